@@ -1,0 +1,88 @@
+#pragma once
+// The Hill muscle laws of DESIGN.md section 2.3 as pure functions. Both the Simbody force
+// element (forward dynamics) and the planner (inverse map) call these, so planned and simulated
+// trajectories share one set of laws. SI units: lengths m, velocities m/s, forces N, time s.
+//
+// Sign conventions: u is the fiber *shortening* velocity (u > 0 concentric), z the force ratio
+// (tendon force) / (a Fmax f(L_C)); g(u) = z is the force-velocity law.
+
+#include "flatsos/muscles/muscle_parameters.hpp"
+
+namespace flatsos::muscles {
+
+// ---- Tendon: Phi_S(L_S) = k (L_S - L_slack)^2 above slack, 0 below (C1 at slack). ----
+double tendon_force(const MuscleParameters& p, double tendon_length_m);
+double tendon_force_derivative(const MuscleParameters& p, double tendon_length_m);         ///< N/m
+double tendon_force_second_derivative(const MuscleParameters& p, double tendon_length_m);  ///< N/m^2
+/// Inverse of the tendon law on its strictly increasing branch: L_slack + sqrt(F / k).
+/// Throws std::domain_error for F <= 0 or non-finite F (a slack tendon has no unique length).
+double tendon_length_from_force(const MuscleParameters& p, double tendon_force_N);
+
+// ---- Force-length: f(L_C) = exp(-((L_C - Lopt) / (W Lopt))^2), in (0, 1]. ----
+double force_length(const MuscleParameters& p, double fiber_length_m);
+double force_length_derivative(const MuscleParameters& p, double fiber_length_m);  ///< 1/m
+
+// ---- Force-velocity g(u): g(0) = 1, g(Vmax) = 0, g -> gmax for u -> -inf. ----
+double force_velocity(const MuscleParameters& p, double shortening_velocity_m_per_s);
+double force_velocity_derivative(const MuscleParameters& p, double shortening_velocity_m_per_s);
+
+/// Exact inverse of g on its range: valid for force ratios z in (0, gmax) (also for z in
+/// (-Ah, 0], where it returns u > Vmax). Throws std::domain_error outside (-Ah, gmax).
+double force_velocity_inverse(const MuscleParameters& p, double force_ratio);
+
+/// Upper end of the force ratios where the forward model uses the exact inverse of g:
+/// z_hi = 1 + 0.9 (gmax - 1). Above it the inverse has a pole at gmax.
+double force_ratio_exact_upper_bound(const MuscleParameters& p);
+
+/// The inverse of g used by the forward model: exactly force_velocity_inverse on
+/// [0, z_hi], continued linearly (value and slope match, so it is C1 and strictly decreasing)
+/// for z < 0 (the fiber pushes: only with a parallel element or round-off) and for z > z_hi
+/// (the pole at gmax would send u to -inf). Finite for every finite z.
+double fiber_velocity_from_force_ratio(const MuscleParameters& p, double force_ratio);
+double fiber_velocity_from_force_ratio_derivative(const MuscleParameters& p, double force_ratio);
+
+// ---- Contraction dynamics. ----
+/// The activation the contraction dynamics use: max(a, activation_floor).
+double effective_activation(const MuscleParameters& p, double activation);
+
+/// z = F_S / (max(a, floor) Fmax f(L_C)). Finite for every finite input: f is floored at
+/// 1e-12 so that an absurd fiber length (exp underflow) cannot divide by zero.
+double force_ratio(const MuscleParameters& p, double tendon_force_N, double activation,
+                   double fiber_length_m);
+
+/// Fiber shortening velocity u = g^-1(z) of the forward model (safe extension included).
+double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N,
+                                 double activation, double fiber_length_m);
+
+/// Time derivative of the tendon length: dL_S/dt = u - dL/dt, where dL/dt is the
+/// muscle-tendon unit's lengthening rate (-(A^T qd)_j for constant moment arms).
+double tendon_length_derivative(const MuscleParameters& p, double tendon_length_m,
+                                double activation, double musculotendon_length_m,
+                                double musculotendon_lengthening_rate_m_per_s);
+
+// ---- Activation dynamics: da/dt = sigma(n) (n - a), sigma(n) = (beta + (1 - beta) n) / T_act.
+double activation_rate_factor(const MuscleParameters& p, double excitation);  ///< sigma, 1/s
+double activation_derivative(const MuscleParameters& p, double excitation, double activation);
+double activation_derivative_d_excitation(const MuscleParameters& p, double excitation,
+                                          double activation);
+double activation_derivative_d_activation(const MuscleParameters& p, double excitation,
+                                          double activation);
+
+/// Result of inverting the activation dynamics.
+struct ExcitationFromActivation {
+  double excitation = 0.0;  ///< the larger real root (the one in [0,1] when attainable)
+  bool real_root = true;    ///< false: no excitation gives this da/dt; excitation is then the
+                            ///< minimiser of |da/dt(n) - target|, which is not a solution
+  bool in_unit_interval() const { return real_root && excitation >= 0.0 && excitation <= 1.0; }
+};
+
+/// Excitation n with sigma(n) (n - a) = da/dt: the larger root of
+/// (1 - beta) n^2 + (beta - (1 - beta) a) n - beta a - T_act da/dt = 0.
+/// For a in [0, 1] and da/dt = 0 it returns n = a (the other root is negative). The roots sum
+/// to a - beta / (1 - beta): for a > beta / (1 - beta) (1/3 with the default time constants)
+/// sigma(n) (n - a) is not monotone in n and two excitations in [0, 1] can give the same
+/// da/dt; the larger root is returned because it varies continuously along a trajectory.
+ExcitationFromActivation excitation_from_activation(const MuscleParameters& p, double activation,
+                                                    double activation_rate_per_s);
+
+}  // namespace flatsos::muscles

@@ -1,0 +1,48 @@
+#pragma once
+// Parameters of one Hill-type muscle-tendon unit (DESIGN.md section 2.3). SI units throughout.
+
+#include <string>
+
+namespace flatsos::muscles {
+
+struct MuscleParameters {
+  std::string name;                        ///< used in every error message
+  double max_isometric_force_N = 0.0;      ///< Fmax
+  double optimal_fiber_length_m = 0.0;     ///< Lopt
+  double tendon_slack_length_m = 0.0;      ///< L_slack
+  double tendon_strain_at_max_force = 0.04;  ///< tendon force is Fmax at this strain
+  double force_length_width = 0.56;        ///< W of the Gaussian force-length curve
+  double max_shortening_velocity_in_optimal_lengths_per_s = 10.0;  ///< Vmax / Lopt
+  double hill_constant = 0.25;             ///< Ah (curvature of the concentric branch)
+  double max_eccentric_force_ratio = 1.5;  ///< gmax: g(u) -> gmax for u -> -inf
+  double activation_time_constant_s = 0.01;    ///< T_act
+  double deactivation_time_constant_s = 0.04;  ///< T_deact (> T_act: deactivation is slower)
+  /// Lower bound of the activation used in the contraction dynamics (the activation state
+  /// itself is not clamped). It keeps the forward model finite where a -> 0. It must stay
+  /// far below every planned activation or the plant is biased against the plan: planned
+  /// activations in the receding-horizon scenario go down to about 1e-3, and a floor of 1e-2
+  /// (OpenSim's) drifts the closed loop by degrees, so the default is 1e-4 (DESIGN.md 2.3).
+  double activation_floor = 1e-4;
+
+  /// Vmax in m/s.
+  double max_shortening_velocity_m_per_s() const {
+    return max_shortening_velocity_in_optimal_lengths_per_s * optimal_fiber_length_m;
+  }
+  /// Tendon stiffness k in N/m^2 of Phi_S = k (L_S - L_slack)^2, so that Phi_S = Fmax at the
+  /// given strain.
+  double tendon_stiffness_N_per_m2() const {
+    const double stretch_at_fmax = tendon_strain_at_max_force * tendon_slack_length_m;
+    return max_isometric_force_N / (stretch_at_fmax * stretch_at_fmax);
+  }
+  /// beta = T_act / T_deact of the activation dynamics.
+  double activation_beta() const {
+    return activation_time_constant_s / deactivation_time_constant_s;
+  }
+};
+
+/// Throws std::invalid_argument naming the muscle and the field when a parameter is
+/// non-finite or non-physical (non-positive force, lengths, time constants; gmax <= 1;
+/// T_act > T_deact; floor outside (0, 1)).
+void validate(const MuscleParameters& p);
+
+}  // namespace flatsos::muscles

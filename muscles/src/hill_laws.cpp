@@ -1,0 +1,198 @@
+#include "flatsos/muscles/hill_laws.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace flatsos::muscles {
+namespace {
+
+// Fraction of (1, gmax) on which the forward model uses the exact eccentric inverse.
+constexpr double kExactEccentricFraction = 0.9;
+// Floor on f(L_C) in the force ratio: only reached for fiber lengths many widths from Lopt.
+constexpr double kForceLengthFloor = 1e-12;
+
+[[noreturn]] void domain_failure(const MuscleParameters& p, const char* what, double value) {
+  std::ostringstream msg;
+  msg << "muscle '" << p.name << "': " << what << " (got " << value << ")";
+  throw std::domain_error(msg.str());
+}
+
+// Coefficient c of the eccentric inverse u = -c (z - 1) / (gmax - z).
+double eccentric_inverse_coefficient(const MuscleParameters& p) {
+  const double ah = p.hill_constant;
+  return (p.max_eccentric_force_ratio - 1.0) * ah * p.max_shortening_velocity_m_per_s() /
+         (ah + 1.0);
+}
+
+// Exact inverse and its derivative without range checks (callers check).
+double inverse_unchecked(const MuscleParameters& p, double z) {
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  if (z <= 1.0) return vmax * (1.0 - z) / (1.0 + z / p.hill_constant);
+  return -eccentric_inverse_coefficient(p) * (z - 1.0) / (p.max_eccentric_force_ratio - z);
+}
+
+double inverse_derivative_unchecked(const MuscleParameters& p, double z) {
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  const double ah = p.hill_constant;
+  if (z <= 1.0) {
+    const double den = 1.0 + z / ah;
+    return -vmax * (1.0 + 1.0 / ah) / (den * den);
+  }
+  const double gap = p.max_eccentric_force_ratio - z;
+  return -eccentric_inverse_coefficient(p) * (p.max_eccentric_force_ratio - 1.0) / (gap * gap);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- tendon
+double tendon_force(const MuscleParameters& p, double tendon_length_m) {
+  const double stretch = tendon_length_m - p.tendon_slack_length_m;
+  return stretch > 0.0 ? p.tendon_stiffness_N_per_m2() * stretch * stretch : 0.0;
+}
+
+double tendon_force_derivative(const MuscleParameters& p, double tendon_length_m) {
+  const double stretch = tendon_length_m - p.tendon_slack_length_m;
+  return stretch > 0.0 ? 2.0 * p.tendon_stiffness_N_per_m2() * stretch : 0.0;
+}
+
+double tendon_force_second_derivative(const MuscleParameters& p, double tendon_length_m) {
+  return tendon_length_m > p.tendon_slack_length_m ? 2.0 * p.tendon_stiffness_N_per_m2() : 0.0;
+}
+
+double tendon_length_from_force(const MuscleParameters& p, double tendon_force_N) {
+  if (!std::isfinite(tendon_force_N) || tendon_force_N <= 0.0)
+    domain_failure(p, "tendon length is defined only for a finite tendon force > 0 N",
+                   tendon_force_N);
+  return p.tendon_slack_length_m + std::sqrt(tendon_force_N / p.tendon_stiffness_N_per_m2());
+}
+
+// ---------------------------------------------------------------- force-length
+double force_length(const MuscleParameters& p, double fiber_length_m) {
+  const double x =
+      (fiber_length_m - p.optimal_fiber_length_m) / (p.force_length_width * p.optimal_fiber_length_m);
+  return std::exp(-x * x);
+}
+
+double force_length_derivative(const MuscleParameters& p, double fiber_length_m) {
+  const double width = p.force_length_width * p.optimal_fiber_length_m;
+  const double x = (fiber_length_m - p.optimal_fiber_length_m) / width;
+  return -2.0 * x / width * std::exp(-x * x);
+}
+
+// ---------------------------------------------------------------- force-velocity
+double force_velocity(const MuscleParameters& p, double u) {
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  const double ah = p.hill_constant;
+  const double gmax = p.max_eccentric_force_ratio;
+  if (u >= 0.0) return ah * (vmax - u) / (ah * vmax + u);
+  const double c0 = ah * vmax * (1.0 - gmax);  // < 0
+  return (c0 + u * gmax * (1.0 + ah)) / (c0 + u * (1.0 + ah));
+}
+
+double force_velocity_derivative(const MuscleParameters& p, double u) {
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  const double ah = p.hill_constant;
+  const double gmax = p.max_eccentric_force_ratio;
+  if (u >= 0.0) {
+    const double den = ah * vmax + u;
+    return -ah * vmax * (1.0 + ah) / (den * den);
+  }
+  const double c0 = ah * vmax * (1.0 - gmax);
+  const double den = c0 + u * (1.0 + ah);
+  return c0 * (1.0 + ah) * (gmax - 1.0) / (den * den);
+}
+
+double force_velocity_inverse(const MuscleParameters& p, double z) {
+  if (!(z > -p.hill_constant && z < p.max_eccentric_force_ratio))
+    domain_failure(p, "force-velocity inverse needs a force ratio in (-Ah, gmax)", z);
+  return inverse_unchecked(p, z);
+}
+
+double force_ratio_exact_upper_bound(const MuscleParameters& p) {
+  return 1.0 + kExactEccentricFraction * (p.max_eccentric_force_ratio - 1.0);
+}
+
+double fiber_velocity_from_force_ratio(const MuscleParameters& p, double z) {
+  if (z < 0.0) return inverse_unchecked(p, 0.0) + inverse_derivative_unchecked(p, 0.0) * z;
+  const double z_hi = force_ratio_exact_upper_bound(p);
+  if (z > z_hi)
+    return inverse_unchecked(p, z_hi) + inverse_derivative_unchecked(p, z_hi) * (z - z_hi);
+  return inverse_unchecked(p, z);
+}
+
+double fiber_velocity_from_force_ratio_derivative(const MuscleParameters& p, double z) {
+  if (z < 0.0) return inverse_derivative_unchecked(p, 0.0);
+  const double z_hi = force_ratio_exact_upper_bound(p);
+  return inverse_derivative_unchecked(p, std::min(z, z_hi));
+}
+
+// ---------------------------------------------------------------- contraction dynamics
+double effective_activation(const MuscleParameters& p, double activation) {
+  return std::max(activation, p.activation_floor);
+}
+
+double force_ratio(const MuscleParameters& p, double tendon_force_N, double activation,
+                   double fiber_length_m) {
+  const double f = std::max(force_length(p, fiber_length_m), kForceLengthFloor);
+  return tendon_force_N / (effective_activation(p, activation) * p.max_isometric_force_N * f);
+}
+
+double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N,
+                                 double activation, double fiber_length_m) {
+  return fiber_velocity_from_force_ratio(p,
+                                         force_ratio(p, tendon_force_N, activation, fiber_length_m));
+}
+
+double tendon_length_derivative(const MuscleParameters& p, double tendon_length_m,
+                                double activation, double musculotendon_length_m,
+                                double musculotendon_lengthening_rate_m_per_s) {
+  const double u = fiber_shortening_velocity(p, tendon_force(p, tendon_length_m), activation,
+                                             musculotendon_length_m - tendon_length_m);
+  // L_C = L - L_S, u = -dL_C/dt  =>  dL_S/dt = dL/dt + u.
+  return u + musculotendon_lengthening_rate_m_per_s;
+}
+
+// ---------------------------------------------------------------- activation dynamics
+double activation_rate_factor(const MuscleParameters& p, double n) {
+  const double beta = p.activation_beta();
+  return (beta + (1.0 - beta) * n) / p.activation_time_constant_s;
+}
+
+double activation_derivative(const MuscleParameters& p, double n, double a) {
+  return activation_rate_factor(p, n) * (n - a);
+}
+
+double activation_derivative_d_excitation(const MuscleParameters& p, double n, double a) {
+  const double beta = p.activation_beta();
+  return ((1.0 - beta) * (n - a) + beta + (1.0 - beta) * n) / p.activation_time_constant_s;
+}
+
+double activation_derivative_d_activation(const MuscleParameters& p, double n, double /*a*/) {
+  return -activation_rate_factor(p, n);
+}
+
+ExcitationFromActivation excitation_from_activation(const MuscleParameters& p, double a,
+                                                    double adot) {
+  const double beta = p.activation_beta();
+  const double qa = 1.0 - beta;
+  const double qb = beta - (1.0 - beta) * a;
+  const double qc = -beta * a - p.activation_time_constant_s * adot;
+  const double disc = qb * qb - 4.0 * qa * qc;
+  ExcitationFromActivation out;
+  if (disc < 0.0) {
+    out.real_root = false;
+    out.excitation = -qb / (2.0 * qa);
+    return out;
+  }
+  // Cancellation-free quadratic roots; keep the larger one.
+  const double sq = std::sqrt(disc);
+  const double q = -0.5 * (qb + (qb >= 0.0 ? sq : -sq));
+  const double r1 = q / qa;
+  const double r2 = q != 0.0 ? qc / q : r1;
+  out.excitation = std::max(r1, r2);
+  return out;
+}
+
+}  // namespace flatsos::muscles

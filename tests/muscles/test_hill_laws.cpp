@@ -1,0 +1,244 @@
+// Property tests for the Hill muscle laws (DESIGN.md 2.3): values at known points,
+// monotonicity, limits, inverse round trips, finite-difference twins of every derivative,
+// and the safe extension of the forward model.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "flatsos/muscles/hill_laws.hpp"
+
+namespace fm = flatsos::muscles;
+
+namespace {
+
+fm::MuscleParameters biceps() {
+  fm::MuscleParameters p;
+  p.name = "biceps";
+  p.max_isometric_force_N = 1000.0;
+  p.optimal_fiber_length_m = 0.1422;
+  p.tendon_slack_length_m = 0.2298;
+  return p;
+}
+
+// Central difference with a step relative to the scale of x; error O(h^2).
+template <class F>
+double central_difference(F f, double x, double h) {
+  return (f(x + h) - f(x - h)) / (2.0 * h);
+}
+
+std::vector<double> linspace(double a, double b, int n) {
+  std::vector<double> v;
+  for (int i = 0; i < n; ++i) v.push_back(a + (b - a) * i / (n - 1));
+  return v;
+}
+
+}  // namespace
+
+TEST(Tendon, ForceIsFmaxAtFourPercentStrainAndZeroWhenSlack) {
+  const auto p = biceps();
+  EXPECT_NEAR(fm::tendon_force(p, 1.04 * p.tendon_slack_length_m), 1000.0, 1e-9);
+  EXPECT_EQ(fm::tendon_force(p, p.tendon_slack_length_m), 0.0);
+  EXPECT_EQ(fm::tendon_force(p, 0.5 * p.tendon_slack_length_m), 0.0);
+  EXPECT_EQ(fm::tendon_force_derivative(p, 0.9 * p.tendon_slack_length_m), 0.0);
+}
+
+TEST(Tendon, InverseRoundTrip) {
+  const auto p = biceps();
+  for (double f : {1e-6, 0.1, 1.0, 10.2, 108.0, 999.0, 1500.0}) {
+    const double ls = fm::tendon_length_from_force(p, f);
+    EXPECT_NEAR(fm::tendon_force(p, ls), f, 1e-12 * std::max(1.0, f)) << f;
+  }
+  for (double ls : linspace(p.tendon_slack_length_m * 1.0001, p.tendon_slack_length_m * 1.06, 50))
+    EXPECT_NEAR(fm::tendon_length_from_force(p, fm::tendon_force(p, ls)), ls, 1e-14);
+}
+
+TEST(Tendon, InverseRejectsNonPositiveAndNaNForce) {
+  const auto p = biceps();
+  EXPECT_THROW(fm::tendon_length_from_force(p, 0.0), std::domain_error);
+  EXPECT_THROW(fm::tendon_length_from_force(p, -1.0), std::domain_error);
+  EXPECT_THROW(fm::tendon_length_from_force(p, std::nan("")), std::domain_error);
+  try {
+    fm::tendon_length_from_force(p, -1.0);
+  } catch (const std::domain_error& e) {
+    EXPECT_NE(std::string(e.what()).find("biceps"), std::string::npos);
+  }
+}
+
+TEST(Tendon, DerivativesMatchFiniteDifferences) {
+  const auto p = biceps();
+  const double h = 1e-7;
+  for (double ls : linspace(1.001 * p.tendon_slack_length_m, 1.05 * p.tendon_slack_length_m, 20)) {
+    const double d1 = central_difference([&](double x) { return fm::tendon_force(p, x); }, ls, h);
+    EXPECT_NEAR(fm::tendon_force_derivative(p, ls), d1, 1e-6 * std::abs(d1));
+    const double d2 =
+        central_difference([&](double x) { return fm::tendon_force_derivative(p, x); }, ls, h);
+    EXPECT_NEAR(fm::tendon_force_second_derivative(p, ls), d2, 1e-6 * std::abs(d2));
+  }
+}
+
+TEST(ForceLength, PeakAtOptimalLengthAndDerivative) {
+  const auto p = biceps();
+  EXPECT_DOUBLE_EQ(fm::force_length(p, p.optimal_fiber_length_m), 1.0);
+  EXPECT_NEAR(fm::force_length(p, p.optimal_fiber_length_m * (1.0 + p.force_length_width)),
+              std::exp(-1.0), 1e-15);
+  for (double lc : linspace(0.3 * p.optimal_fiber_length_m, 1.8 * p.optimal_fiber_length_m, 40)) {
+    const double f = fm::force_length(p, lc);
+    EXPECT_GT(f, 0.0);
+    EXPECT_LE(f, 1.0);
+    const double d = central_difference([&](double x) { return fm::force_length(p, x); }, lc, 1e-7);
+    EXPECT_NEAR(fm::force_length_derivative(p, lc), d, 1e-7 * std::max(1.0, std::abs(d)));
+  }
+}
+
+TEST(ForceVelocity, KnownValuesAndLimits) {
+  const auto p = biceps();
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  EXPECT_DOUBLE_EQ(fm::force_velocity(p, 0.0), 1.0);
+  EXPECT_NEAR(fm::force_velocity(p, vmax), 0.0, 1e-15);
+  EXPECT_NEAR(fm::force_velocity(p, -1e9 * vmax), p.max_eccentric_force_ratio, 1e-8);
+  EXPECT_LT(fm::force_velocity(p, -1e3 * vmax), p.max_eccentric_force_ratio);
+}
+
+TEST(ForceVelocity, StrictlyDecreasingAndDerivativeMatchesFiniteDifferences) {
+  const auto p = biceps();
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  const auto us = linspace(-5.0 * vmax, vmax, 601);
+  for (std::size_t i = 1; i < us.size(); ++i)
+    EXPECT_LT(fm::force_velocity(p, us[i]), fm::force_velocity(p, us[i - 1])) << us[i];
+  for (double u : us) {
+    if (std::abs(u) < 1e-6) continue;  // the two branches meet (C1) at u = 0
+    const double d = central_difference([&](double x) { return fm::force_velocity(p, x); }, u, 1e-7);
+    EXPECT_NEAR(fm::force_velocity_derivative(p, u), d, 1e-6 * std::max(1.0, std::abs(d))) << u;
+    EXPECT_LT(fm::force_velocity_derivative(p, u), 0.0);
+  }
+  // C1 at u = 0: both branches have the same slope there.
+  EXPECT_NEAR(fm::force_velocity_derivative(p, -1e-300), fm::force_velocity_derivative(p, 0.0),
+              1e-12);
+}
+
+TEST(ForceVelocity, InverseRoundTripsOverTheValidDomain) {
+  const auto p = biceps();
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  for (double u : linspace(-20.0 * vmax, vmax, 2001)) {
+    const double z = fm::force_velocity(p, u);
+    EXPECT_NEAR(fm::force_velocity_inverse(p, z), u, 1e-12 * std::max(1.0, std::abs(u))) << u;
+  }
+  for (double z : linspace(1e-9, p.max_eccentric_force_ratio - 1e-6, 2001)) {
+    const double u = fm::force_velocity_inverse(p, z);
+    EXPECT_NEAR(fm::force_velocity(p, u), z, 1e-12) << z;
+  }
+  EXPECT_THROW(fm::force_velocity_inverse(p, p.max_eccentric_force_ratio), std::domain_error);
+  EXPECT_THROW(fm::force_velocity_inverse(p, std::nan("")), std::domain_error);
+}
+
+TEST(ForceVelocity, SafeExtensionIsExactInsideC1AtTheSeamsAndMonotone) {
+  const auto p = biceps();
+  const double z_hi = fm::force_ratio_exact_upper_bound(p);
+  EXPECT_GT(z_hi, 1.0);
+  EXPECT_LT(z_hi, p.max_eccentric_force_ratio);
+  for (double z : linspace(0.0, z_hi, 200))
+    EXPECT_DOUBLE_EQ(fm::fiber_velocity_from_force_ratio(p, z), fm::force_velocity_inverse(p, z));
+  for (double seam : {0.0, z_hi}) {
+    const double eps = 1e-9;
+    EXPECT_NEAR(fm::fiber_velocity_from_force_ratio(p, seam - eps),
+                fm::fiber_velocity_from_force_ratio(p, seam + eps), 1e-6);
+    EXPECT_NEAR(fm::fiber_velocity_from_force_ratio_derivative(p, seam - eps),
+                fm::fiber_velocity_from_force_ratio_derivative(p, seam + eps),
+                1e-6 * std::abs(fm::fiber_velocity_from_force_ratio_derivative(p, seam)));
+  }
+  const auto zs = linspace(-10.0, 1e4, 20001);
+  for (std::size_t i = 1; i < zs.size(); ++i) {
+    const double u = fm::fiber_velocity_from_force_ratio(p, zs[i]);
+    EXPECT_TRUE(std::isfinite(u));
+    EXPECT_LT(u, fm::fiber_velocity_from_force_ratio(p, zs[i - 1]));
+  }
+  for (double z : linspace(-3.0, 5.0, 161)) {
+    if (std::abs(z) < 1e-6 || std::abs(z - z_hi) < 1e-6 || std::abs(z - 1.0) < 1e-6) continue;
+    const double d =
+        central_difference([&](double x) { return fm::fiber_velocity_from_force_ratio(p, x); }, z, 1e-7);
+    EXPECT_NEAR(fm::fiber_velocity_from_force_ratio_derivative(p, z), d,
+                1e-6 * std::max(1.0, std::abs(d)))
+        << z;
+  }
+}
+
+TEST(ContractionDynamics, IsometricAtForceEqualToActiveCapacity) {
+  const auto p = biceps();
+  const double lc = 0.13, a = 0.4;
+  const double f_iso = a * p.max_isometric_force_N * fm::force_length(p, lc);
+  EXPECT_NEAR(fm::fiber_shortening_velocity(p, f_iso, a, lc), 0.0, 1e-14);
+  EXPECT_GT(fm::fiber_shortening_velocity(p, 0.5 * f_iso, a, lc), 0.0);  // concentric
+  EXPECT_LT(fm::fiber_shortening_velocity(p, 1.2 * f_iso, a, lc), 0.0);  // eccentric
+}
+
+TEST(ContractionDynamics, NeverNaNOrInfOverAWideSweep) {
+  const auto p = biceps();
+  const double ls_slack = p.tendon_slack_length_m;
+  for (double a : {0.0, 1e-12, 1e-6, p.activation_floor, 0.01, 0.5, 1.0})
+    for (double ls : linspace(0.5 * ls_slack, 1.2 * ls_slack, 71))
+      for (double L : linspace(0.0, 1.0, 41))
+        for (double dL : {-10.0, 0.0, 10.0}) {
+          const double d = fm::tendon_length_derivative(p, ls, a, L, dL);
+          ASSERT_TRUE(std::isfinite(d)) << a << " " << ls << " " << L << " " << dL;
+        }
+}
+
+TEST(ContractionDynamics, ActivationFloorBoundsTheForceRatio) {
+  const auto p = biceps();
+  const double lc = p.optimal_fiber_length_m;
+  EXPECT_DOUBLE_EQ(fm::force_ratio(p, 100.0, 0.0, lc), fm::force_ratio(p, 100.0, p.activation_floor, lc));
+  EXPECT_DOUBLE_EQ(fm::force_ratio(p, 100.0, 0.5, lc), 100.0 / (0.5 * 1000.0));
+  EXPECT_TRUE(std::isfinite(fm::force_ratio(p, 100.0, 0.0, 1e3)));  // f underflows there
+}
+
+TEST(ActivationDynamics, FasterActivationThanDeactivation) {
+  const auto p = biceps();
+  EXPECT_NEAR(fm::activation_rate_factor(p, 1.0), 1.0 / p.activation_time_constant_s, 1e-12);
+  EXPECT_NEAR(fm::activation_rate_factor(p, 0.0), 1.0 / p.deactivation_time_constant_s, 1e-12);
+  EXPECT_GT(fm::activation_derivative(p, 1.0, 0.5), -fm::activation_derivative(p, 0.0, 0.5));
+  EXPECT_EQ(fm::activation_derivative(p, 0.3, 0.3), 0.0);
+}
+
+TEST(ActivationDynamics, PartialDerivativesMatchFiniteDifferences) {
+  const auto p = biceps();
+  for (double n : linspace(0.0, 1.0, 11))
+    for (double a : linspace(0.0, 1.0, 11)) {
+      const double dn = central_difference([&](double x) { return fm::activation_derivative(p, x, a); }, n, 1e-6);
+      const double da = central_difference([&](double x) { return fm::activation_derivative(p, n, x); }, a, 1e-6);
+      EXPECT_NEAR(fm::activation_derivative_d_excitation(p, n, a), dn, 1e-7 * std::max(1.0, std::abs(dn)));
+      EXPECT_NEAR(fm::activation_derivative_d_activation(p, n, a), da, 1e-7 * std::max(1.0, std::abs(da)));
+    }
+}
+
+TEST(ActivationDynamics, InverseRoundTrips) {
+  const auto p = biceps();
+  for (double n : linspace(0.0, 1.0, 101))
+    for (double a : linspace(0.0, 1.0, 101)) {
+      const double adot = fm::activation_derivative(p, n, a);
+      const auto inv = fm::excitation_from_activation(p, a, adot);
+      ASSERT_TRUE(inv.real_root);
+      // The two roots sum to a - beta / (1 - beta). For a > beta / (1 - beta) both can lie in
+      // [0, 1] and give the same da/dt (sigma(n) (n - a) is not monotone in n there); the
+      // inverse returns the larger one, which is continuous along trajectories.
+      const double other_root = a - p.activation_beta() / (1.0 - p.activation_beta()) - n;
+      EXPECT_NEAR(inv.excitation, std::max(n, other_root), 1e-12) << "n=" << n << " a=" << a;
+      EXPECT_NEAR(fm::activation_derivative(p, inv.excitation, a), adot, 1e-12 * 100.0);
+    }
+  // Equilibrium: da/dt = 0 gives n = a.
+  EXPECT_NEAR(fm::excitation_from_activation(p, 0.37, 0.0).excitation, 0.37, 1e-15);
+}
+
+TEST(ActivationDynamics, UnattainableRateIsFlagged) {
+  const auto p = biceps();
+  // Deactivating faster than the decay with n at the vertex of the quadratic is impossible.
+  const auto inv = fm::excitation_from_activation(p, 0.5, -1e4);
+  EXPECT_FALSE(inv.real_root);
+  EXPECT_FALSE(inv.in_unit_interval());
+  // An activation rate above what n = 1 gives needs n > 1: a real root outside [0, 1].
+  const auto high = fm::excitation_from_activation(p, 0.2, 2.0 * fm::activation_derivative(p, 1.0, 0.2));
+  EXPECT_TRUE(high.real_root);
+  EXPECT_GT(high.excitation, 1.0);
+  EXPECT_FALSE(high.in_unit_interval());
+}
