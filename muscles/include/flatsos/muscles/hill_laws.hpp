@@ -54,7 +54,7 @@ double force_ratio(const MuscleParameters& p, double tendon_force_N, double acti
 double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N,
                                  double activation, double fiber_length_m);
 
-/// Time derivative of the tendon length: dL_S/dt = u - dL/dt, where dL/dt is the
+/// Time derivative of the tendon length: dL_S/dt = u + dL/dt, where dL/dt is the
 /// muscle-tendon unit's lengthening rate (-(A^T qd)_j for constant moment arms).
 double tendon_length_derivative(const MuscleParameters& p, double tendon_length_m,
                                 double activation, double musculotendon_length_m,

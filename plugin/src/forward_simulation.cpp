@@ -1,0 +1,96 @@
+#include "flatsos/plugin/forward_simulation.hpp"
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+namespace flatsos::plugin {
+
+StoTable make_state_table(const MusculoskeletalModel& model, const std::string& name) {
+  StoTable t;
+  t.name = name;
+  t.columns.push_back("time");
+  for (const auto& j : model.description().joints) {
+    t.columns.push_back("/jointset/" + j.name + "/q");
+    t.columns.push_back("/jointset/" + j.name + "/qdot");
+  }
+  for (const auto& m : model.description().muscles)
+    for (const char* what : {"excitation", "activation", "tendon_length", "tendon_force",
+                             "fiber_length", "fiber_velocity"})
+      t.columns.push_back("/forceset/" + m.parameters.name + "/" + what);
+  return t;
+}
+
+void append_state_row(const MusculoskeletalModel& model, const SimTK::State& s, StoTable& table) {
+  model.system().realize(s, SimTK::Stage::Velocity);
+  std::vector<double> row;
+  row.reserve(table.columns.size());
+  row.push_back(s.getTime());
+  for (int i = 0; i < model.numJoints(); ++i) {
+    row.push_back(model.joint(i).getOneQ(s, 0));
+    row.push_back(model.joint(i).getOneU(s, 0));
+  }
+  for (int j = 0; j < model.numMuscles(); ++j) {
+    const HillMuscle& m = model.muscle(j);
+    row.push_back(m.getExcitation(s));
+    row.push_back(m.getActivation(s));
+    row.push_back(m.getTendonLength(s));
+    row.push_back(m.getTendonForce(s));
+    row.push_back(m.getFiberLength(s));
+    row.push_back(-m.getFiberShorteningVelocity(s));
+  }
+  table.rows.push_back(std::move(row));
+}
+
+bool all_states_finite(const SimTK::State& s) {
+  const SimTK::Vector& y = s.getY();
+  for (int i = 0; i < y.size(); ++i)
+    if (!std::isfinite(y[i])) return false;
+  return true;
+}
+
+SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State& initial,
+                          const SimulationOptions& o) {
+  if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s))
+    throw std::invalid_argument("simulation duration must be a finite number > 0 s");
+  if (!(o.accuracy > 0.0 && o.accuracy < 1.0))
+    throw std::invalid_argument("integrator accuracy must be in (0, 1)");
+  if (!(o.report_interval_s > 0.0) || !std::isfinite(o.report_interval_s))
+    throw std::invalid_argument("report interval must be a finite number > 0 s");
+  if (!all_states_finite(initial))
+    throw std::invalid_argument("initial state has a non-finite value");
+
+  SimulationResult result;
+  result.states = make_state_table(model);
+  std::unique_ptr<SimTK::Integrator> integ_ptr;
+  if (o.integrator == IntegratorKind::CPodesBdf)
+    integ_ptr = std::make_unique<SimTK::CPodesIntegrator>(model.system(), SimTK::CPodes::BDF,
+                                                          SimTK::CPodes::Newton);
+  else
+    integ_ptr = std::make_unique<SimTK::RungeKuttaMersonIntegrator>(model.system());
+  SimTK::Integrator& integ = *integ_ptr;
+  integ.setAccuracy(o.accuracy);
+  integ.initialize(initial);
+  append_state_row(model, integ.getState(), result.states);
+
+  const double t0 = initial.getTime();
+  const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
+  for (long k = 1; k <= reports; ++k) {
+    const double t = t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s);
+    // The first stepTo after initialize() only reports the start of the continuous interval
+    // without advancing; step until the report time is really reached.
+    while (integ.getTime() < t && all_states_finite(integ.getState()))
+      if (integ.stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
+    if (!all_states_finite(integ.getState())) {
+      result.finite = false;
+      result.message = "a state became non-finite before t = " + std::to_string(t) + " s";
+      break;
+    }
+    append_state_row(model, integ.getState(), result.states);
+  }
+  result.final_state = integ.getState();
+  result.integrator_steps = integ.getNumStepsTaken();
+  return result;
+}
+
+}  // namespace flatsos::plugin

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# arm_forward: --help works, bad arguments exit 2 with a message, a good run writes states.sto,
+# a bad model file exits non-zero naming the problem. Usage: test_arm_forward_cli.sh BIN SRC
+set -u
+bin=$1 src=$2
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+fail=0
+expect() {  # expect <exit code> <text in output> -- command...
+  local code=$1 text=$2; shift 3
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [[ $rc != "$code" ]] || ! grep -qF -- "$text" <<<"$out"; then
+    echo "FAILED: $* -> exit $rc (want $code), output lacks '$text':"; echo "$out" | head -5; fail=1
+  else echo "ok: $*"; fi
+}
+a0=0.135,0.040,0.404,0.556,0.414,0.068
+expect 0 "--equilibrate-tendons" -- "$bin" --help
+expect 2 "--q0-deg" -- "$bin" --q0-deg 1,2,3 --equilibrate-tendons --out "$tmp/o"
+expect 2 "--a0" -- "$bin" --a0 0.1,0.2 --equilibrate-tendons --out "$tmp/o"
+expect 2 "--duration" -- "$bin" --duration -1 --equilibrate-tendons --out "$tmp/o"
+expect 2 "--accuracy" -- "$bin" --accuracy abc --equilibrate-tendons --out "$tmp/o"
+expect 2 "--ls0" -- "$bin" --a0 $a0 --out "$tmp/o"
+expect 2 "--integrator" -- "$bin" --integrator euler --equilibrate-tendons --out "$tmp/o"
+expect 2 "--bogus" -- "$bin" --bogus
+printf '{"bodies": []}' > "$tmp/bad.json"
+expect 1 "bodies: must not be empty" -- "$bin" --model "$tmp/bad.json" --equilibrate-tendons --out "$tmp/o"
+printf 'time,biceps\n0,0.5\n' > "$tmp/n.csv"
+expect 1 "no column for muscle 'anterior_deltoid'" -- "$bin" --excitations "$tmp/n.csv" --equilibrate-tendons --out "$tmp/o"
+expect 0 "wrote" -- "$bin" --q0-deg 0,10 --a0 $a0 --equilibrate-tendons --duration 0.05 --out "$tmp/good"
+if ! grep -q "^endheader$" "$tmp/good/states.sto" || ! grep -q "/forceset/biceps/activation" "$tmp/good/states.sto"; then
+  echo "FAILED: states.sto lacks the OpenSim header or columns"; fail=1
+fi
+exit $fail

@@ -1,0 +1,28 @@
+#pragma once
+// Shared test data: the arm of DESIGN.md 2.4 and the paper's open-loop initial state.
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "flatsos/plugin/musculoskeletal_model.hpp"
+
+namespace flatsos::test {
+
+inline std::string arm_model_path() { return std::string(FLATSOS_SOURCE_DIR) + "/models/arm_richter_warner.json"; }
+
+inline std::unique_ptr<plugin::MusculoskeletalModel> load_arm() {
+  return plugin::MusculoskeletalModel::fromFile(arm_model_path());
+}
+
+constexpr double kPi = 3.14159265358979323846;
+inline double deg(double d) { return d * kPi / 180.0; }
+
+/// The paper's initial activations at q = [0, 10 deg].
+inline Eigen::VectorXd paper_a0() {
+  Eigen::VectorXd a(6);
+  a << 0.135, 0.040, 0.404, 0.556, 0.414, 0.068;
+  return a;
+}
+
+}  // namespace flatsos::test

@@ -1,0 +1,208 @@
+// The Simbody force element: state access, excitation input, and robustness where the forward
+// model is singular (a -> 0, slack tendon, extreme excitations): never NaN or Inf.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "arm_fixture.hpp"
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/static_equilibrium.hpp"
+
+namespace fp = flatsos::plugin;
+using flatsos::test::deg;
+
+namespace {
+
+SimTK::State paper_state(const fp::MusculoskeletalModel& arm) {
+  SimTK::State s = arm.defaultState();
+  arm.setJointAngles(s, Eigen::Vector2d(0.0, deg(10)));
+  fp::equilibrate_tendons(arm, s, flatsos::test::paper_a0());
+  arm.setExcitations(s, flatsos::test::paper_a0());
+  return s;
+}
+
+// Every state finite and physically bounded along the run: activations in [0, 1], tendons
+// never shorter than half their slack length, joint speeds below 100 rad/s.
+void expect_bounded(const fp::MusculoskeletalModel& arm, const fp::SimulationResult& r) {
+  ASSERT_TRUE(r.finite) << r.message;
+  for (const auto& row : r.states.rows)
+    for (double v : row) ASSERT_TRUE(std::isfinite(v));
+  for (int j = 0; j < arm.numMuscles(); ++j) {
+    const auto& name = arm.description().muscles[j].parameters.name;
+    const double slack = arm.description().muscles[j].parameters.tendon_slack_length_m;
+    for (double a : r.states.column("/forceset/" + name + "/activation")) {
+      EXPECT_GE(a, 0.0);
+      EXPECT_LE(a, 1.0);
+    }
+    for (double ls : r.states.column("/forceset/" + name + "/tendon_length")) EXPECT_GT(ls, 0.5 * slack);
+  }
+  for (const auto& joint : arm.description().joints)
+    for (double qd : r.states.column("/jointset/" + joint.name + "/qdot")) EXPECT_LT(std::abs(qd), 100.0);
+}
+
+class ConstantSignal : public fp::ExcitationSignal {
+ public:
+  explicit ConstantSignal(double v) : v_(v) {}
+  double value(double) const override { return v_; }
+
+ private:
+  double v_;
+};
+
+}  // namespace
+
+TEST(HillMuscle, StateAccessorsRoundTripAndRejectBadValues) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = arm->defaultState();
+  const auto& biceps = arm->muscle(2);
+  biceps.setActivation(s, 0.3);
+  biceps.setTendonLength(s, 0.235);
+  EXPECT_EQ(biceps.getActivation(s), 0.3);
+  EXPECT_EQ(biceps.getTendonLength(s), 0.235);
+  EXPECT_THROW(biceps.setActivation(s, 1.5), std::invalid_argument);
+  EXPECT_THROW(biceps.setActivation(s, -0.1), std::invalid_argument);
+  EXPECT_THROW(biceps.setActivation(s, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(biceps.setTendonLength(s, -0.2), std::invalid_argument);
+  EXPECT_THROW(biceps.setExcitation(s, std::nan("")), std::invalid_argument);
+  try {
+    biceps.setActivation(s, 2.0);
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("biceps"), std::string::npos);
+  }
+}
+
+TEST(HillMuscle, ExcitationIsClampedAndSignalsOverrideHeldValues) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = arm->defaultState();
+  const auto& m = arm->muscle(0);
+  m.setExcitation(s, 1.7);
+  EXPECT_EQ(m.getExcitation(s), 1.0);
+  EXPECT_EQ(m.getUnclampedExcitation(s), 1.7);
+  m.setExcitation(s, -0.2);
+  EXPECT_EQ(m.getExcitation(s), 0.0);
+  m.setExcitationSignal(s, std::make_shared<fp::PiecewiseLinearSignal>(std::vector<double>{0.0, 1.0},
+                                                                       std::vector<double>{0.2, 0.6}));
+  s.updTime() = 0.25;
+  EXPECT_NEAR(m.getExcitation(s), 0.3, 1e-15);
+  m.setExcitationSignal(s, std::make_shared<ConstantSignal>(std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_EQ(m.getExcitation(s), 0.0);  // a NaN signal drives nothing rather than poisoning the run
+  m.setExcitation(s, 0.4);             // a held value replaces the signal
+  EXPECT_EQ(m.getExcitation(s), 0.4);
+}
+
+TEST(HillMuscleRobustness, ZeroExcitationForSecondsStaysFiniteAndBounded) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = paper_state(*arm);
+  arm->setExcitations(s, Eigen::VectorXd::Zero(6));
+  fp::SimulationOptions o;
+  o.duration_s = 3.0;
+  o.report_interval_s = 0.05;
+  // Once activations fall below the floor the tendon ODE is stiff (rates ~1e6/s): Runge-Kutta-
+  // Merson needs ~5e5 steps per simulated second here, the implicit BDF ~1e3. BDF needs a tight
+  // accuracy: at 1e-6 and 1e-7 its error control let slack tendons drift far below slack length
+  // (measured), at 1e-8 they stay within round-off of it.
+  o.accuracy = 1e-8;
+  o.integrator = fp::IntegratorKind::CPodesBdf;
+  const auto r = fp::simulate(*arm, s, o);
+  expect_bounded(*arm, r);
+  // Deactivation decays with T_deact = 0.04 s: after 3 s every activation is ~0.
+  EXPECT_LT(arm->activations(r.final_state).maxCoeff(), 1e-6);
+  // With no muscle force the arm falls and hangs down: the shoulder angle goes below 0.
+  EXPECT_LT(r.states.column("/jointset/shoulder/q").back(), -0.5);
+}
+
+TEST(HillMuscleRobustness, SlackTendonsAndActivationAtZeroStayFinite) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = arm->defaultState();
+  arm->setJointAngles(s, Eigen::Vector2d(deg(30), deg(40)));
+  Eigen::VectorXd slack(6);
+  for (int j = 0; j < 6; ++j) slack[j] = 0.9 * arm->description().muscles[j].parameters.tendon_slack_length_m;
+  arm->setTendonLengths(s, slack);
+  arm->setActivations(s, Eigen::VectorXd::Zero(6));
+  arm->setExcitations(s, Eigen::VectorXd::Constant(6, 0.5));
+  arm->system().realize(s, SimTK::Stage::Acceleration);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_EQ(arm->muscle(j).getTendonForce(s), 0.0);
+    // A slack tendon: z = 0, the fiber shortens at Vmax and takes up the slack.
+    EXPECT_GT(arm->muscle(j).getTendonLengthDerivative(s), 0.0);
+  }
+  fp::SimulationOptions o;
+  o.duration_s = 1.0;
+  o.accuracy = 1e-6;
+  o.report_interval_s = 0.05;
+  expect_bounded(*arm, fp::simulate(*arm, s, o));
+}
+
+TEST(HillMuscleRobustness, LoadedTendonAtTheActivationFloorStaysFinite) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = paper_state(*arm);
+  arm->setActivations(s, Eigen::VectorXd::Zero(6));  // loaded tendons, no activation: z >> gmax
+  arm->setExcitations(s, Eigen::VectorXd::Zero(6));
+  arm->system().realize(s, SimTK::Stage::Acceleration);
+  for (int j = 0; j < 6; ++j) EXPECT_TRUE(std::isfinite(arm->muscle(j).getTendonLengthDerivative(s)));
+  fp::SimulationOptions o;
+  o.duration_s = 0.5;
+  o.accuracy = 1e-8;
+  o.report_interval_s = 0.05;
+  o.integrator = fp::IntegratorKind::CPodesBdf;
+  const auto bdf = fp::simulate(*arm, s, o);
+  expect_bounded(*arm, bdf);
+  // The explicit and the implicit integrator agree on this stiff run (checked on its first
+  // 0.1 s, where the explicit one is still affordable).
+  o.duration_s = 0.1;
+  o.integrator = fp::IntegratorKind::RungeKuttaMerson;
+  const auto rkm = fp::simulate(*arm, s, o);
+  expect_bounded(*arm, rkm);
+  const auto q_rkm = rkm.states.column("/jointset/shoulder/q");
+  const auto q_bdf = bdf.states.column("/jointset/shoulder/q");
+  const auto ls_rkm = rkm.states.column("/forceset/brachialis/tendon_length");
+  const auto ls_bdf = bdf.states.column("/forceset/brachialis/tendon_length");
+  for (std::size_t k = 0; k < q_rkm.size(); ++k) {
+    EXPECT_NEAR(q_rkm[k], q_bdf[k], 1e-5) << k;
+    EXPECT_NEAR(ls_rkm[k], ls_bdf[k], 1e-8) << k;
+  }
+}
+
+TEST(HillMuscleRobustness, FullExcitationStaysFiniteAndBounded) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = paper_state(*arm);
+  arm->setExcitations(s, Eigen::VectorXd::Ones(6));
+  fp::SimulationOptions o;
+  o.duration_s = 1.0;
+  o.accuracy = 1e-6;
+  o.report_interval_s = 0.05;
+  const auto r = fp::simulate(*arm, s, o);
+  expect_bounded(*arm, r);
+  EXPECT_GT(arm->activations(r.final_state).minCoeff(), 0.99);
+}
+
+TEST(StaticEquilibrium, ClearErrorsWhereNoEquilibriumExists) {
+  const auto arm = flatsos::test::load_arm();
+  const auto& p = arm->muscle(5).getParameters();  // brachialis, slack length 0.0175 m
+  EXPECT_THROW(fp::static_equilibrium_tendon_length(p, 0.15, 1.5), std::domain_error);
+  EXPECT_THROW(fp::static_equilibrium_tendon_length(p, 0.15, std::nan("")), std::domain_error);
+  try {
+    fp::static_equilibrium_tendon_length(p, 0.01, 0.3);
+    ADD_FAILURE();
+  } catch (const std::domain_error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("brachialis"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("slack"), std::string::npos) << msg;
+  }
+}
+
+TEST(StaticEquilibrium, SolvesTheBalanceToRoundOff) {
+  const auto arm = flatsos::test::load_arm();
+  for (int j = 0; j < arm->numMuscles(); ++j) {
+    const auto& p = arm->muscle(j).getParameters();
+    for (double a : {0.0, 0.001, 0.1, 0.5, 1.0}) {
+      const double length = p.tendon_slack_length_m + 0.9 * p.optimal_fiber_length_m;
+      const double ls = fp::static_equilibrium_tendon_length(p, length, a);
+      const double capacity = flatsos::muscles::effective_activation(p, a) * p.max_isometric_force_N *
+                              flatsos::muscles::force_length(p, length - ls);
+      EXPECT_NEAR(flatsos::muscles::tendon_force(p, ls), capacity, 1e-9 * p.max_isometric_force_N) << j << " " << a;
+    }
+  }
+}

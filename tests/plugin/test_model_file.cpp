@@ -1,0 +1,149 @@
+// The model loader: the arm file loads to the DESIGN.md 2.4 numbers, and every kind of bad file
+// is rejected with a message naming the field, before anything is built.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "arm_fixture.hpp"
+#include "flatsos/plugin/model_description.hpp"
+
+namespace fp = flatsos::plugin;
+using nlohmann::json;
+
+namespace {
+json arm_json() {
+  std::ifstream in(flatsos::test::arm_model_path());
+  return json::parse(in);
+}
+
+struct BadModel {
+  const char* what;
+  std::function<void(json&)> spoil;
+  std::vector<std::string> message_contains;
+};
+}  // namespace
+
+TEST(ModelFile, ArmLoadsWithItsMomentArmsAndFlatOutputs) {
+  const auto m = fp::load_model_file(flatsos::test::arm_model_path());
+  ASSERT_EQ(m.numJoints(), 2);
+  ASSERT_EQ(m.numMuscles(), 6);
+  Eigen::MatrixXd a_expected(2, 6);
+  a_expected << 0.05, -0.05, 0.03, -0.03, 0, 0,  //
+      0, 0, 0.03, -0.03, -0.03, 0.03;
+  EXPECT_EQ(m.momentArmMatrix(), a_expected);
+  Eigen::MatrixXd e_expected(4, 6);
+  e_expected << 0.5, 0.5, 0, 0, 0, 0,  //
+      0, 0, 0.5, 0.5, 0, 0,            //
+      0, 0, 0, 0, 0.5, 0.5,            //
+      0, 0, 0, 0, 1, 0;
+  EXPECT_EQ(m.flatOutputMatrix(), e_expected);
+  EXPECT_EQ(m.muscles[5].parameters.name, "brachialis");
+  EXPECT_DOUBLE_EQ(m.muscles[5].parameters.tendon_slack_length_m, 0.0175);
+  EXPECT_DOUBLE_EQ(m.muscles[5].parameters.activation_floor, 1e-4);
+  EXPECT_DOUBLE_EQ(m.muscles[2].length_at_zero_angles_m, 0.4283);
+  EXPECT_EQ(m.jointIndex("elbow"), 1);
+  EXPECT_EQ(m.muscleIndex("nope"), -1);
+}
+
+TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
+  const std::vector<BadModel> cases = {
+      {"missing bodies", [](json& j) { j.erase("bodies"); }, {"bodies", "missing"}},
+      {"empty muscles", [](json& j) { j["muscles"] = json::array(); }, {"muscles", "empty"}},
+      {"negative mass", [](json& j) { j["bodies"][1]["mass_kg"] = -1.76; }, {"bodies[1].mass_kg", "> 0"}},
+      {"mass as string", [](json& j) { j["bodies"][0]["mass_kg"] = "2.24"; }, {"bodies[0].mass_kg", "number"}},
+      {"com wrong dimension", [](json& j) { j["bodies"][0]["mass_center_m"] = {0.1, 0.0}; },
+       {"bodies[0].mass_center_m", "dimension"}},
+      {"inertia wrong dimension", [](json& j) { j["bodies"][0]["inertia_about_mass_center_kg_m2"] = {1, 2}; },
+       {"inertia_about_mass_center_kg_m2", "dimension"}},
+      {"inertia triangle", [](json& j) { j["bodies"][0]["inertia_about_mass_center_kg_m2"] = {0.01, 0.01, 0.05}; },
+       {"inertia_about_mass_center_kg_m2", "triangle"}},
+      {"typo key in body", [](json& j) { j["bodies"][0]["mass"] = 2.0; }, {"bodies[0].mass", "unknown key"}},
+      {"ground as body name", [](json& j) { j["bodies"][0]["name"] = "ground"; }, {"reserved"}},
+      {"duplicate body", [](json& j) { j["bodies"][1]["name"] = "upper_arm"; }, {"duplicate body"}},
+      {"slider joint", [](json& j) { j["joints"][0]["type"] = "slider"; }, {"joints[0].type", "slider"}},
+      {"unknown parent", [](json& j) { j["joints"][1]["parent"] = "torso"; }, {"joints[1].parent", "torso"}},
+      {"unknown child", [](json& j) { j["joints"][1]["child"] = "hand"; }, {"joints[1].child", "hand"}},
+      {"children first", [](json& j) { std::swap(j["joints"][0], j["joints"][1]); }, {"joints[0].parent", "not attached"}},
+      {"body attached twice", [](json& j) { j["joints"][1]["child"] = "upper_arm"; j["joints"][1]["parent"] = "ground"; },
+       {"joints[1].child", "already has a joint"}},
+      {"zero axis", [](json& j) { j["joints"][0]["axis"] = {0, 0, 0}; }, {"joints[0].axis", "zero"}},
+      {"gravity wrong dimension", [](json& j) { j["gravity_m_per_s2"] = {0, -9.81}; }, {"gravity_m_per_s2", "dimension"}},
+      {"unknown top-level key", [](json& j) { j["muscle"] = json::array(); }, {"muscle", "unknown key"}},
+      {"missing Fmax", [](json& j) { j["muscles"][0].erase("max_isometric_force_N"); },
+       {"muscles[0].max_isometric_force_N", "missing"}},
+      {"negative Fmax", [](json& j) { j["muscles"][3]["max_isometric_force_N"] = -1000; },
+       {"muscles[3]", "triceps_long", "max_isometric_force_N"}},
+      {"gmax <= 1 in defaults", [](json& j) { j["muscle_defaults"]["max_eccentric_force_ratio"] = 0.9; },
+       {"muscles[0]", "max_eccentric_force_ratio"}},
+      {"typo in defaults", [](json& j) { j["muscle_defaults"]["hill"] = 0.3; }, {"muscle_defaults.hill", "unknown key"}},
+      {"Tact > Tdeact", [](json& j) { j["muscles"][2]["activation_time_constant_s"] = 0.1; },
+       {"biceps", "activation_time_constant_s"}},
+      {"negative l0", [](json& j) { j["muscles"][1]["length_at_zero_angles_m"] = -0.1; },
+       {"muscles[1].length_at_zero_angles_m", "> 0"}},
+      {"unknown joint in moment arms", [](json& j) { j["muscles"][0]["moment_arms_m"] = {{"wrist", 0.02}}; },
+       {"muscles[0].moment_arms_m.wrist", "unknown joint"}},
+      {"moment-arm row not N", [](json& j) { j["muscles"][0]["moment_arms_m"] = {0.05, 0.0, 0.01}; },
+       {"muscles[0].moment_arms_m", "N x m"}},
+      {"crosses no joint", [](json& j) { j["muscles"][4]["moment_arms_m"] = {{"elbow", 0.0}}; },
+       {"muscles[4].moment_arms_m", "crosses no joint"}},
+      {"duplicate muscle", [](json& j) { j["muscles"][1]["name"] = "anterior_deltoid"; }, {"duplicate muscle"}},
+      {"E wrong shape", [](json& j) { j["flat_outputs"].erase(3); }, {"flat_outputs", "m - N = 4 rows"}},
+      {"E unknown muscle", [](json& j) { j["flat_outputs"][0]["weights"]["deltoid"] = 1.0; },
+       {"flat_outputs[0].weights.deltoid", "unknown muscle"}},
+      {"E weight not a number", [](json& j) { j["flat_outputs"][1]["weights"]["biceps"] = nullptr; },
+       {"flat_outputs[1].weights.biceps", "number"}},
+  };
+  for (const auto& c : cases) {
+    json j = arm_json();
+    c.spoil(j);
+    try {
+      fp::parse_model_json(j.dump(), "case.json");
+      ADD_FAILURE() << "accepted: " << c.what;
+    } catch (const fp::ModelFileError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("case.json"), std::string::npos) << c.what << ": " << msg;
+      for (const auto& part : c.message_contains)
+        EXPECT_NE(msg.find(part), std::string::npos) << c.what << ": '" << part << "' not in: " << msg;
+    }
+  }
+}
+
+TEST(ModelFile, MalformedJsonAndMissingFileAreRejected) {
+  EXPECT_THROW(fp::parse_model_json("{\"bodies\": [", "broken.json"), fp::ModelFileError);
+  try {
+    fp::parse_model_json("{\"bodies\": [", "broken.json");
+  } catch (const fp::ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos);
+  }
+  try {
+    fp::load_model_file("/nonexistent/arm.json");
+    ADD_FAILURE();
+  } catch (const fp::ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot be opened"), std::string::npos);
+  }
+}
+
+TEST(ModelFile, BuildingAModelValidatesACodeBuiltDescriptionToo) {
+  auto d = fp::load_model_file(flatsos::test::arm_model_path());
+  d.muscles[0].moment_arms_m.resize(3);
+  EXPECT_THROW(fp::MusculoskeletalModel{d}, fp::ModelFileError);
+}
+
+TEST(ModelFile, ThreeLinkChainFromAFileBuildsAndHasTheRightMassMatrixSize) {
+  json j = arm_json();
+  j["bodies"].push_back({{"name", "hand"}, {"mass_kg", 0.5}, {"mass_center_m", {0.05, 0, 0}},
+                         {"inertia_about_mass_center_kg_m2", 0.001}});
+  j["joints"].push_back({{"name", "wrist"}, {"type", "pin"}, {"parent", "forearm"}, {"child", "hand"},
+                         {"location_in_parent_m", {0.32, 0, 0}}});
+  j["muscles"].push_back({{"name", "flexor"}, {"max_isometric_force_N", 200}, {"optimal_fiber_length_m", 0.06},
+                          {"tendon_slack_length_m", 0.2}, {"length_at_zero_angles_m", 0.26},
+                          {"moment_arms_m", {{"wrist", 0.01}}}});
+  // m - N = 7 - 3 = 4: the arm's four flat outputs still have the right shape.
+  fp::MusculoskeletalModel model(fp::parse_model_json(j.dump(), "three_link.json"));
+  EXPECT_EQ(model.numJoints(), 3);
+  EXPECT_EQ(model.massMatrix(Eigen::Vector3d(0.1, 0.2, 0.3)).rows(), 3);
+  EXPECT_EQ(model.momentArmMatrix()(2, 6), 0.01);
+}
