@@ -1,0 +1,37 @@
+// Adds one flatsos Hill muscle to a user-built Simbody pendulum and simulates it briefly.
+#include <cmath>
+#include <iostream>
+
+#include <Simbody.h>
+
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/plugin/hill_muscle.hpp"
+
+int main() {
+  SimTK::MultibodySystem system;
+  SimTK::SimbodyMatterSubsystem matter(system);
+  SimTK::GeneralForceSubsystem forces(system);
+  SimTK::Force::Gravity gravity(forces, matter, SimTK::Vec3(0, -9.81, 0));
+  const SimTK::Vec3 com(0.2, 0, 0);
+  const SimTK::MassProperties mass(1.0, com, SimTK::Inertia(0.01).shiftFromMassCenter(com, 1.0));
+  SimTK::MobilizedBody::Pin link(matter.Ground(), SimTK::Transform(), SimTK::Body::Rigid(mass),
+                                 SimTK::Transform());
+  flatsos::muscles::MuscleParameters p;
+  p.name = "flexor";
+  p.max_isometric_force_N = 500;
+  p.optimal_fiber_length_m = 0.1;
+  p.tendon_slack_length_m = 0.2;
+  flatsos::plugin::HillMuscle muscle(forces, p, {0.3, {{link, 0.03}}});
+  system.realizeTopology();
+  SimTK::State s = system.getDefaultState();
+  muscle.setActivation(s, 0.5);
+  muscle.setExcitation(s, 0.5);
+  muscle.setTendonLength(s, 0.205);
+  SimTK::RungeKuttaMersonIntegrator integ(system);
+  integ.initialize(s);
+  integ.stepTo(0.1);
+  integ.stepTo(0.1);
+  const double q = link.getOneQ(integ.getState(), 0);
+  std::cout << "q(0.1 s) = " << q << " rad, tendon force " << muscle.getTendonForce(integ.getState()) << " N\n";
+  return std::isfinite(q) && integ.getTime() == 0.1 ? 0 : 1;
+}
