@@ -1,0 +1,106 @@
+#pragma once
+// Flat outputs y = [q; Y], Y = E Phi_S(L_S) (DESIGN.md 3), and the maps between muscle states and
+// flat outputs with their derivatives.
+//
+// Inverse map (flat outputs -> muscle states and excitations) at one time, from the joint jet
+// (q and its first four time derivatives) and the flat-output jet (Y, dY, ddY):
+//   tau, dtau, ddtau from Simbody's inverse dynamics along the joint motion (eighth-order
+//   central differences in time of tau(t) = ID(q(t), qd(t), qdd(t)) on the jet's Taylor curve);
+//   F = C_tau tau + C_Y Y; L_S = Phi_S^-1(F); dL_S = dF / Phi_S'; u = dL_S + A^T qd;
+//   L_C = L(q) - L_S; a = F / (Fmax f(L_C) g(u)); da/dt by the analytic chain rule; n from the
+//   inverse activation dynamics. No numerical differentiation of a.
+// Forward map (state -> flat outputs and the derivatives the state determines): q, qd, qdd,
+//   q''' , Y, dY from (q, qd, L_S, a) with the same laws the Simbody force element uses.
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "flatsos/plugin/musculoskeletal_model.hpp"
+
+namespace flatsos::planner {
+
+/// Thrown when A and E violate Assumption 1 of the paper, or E has the wrong shape.
+class FlatnessError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+/// Derivatives 0..K-1 of a vector signal at one time, one column per order (N x K).
+using Jet = Eigen::MatrixXd;
+
+/// Joint torques and their first two time derivatives (N x 3).
+struct TorqueJet {
+  Eigen::MatrixXd tau;  ///< columns tau, dtau/dt, d2tau/dt2 (N m, N m/s, N m/s^2)
+};
+
+/// Muscle quantities from the inverse map at one time (one entry per muscle).
+struct MusclePoint {
+  Eigen::VectorXd tendon_force_N, tendon_force_rate_N_per_s;
+  Eigen::VectorXd tendon_length_m, tendon_length_rate_m_per_s;
+  Eigen::VectorXd fiber_length_m, shortening_velocity_m_per_s;
+  Eigen::VectorXd force_ratio;  ///< z = g(u)
+  Eigen::VectorXd activation, activation_rate_per_s;
+  Eigen::VectorXd excitation;   ///< larger root of the inverse activation dynamics
+  /// Per muscle, empty when the point is inside the valid domain; otherwise why not (slack
+  /// tendon, u >= Vmax, z beyond the exact force-velocity range, a outside (0, 1], n outside
+  /// [0, 1] or unattainable).
+  std::vector<std::string> domain_violation;
+  bool inDomain() const;
+};
+
+/// The flat outputs and derivatives that a muscle state determines.
+struct FlatState {
+  Eigen::MatrixXd q;  ///< N x 4: q, qd, qdd, q''' (rad, rad/s, ...)
+  Eigen::MatrixXd Y;  ///< p x 2: Y, dY (N, N/s)
+};
+
+/// Muscle state of a model at one time (description order).
+struct MuscleState {
+  Eigen::VectorXd q_rad, qd_rad_per_s, tendon_length_m, activation;
+};
+
+/// The muscle state of a Simbody State of `model` (q, qd, tendon lengths, activations).
+MuscleState muscle_state_of(const plugin::MusculoskeletalModel& model, const SimTK::State& state);
+
+class FlatOutputMap {
+ public:
+  /// E from the model file's flat_outputs. Throws FlatnessError naming each violated condition
+  /// of Assumption 1 (E shape, C singular, rows of E not summing to 1, 1 - C_tau s_tau > 0).
+  explicit FlatOutputMap(const plugin::MusculoskeletalModel& model);
+  FlatOutputMap(const plugin::MusculoskeletalModel& model, Eigen::MatrixXd E);
+
+  const plugin::MusculoskeletalModel& model() const { return model_; }
+  int numJoints() const { return static_cast<int>(A_.rows()); }
+  int numMuscles() const { return static_cast<int>(A_.cols()); }
+  int numFlatOutputs() const { return static_cast<int>(E_.rows()); }
+  const Eigen::MatrixXd& A() const { return A_; }
+  const Eigen::MatrixXd& E() const { return E_; }
+  const Eigen::MatrixXd& C() const { return C_; }
+  const Eigen::MatrixXd& Ctau() const { return Ctau_; }  ///< m x N
+  const Eigen::MatrixXd& CY() const { return CY_; }      ///< m x p
+
+  /// Checks Assumption 1 for a pair (A, E); throws FlatnessError listing every failure.
+  static void checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E);
+
+  /// tau(q, qd, qdd) from Simbody (muscles excluded).
+  Eigen::VectorXd torque(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                         const Eigen::VectorXd& qdd) const;
+  /// tau and its first two time derivatives along a joint motion with the given jet
+  /// (N x 5: q .. q''''). Columns beyond those given are taken as 0.
+  TorqueJet torqueJet(const Jet& q_jet) const;
+
+  /// Inverse map at one time: q_jet N x 5 (q..q''''), Y_jet p x 3 (Y, dY, ddY).
+  MusclePoint inverse(const Jet& q_jet, const Jet& Y_jet) const;
+  /// Same with a precomputed torque jet.
+  MusclePoint inverseFromTorque(const Jet& q_jet, const TorqueJet& tau, const Jet& Y_jet) const;
+
+  /// Forward map of a muscle state. Throws std::invalid_argument for sizes or NaN.
+  FlatState forward(const MuscleState& s) const;
+
+ private:
+  const plugin::MusculoskeletalModel& model_;
+  Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;
+};
+
+}  // namespace flatsos::planner

@@ -1,0 +1,26 @@
+#pragma once
+// Primary motion planning (PMPP): one polynomial per joint through boundary derivatives.
+// Open loop: degree 8 from (q, qd, qdd, q''') at 0 to (q_T, 0, 0, 0, 0) at T; receding horizon:
+// a cubic from (q, qd) to (q_T, 0).
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/polynomial.hpp"
+
+namespace flatsos::planner {
+
+struct JointPath {
+  double duration_s = 0.0;
+  std::vector<Polynomial> q;  ///< per joint, ascending powers of t (s), radians
+  /// N x orders jet (derivatives 0..orders-1) at time t.
+  Jet jet(double t, int orders = 5) const;
+};
+
+/// initial: N x k0 (derivatives 0..k0-1 at 0), terminal: N x kT (derivatives 0..kT-1 at T).
+/// Degree k0 + kT - 1. Throws std::invalid_argument for T <= 0, mismatched rows or NaN.
+JointPath fit_joint_path(double duration_s, const Eigen::MatrixXd& initial, const Eigen::MatrixXd& terminal);
+
+}  // namespace flatsos::planner

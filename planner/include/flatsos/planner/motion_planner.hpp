@@ -1,0 +1,91 @@
+#pragma once
+// The planner API for a model built with the plugin: plan an open-loop transfer between a
+// muscle state and a rest target (PMPP + torque model + SOS program + dense a-posteriori check),
+// or one receding-horizon step (cubic path + torque box + SLP).
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/slp.hpp"
+#include "flatsos/planner/sos_program.hpp"
+#include "flatsos/planner/torque_model.hpp"
+
+namespace flatsos::planner {
+
+/// What a plan implies along a dense time grid, from the exact inverse map.
+struct PlanCheck {
+  int points = 0;
+  double min_tendon_force_N = 0.0;
+  double min_reserve_margin_N = 0.0;  ///< min over grid and muscles of F_j - reserve_j
+  double min_activation = 0.0, max_activation = 0.0;
+  double min_excitation = 0.0, max_excitation = 0.0;
+  int points_outside_domain = 0;      ///< grid points where some muscle leaves the valid domain
+  std::string first_violation;        ///< "t = ... s, muscle '...': why"
+};
+
+struct OpenLoopOptions {
+  double duration_s = 3.0;
+  Eigen::VectorXd target_q_rad;       ///< rest target (qd = qdd = q''' = q'''' = 0 there)
+  Eigen::VectorXd reserves_N;         ///< minimum tendon force per muscle
+  TorqueModelOptions torque;          ///< K pieces of degree r (K = 1, r = 0: the paper's box)
+  SosProgramOptions sos;              ///< includes the flat-output degree (4: quartic)
+  int check_points = 301;             ///< dense grid of the a-posteriori check
+};
+
+struct OpenLoopPlan {
+  SolveStatus status = SolveStatus::Failed;
+  std::string message;
+  JointPath path;                     ///< degree-8 joint polynomials
+  std::vector<Polynomial> Y;          ///< flat outputs (N), ascending powers of t
+  SosProgramResult sos;
+  TorqueModel torque;
+  PlanCheck check;
+  double setup_seconds = 0.0;         ///< forward map, joint paths, torque model, SOS setup
+  double solve_seconds = 0.0;         ///< exchange LPs
+  double certify_seconds = 0.0;
+  double check_seconds = 0.0;
+
+  Jet jointJet(double t) const { return path.jet(t, 5); }
+  Jet flatOutputJet(double t) const;  ///< p x 3: Y, dY, ddY
+};
+
+/// Open-loop plan from `initial` to rest at options.target_q_rad in options.duration_s.
+/// The initial muscle state fixes q, qd, qdd, q''' and Y, dY at t = 0 (forward map); terminal
+/// rest fixes qd..q'''' = 0 and dY = ddY = 0. Throws std::invalid_argument for bad input (sizes,
+/// NaN, T <= 0, negative reserves, initial state outside the model's valid domain); solver
+/// outcomes come back as statuses.
+OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& options);
+
+/// The a-posteriori check of any flat trajectory on `points` uniform times in [0, T].
+PlanCheck check_plan(const FlatOutputMap& flat, const JointPath& path, const std::vector<Polynomial>& Y,
+                     const Eigen::VectorXd& reserves_N, int points);
+
+struct RecedingHorizonOptions {
+  double horizon_s = 0.5;
+  int grid_points = 11;               ///< torque box sampled here (the paper's grid)
+  Eigen::VectorXd target_q_rad;
+  Eigen::VectorXd reserves_N;
+  SlpSolver solver = SlpSolver::Ipopt;
+};
+
+struct RecedingHorizonStep {
+  SolveStatus status = SolveStatus::Failed;
+  std::string message;
+  JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon
+  Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
+  SlpResult slp;
+  Eigen::VectorXd alpha() const { return slp.alpha; }  ///< constant Y, N
+  double seconds = 0.0;
+};
+
+/// One RH step from the measured joint state (the SLP formulation: no initial constraints on Y,
+/// terminal equilibrium). Throws std::invalid_argument for bad sizes, NaN, horizon <= 0,
+/// fewer than 2 grid points or negative reserves.
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad,
+                                               const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions& options);
+
+}  // namespace flatsos::planner

@@ -1,0 +1,48 @@
+#pragma once
+// The secondary linear program (SLP, paper section "Linear Programming Solution"): with no
+// initial constraints on Y and dY(T) = 0, the optimal Y is a constant alpha solving
+//   minimize sum(alpha)  subject to  C_Y alpha >= B,  alpha >= 0,
+//   B_j = F_reserve,j - min over the torque box of C_tau,j tau.
+// Under Assumption 1, sigma = C_Y 1_p > 0 (paper appendix), so alpha = gamma 1_p with
+// gamma = max(max_j B_j / sigma_j, 0) is always feasible. (The paper writes alpha = gamma sigma,
+// which has the wrong size: sigma has m entries, alpha p.)
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/linear_program.hpp"
+
+namespace flatsos::planner {
+
+/// B from a torque box [tau_min, tau_max] (per joint) and the reserves.
+Eigen::VectorXd slp_bound_vector(const Eigen::MatrixXd& Ctau, const Eigen::VectorXd& tau_min,
+                                 const Eigen::VectorXd& tau_max, const Eigen::VectorXd& reserves_N);
+
+/// The appendix construction: always feasible, generally not optimal.
+Eigen::VectorXd slp_appendix_solution(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B);
+
+/// Exact optimum by enumerating the vertices of {C_Y alpha >= B, alpha >= 0} (p active
+/// constraints out of m + p). For small p only (cost grows as C(m + p, p)); reference solver in
+/// tests and a fast exact path. Throws std::runtime_error if no vertex is feasible.
+Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B);
+
+enum class SlpSolver { Ipopt, VertexEnumeration };
+
+struct SlpResult {
+  SolveStatus status = SolveStatus::Failed;
+  std::string message;
+  Eigen::VectorXd alpha;       ///< the constant flat outputs, N
+  double cost_N = 0.0;         ///< sum(alpha)
+  bool used_fallback = false;  ///< the solver failed and the appendix construction was used
+  int iterations = 0;
+  double seconds = 0.0;
+};
+
+/// Solves the SLP. Ipopt starts from the appendix construction; if it fails, the result falls
+/// back to the appendix construction (feasible, status Solved, used_fallback = true, message says
+/// why). Throws std::invalid_argument for wrong sizes or NaN, FlatnessError-like
+/// std::invalid_argument if some row sum of C_Y is not positive.
+SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::Ipopt);
+
+}  // namespace flatsos::planner

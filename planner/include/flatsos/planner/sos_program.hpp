@@ -1,0 +1,65 @@
+#pragma once
+// The secondary optimization problem (SOP, DESIGN.md 4):
+//   minimize  integral_0^T sum_l Y_l(t) dt  over polynomial Y of degree d
+//   subject to  F_j(t) = C_tau,j tau(t) + C_Y,j Y(t) >= F_reserve,j  and  Y(t) >= 0 on [0, T],
+//               boundary equalities on Y and its derivatives at 0 and T.
+// tau(t) comes from a TorqueModel (K pieces, degree r, remainder bounds), so on piece k each
+// constraint is a polynomial in scaled time s in [0, 1] that is affine in the free
+// coefficients theta of Y (the boundary equalities are eliminated first):
+//   g_jk(s) = C_Y,j Y(s) + C_tau,j p_k(s) - |C_tau,j| e_k - F_reserve,j >= 0.
+// Solved by an exchange (cutting-plane) method: an LP in theta (Ipopt) imposes the constraints
+// at finitely many points; the exact minimum of every g_jk on [0, 1] (roots of g') adds the
+// violated points; repeat. The result is feasible for the semi-infinite program, and the
+// pieces that come near zero get Markov-Lukacs SOS certificates.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/linear_program.hpp"
+#include "flatsos/planner/polynomial.hpp"
+#include "flatsos/planner/torque_model.hpp"
+
+namespace flatsos::planner {
+
+/// Boundary equalities on the flat outputs Y (p rows each).
+struct FlatOutputBoundary {
+  Eigen::MatrixXd initial;            ///< p x k0: derivatives 0..k0-1 at t = 0 (k0 may be 0)
+  Eigen::MatrixXd terminal;           ///< p x kT: derivatives first..first+kT-1 at t = T
+  int terminal_first_order = 1;       ///< 1: Y(T) free, rates fixed (terminal equilibrium)
+};
+
+struct SosProgramOptions {
+  int flat_output_degree = 4;          ///< d
+  double feasibility_margin_N = 1e-6;  ///< constraints are imposed >= this at the LP points
+  int max_exchange_rounds = 40;
+  double coefficient_bound_N = 1e7;    ///< |theta| box keeping early LPs bounded
+  bool certify = true;                 ///< Lukacs certificates for the near-active pieces
+  double near_active_N = 1.0;          ///< pieces whose minimum is below this get certified
+};
+
+struct SosProgramResult {
+  SolveStatus status = SolveStatus::Failed;
+  std::string message;                 ///< why, when not solved
+  double cost_N_s = 0.0;               ///< integral of sum Y
+  std::vector<Polynomial> Y;           ///< per flat output, ascending powers of t (s), N
+  double min_constraint_value_N = 0.0; ///< exact minimum of every g_jk and Y_l over [0, T]
+  int exchange_rounds = 0;
+  int lp_points = 0;
+  int ipopt_iterations = 0;            ///< summed over all Ipopt calls
+  int ipopt_calls = 0;
+  int near_active_pieces = 0;
+  int certified_pieces = 0;            ///< of the near-active ones
+  bool certified = false;              ///< every near-active piece has a certificate
+  double setup_seconds = 0.0, solve_seconds = 0.0, certify_seconds = 0.0;
+};
+
+/// Throws std::invalid_argument for bad sizes, NaN, T <= 0, a negative reserve or a degree too
+/// low for the equalities.
+SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
+                                   const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
+                                   const SosProgramOptions& options = {});
+
+}  // namespace flatsos::planner

@@ -1,0 +1,40 @@
+#pragma once
+// Torque models for the SOS program: tau(t) is not polynomial, so on each of K pieces of the
+// horizon it is replaced by a polynomial of degree r plus a bound on the remainder,
+//   |tau_i(t) - p_ki(t)| <= e_ki  on piece k.
+// K = 1, r = 0 is the paper's single box [tau_min, tau_max] (p = midpoint, e = half range).
+// For r >= 1, p interpolates tau at r + 1 Chebyshev points of the piece. The remainder is the
+// largest deviation over `samples_per_piece` uniform samples (ends included), inflated by
+// `remainder_inflation`: a sampled estimate, made safe by the inflation and checked a
+// posteriori by the planner on a dense grid. The conservativeness vanishes as K and r grow.
+
+#include <vector>
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/polynomial.hpp"
+
+namespace flatsos::planner {
+
+struct TorqueModelOptions {
+  int pieces = 12;                  ///< K
+  int degree = 3;                   ///< r
+  int samples_per_piece = 16;
+  double remainder_inflation = 1.25;
+};
+
+struct TorquePiece {
+  double t0_s = 0.0, t1_s = 0.0;
+  std::vector<Polynomial> torque;   ///< per joint, in the piece's scaled time s in [0, 1]
+  Eigen::VectorXd remainder_N_m;    ///< e_ki per joint
+};
+
+struct TorqueModel {
+  std::vector<TorquePiece> pieces;
+  int torque_evaluations = 0;
+};
+
+/// Throws std::invalid_argument for K < 1, r < 0, samples < 2 or fewer samples than r + 1.
+TorqueModel build_torque_model(const FlatOutputMap& flat, const JointPath& path, const TorqueModelOptions& options);
+
+}  // namespace flatsos::planner

@@ -1,0 +1,236 @@
+#include "flatsos/planner/flat_outputs.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Dense>
+
+#include "flatsos/muscles/hill_laws.hpp"
+
+namespace flatsos::planner {
+
+namespace fm = flatsos::muscles;
+
+namespace {
+
+// Eighth-order central-difference weights for the first and second derivative at offsets
+// -4h..4h (Fornberg). The step is in seconds: joint motions vary on time scales far above it,
+// and round-off of the second derivative stays ~1e-9 relative.
+constexpr double kJetStep_s = 1e-2;
+constexpr double kD1[9] = {1.0 / 280, -4.0 / 105, 1.0 / 5, -4.0 / 5, 0.0, 4.0 / 5, -1.0 / 5, 4.0 / 105, -1.0 / 280};
+constexpr double kD2[9] = {-1.0 / 560, 8.0 / 315, -1.0 / 5, 8.0 / 5, -205.0 / 72, 8.0 / 5, -1.0 / 5, 8.0 / 315, -1.0 / 560};
+
+double factorial(int k) {
+  double f = 1.0;
+  for (int i = 2; i <= k; ++i) f *= i;
+  return f;
+}
+
+// Derivative `order` of the Taylor curve gamma(s) = sum_k jet_k s^k / k! at s.
+Eigen::VectorXd taylor(const Jet& jet, int order, double s) {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(jet.rows());
+  for (int k = order; k < jet.cols(); ++k) v += jet.col(k) * std::pow(s, k - order) / factorial(k - order);
+  return v;
+}
+
+}  // namespace
+
+MuscleState muscle_state_of(const plugin::MusculoskeletalModel& model, const SimTK::State& state) {
+  return {model.jointAngles(state), model.jointSpeeds(state), model.tendonLengths(state), model.activations(state)};
+}
+
+bool MusclePoint::inDomain() const {
+  for (const auto& v : domain_violation)
+    if (!v.empty()) return false;
+  return true;
+}
+
+void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E) {
+  const Eigen::Index n = A.rows(), m = A.cols();
+  std::ostringstream why;
+  if (E.rows() != m - n || E.cols() != m) {
+    why << "flat-output matrix E must be (m - N) x m = " << (m - n) << " x " << m << ", got "
+        << E.rows() << " x " << E.cols();
+    throw FlatnessError(why.str());
+  }
+  if (!A.allFinite() || !E.allFinite()) throw FlatnessError("A and E must be finite");
+  Eigen::MatrixXd C(m, m);
+  C << A, E;
+  std::vector<std::string> failures;
+  for (Eigen::Index i = 0; i < E.rows(); ++i)
+    if (std::abs(E.row(i).sum() - 1.0) > 1e-12) {
+      std::ostringstream f;
+      f << "condition 2: row " << i << " of E sums to " << E.row(i).sum() << ", not 1";
+      failures.push_back(f.str());
+    }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
+  lu.setThreshold(1e-10);
+  if (!lu.isInvertible()) {
+    failures.push_back("condition 1: C = [A; E] is singular (rank " + std::to_string(lu.rank()) +
+                       " of " + std::to_string(m) + ")");
+  } else {
+    const Eigen::MatrixXd Cinv = lu.inverse();
+    const Eigen::VectorXd margin =
+        Eigen::VectorXd::Ones(m) - Cinv.leftCols(n) * A.rowwise().sum();
+    for (Eigen::Index j = 0; j < m; ++j)
+      if (!(margin[j] > 0.0)) {
+        std::ostringstream f;
+        f << "condition 3: 1 - C_tau s_tau = " << margin[j] << " <= 0 for muscle " << j;
+        failures.push_back(f.str());
+      }
+  }
+  if (!failures.empty()) {
+    std::string msg = "Assumption 1 violated:";
+    for (const auto& f : failures) msg += " " + f + ";";
+    throw FlatnessError(msg);
+  }
+}
+
+FlatOutputMap::FlatOutputMap(const plugin::MusculoskeletalModel& model)
+    : FlatOutputMap(model, model.description().flatOutputMatrix()) {}
+
+FlatOutputMap::FlatOutputMap(const plugin::MusculoskeletalModel& model, Eigen::MatrixXd E)
+    : model_(model), A_(model.momentArmMatrix()), E_(std::move(E)) {
+  if (E_.rows() == 0) throw FlatnessError("the model '" + model.description().name + "' defines no flat_outputs (E)");
+  checkAssumption1(A_, E_);
+  C_.resize(numMuscles(), numMuscles());
+  C_ << A_, E_;
+  const Eigen::MatrixXd Cinv = C_.fullPivLu().inverse();
+  Ctau_ = Cinv.leftCols(numJoints());
+  CY_ = Cinv.rightCols(numFlatOutputs());
+}
+
+Eigen::VectorXd FlatOutputMap::torque(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                      const Eigen::VectorXd& qdd) const {
+  return model_.inverseDynamics(q, qd, qdd);
+}
+
+TorqueJet FlatOutputMap::torqueJet(const Jet& q_jet) const {
+  if (q_jet.rows() != numJoints() || q_jet.cols() < 3)
+    throw std::invalid_argument("joint jet must be N x (3..5): q, qd, qdd[, q''', q'''']");
+  TorqueJet out;
+  out.tau = Eigen::MatrixXd::Zero(numJoints(), 3);
+  for (int k = -4; k <= 4; ++k) {
+    const double s = k * kJetStep_s;
+    const Eigen::VectorXd t = torque(taylor(q_jet, 0, s), taylor(q_jet, 1, s), taylor(q_jet, 2, s));
+    if (k == 0) out.tau.col(0) = t;
+    out.tau.col(1) += kD1[k + 4] / kJetStep_s * t;
+    out.tau.col(2) += kD2[k + 4] / (kJetStep_s * kJetStep_s) * t;
+  }
+  return out;
+}
+
+MusclePoint FlatOutputMap::inverse(const Jet& q_jet, const Jet& Y_jet) const {
+  return inverseFromTorque(q_jet, torqueJet(q_jet), Y_jet);
+}
+
+MusclePoint FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, const Jet& Y_jet) const {
+  const int m = numMuscles();
+  if (Y_jet.rows() != numFlatOutputs() || Y_jet.cols() < 2)
+    throw std::invalid_argument("flat-output jet must be p x (2..3): Y, dY[, ddY]");
+  auto col = [](const Jet& j, int k) { return k < j.cols() ? Eigen::VectorXd(j.col(k)) : Eigen::VectorXd::Zero(j.rows()); };
+  const Eigen::VectorXd F = Ctau_ * tj.tau.col(0) + CY_ * col(Y_jet, 0);
+  const Eigen::VectorXd dF = Ctau_ * tj.tau.col(1) + CY_ * col(Y_jet, 1);
+  const Eigen::VectorXd ddF = Ctau_ * tj.tau.col(2) + CY_ * col(Y_jet, 2);
+  const Eigen::VectorXd L = model_.musculotendonLengths(q_jet.col(0));
+  const Eigen::VectorXd dL = -A_.transpose() * col(q_jet, 1);
+  const Eigen::VectorXd ddL = -A_.transpose() * col(q_jet, 2);
+
+  MusclePoint p;
+  for (auto* v : {&p.tendon_force_N, &p.tendon_force_rate_N_per_s, &p.tendon_length_m, &p.tendon_length_rate_m_per_s,
+                  &p.fiber_length_m, &p.shortening_velocity_m_per_s, &p.force_ratio, &p.activation,
+                  &p.activation_rate_per_s, &p.excitation})
+    *v = Eigen::VectorXd::Constant(m, std::nan(""));
+  p.domain_violation.assign(static_cast<std::size_t>(m), "");
+  p.tendon_force_N = F;
+  p.tendon_force_rate_N_per_s = dF;
+
+  for (int j = 0; j < m; ++j) {
+    const fm::MuscleParameters& mp = model_.muscle(j).getParameters();
+    std::string& why = p.domain_violation[static_cast<std::size_t>(j)];
+    if (!(F[j] > 0.0)) {
+      why = "slack tendon (planned tendon force " + std::to_string(F[j]) + " N <= 0)";
+      continue;
+    }
+    const double ls = fm::tendon_length_from_force(mp, F[j]);
+    const double d1 = fm::tendon_force_derivative(mp, ls);
+    const double d2 = fm::tendon_force_second_derivative(mp, ls);
+    const double dls = dF[j] / d1;
+    const double ddls = (ddF[j] - d2 * dls * dls) / d1;
+    const double u = dls - dL[j];
+    const double du = ddls - ddL[j];
+    const double lc = L[j] - ls;
+    const double f = fm::force_length(mp, lc);
+    const double df = fm::force_length_derivative(mp, lc) * (-u);  // dL_C/dt = -u
+    const double g = fm::force_velocity(mp, u);
+    const double dg = fm::force_velocity_derivative(mp, u) * du;
+    p.tendon_length_m[j] = ls;
+    p.tendon_length_rate_m_per_s[j] = dls;
+    p.fiber_length_m[j] = lc;
+    p.shortening_velocity_m_per_s[j] = u;
+    p.force_ratio[j] = g;
+    if (!(g > 0.0)) {
+      why = "shortening velocity " + std::to_string(u) + " m/s >= Vmax (no force capacity)";
+      continue;
+    }
+    const double a = F[j] / (mp.max_isometric_force_N * f * g);
+    const double da = a * (dF[j] / F[j] - df / f - dg / g);
+    p.activation[j] = a;
+    p.activation_rate_per_s[j] = da;
+    const auto n = fm::excitation_from_activation(mp, a, da);
+    p.excitation[j] = n.excitation;
+    if (g > fm::force_ratio_exact_upper_bound(mp))
+      why = "force ratio z = " + std::to_string(g) + " beyond the forward model's exact range";
+    else if (!(a > 0.0 && a <= 1.0))
+      why = "activation " + std::to_string(a) + " outside (0, 1]";
+    else if (a < mp.activation_floor)
+      why = "activation " + std::to_string(a) + " below the forward model's floor " + std::to_string(mp.activation_floor);
+    else if (!n.real_root)
+      why = "no excitation gives da/dt = " + std::to_string(da) + " 1/s";
+    else if (!n.in_unit_interval())
+      why = "excitation " + std::to_string(n.excitation) + " outside [0, 1]";
+  }
+  return p;
+}
+
+FlatState FlatOutputMap::forward(const MuscleState& s) const {
+  const int n = numJoints(), m = numMuscles();
+  auto check = [](const Eigen::VectorXd& v, int size, const char* what) {
+    if (v.size() != size || !v.allFinite())
+      throw std::invalid_argument(std::string("muscle state: ") + what + " must have " + std::to_string(size) +
+                                  " finite values");
+  };
+  check(s.q_rad, n, "q");
+  check(s.qd_rad_per_s, n, "qd");
+  check(s.tendon_length_m, m, "tendon lengths");
+  check(s.activation, m, "activations");
+  Eigen::VectorXd F(m), dF(m);
+  const Eigen::VectorXd L = model_.musculotendonLengths(s.q_rad);
+  const Eigen::VectorXd dL = -A_.transpose() * s.qd_rad_per_s;
+  for (int j = 0; j < m; ++j) {
+    const fm::MuscleParameters& mp = model_.muscle(j).getParameters();
+    F[j] = fm::tendon_force(mp, s.tendon_length_m[j]);
+    const double dls = fm::tendon_length_derivative(mp, s.tendon_length_m[j], s.activation[j], L[j], dL[j]);
+    dF[j] = fm::tendon_force_derivative(mp, s.tendon_length_m[j]) * dls;
+  }
+  const Eigen::VectorXd tau = A_ * F, dtau = A_ * dF;
+  const Eigen::MatrixXd M = model_.massMatrix(s.q_rad);
+  const Eigen::LDLT<Eigen::MatrixXd> Minv(M);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+  const Eigen::VectorXd qdd = Minv.solve(tau - torque(s.q_rad, s.qd_rad_per_s, zero));
+  // dtau = d/dt ID(q, qd, qdd) = [terms with q''' = 0] + M q'''.
+  Jet jet = Eigen::MatrixXd::Zero(n, 4);
+  jet.col(0) = s.q_rad;
+  jet.col(1) = s.qd_rad_per_s;
+  jet.col(2) = qdd;
+  const Eigen::VectorXd dtau0 = torqueJet(jet).tau.col(1);
+  FlatState out;
+  out.q = jet;
+  out.q.col(3) = Minv.solve(dtau - dtau0);
+  out.Y.resize(numFlatOutputs(), 2);
+  out.Y.col(0) = E_ * F;
+  out.Y.col(1) = E_ * dF;
+  return out;
+}
+
+}  // namespace flatsos::planner

@@ -1,0 +1,158 @@
+#include "flatsos/planner/motion_planner.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "flatsos/muscles/hill_laws.hpp"
+
+namespace flatsos::planner {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+void require(const Eigen::VectorXd& v, int size, const std::string& what) {
+  if (v.size() != size) throw std::invalid_argument(what + ": expected " + std::to_string(size) + " values, got " + std::to_string(v.size()));
+  if (!v.allFinite()) throw std::invalid_argument(what + ": values must be finite (NaN or Inf given)");
+}
+
+void require_reserves(const Eigen::VectorXd& r, int m) {
+  require(r, m, "reserves");
+  if (r.minCoeff() < 0.0) throw std::invalid_argument("reserves: tendon-force reserves must be >= 0 N");
+}
+
+Jet polynomial_jet(const std::vector<Polynomial>& polys, double t, int orders) {
+  Jet j(static_cast<Eigen::Index>(polys.size()), orders);
+  for (std::size_t i = 0; i < polys.size(); ++i)
+    for (int k = 0; k < orders; ++k) j(static_cast<Eigen::Index>(i), k) = polys[i].derivativeAt(t, k);
+  return j;
+}
+}  // namespace
+
+Jet OpenLoopPlan::flatOutputJet(double t) const { return polynomial_jet(Y, t, 3); }
+
+PlanCheck check_plan(const FlatOutputMap& flat, const JointPath& path, const std::vector<Polynomial>& Y,
+                     const Eigen::VectorXd& reserves, int points) {
+  if (points < 2) throw std::invalid_argument("plan check: need at least 2 points");
+  PlanCheck c;
+  c.points = points;
+  c.min_tendon_force_N = c.min_reserve_margin_N = c.min_activation = c.min_excitation = 1e300;
+  c.max_activation = c.max_excitation = -1e300;
+  for (int i = 0; i < points; ++i) {
+    const double t = path.duration_s * i / (points - 1);
+    const MusclePoint mp = flat.inverse(path.jet(t, 5), polynomial_jet(Y, t, 3));
+    c.min_tendon_force_N = std::min(c.min_tendon_force_N, mp.tendon_force_N.minCoeff());
+    c.min_reserve_margin_N = std::min(c.min_reserve_margin_N, (mp.tendon_force_N - reserves).minCoeff());
+    if (mp.activation.allFinite()) {
+      c.min_activation = std::min(c.min_activation, mp.activation.minCoeff());
+      c.max_activation = std::max(c.max_activation, mp.activation.maxCoeff());
+    }
+    if (mp.excitation.allFinite()) {
+      c.min_excitation = std::min(c.min_excitation, mp.excitation.minCoeff());
+      c.max_excitation = std::max(c.max_excitation, mp.excitation.maxCoeff());
+    }
+    if (!mp.inDomain()) {
+      ++c.points_outside_domain;
+      if (c.first_violation.empty())
+        for (std::size_t j = 0; j < mp.domain_violation.size(); ++j)
+          if (!mp.domain_violation[j].empty()) {
+            std::ostringstream why;
+            why << "t = " << t << " s, muscle '" << flat.model().description().muscles[j].parameters.name
+                << "': " << mp.domain_violation[j];
+            c.first_violation = why.str();
+            break;
+          }
+    }
+  }
+  return c;
+}
+
+OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& o) {
+  const auto t_setup = Clock::now();
+  const int n = flat.numJoints(), m = flat.numMuscles(), p = flat.numFlatOutputs();
+  if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s)) throw std::invalid_argument("open-loop plan: duration T must be > 0 s");
+  require(o.target_q_rad, n, "target joint angles");
+  require_reserves(o.reserves_N, m);
+  if (o.check_points < 2) throw std::invalid_argument("open-loop plan: check_points must be >= 2");
+  require(initial.activation, m, "initial activations");
+  require(initial.tendon_length_m, m, "initial tendon lengths");
+  for (int j = 0; j < m; ++j) {
+    const auto& mp = flat.model().muscle(j).getParameters();
+    if (!(initial.activation[j] > 0.0 && initial.activation[j] <= 1.0))
+      throw std::invalid_argument("initial state: activation of '" + mp.name + "' is " + std::to_string(initial.activation[j]) +
+                                  ", outside (0, 1]");
+    if (!(initial.tendon_length_m[j] > mp.tendon_slack_length_m))
+      throw std::invalid_argument("initial state: tendon of '" + mp.name + "' is slack (" +
+                                  std::to_string(initial.tendon_length_m[j]) + " m <= slack length " +
+                                  std::to_string(mp.tendon_slack_length_m) + " m): flat outputs need taut tendons");
+  }
+  const FlatState y0 = flat.forward(initial);  // validates q, qd sizes too
+
+  OpenLoopPlan plan;
+  Eigen::MatrixXd terminal = Eigen::MatrixXd::Zero(n, 5);
+  terminal.col(0) = o.target_q_rad;
+  plan.path = fit_joint_path(o.duration_s, y0.q, terminal);
+  plan.torque = build_torque_model(flat, plan.path, o.torque);
+  FlatOutputBoundary bc;
+  bc.initial = y0.Y;                          // Y(0), dY(0)
+  bc.terminal = Eigen::MatrixXd::Zero(p, 2);  // dY(T) = ddY(T) = 0
+  bc.terminal_first_order = 1;
+  const double before_sos = seconds_since(t_setup);
+  plan.sos = solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos);
+  plan.setup_seconds = before_sos + plan.sos.setup_seconds;
+  plan.solve_seconds = plan.sos.solve_seconds;
+  plan.certify_seconds = plan.sos.certify_seconds;
+  plan.status = plan.sos.status;
+  plan.message = plan.sos.message;
+  if (plan.status != SolveStatus::Solved) return plan;
+  plan.Y = plan.sos.Y;
+
+  const auto t_check = Clock::now();
+  plan.check = check_plan(flat, plan.path, plan.Y, o.reserves_N, o.check_points);
+  plan.check_seconds = seconds_since(t_check);
+  if (plan.check.min_reserve_margin_N < -1e-6) {
+    plan.status = SolveStatus::Failed;
+    plan.message = "the plan violates a tendon-force reserve on the check grid by " +
+                   std::to_string(-plan.check.min_reserve_margin_N) + " N (torque-model remainder underestimated)";
+  } else if (plan.check.points_outside_domain > 0) {
+    plan.message = "the plan leaves the model's valid domain at " + std::to_string(plan.check.points_outside_domain) +
+                   " of " + std::to_string(plan.check.points) + " check points, first at " + plan.check.first_violation;
+  }
+  return plan;
+}
+
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
+                                               const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
+  const auto t0 = Clock::now();
+  const int n = flat.numJoints();
+  if (!(o.horizon_s > 0.0) || !std::isfinite(o.horizon_s)) throw std::invalid_argument("RH step: horizon must be > 0 s");
+  if (o.grid_points < 2) throw std::invalid_argument("RH step: need at least 2 grid points");
+  require(q, n, "joint angles");
+  require(qd, n, "joint speeds");
+  require(o.target_q_rad, n, "target joint angles");
+  require_reserves(o.reserves_N, flat.numMuscles());
+
+  RecedingHorizonStep step;
+  Eigen::MatrixXd initial(n, 2), terminal = Eigen::MatrixXd::Zero(n, 2);
+  initial << q, qd;
+  terminal.col(0) = o.target_q_rad;
+  step.path = fit_joint_path(o.horizon_s, initial, terminal);
+  step.tau_min = Eigen::VectorXd::Constant(n, 1e300);
+  step.tau_max = Eigen::VectorXd::Constant(n, -1e300);
+  for (int i = 0; i < o.grid_points; ++i) {
+    const Jet j = step.path.jet(o.horizon_s * i / (o.grid_points - 1), 3);
+    const Eigen::VectorXd tau = flat.torque(j.col(0), j.col(1), j.col(2));
+    step.tau_min = step.tau_min.cwiseMin(tau);
+    step.tau_max = step.tau_max.cwiseMax(tau);
+  }
+  const Eigen::VectorXd B = slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N);
+  step.slp = solve_slp(flat.CY(), B, o.solver);
+  step.status = step.slp.status;
+  step.message = step.slp.message;
+  step.seconds = seconds_since(t0);
+  return step;
+}
+
+}  // namespace flatsos::planner

@@ -1,0 +1,198 @@
+#include "flatsos/planner/receding_horizon.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "flatsos/plugin/excitation_signal.hpp"
+
+namespace flatsos::planner {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+Jet constant_jet(const Eigen::VectorXd& alpha) {
+  Jet j = Jet::Zero(alpha.size(), 3);
+  j.col(0) = alpha;
+  return j;
+}
+}  // namespace
+
+RecedingHorizonController::RecedingHorizonController(const FlatOutputMap& flat, RecedingHorizonControllerOptions o)
+    : flat_(flat), options_(std::move(o)) {
+  if (!(options_.control_period_s > 0.0) || !std::isfinite(options_.control_period_s))
+    throw std::invalid_argument("RH controller: control period must be > 0 s");
+  if (options_.excitation_samples_per_period < 2)
+    throw std::invalid_argument("RH controller: need at least 2 excitation samples per period");
+  if (!(options_.control_period_s <= options_.plan.horizon_s))
+    throw std::invalid_argument("RH controller: the control period must not exceed the horizon");
+}
+
+const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {
+  const auto t0 = Clock::now();
+  const auto& model = flat_.model();
+  RecedingHorizonRecord rec;
+  rec.time_s = state.getTime();
+  const Eigen::VectorXd q = model.jointAngles(state), qd = model.jointSpeeds(state);
+  try {
+    const RecedingHorizonStep plan = plan_receding_horizon_step(flat_, q, qd, options_.plan);
+    rec.plan_seconds = plan.seconds;
+    rec.status = plan.status;
+    rec.message = plan.message;
+    if (plan.status == SolveStatus::Solved) {
+      rec.alpha = plan.alpha();
+      rec.path = plan.path;
+      rec.plan_start_time_s = rec.time_s;
+    }
+  } catch (const std::exception& e) {
+    rec.status = SolveStatus::Failed;
+    rec.message = e.what();
+  }
+
+  // Excitations of the first period from the exact inverse map of the plan in use.
+  auto sample = [&](std::vector<double>& times, std::vector<std::vector<double>>& values) {
+    const int ns = options_.excitation_samples_per_period;
+    times.clear();
+    values.assign(static_cast<std::size_t>(model.numMuscles()), {});
+    for (int i = 0; i < ns; ++i) {
+      const double t = rec.time_s + options_.control_period_s * i / (ns - 1);
+      const double tau = std::min(t - rec.plan_start_time_s, rec.path.duration_s);
+      const MusclePoint mp = flat_.inverse(rec.path.jet(tau, 5), constant_jet(rec.alpha));
+      if (!mp.excitation.allFinite()) return false;
+      times.push_back(t);
+      for (int j = 0; j < model.numMuscles(); ++j) {
+        const double n = mp.excitation[j];
+        if (n < 0.0 || n > 1.0) ++rec.clamped_samples;
+        values[static_cast<std::size_t>(j)].push_back(n);
+      }
+    }
+    return true;
+  };
+  std::vector<double> times;
+  std::vector<std::vector<double>> values;
+  bool have_excitations = rec.status == SolveStatus::Solved && sample(times, values);
+  if (!have_excitations) {
+    if (rec.status == SolveStatus::Solved) {
+      rec.status = SolveStatus::Failed;
+      rec.message = "the plan's excitations are undefined on the first period (left the valid domain)";
+    }
+    // Recursive feasibility: the previous plan's tail is still a valid plan.
+    for (auto it = history_.rbegin(); it != history_.rend(); ++it)
+      if (it->alpha.size()) {
+        rec.used_previous_plan = true;
+        rec.alpha = it->alpha;
+        rec.path = it->path;
+        rec.plan_start_time_s = it->plan_start_time_s;
+        rec.clamped_samples = 0;
+        have_excitations = sample(times, values);
+        break;
+      }
+  }
+  if (have_excitations) {
+    for (int j = 0; j < model.numMuscles(); ++j)
+      model.muscle(j).setExcitationSignal(
+          state, std::make_shared<plugin::PiecewiseLinearSignal>(times, values[static_cast<std::size_t>(j)]));
+  }  // else: no plan ever succeeded; the muscles keep their current inputs.
+  rec.step_seconds = seconds_since(t0);
+  history_.push_back(std::move(rec));
+  return history_.back();
+}
+
+int RecedingHorizonController::planFailures() const {
+  int n = 0;
+  for (const auto& r : history_) n += r.status != SolveStatus::Solved;
+  return n;
+}
+
+int RecedingHorizonController::clampedSamples() const {
+  int n = 0;
+  for (const auto& r : history_) n += r.clamped_samples;
+  return n;
+}
+
+ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, const SimTK::State& initial,
+                                      double duration, double accuracy, int reports, double settle_tol,
+                                      plugin::IntegratorKind kind) {
+  if (!(duration > 0.0) || !std::isfinite(duration)) throw std::invalid_argument("closed loop: duration must be > 0 s");
+  if (reports < 1) throw std::invalid_argument("closed loop: need at least one report per period");
+  const auto& model = controller.flat().model();
+  const int n = model.numJoints();
+  const double period = controller.options().control_period_s;
+  ClosedLoopResult out;
+  out.states = plugin::make_state_table(model, "simulation");
+  out.predictions.name = "predictions";
+  out.predictions.columns = {"time", "/controller/step"};
+  for (const auto& j : model.description().joints) out.predictions.columns.push_back("/jointset/" + j.name + "/q_predicted");
+
+  const auto wall0 = Clock::now();
+  SimTK::State s = initial;
+  std::unique_ptr<SimTK::Integrator> integ_ptr;
+  if (kind == plugin::IntegratorKind::CPodesBdf)
+    integ_ptr = std::make_unique<SimTK::CPodesIntegrator>(model.system(), SimTK::CPodes::BDF, SimTK::CPodes::Newton);
+  else
+    integ_ptr = std::make_unique<SimTK::RungeKuttaMersonIntegrator>(model.system());
+  SimTK::Integrator& integ = *integ_ptr;
+  integ.setAccuracy(accuracy);
+  plugin::append_state_row(model, s, out.states);
+  const int steps = static_cast<int>(std::ceil(duration / period - 1e-9));
+  for (int k = 0; k < steps && out.finite; ++k) {
+    const RecedingHorizonRecord& rec = controller.step(s);
+    for (int i = 0; i <= 10 && rec.alpha.size(); ++i) {
+      const double tau = rec.path.duration_s * i / 10.0;
+      const Jet jq = rec.path.jet(tau, 1);
+      std::vector<double> row = {rec.plan_start_time_s + tau, static_cast<double>(k)};
+      for (int j = 0; j < n; ++j) row.push_back(jq(j, 0));
+      out.predictions.rows.push_back(std::move(row));
+    }
+    // The controller changed the State's discrete inputs: restart the integrator from it.
+    integ.initialize(s);
+    const double t_begin = s.getTime(), t_end = std::min(duration, (k + 1) * period);
+    for (int r = 1; r <= reports; ++r) {
+      const double t = t_begin + (t_end - t_begin) * r / reports;
+      while (integ.getTime() < t)
+        if (integ.stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
+      if (!plugin::all_states_finite(integ.getState())) {
+        out.finite = false;
+        break;
+      }
+      plugin::append_state_row(model, integ.getState(), out.states);
+    }
+    s = integ.getState();
+    out.integrator_steps += integ.getNumStepsTaken();
+  }
+  out.final_state = s;
+  out.wall_seconds = std::max(seconds_since(wall0), 1e-9);
+  out.real_time_factor = (s.getTime() - initial.getTime()) / out.wall_seconds;
+  const Eigen::VectorXd& target = controller.options().plan.target_q_rad;
+  for (std::size_t r = out.states.rows.size(); r-- > 0;) {
+    bool inside = true;
+    for (int j = 0; j < n; ++j) inside = inside && std::abs(out.states.rows[r][static_cast<std::size_t>(1 + 2 * j)] - target[j]) <= settle_tol;
+    if (!inside) break;
+    out.settling_time_s = out.states.rows[r][0];
+  }
+  if (!out.finite) out.settling_time_s = -1.0;
+  return out;
+}
+
+void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& state, const Eigen::VectorXd& q,
+                                   const Eigen::VectorXd& reserves) {
+  RecedingHorizonOptions o;
+  o.target_q_rad = q;
+  o.reserves_N = reserves;
+  const RecedingHorizonStep rest = plan_receding_horizon_step(flat, q, Eigen::VectorXd::Zero(q.size()), o);
+  if (rest.status != SolveStatus::Solved) throw std::runtime_error("rest state: the SLP failed: " + rest.message);
+  const MusclePoint mp = flat.inverse(rest.path.jet(0.0, 5), constant_jet(rest.alpha()));
+  if (!mp.inDomain())
+    for (const auto& why : mp.domain_violation)
+      if (!why.empty()) throw std::runtime_error("rest state outside the model's valid domain: " + why);
+  const auto& model = flat.model();
+  model.setJointAngles(state, q);
+  model.setJointSpeeds(state, Eigen::VectorXd::Zero(q.size()));
+  model.setTendonLengths(state, mp.tendon_length_m);
+  model.setActivations(state, mp.activation);
+  model.setExcitations(state, mp.activation);
+}
+
+}  // namespace flatsos::planner

@@ -1,0 +1,76 @@
+#include "flatsos/planner/torque_model.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+namespace flatsos::planner {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+// Polynomial in s through (s_k, v_k), k = 0..r (Vandermonde; r is small).
+Polynomial interpolate(const Eigen::VectorXd& s, const Eigen::VectorXd& v) {
+  const Eigen::Index n = s.size();
+  Eigen::MatrixXd V(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) V(i, j) = std::pow(s[i], static_cast<double>(j));
+  return Polynomial(V.fullPivLu().solve(v));
+}
+}  // namespace
+
+TorqueModel build_torque_model(const FlatOutputMap& flat, const JointPath& path, const TorqueModelOptions& o) {
+  if (o.pieces < 1) throw std::invalid_argument("torque model: pieces K must be >= 1");
+  if (o.degree < 0) throw std::invalid_argument("torque model: degree r must be >= 0");
+  if (o.samples_per_piece < 2 || o.samples_per_piece < o.degree + 1)
+    throw std::invalid_argument("torque model: need at least max(2, r + 1) samples per piece");
+  if (!(o.remainder_inflation >= 1.0)) throw std::invalid_argument("torque model: remainder inflation must be >= 1");
+  const int n = flat.numJoints();
+  const double T = path.duration_s;
+  auto tau_at = [&](double t) {
+    const Jet j = path.jet(t, 3);
+    return flat.torque(j.col(0), j.col(1), j.col(2));
+  };
+
+  TorqueModel model;
+  for (int k = 0; k < o.pieces; ++k) {
+    TorquePiece piece;
+    piece.t0_s = T * k / o.pieces;
+    piece.t1_s = T * (k + 1) / o.pieces;
+    const double h = piece.t1_s - piece.t0_s;
+    const int ns = o.samples_per_piece;
+    Eigen::VectorXd s_samples(ns);
+    Eigen::MatrixXd tau_samples(n, ns);
+    for (int i = 0; i < ns; ++i) {
+      s_samples[i] = static_cast<double>(i) / (ns - 1);
+      tau_samples.col(i) = tau_at(piece.t0_s + h * s_samples[i]);
+    }
+    model.torque_evaluations += ns;
+    piece.remainder_N_m.resize(n);
+    for (int joint = 0; joint < n; ++joint) {
+      Polynomial p;
+      if (o.degree == 0) {
+        const double lo = tau_samples.row(joint).minCoeff(), hi = tau_samples.row(joint).maxCoeff();
+        p = Polynomial(Eigen::VectorXd::Constant(1, 0.5 * (lo + hi)));
+      } else {
+        const int r = o.degree;
+        Eigen::VectorXd nodes(r + 1), values(r + 1);
+        for (int c = 0; c <= r; ++c) {
+          nodes[c] = 0.5 * (1.0 - std::cos(kPi * (2.0 * c + 1.0) / (2.0 * (r + 1))));
+          values[c] = tau_at(piece.t0_s + h * nodes[c])[joint];
+        }
+        model.torque_evaluations += r + 1;
+        p = interpolate(nodes, values);
+      }
+      double dev = 0.0;
+      for (int i = 0; i < ns; ++i) dev = std::max(dev, std::abs(tau_samples(joint, i) - p(s_samples[i])));
+      piece.remainder_N_m[joint] = o.degree == 0 ? dev : o.remainder_inflation * dev;
+      piece.torque.push_back(p);
+    }
+    model.pieces.push_back(std::move(piece));
+  }
+  return model;
+}
+
+}  // namespace flatsos::planner

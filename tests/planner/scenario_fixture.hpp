@@ -1,0 +1,38 @@
+#pragma once
+// The paper's open-loop scenario (DESIGN.md 5) on the arm model.
+#include <memory>
+
+#include "../plugin/arm_fixture.hpp"
+#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/motion_planner.hpp"
+
+namespace flatsos::test {
+
+struct ArmPlanning {
+  std::unique_ptr<plugin::MusculoskeletalModel> model = load_arm();
+  planner::FlatOutputMap flat{*model};
+};
+
+/// q0 = [0, 10 deg], qd0 = [0.001, 0.002] rad/s, a0 of the paper, tendons in static equilibrium.
+inline planner::MuscleState open_loop_initial_state(const plugin::MusculoskeletalModel& model) {
+  planner::MuscleState s;
+  s.q_rad = Eigen::Vector2d(0.0, deg(10));
+  s.qd_rad_per_s = Eigen::Vector2d(0.001, 0.002);
+  s.activation = paper_a0();
+  const Eigen::VectorXd L = model.musculotendonLengths(s.q_rad);
+  s.tendon_length_m.resize(6);
+  for (int j = 0; j < 6; ++j)
+    s.tendon_length_m[j] = plugin::static_equilibrium_tendon_length(model.muscle(j).getParameters(), L[j], s.activation[j]);
+  return s;
+}
+
+inline planner::OpenLoopOptions open_loop_options() {
+  planner::OpenLoopOptions o;
+  o.duration_s = 3.0;
+  o.target_q_rad = Eigen::Vector2d(deg(90), 0.0);
+  o.reserves_N = Eigen::VectorXd::Constant(6, 10.0);
+  return o;
+}
+
+}  // namespace flatsos::test
