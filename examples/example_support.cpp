@@ -1,0 +1,124 @@
+#include "example_support.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace flatsos::examples {
+
+Eigen::VectorXd to_vector(const std::vector<double>& v) {
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+void require_count(const std::vector<double>& v, int n, const std::string& option) {
+  if (static_cast<int>(v.size()) != n)
+    throw CLI::ValidationError(option, "expects " + std::to_string(n) + " comma-separated values, got " + std::to_string(v.size()));
+}
+
+Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option) {
+  if (v.size() == 1) return Eigen::VectorXd::Constant(m, v[0]);
+  require_count(v, m, option);
+  return to_vector(v);
+}
+
+std::string format(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
+plugin::StoTable plan_table(const planner::FlatOutputMap& flat, const planner::OpenLoopPlan& plan,
+                            const plugin::StoTable& times_from) {
+  const auto& model = flat.model();
+  plugin::StoTable t = plugin::make_state_table(model, "plan");
+  t.metadata = {{"status", planner::to_string(plan.status)}, {"success", plan.status == planner::SolveStatus::Solved ? "true" : "false"},
+                {"objective", format(plan.sos.cost_N_s)}, {"solver_duration", format(plan.setup_seconds + plan.solve_seconds)}};
+  for (const auto& src : times_from.rows) {
+    const double time = std::min(src[0], plan.path.duration_s);
+    const planner::Jet qj = plan.jointJet(time);
+    const planner::MusclePoint mp = flat.inverse(qj, plan.flatOutputJet(time));
+    std::vector<double> row = {src[0]};
+    for (int i = 0; i < model.numJoints(); ++i) row.push_back(qj(i, 0)), row.push_back(qj(i, 1));
+    for (int j = 0; j < model.numMuscles(); ++j) {
+      row.push_back(mp.excitation[j]);
+      row.push_back(mp.activation[j]);
+      row.push_back(mp.tendon_length_m[j]);
+      row.push_back(mp.tendon_force_N[j]);
+      row.push_back(mp.fiber_length_m[j]);
+      row.push_back(-mp.shortening_velocity_m_per_s[j]);
+    }
+    t.rows.push_back(std::move(row));
+  }
+  return t;
+}
+
+Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTable& a, const plugin::StoTable& b) {
+  Tracking e;
+  auto max_diff = [&](const std::string& column) {
+    const auto x = a.column(column), y = b.column(column);
+    double d = 0.0;
+    for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) d = std::max(d, std::abs(x[i] - y[i]));
+    return d;
+  };
+  for (const auto& j : model.description().joints) e.max_q_error_rad = std::max(e.max_q_error_rad, max_diff("/jointset/" + j.name + "/q"));
+  for (const auto& m : model.description().muscles) {
+    const std::string base = "/forceset/" + m.parameters.name + "/";
+    e.max_activation_error = std::max(e.max_activation_error, max_diff(base + "activation"));
+    e.max_tendon_length_error_m = std::max(e.max_tendon_length_error_m, max_diff(base + "tendon_length"));
+  }
+  return e;
+}
+
+nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::MusculoskeletalModel& model) {
+  nlohmann::json j;
+  j["status"] = planner::to_string(plan.status);
+  j["success"] = plan.status == planner::SolveStatus::Solved;
+  j["message"] = plan.message;
+  j["model"] = model.description().name;
+  const auto& s = plan.sos;
+  j["cost_Ns"] = s.cost_N_s;
+  j["solve_seconds"] = plan.setup_seconds + plan.solve_seconds;
+  j["setup_seconds"] = plan.setup_seconds;
+  j["exchange_solve_seconds"] = plan.solve_seconds;
+  j["certify_seconds"] = plan.certify_seconds;
+  j["check_seconds"] = plan.check_seconds;
+  j["ipopt_iterations"] = s.ipopt_iterations;
+  j["ipopt_calls"] = s.ipopt_calls;
+  j["exchange_rounds"] = s.exchange_rounds;
+  j["lp_points"] = s.lp_points;
+  j["torque_model"] = {{"pieces", plan.torque.pieces.size()},
+                       {"degree", plan.torque.pieces.empty() || plan.torque.pieces[0].torque.empty() ? 0 : plan.torque.pieces[0].torque[0].degree()}};
+  j["certificates"] = {{"near_active_pieces", s.near_active_pieces}, {"certified_pieces", s.certified_pieces}, {"all_certified", s.certified}};
+  nlohmann::json qc = nlohmann::json::object(), yc = nlohmann::json::object();
+  for (std::size_t i = 0; i < plan.path.q.size(); ++i) {
+    const auto& c = plan.path.q[i].coefficients();
+    qc[model.description().joints[i].name] = std::vector<double>(c.data(), c.data() + c.size());
+  }
+  for (std::size_t l = 0; l < plan.Y.size(); ++l) {
+    const auto& c = plan.Y[l].coefficients();
+    yc[model.description().flat_outputs[l].name] = std::vector<double>(c.data(), c.data() + c.size());
+  }
+  j["q_coeffs"] = qc;
+  j["Y_coeffs"] = yc;
+  j["coefficient_convention"] = "ascending powers of t in seconds; q in rad, Y in N";
+  if (plan.status == planner::SolveStatus::Solved) {
+    j["check_points"] = plan.check.points;
+    j["min_tendon_force_N"] = plan.check.min_tendon_force_N;
+    j["min_reserve_margin_N"] = plan.check.min_reserve_margin_N;
+    j["activation_range"] = {plan.check.min_activation, plan.check.max_activation};
+    j["excitation_range"] = {plan.check.min_excitation, plan.check.max_excitation};
+    j["points_outside_domain"] = plan.check.points_outside_domain;
+  }
+  return j;
+}
+
+void write_json(const std::string& path, const nlohmann::json& j) { plugin::write_file_atomically(path, j.dump(2) + "\n"); }
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace flatsos::examples

@@ -1,0 +1,46 @@
+#pragma once
+// Shared pieces of the example programs: argument helpers, plan tables, summaries, comparisons.
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/plugin/musculoskeletal_model.hpp"
+#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/sto_file.hpp"
+
+namespace flatsos::examples {
+
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+
+Eigen::VectorXd to_vector(const std::vector<double>& v);
+/// Throws CLI::ValidationError unless v has n entries.
+void require_count(const std::vector<double>& v, int n, const std::string& option);
+/// One value for all muscles or one per muscle.
+Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option);
+std::string format(double x);
+
+/// The plan evaluated at the times of `times_from` (its first column), with the same columns as
+/// plugin::make_state_table (planned q, qd and muscle states, excitations from the inverse map).
+plugin::StoTable plan_table(const planner::FlatOutputMap& flat, const planner::OpenLoopPlan& plan,
+                            const plugin::StoTable& times_from);
+
+struct Tracking {
+  double max_q_error_rad = 0.0, max_activation_error = 0.0, max_tendon_length_error_m = 0.0;
+};
+/// Largest differences between two state tables with the same rows and columns.
+Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTable& a, const plugin::StoTable& b);
+
+/// status, cost, timings, iterations, coefficients and the a-posteriori check of a plan.
+nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::MusculoskeletalModel& model);
+
+/// Writes pretty JSON atomically.
+void write_json(const std::string& path, const nlohmann::json& j);
+
+double median(std::vector<double> v);
+
+}  // namespace flatsos::examples
