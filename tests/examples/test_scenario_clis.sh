@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# arm_open_loop and arm_receding_horizon: --help, bad arguments exit 2 naming the option, bad
+# models exit 1 naming the problem, good runs write their files. Usage: OPEN_LOOP RH
+set -u
+ol=$1 rh=$2
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+fail=0
+expect() {  # expect <exit code> <text in output> -- command...
+  local code=$1 text=$2; shift 3
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [[ $rc != "$code" ]] || ! grep -qF -- "$text" <<<"$out"; then
+    echo "FAILED: $* -> exit $rc (want $code), output lacks '$text':"; echo "$out" | head -5; fail=1
+  else echo "ok: $*"; fi
+}
+expect 0 "--pieces" -- "$ol" --help
+expect 2 "--target-deg" -- "$ol" --target-deg 90 --out "$tmp/o"
+expect 2 "--reserves" -- "$ol" --reserves 1,2,3 --out "$tmp/o"
+expect 2 "--pieces" -- "$ol" --pieces 0 --out "$tmp/o"
+expect 2 "--duration" -- "$ol" --duration -3 --out "$tmp/o"
+printf '{"bodies": []}' > "$tmp/bad.json"
+expect 1 "bodies: must not be empty" -- "$ol" --model "$tmp/bad.json" --out "$tmp/o"
+# The paper's single box: infeasible, exit 1, a summary that says why, no simulation.
+expect 1 "infeasible" -- "$ol" --pieces 1 --degree 0 --out "$tmp/box"
+grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box summary lacks the status"; fail=1; }
+[[ ! -e "$tmp/box/simulation.sto" ]] || { echo "FAILED: a failed plan left a simulation"; fail=1; }
+expect 0 "--horizon" -- "$rh" --help
+expect 2 "--period" -- "$rh" --period 1.0 --horizon 0.5 --out "$tmp/o"
+expect 2 "--slp-solver" -- "$rh" --slp-solver simplex --out "$tmp/o"
+expect 2 "--q0-deg" -- "$rh" --q0-deg 1,2,3 --out "$tmp/o"
+expect 0 "settling" -- "$rh" --duration 0.2 --out "$tmp/rh"
+for f in simulation.sto predictions.sto summary.json; do
+  [[ -s "$tmp/rh/$f" ]] || { echo "FAILED: $f missing"; fail=1; }
+done
+grep -q '"real_time_factor"' "$tmp/rh/summary.json" || { echo "FAILED: RH summary lacks real_time_factor"; fail=1; }
+exit $fail
