@@ -318,7 +318,7 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
       result.certified_pieces = static_cast<int>(std::count(cert.certified.begin(), cert.certified.end(), true));
       result.certified = cert.all_certified;
       result.ipopt_iterations += cert.ipopt_iterations;
-      ++result.ipopt_calls;
+      result.ipopt_calls += cert.ipopt_calls;
     }
     result.certify_seconds = seconds_since(t_cert);
   }

@@ -4,30 +4,38 @@
 // A polynomial p of degree n is >= 0 on [0, 1] iff
 //   n = 2d:     p(s) = v_d(s)^T Q0 v_d(s) + s (1 - s) v_{d-1}(s)^T Q1 v_{d-1}(s),  Q0 (d+1), Q1 (d)
 //   n = 2d + 1: p(s) = s v_d(s)^T Q0 v_d(s) + (1 - s) v_d(s)^T Q1 v_d(s),         Q0, Q1 (d+1)
-// with Q0, Q1 positive semidefinite. The Gram matrices are found as Q = L L^T, L lower triangular,
-// by ONE Ipopt problem for a whole batch of polynomials (block diagonal; Ipopt costs about 5 ms
-// per call whatever the size): variables = the entries of every L, equality constraints = the
-// coefficient matching (quadratic in L), exact Jacobian and exact Hessian of the Lagrangian.
+// with Q0, Q1 positive semidefinite. The Gram matrices are found as Q = L L^T by ONE Ipopt
+// problem for a whole batch of polynomials (block diagonal; Ipopt costs about 5 ms per call
+// whatever the size): variables = the entries of every factor L (full square factors: measured
+// far more robust than triangular ones at singular solutions; the returned factors are made lower
+// triangular by a QR), equality constraints = the coefficient matching (quadratic in L), zero
+// objective, exact Jacobian and exact Hessian of the Lagrangian. Blocks that fail get one second
+// call with triangular factors.
 //
 // v_d(s) is a polynomial basis of degree d; the default is the Bernstein basis
 // B^d_k(s) = C(d,k) s^k (1-s)^(d-k), matched in the Bernstein basis of degree n. With it each
 // diagonal entry of Q0 / Q1 feeds exactly one Bernstein coefficient of p, so a diagonal Gram is an
 // exact certificate whenever p's Bernstein coefficients are >= 0 (the closed-form shortcut, no
 // Ipopt), and otherwise the diagonal Gram built from the clipped Bernstein coefficients is the
-// Ipopt start. The choice is measured: see sos_certificate.cpp.
+// Ipopt start.
+//
+// Polynomials that come near zero on [0, 1] (the ones that matter: active constraints) make the
+// L L^T program nearly singular. They are first split at their global minimum, exactly:
+// p = s q + p(0), (1-s) q + p(1) or (s-r)^2 q + (linear >= 0), repeatedly; q (well conditioned)
+// goes to Ipopt or the closed form, and the certificate of p is assembled from q's. The
+// measurements behind these choices are at the end of sos_certificate.cpp.
 //
 // What "certified" proves. The certificate's factors rebuild a polynomial r that is >= 0 on [0, 1]
 // by construction (up to rounding in forming L L^T). The residual e = p - r is reported, with a
-// bound residual_bound >= max |e| on [0, 1], so p >= -residual_bound there. A polynomial is certified when
-// max_k |e_k| <= tolerance * scale (scale = max_k |p_k|, monomial coefficients) AND the numeric
-// pre-check (minimum_on_interval) finds no value below -tolerance * scale. So "certified" means
-// "nonnegative on [0, 1] up to (degree + 1) * tolerance * scale"; exact zeros (double roots,
-// endpoint zeros) are certified in this sense. A polynomial whose computed minimum m is slightly
-// negative (-tolerance * scale <= m < 0) is certified through p + delta, delta = -m + 0.01 *
-// tolerance * scale, which shows in its residual.
+// bound residual_bound >= max |e| on [0, 1], so p >= -residual_bound there. A polynomial is
+// certified when max_k |e_k| <= tolerance * scale (scale = max_k |p_k|, monomial coefficients) AND
+// the numeric pre-check (minimum_on_interval) finds no value below -tolerance * scale. So
+// "certified" means "nonnegative on [0, 1] up to (degree + 1) * tolerance * scale"; exact zeros
+// (double roots, endpoint zeros) are certified in this sense. A polynomial whose computed minimum m
+// is slightly negative (-tolerance * scale <= m < 0) is certified through p + delta, delta = -m +
+// 0.01 * tolerance * scale, which shows in its residual.
 
 #include <Eigen/Core>
-
 #include <limits>
 #include <string>
 #include <vector>
@@ -58,7 +66,9 @@ struct LukacsCertificate {
   /// A bound on |p - r| over [0, 1], so p(s) >= -residual_bound there: the smaller of
   /// sum_k |r_k - p_k| and the largest Bernstein coefficient of |r - p|.
   double residual_bound = std::numeric_limits<double>::infinity();
-  bool from_ipopt = false;  ///< false: closed form (degree <= 1, zero, or Bernstein coefficients >= 0)
+  /// Whether Ipopt found (part of) it; false: closed form throughout (degree <= 1, zero, or
+  /// Bernstein coefficients >= 0, possibly after the splits).
+  bool from_ipopt = false;
   /// Factors s, 1 - s or (s - r)^2 split off at near-zero minima before solving (see
   /// CertificationOptions::deflate_near_zeros). The factors above are for p itself.
   int deflation_steps = 0;
@@ -105,13 +115,14 @@ struct CertificationOptions {
 struct CertificationResult {
   std::vector<LukacsCertificate> certificates;  ///< one per input polynomial
   std::vector<bool> certified;
-  std::vector<double> interval_minimum;   ///< pre-check: minimum of p on [0, 1] (minimum_on_interval)
+  std::vector<double>
+      interval_minimum;  ///< pre-check: minimum of p on [0, 1] (minimum_on_interval)
   std::vector<bool> refused_by_precheck;  ///< minimum < -tolerance * scale: no certificate sought
   bool all_certified = false;
-  int ipopt_calls = 0;  ///< 0, 1, or 2 with a retry
+  int ipopt_calls = 0;      ///< 0, 1, or 2 with a retry
   int ipopt_variables = 0;  ///< of the first call
   int ipopt_constraints = 0;
-  int ipopt_iterations = 0;  ///< summed over the calls
+  int ipopt_iterations = 0;    ///< summed over the calls
   double solve_seconds = 0.0;  ///< wall time of the Ipopt calls (setup of the TNLPs included)
   double total_seconds = 0.0;  ///< wall time of the whole certification
   std::string ipopt_status = "not_called";  ///< of the first call
@@ -124,7 +135,8 @@ struct CertificationResult {
 };
 
 /// Certify each polynomial (coefficients ascending in s) nonnegative on [0, 1], all Ipopt work in
-/// one call. Throws std::invalid_argument for non-finite coefficients or a tolerance <= 0.
+/// one call (two if a retry is needed). Throws std::invalid_argument for non-finite coefficients or
+/// a tolerance <= 0.
 CertificationResult certify_nonnegative_on_unit_interval(const std::vector<Polynomial>& polys,
                                                          double tolerance);
 CertificationResult certify_nonnegative_on_unit_interval(const std::vector<Polynomial>& polys,
