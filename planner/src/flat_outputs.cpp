@@ -11,14 +11,19 @@ namespace flatsos::planner {
 
 namespace fm = flatsos::muscles;
 
+// Eighth-order central differences at offsets -4h..4h (Fornberg's weights).
+const double detail::kFirstDerivativeWeights[9] = {1.0 / 280, -4.0 / 105, 1.0 / 5, -4.0 / 5, 0.0,
+                                                   4.0 / 5,   -1.0 / 5,   4.0 / 105, -1.0 / 280};
+const double detail::kSecondDerivativeWeights[9] = {-1.0 / 560, 8.0 / 315, -1.0 / 5, 8.0 / 5, -205.0 / 72,
+                                                    8.0 / 5,    -1.0 / 5,  8.0 / 315, -1.0 / 560};
+
 namespace {
 
-// Eighth-order central-difference weights for the first and second derivative at offsets
-// -4h..4h (Fornberg). The step is in seconds: joint motions vary on time scales far above it,
-// and round-off of the second derivative stays ~1e-9 relative.
-constexpr double kJetStep_s = 1e-2;
-constexpr double kD1[9] = {1.0 / 280, -4.0 / 105, 1.0 / 5, -4.0 / 5, 0.0, 4.0 / 5, -1.0 / 5, 4.0 / 105, -1.0 / 280};
-constexpr double kD2[9] = {-1.0 / 560, 8.0 / 315, -1.0 / 5, 8.0 / 5, -205.0 / 72, 8.0 / 5, -1.0 / 5, 8.0 / 315, -1.0 / 560};
+// The step of the jet's differences is in seconds: joint motions vary on time scales far above
+// it, and round-off of the second derivative stays ~1e-9 relative.
+constexpr double kJetStep_s = detail::kMaxJetStep_s;
+const double* const kD1 = detail::kFirstDerivativeWeights;
+const double* const kD2 = detail::kSecondDerivativeWeights;
 
 double factorial(int k) {
   double f = 1.0;

@@ -40,9 +40,11 @@ PlanCheck check_plan(const FlatOutputMap& flat, const JointPath& path, const std
   c.points = points;
   c.min_tendon_force_N = c.min_reserve_margin_N = c.min_activation = c.min_excitation = 1e300;
   c.max_activation = c.max_excitation = -1e300;
+  const double h = path.duration_s / (points - 1);
+  const std::vector<TorqueJet> jets = flat.torqueJetsOnGrid([&](double t) { return path.jet(t, 3); }, 0.0, h, points);
   for (int i = 0; i < points; ++i) {
-    const double t = path.duration_s * i / (points - 1);
-    const MusclePoint mp = flat.inverse(path.jet(t, 5), polynomial_jet(Y, t, 3));
+    const double t = h * i;
+    const MusclePoint mp = flat.inverseFromTorque(path.jet(t, 5), jets[static_cast<std::size_t>(i)], polynomial_jet(Y, t, 3));
     c.min_tendon_force_N = std::min(c.min_tendon_force_N, mp.tendon_force_N.minCoeff());
     c.min_reserve_margin_N = std::min(c.min_reserve_margin_N, (mp.tendon_force_N - reserves).minCoeff());
     if (mp.activation.allFinite()) {
@@ -148,7 +150,7 @@ RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const 
     step.tau_max = step.tau_max.cwiseMax(tau);
   }
   const Eigen::VectorXd B = slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N);
-  step.slp = solve_slp(flat.CY(), B, o.solver);
+  step.slp = solve_slp(flat.CY(), B, o.solver, o.warm_start);
   step.status = step.slp.status;
   step.message = step.slp.message;
   step.seconds = seconds_since(t0);

@@ -122,6 +122,21 @@ IntervalMinimum minimum_on_interval(const Polynomial& p, double a, double b) {
   return best;
 }
 
+Polynomial interpolating_polynomial(const Eigen::VectorXd& x, const Eigen::VectorXd& v) {
+  if (x.size() != v.size() || x.size() == 0) throw std::invalid_argument("interpolation: need as many values as nodes");
+  const Eigen::Index n = x.size();
+  Eigen::MatrixXd V(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) V(i, j) = std::pow(x[i], static_cast<double>(j));
+  return Polynomial(V.fullPivLu().solve(v));
+}
+
+Eigen::VectorXd chebyshev_nodes_unit_interval(int n) {
+  Eigen::VectorXd x(n);
+  for (int c = 0; c < n; ++c) x[c] = 0.5 * (1.0 - std::cos(3.14159265358979323846 * (2.0 * c + 1.0) / (2.0 * n)));
+  return x;
+}
+
 Polynomial hermite_interpolant(double T, const Eigen::VectorXd& d0, const Eigen::VectorXd& dT) {
   if (!(T > 0.0) || !std::isfinite(T)) throw std::invalid_argument("joint path: horizon T must be > 0 s");
   if (!d0.allFinite() || !dT.allFinite())

@@ -1,7 +1,10 @@
 #include "flatsos/planner/receding_horizon.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
+
+#include <Eigen/Dense>
 #include <memory>
 #include <stdexcept>
 
@@ -11,6 +14,21 @@ namespace flatsos::planner {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+
+// Degree of the least-squares polynomial through the excitation samples of one period: n(t) is
+// smooth there (a cubic path, constant Y), so degree 6 reproduces it to ~1e-6 (measured).
+constexpr int kExcitationFitDegree = 6;
+
+// n(t) = p((t - t0) / duration), held at the ends.
+class PolynomialSignal final : public plugin::ExcitationSignal {
+ public:
+  PolynomialSignal(Polynomial p, double t0, double duration) : p_(std::move(p)), t0_(t0), duration_(duration) {}
+  double value(double t) const override { return p_(std::clamp((t - t0_) / duration_, 0.0, 1.0)); }
+
+ private:
+  Polynomial p_;
+  double t0_, duration_;
+};
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 Jet constant_jet(const Eigen::VectorXd& alpha) {
@@ -51,28 +69,28 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     rec.message = e.what();
   }
 
-  // Excitations of the first period from the exact inverse map of the plan in use.
-  auto sample = [&](std::vector<double>& times, std::vector<std::vector<double>>& values) {
-    const int ns = options_.excitation_samples_per_period;
-    times.clear();
-    values.assign(static_cast<std::size_t>(model.numMuscles()), {});
+  // Excitations of the first period from the exact inverse map of the plan in use, sampled on a
+  // uniform grid (torque jets share their inverse-dynamics calls) and fitted by one smooth
+  // polynomial per muscle: no kinks inside the period for the integrator to resolve.
+  const int ns = options_.excitation_samples_per_period;
+  const double h = options_.control_period_s / (ns - 1);
+  auto sample = [&](Eigen::MatrixXd& values) {
+    values.resize(model.numMuscles(), ns);
+    const JointPath& path = rec.path;
+    const double tau0 = rec.time_s - rec.plan_start_time_s;
+    // Beyond the plan's end the path rests at its target (the cubic's end state).
+    auto jet_at = [&](double tau) { return path.jet(std::min(tau, path.duration_s), 5); };
+    const auto jets = flat_.torqueJetsOnGrid([&](double tau) { return jet_at(tau).leftCols(3).eval(); }, tau0, h, ns);
     for (int i = 0; i < ns; ++i) {
-      const double t = rec.time_s + options_.control_period_s * i / (ns - 1);
-      const double tau = std::min(t - rec.plan_start_time_s, rec.path.duration_s);
-      const MusclePoint mp = flat_.inverse(rec.path.jet(tau, 5), constant_jet(rec.alpha));
+      const MusclePoint mp = flat_.inverseFromTorque(jet_at(tau0 + h * i), jets[static_cast<std::size_t>(i)], constant_jet(rec.alpha));
       if (!mp.excitation.allFinite()) return false;
-      times.push_back(t);
-      for (int j = 0; j < model.numMuscles(); ++j) {
-        const double n = mp.excitation[j];
-        if (n < 0.0 || n > 1.0) ++rec.clamped_samples;
-        values[static_cast<std::size_t>(j)].push_back(n);
-      }
+      values.col(i) = mp.excitation;
     }
+    rec.clamped_samples = static_cast<int>(((values.array() < 0.0) || (values.array() > 1.0)).count());
     return true;
   };
-  std::vector<double> times;
-  std::vector<std::vector<double>> values;
-  bool have_excitations = rec.status == SolveStatus::Solved && sample(times, values);
+  Eigen::MatrixXd values;
+  bool have_excitations = rec.status == SolveStatus::Solved && sample(values);
   if (!have_excitations) {
     if (rec.status == SolveStatus::Solved) {
       rec.status = SolveStatus::Failed;
@@ -85,15 +103,21 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
         rec.alpha = it->alpha;
         rec.path = it->path;
         rec.plan_start_time_s = it->plan_start_time_s;
-        rec.clamped_samples = 0;
-        have_excitations = sample(times, values);
+        have_excitations = sample(values);
         break;
       }
   }
   if (have_excitations) {
-    for (int j = 0; j < model.numMuscles(); ++j)
+    const int degree = std::min(ns - 1, kExcitationFitDegree);
+    Eigen::MatrixXd V(ns, degree + 1);
+    for (int i = 0; i < ns; ++i)
+      for (int k = 0; k <= degree; ++k) V(i, k) = std::pow(static_cast<double>(i) / (ns - 1), k);
+    const auto qr = V.colPivHouseholderQr();
+    for (int j = 0; j < model.numMuscles(); ++j) {
+      const Polynomial fit(qr.solve(values.row(j).transpose()));
       model.muscle(j).setExcitationSignal(
-          state, std::make_shared<plugin::PiecewiseLinearSignal>(times, values[static_cast<std::size_t>(j)]));
+          state, std::make_shared<PolynomialSignal>(fit, rec.time_s, options_.control_period_s));
+    }
   }  // else: no plan ever succeeded; the muscles keep their current inputs.
   rec.step_seconds = seconds_since(t0);
   history_.push_back(std::move(rec));

@@ -73,7 +73,8 @@ Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::V
   return best_alpha;
 }
 
-SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver) {
+SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
+                    const Eigen::VectorXd* warm_start) {
   const auto t0 = std::chrono::steady_clock::now();
   const Eigen::VectorXd start = slp_appendix_solution(CY, B);  // also validates
   SlpResult r;
@@ -89,8 +90,10 @@ SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolv
     lp.row_upper = Eigen::VectorXd::Constant(m, 1e19);
     lp.x_lower = Eigen::VectorXd::Zero(p);
     lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
+    if (warm_start && (warm_start->size() != p || !warm_start->allFinite()))
+      throw std::invalid_argument("SLP: warm start must have " + std::to_string(p) + " finite entries");
     LinearProgramOptions o;
-    o.start = &start;
+    o.start = warm_start ? warm_start : &start;
     const LinearProgramResult lr = solve_linear_program(lp, o);
     r.iterations = lr.iterations;
     const double scale = 1.0 + B.cwiseAbs().maxCoeff();

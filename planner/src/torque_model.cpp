@@ -7,18 +7,6 @@
 
 namespace flatsos::planner {
 
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-
-// Polynomial in s through (s_k, v_k), k = 0..r (Vandermonde; r is small).
-Polynomial interpolate(const Eigen::VectorXd& s, const Eigen::VectorXd& v) {
-  const Eigen::Index n = s.size();
-  Eigen::MatrixXd V(n, n);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < n; ++j) V(i, j) = std::pow(s[i], static_cast<double>(j));
-  return Polynomial(V.fullPivLu().solve(v));
-}
-}  // namespace
 
 TorqueModel build_torque_model(const FlatOutputMap& flat, const JointPath& path, const TorqueModelOptions& o) {
   if (o.pieces < 1) throw std::invalid_argument("torque model: pieces K must be >= 1");
@@ -48,20 +36,19 @@ TorqueModel build_torque_model(const FlatOutputMap& flat, const JointPath& path,
     }
     model.torque_evaluations += ns;
     piece.remainder_N_m.resize(n);
+    const Eigen::VectorXd nodes = chebyshev_nodes_unit_interval(o.degree + 1);
+    Eigen::MatrixXd node_torques(n, o.degree + 1);
+    if (o.degree > 0) {
+      for (int c = 0; c <= o.degree; ++c) node_torques.col(c) = tau_at(piece.t0_s + h * nodes[c]);
+      model.torque_evaluations += o.degree + 1;
+    }
     for (int joint = 0; joint < n; ++joint) {
       Polynomial p;
       if (o.degree == 0) {
         const double lo = tau_samples.row(joint).minCoeff(), hi = tau_samples.row(joint).maxCoeff();
         p = Polynomial(Eigen::VectorXd::Constant(1, 0.5 * (lo + hi)));
       } else {
-        const int r = o.degree;
-        Eigen::VectorXd nodes(r + 1), values(r + 1);
-        for (int c = 0; c <= r; ++c) {
-          nodes[c] = 0.5 * (1.0 - std::cos(kPi * (2.0 * c + 1.0) / (2.0 * (r + 1))));
-          values[c] = tau_at(piece.t0_s + h * nodes[c])[joint];
-        }
-        model.torque_evaluations += r + 1;
-        p = interpolate(nodes, values);
+        p = interpolating_polynomial(nodes, node_torques.row(joint).transpose());
       }
       double dev = 0.0;
       for (int i = 0; i < ns; ++i) dev = std::max(dev, std::abs(tau_samples(joint, i) - p(s_samples[i])));

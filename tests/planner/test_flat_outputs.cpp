@@ -142,3 +142,21 @@ TEST(FlatOutputs, InverseThenForwardReproducesAPlannedFlatTrajectory) {
         EXPECT_NEAR(y.Y(l, k), yj(l, k), 1e-8 * (1 + std::abs(yj(l, k)))) << "t " << t << " output " << l << " order " << k;
   }
 }
+
+TEST(FlatOutputs, TorqueJetsOnAGridEqualThePointwiseJets) {
+  flatsos::test::ArmPlanning arm;
+  const auto plan = fpl::plan_open_loop(arm.flat, flatsos::test::open_loop_initial_state(*arm.model),
+                                        flatsos::test::open_loop_options());
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved);
+  // h = 0.3 s is refined internally to 10 ms; h = 5 ms is used as is.
+  for (const double h : {0.3, 0.005}) {
+    const int count = 11;
+    const auto jets = arm.flat.torqueJetsOnGrid([&](double t) { return plan.path.jet(t, 3); }, 0.2, h, count);
+    ASSERT_EQ(jets.size(), 11u);
+    for (int i = 0; i < count; ++i) {
+      const fpl::TorqueJet pointwise = arm.flat.torqueJet(plan.jointJet(0.2 + h * i));
+      EXPECT_LT((jets[i].tau - pointwise.tau).cwiseAbs().maxCoeff(), 1e-6 * (1 + pointwise.tau.cwiseAbs().maxCoeff()))
+          << "h " << h << " i " << i;
+    }
+  }
+}

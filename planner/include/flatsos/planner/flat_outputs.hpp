@@ -12,7 +12,10 @@
 // Forward map (state -> flat outputs and the derivatives the state determines): q, qd, qdd,
 //   q''' , Y, dY from (q, qd, L_S, a) with the same laws the Simbody force element uses.
 
+#include <algorithm>
+#include <cmath>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -90,6 +93,13 @@ class FlatOutputMap {
   /// (N x 5: q .. q''''). Columns beyond those given are taken as 0.
   TorqueJet torqueJet(const Jet& q_jet) const;
 
+  /// Torque jets at the `count` uniform times t0 + i h along a joint motion given as a function
+  /// of time (q, qd, qdd at t: N x 3). The same eighth-order differences as torqueJet, but
+  /// neighbouring times share their inverse-dynamics calls: about one call per time instead of
+  /// nine (the grid is refined internally to a step <= 10 ms).
+  template <class JointJetAt>
+  std::vector<TorqueJet> torqueJetsOnGrid(const JointJetAt& jet_at, double t0, double h, int count) const;
+
   /// Inverse map at one time: q_jet N x 5 (q..q''''), Y_jet p x 3 (Y, dY, ddY).
   MusclePoint inverse(const Jet& q_jet, const Jet& Y_jet) const;
   /// Same with a precomputed torque jet.
@@ -102,5 +112,37 @@ class FlatOutputMap {
   const plugin::MusculoskeletalModel& model_;
   Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;
 };
+
+namespace detail {
+/// Eighth-order central-difference weights (offsets -4..4) and the largest step used.
+extern const double kFirstDerivativeWeights[9];
+extern const double kSecondDerivativeWeights[9];
+constexpr double kMaxJetStep_s = 1e-2;
+}  // namespace detail
+
+template <class JointJetAt>
+std::vector<TorqueJet> FlatOutputMap::torqueJetsOnGrid(const JointJetAt& jet_at, double t0, double h, int count) const {
+  if (count < 1 || !(h > 0.0)) throw std::invalid_argument("torque jets on a grid: need count >= 1 and h > 0");
+  const int sub = std::max(1, static_cast<int>(std::ceil(h / detail::kMaxJetStep_s - 1e-12)));
+  const double hf = h / sub;
+  const int fine = (count - 1) * sub + 9;  // fine points k = -4 .. (count - 1) sub + 4
+  std::vector<Eigen::VectorXd> tau(static_cast<std::size_t>(fine));
+  for (int k = 0; k < fine; ++k) {
+    const Jet j = jet_at(t0 + (k - 4) * hf);
+    tau[static_cast<std::size_t>(k)] = torque(j.col(0), j.col(1), j.col(2));
+  }
+  std::vector<TorqueJet> out(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    TorqueJet& tj = out[static_cast<std::size_t>(i)];
+    tj.tau = Eigen::MatrixXd::Zero(numJoints(), 3);
+    const int c = i * sub + 4;
+    tj.tau.col(0) = tau[static_cast<std::size_t>(c)];
+    for (int k = -4; k <= 4; ++k) {
+      tj.tau.col(1) += detail::kFirstDerivativeWeights[k + 4] / hf * tau[static_cast<std::size_t>(c + k)];
+      tj.tau.col(2) += detail::kSecondDerivativeWeights[k + 4] / (hf * hf) * tau[static_cast<std::size_t>(c + k)];
+    }
+  }
+  return out;
+}
 
 }  // namespace flatsos::planner

@@ -70,6 +70,7 @@ struct RecedingHorizonOptions {
   Eigen::VectorXd target_q_rad;
   Eigen::VectorXd reserves_N;
   SlpSolver solver = SlpSolver::Ipopt;
+  const Eigen::VectorXd* warm_start = nullptr;  ///< Ipopt's start for the SLP (e.g. the last alpha)
 };
 
 struct RecedingHorizonStep {

@@ -43,6 +43,12 @@ IntervalMinimum minimum_on_interval(const Polynomial& p, double a, double b);
 /// Real roots of p in [a, b] (|imaginary part| <= tol * (1 + |root|)), ascending.
 Eigen::VectorXd real_roots_in(const Polynomial& p, double a, double b, double tol = 1e-9);
 
+/// The polynomial of degree n - 1 through (x_k, v_k), k = 0..n-1 (distinct nodes; small n).
+Polynomial interpolating_polynomial(const Eigen::VectorXd& nodes, const Eigen::VectorXd& values);
+
+/// n Chebyshev points of the first kind mapped to [0, 1], ascending.
+Eigen::VectorXd chebyshev_nodes_unit_interval(int n);
+
 /// Coefficients (ascending powers of t) of the polynomial of degree n_initial + n_terminal - 1
 /// that has the given derivatives 0..n_initial-1 at t = 0 and 0..n_terminal-1 at t = T.
 /// Solved in scaled time s = t / T for conditioning. Throws std::invalid_argument for T <= 0 or

@@ -43,6 +43,9 @@ struct SlpResult {
 /// back to the appendix construction (feasible, status Solved, used_fallback = true, message says
 /// why). Throws std::invalid_argument for wrong sizes or NaN, FlatnessError-like
 /// std::invalid_argument if some row sum of C_Y is not positive.
-SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::Ipopt);
+/// `warm_start` (optional, p entries): Ipopt's initial point instead of the appendix construction,
+/// e.g. the previous RH step's alpha.
+SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::Ipopt,
+                    const Eigen::VectorXd* warm_start = nullptr);
 
 }  // namespace flatsos::planner

@@ -1,0 +1,216 @@
+// flatsos_bench: how fast every stage is, measured in one run and printed as JSON (medians over
+// repetitions, wall clock). Stages: the open-loop SOP (setup, exchange solve, certificates), the
+// paper's single box vs the default torque model, the SLP (Ipopt vs exact vs the appendix
+// construction), one inverse-map evaluation, one RH step (cold vs warm Ipopt, exact), the
+// closed-loop RH scenario (real-time factor) and a forward simulation per simulated second.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "example_support.hpp"
+#include "flatsos/planner/receding_horizon.hpp"
+#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/static_equilibrium.hpp"
+
+namespace fp = flatsos::plugin;
+namespace fpl = flatsos::planner;
+namespace ex = flatsos::examples;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+json stats(std::vector<double> v, double scale, const std::string& unit) {
+  std::sort(v.begin(), v.end());
+  return {{"median", scale * ex::median(v)}, {"min", scale * v.front()}, {"max", scale * v.back()}, {"samples", v.size()}, {"unit", unit}};
+}
+
+template <class F>
+std::vector<double> repeat(int reps, F f) {
+  std::vector<double> out;
+  for (int i = 0; i < reps; ++i) {
+    const auto t0 = Clock::now();
+    f();
+    out.push_back(seconds_since(t0));
+  }
+  return out;
+}
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Benchmarks of flatsos (prints JSON; timings are wall clock, medians over repetitions)."};
+  std::string model_path = FLATSOS_DEFAULT_MODEL, out_path;
+  int reps = 21;
+  app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
+  app.add_option("--repetitions", reps, "repetitions per timed stage")->capture_default_str()->check(CLI::Range(1, 10000));
+  app.add_option("--out", out_path, "also write the JSON here");
+  CLI11_PARSE(app, argc, argv);
+
+  const auto model = fp::MusculoskeletalModel::fromFile(model_path);
+  const fpl::FlatOutputMap flat(*model);
+  json j;
+  j["machine"] = {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}};
+  j["repetitions"] = reps;
+
+  // ---- open loop: the paper's scenario ----
+  SimTK::State s0 = model->defaultState();
+  model->setJointAngles(s0, Eigen::Vector2d(0.0, 10.0 * ex::kRadPerDeg));
+  model->setJointSpeeds(s0, Eigen::Vector2d(0.001, 0.002));
+  Eigen::VectorXd a0(6);
+  a0 << 0.135, 0.040, 0.404, 0.556, 0.414, 0.068;
+  fp::equilibrate_tendons(*model, s0, a0);
+  const fpl::MuscleState ms0 = fpl::muscle_state_of(*model, s0);
+  fpl::OpenLoopOptions ol;
+  ol.target_q_rad = Eigen::Vector2d(90.0 * ex::kRadPerDeg, 0.0);
+  ol.reserves_N = Eigen::VectorXd::Constant(6, 10.0);
+  ol.check_points = 2;  // the a-posteriori check is timed separately
+  auto time_plan = [&](const fpl::OpenLoopOptions& o) {
+    std::vector<double> setup, solve, certify, total;
+    fpl::OpenLoopPlan last;
+    for (int i = 0; i < reps; ++i) {
+      last = fpl::plan_open_loop(flat, ms0, o);
+      setup.push_back(last.setup_seconds);
+      solve.push_back(last.solve_seconds);
+      certify.push_back(last.certify_seconds);
+      total.push_back(last.setup_seconds + last.solve_seconds + last.certify_seconds);
+    }
+    json r = {{"status", fpl::to_string(last.status)},
+              {"message", last.message},
+              {"pieces", o.torque.pieces},
+              {"degree", o.torque.degree},
+              {"setup", stats(setup, 1e3, "ms")},
+              {"exchange_solve", stats(solve, 1e3, "ms")},
+              {"certify", stats(certify, 1e3, "ms")},
+              {"setup_plus_solve", stats(total, 1e3, "ms")},
+              {"ipopt_iterations", last.sos.ipopt_iterations},
+              {"ipopt_calls", last.sos.ipopt_calls},
+              {"exchange_rounds", last.sos.exchange_rounds}};
+    if (last.status == fpl::SolveStatus::Solved) r["cost_Ns"] = last.sos.cost_N_s;
+    return std::make_pair(r, ex::median(total));
+  };
+  const auto [sop, sop_median] = time_plan(ol);
+  j["open_loop_sop"] = sop;
+  fpl::OpenLoopOptions box = ol;
+  box.torque.pieces = 1;
+  box.torque.degree = 0;
+  box.torque.samples_per_piece = 31;
+  const auto [box_json, box_median] = time_plan(box);
+  j["open_loop_sop_paper_box"] = box_json;
+  {
+    const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, ms0, ol);
+    j["open_loop_check_301_points"] =
+        stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, plan.path, plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
+    const fpl::Jet qj = plan.jointJet(1.3), yj = plan.flatOutputJet(1.3);
+    j["inverse_map_one_time"] = stats(repeat(reps * 20, [&] { flat.inverse(qj, yj); }), 1e6, "us");
+    j["inverse_dynamics_one_call"] = stats(repeat(reps * 50, [&] { flat.torque(qj.col(0), qj.col(1), qj.col(2)); }), 1e6, "us");
+  }
+
+  // ---- SLP and one RH step, at the first step of the RH scenario ----
+  fpl::RecedingHorizonOptions rh;
+  rh.target_q_rad = Eigen::Vector2d(80.0 * ex::kRadPerDeg, 80.0 * ex::kRadPerDeg);
+  rh.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
+  const Eigen::Vector2d q_rh(20.0 * ex::kRadPerDeg, 20.0 * ex::kRadPerDeg);
+  const fpl::RecedingHorizonStep first = fpl::plan_receding_horizon_step(flat, q_rh, Eigen::Vector2d::Zero(), rh);
+  const Eigen::VectorXd B = fpl::slp_bound_vector(flat.Ctau(), first.tau_min, first.tau_max, rh.reserves_N);
+  const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(flat.CY(), B); });
+  const auto slp_exact = repeat(reps * 20, [&] { fpl::solve_slp(flat.CY(), B, fpl::SlpSolver::VertexEnumeration); });
+  const auto slp_appendix = repeat(reps * 20, [&] { fpl::slp_appendix_solution(flat.CY(), B); });
+  const double appendix_cost = fpl::slp_appendix_solution(flat.CY(), B).sum();
+  const double optimal_cost = fpl::solve_slp(flat.CY(), B).cost_N;
+  j["slp"] = {{"ipopt", stats(slp_ipopt, 1e3, "ms")},
+              {"vertex_enumeration", stats(slp_exact, 1e3, "ms")},
+              {"appendix_construction", stats(slp_appendix, 1e3, "ms")},
+              {"ipopt_over_exact_time", ex::median(slp_ipopt) / ex::median(slp_exact)},
+              {"optimal_cost_N", optimal_cost},
+              {"appendix_cost_N", appendix_cost},
+              {"appendix_over_optimal_cost", appendix_cost / optimal_cost}};
+
+  // Cold vs warm RH step (Ipopt SLP): the second step of the scenario, from the state after one
+  // period of the first plan, started from the appendix construction or from the first alpha.
+  const fpl::Jet after = first.path.jet(0.05, 2);
+  const Eigen::VectorXd q1 = after.col(0), qd1 = after.col(1);
+  const Eigen::VectorXd alpha0 = first.alpha();
+  fpl::RecedingHorizonOptions warm = rh;
+  warm.warm_start = &alpha0;
+  const auto cold_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, q1, qd1, rh); });
+  const auto warm_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, q1, qd1, warm); });
+  fpl::RecedingHorizonOptions exact = rh;
+  exact.solver = fpl::SlpSolver::VertexEnumeration;
+  const auto exact_t = repeat(reps * 5, [&] { fpl::plan_receding_horizon_step(flat, q1, qd1, exact); });
+  j["rh_plan_step"] = {{"ipopt_cold", stats(cold_t, 1e3, "ms")},
+                       {"ipopt_warm", stats(warm_t, 1e3, "ms")},
+                       {"exact", stats(exact_t, 1e3, "ms")},
+                       {"warm_over_cold_time", ex::median(warm_t) / ex::median(cold_t)},
+                       {"cold_iterations", fpl::plan_receding_horizon_step(flat, q1, qd1, rh).slp.iterations},
+                       {"warm_iterations", fpl::plan_receding_horizon_step(flat, q1, qd1, warm).slp.iterations}};
+
+  // ---- the closed-loop scenario ----
+  SimTK::State rest = model->defaultState();
+  fpl::set_minimum_effort_rest_state(flat, rest, q_rh, rh.reserves_N);
+  fpl::RecedingHorizonControllerOptions co;
+  co.plan = exact;
+  json closed = json::object();
+  std::vector<double> full_steps;
+  for (auto [name, kind] : {std::make_pair("bdf", fp::IntegratorKind::CPodesBdf), std::make_pair("rkm", fp::IntegratorKind::RungeKuttaMerson)}) {
+    std::vector<double> rtf;
+    for (int i = 0; i < std::max(3, reps / 5); ++i) {
+      fpl::RecedingHorizonController controller(flat, co);
+      const auto run = fpl::simulate_closed_loop(controller, rest, 2.0, 1e-8, 5, ex::kRadPerDeg, kind);
+      rtf.push_back(run.real_time_factor);
+      if (kind == fp::IntegratorKind::CPodesBdf)
+        for (const auto& rec : controller.history()) full_steps.push_back(rec.step_seconds);
+      closed[name]["integrator_steps"] = run.integrator_steps;
+      closed[name]["settling_time_s"] = run.settling_time_s;
+    }
+    closed[name]["real_time_factor"] = stats(rtf, 1.0, "simulated s per wall s");
+  }
+  j["closed_loop_rh"] = closed;
+  j["rh_controller_step"] = stats(full_steps, 1e3, "ms (SLP plan + excitations of the next period)");
+
+  // ---- forward simulation: wall seconds per simulated second ----
+  SimTK::State held = s0;
+  model->setExcitations(held, a0);
+  json fwd = json::object();
+  for (auto [name, kind] : {std::make_pair("rkm", fp::IntegratorKind::RungeKuttaMerson), std::make_pair("bdf", fp::IntegratorKind::CPodesBdf)}) {
+    fp::SimulationOptions so;
+    so.duration_s = 1.0;
+    so.accuracy = 1e-8;
+    so.integrator = kind;
+    long steps = 0;
+    const auto t = repeat(std::max(3, reps / 5), [&] { steps = fp::simulate(*model, held, so).integrator_steps; });
+    fwd[name] = {{"wall_per_simulated_second", stats(t, 1e3, "ms")}, {"integrator_steps", steps}};
+  }
+  j["forward_simulation_paper_state_1s"] = fwd;
+
+  // ---- against the paper and the targets ----
+  const double rh_step_ms = 1e3 * ex::median(full_steps);
+  const double rtf_bdf = closed["bdf"]["real_time_factor"]["median"];
+  j["comparisons"] = {
+      {"paper_box_over_default_time", box_median / sop_median},
+      {"paper_open_loop_0.32s_over_ours", 0.32 / sop_median},
+      {"paper_lp_15ms_over_our_exact_slp", 0.015 / ex::median(slp_exact)},
+      {"paper_lp_15ms_over_our_ipopt_slp", 0.015 / ex::median(slp_ipopt)},
+      {"paper_rh_step_60ms_over_ours", 60.0 / rh_step_ms}};
+  j["targets"] = {{"open_loop_sop_setup_plus_solve_ms", {{"median", 1e3 * sop_median}, {"target", 20.0}, {"met", 1e3 * sop_median <= 20.0}}},
+                  {"rh_step_ms", {{"median", rh_step_ms}, {"target", 1.0}, {"met", rh_step_ms <= 1.0}}},
+                  {"closed_loop_real_time_factor", {{"median", rtf_bdf}, {"target", 50.0}, {"met", rtf_bdf >= 50.0}}}};
+  const std::string text = j.dump(2);
+  std::cout << text << "\n";
+  if (!out_path.empty()) fp::write_file_atomically(out_path, text + "\n");
+  return 0;
+}
