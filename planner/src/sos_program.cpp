@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 
+#include "flatsos/planner/small_lp.hpp"
 #include "flatsos/planner/sos_certificate.hpp"
 
 namespace flatsos::planner {
@@ -26,6 +27,7 @@ struct AffinePolynomial {
   int muscle = -1;       ///< >= 0: tendon-force constraint of this muscle
   int flat_output = -1;  ///< >= 0: Y_l >= 0
   std::vector<double> points;
+  std::vector<bool> sticky;  ///< added by the exchange: never pruned
   Polynomial at(const Eigen::VectorXd& theta) const { return Polynomial(base + G * theta); }
 };
 
@@ -116,6 +118,7 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
     for (const auto& poly : piece.torque) r = std::max(r, poly.degree());
   const int D = std::max(d, r);
   std::vector<AffinePolynomial> constraints;
+  const bool y_implied = flat.E().minCoeff() >= 0.0;
   const Eigen::MatrixXd& Ctau = flat.Ctau();
   const Eigen::MatrixXd& CY = flat.CY();
   for (std::size_t k = 0; k < torque.pieces.size(); ++k) {
@@ -148,9 +151,12 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
       }
       c.base[0] -= reserves[j];
       c.points = initial_points;
+      c.sticky.assign(initial_points.size(), false);
       constraints.push_back(std::move(c));
     }
-    for (int l = 0; l < p; ++l) {
+    // Y = E F exactly (E C_tau = 0, E C_Y = I), so with E >= 0 entrywise and F >= reserve >= 0
+    // the constraints Y >= 0 are implied and left out.
+    for (int l = 0; l < p && !y_implied; ++l) {
       const auto& out = outputs[static_cast<std::size_t>(l)];
       AffinePolynomial c;
       c.piece = static_cast<int>(k);
@@ -159,6 +165,7 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
       c.G = Eigen::MatrixXd::Zero(D + 1, n_theta);
       c.G.middleCols(out.offset, out.nullspace.cols()) = P * out.nullspace;
       c.points = initial_points;
+      c.sticky.assign(initial_points.size(), false);
       constraints.push_back(std::move(c));
     }
   }
@@ -231,44 +238,83 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
   }
   Eigen::VectorXd theta = Eigen::VectorXd::Zero(n_theta);
   bool converged = false;
+  // Ipopt solves an exchange LP when the exact solver cannot, and always the final one: the
+  // reported optimum is Ipopt's.
+  auto ipopt_round = [&](int round) -> bool {
+    LinearProgramOptions lpo;
+    lpo.start = round > 0 || o.exact_exchange ? &theta : nullptr;
+    const LinearProgramResult lr = solve_linear_program(lp, lpo);
+    result.ipopt_iterations += lr.iterations;
+    ++result.ipopt_calls;
+    if (lr.status != SolveStatus::Solved) {
+      const std::string reason = fixed_violation();
+      result.status = lr.status == SolveStatus::Infeasible || !reason.empty() ? SolveStatus::Infeasible : SolveStatus::Failed;
+      result.message = !reason.empty() ? reason
+                                       : "the exchange LP of round " + std::to_string(round + 1) +
+                                             " was not solved (Ipopt: " + lr.solver_status + ")";
+      result.solve_seconds = seconds_since(t_solve);
+      return false;
+    }
+    theta = lr.x;
+    return true;
+  };
+  bool last_by_ipopt = false;
   for (int round = 0; round < o.max_exchange_rounds; ++round) {
     result.exchange_rounds = round + 1;
     if (n_theta > 0) {
       build_rows();
-      LinearProgramOptions lpo;
-      lpo.start = round > 0 ? &theta : nullptr;
-      const LinearProgramResult lr = solve_linear_program(lp, lpo);
-      result.ipopt_iterations += lr.iterations;
-      ++result.ipopt_calls;
-      if (lr.status != SolveStatus::Solved) {
-        const std::string reason = fixed_violation();
-        result.status = lr.status == SolveStatus::Infeasible || !reason.empty() ? SolveStatus::Infeasible : SolveStatus::Failed;
-        result.message = !reason.empty() ? reason
-                                         : "the exchange LP of round " + std::to_string(round + 1) +
-                                               " was not solved (Ipopt: " + lr.solver_status + ")";
-        result.solve_seconds = seconds_since(t_solve);
-        return result;
+      SmallLpResult exact;
+      if (o.exact_exchange) {
+        exact = solve_small_lp(lp);
+        result.exact_lp_pivots += exact.pivots;
       }
-      theta = lr.x;
+      if (exact.status == SolveStatus::Solved) {
+        theta = exact.x;
+        last_by_ipopt = false;
+      } else {
+        if (!ipopt_round(round)) return result;
+        last_by_ipopt = true;
+      }
+      // Keep the LPs small: initial points far from active leave the next LP (Ipopt's cost per
+      // iteration grows with the rows). A pruned constraint that becomes violated is caught by
+      // the exact minimum below and comes back as a sticky point.
+      for (auto& c : constraints) {
+        const Polynomial g = c.at(theta);
+        for (std::size_t i = c.points.size(); i-- > 0;)
+          if (!c.sticky[i] && g(c.points[i]) > o.prune_slack_N) {
+            c.points.erase(c.points.begin() + static_cast<std::ptrdiff_t>(i));
+            c.sticky.erase(c.sticky.begin() + static_cast<std::ptrdiff_t>(i));
+          }
+      }
     }
     // Exact minimum of every constraint polynomial; add the violated points.
-    bool added = false;
-    result.min_constraint_value_N = kNoBound;
-    for (auto& c : constraints) {
-      const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
-      result.min_constraint_value_N = std::min(result.min_constraint_value_N, mn.value);
-      if (mn.value < 0.0) {
-        const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
-        if (!known) {
-          c.points.push_back(mn.at);
-          added = true;
+    auto add_violated = [&]() {
+      bool added = false;
+      result.min_constraint_value_N = kNoBound;
+      for (auto& c : constraints) {
+        const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
+        result.min_constraint_value_N = std::min(result.min_constraint_value_N, mn.value);
+        if (mn.value < 0.0) {
+          const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
+          if (!known) {
+            c.points.push_back(mn.at);
+            c.sticky.push_back(true);
+            added = true;
+          }
         }
       }
+      return added;
+    };
+    if (add_violated()) continue;
+    if (n_theta > 0 && !last_by_ipopt) {
+      // The exact solver converged: Ipopt solves the final LP (on the final points, started there).
+      build_rows();
+      if (!ipopt_round(round)) return result;
+      last_by_ipopt = true;
+      if (add_violated()) continue;
     }
-    if (!added) {
-      converged = true;
-      break;
-    }
+    converged = true;
+    break;
   }
   result.solve_seconds = seconds_since(t_solve);
 

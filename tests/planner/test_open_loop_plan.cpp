@@ -165,3 +165,18 @@ TEST_F(OpenLoopScenario, BadInputIsRejectedByName) {
   s.qd_rad_per_s = Eigen::Vector2d(std::nan(""), 0.0);
   expect_message(options, s, "qd must have 2 finite values");
 }
+
+TEST_F(OpenLoopScenario, ExactExchangeRoundsGiveIpoptsOptimumWithFewerIpoptCalls) {
+  const auto fast = fpl::plan_open_loop(arm.flat, s0, options);
+  auto ipopt_only = options;
+  ipopt_only.sos.exact_exchange = false;
+  const auto slow = fpl::plan_open_loop(arm.flat, s0, ipopt_only);
+  ASSERT_EQ(fast.status, fpl::SolveStatus::Solved) << fast.message;
+  ASSERT_EQ(slow.status, fpl::SolveStatus::Solved) << slow.message;
+  EXPECT_NEAR(fast.sos.cost_N_s, slow.sos.cost_N_s, 1e-6 * slow.sos.cost_N_s);
+  EXPECT_GT(fast.sos.exact_lp_pivots, 0);
+  EXPECT_EQ(slow.sos.exact_lp_pivots, 0);
+  EXPECT_LT(fast.sos.ipopt_calls, slow.sos.ipopt_calls);
+  for (std::size_t l = 0; l < fast.Y.size(); ++l)
+    for (double t : {0.0, 1.0, 2.0, 3.0}) EXPECT_NEAR(fast.Y[l](t), slow.Y[l](t), 1e-4 * (1 + std::abs(slow.Y[l](t))));
+}

@@ -7,10 +7,12 @@
 // constraint is a polynomial in scaled time s in [0, 1] that is affine in the free
 // coefficients theta of Y (the boundary equalities are eliminated first):
 //   g_jk(s) = C_Y,j Y(s) + C_tau,j p_k(s) - |C_tau,j| e_k - F_reserve,j >= 0.
-// Solved by an exchange (cutting-plane) method: an LP in theta (Ipopt) imposes the constraints
+// Solved by an exchange (cutting-plane) method: an LP in theta imposes the constraints
 // at finitely many points; the exact minimum of every g_jk on [0, 1] (roots of g') adds the
-// violated points; repeat. The result is feasible for the semi-infinite program, and the
-// pieces that come near zero get Markov-Lukacs SOS certificates.
+// violated points; repeat (the rounds' LPs by an exact simplex, the final one by Ipopt). The
+// result is feasible for the semi-infinite program, and the
+// pieces that come near zero get Markov-Lukacs SOS certificates. The constraints Y >= 0 are
+// imposed only when E has a negative entry (otherwise Y = E F >= 0 follows from the reserves).
 
 #include <string>
 #include <vector>
@@ -36,6 +38,10 @@ struct SosProgramOptions {
   double feasibility_margin_N = 1e-6;  ///< constraints are imposed >= this at the LP points
   int max_exchange_rounds = 40;
   double coefficient_bound_N = 1e7;    ///< |theta| box keeping early LPs bounded
+  double prune_slack_N = 20.0;         ///< after an LP, initial points with more slack are dropped
+  /// Exchange rounds by the exact small-LP simplex, then Ipopt on the final points (one Ipopt
+  /// call instead of one per round; the reported optimum is still Ipopt's). false: Ipopt always.
+  bool exact_exchange = true;
   bool certify = true;                 ///< Lukacs certificates for the near-active pieces
   double near_active_N = 1.0;          ///< pieces whose minimum is below this get certified
 };
@@ -50,6 +56,7 @@ struct SosProgramResult {
   int lp_points = 0;
   int ipopt_iterations = 0;            ///< summed over all Ipopt calls
   int ipopt_calls = 0;
+  int exact_lp_pivots = 0;             ///< simplex pivots of the exact exchange LPs
   int near_active_pieces = 0;
   int certified_pieces = 0;            ///< of the near-active ones
   bool certified = false;              ///< every near-active piece has a certificate
