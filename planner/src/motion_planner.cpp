@@ -119,6 +119,9 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
     plan.message = "the plan violates a tendon-force reserve on the check grid by " +
                    std::to_string(-plan.check.min_reserve_margin_N) + " N (torque-model remainder underestimated)";
   } else if (plan.check.points_outside_domain > 0) {
+    // The SOS program was solved, but the muscles cannot execute the plan (a > 1, n outside
+    // [0, 1], u >= Vmax, ...): not a usable plan.
+    plan.status = SolveStatus::Infeasible;
     plan.message = "the plan leaves the model's valid domain at " + std::to_string(plan.check.points_outside_domain) +
                    " of " + std::to_string(plan.check.points) + " check points, first at " + plan.check.first_violation;
   }

@@ -55,7 +55,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   rec.time_s = state.getTime();
   const Eigen::VectorXd q = model.jointAngles(state), qd = model.jointSpeeds(state);
   try {
-    const RecedingHorizonStep plan = plan_receding_horizon_step(flat_, q, qd, options_.plan);
+    const RecedingHorizonStep plan = options_.planner(flat_, q, qd, options_.plan);
     rec.plan_seconds = plan.seconds;
     rec.status = plan.status;
     rec.message = plan.message;

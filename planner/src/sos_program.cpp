@@ -212,17 +212,23 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
         const Eigen::RowVectorXd v = monomials(s, c.base.size());
         const Eigen::RowVectorXd row = v * c.G;
         const double value = v.dot(c.base);
-        if (row.cwiseAbs().maxCoeff() <= 1e-12 * (1.0 + c.G.cwiseAbs().maxCoeff()) && value < -o.feasibility_margin_N) {
+        // Eigen's maxCoeff on an empty vector is undefined: with no free coefficient (the
+        // equalities fix Y completely) every row is fixed.
+        const double row_size = row.size() ? row.cwiseAbs().maxCoeff() : 0.0;
+        const double g_size = c.G.size() ? c.G.cwiseAbs().maxCoeff() : 0.0;
+        if (row_size <= 1e-12 * (1.0 + g_size) && value < -o.feasibility_margin_N) {
           const auto& piece = torque.pieces[static_cast<std::size_t>(c.piece)];
           const double t = piece.t0_s + s * (piece.t1_s - piece.t0_s);
           std::ostringstream why;
-          why << "infeasible: at t = " << t << " s the boundary conditions fix Y, and the " << describe(c, flat)
-              << " is guaranteed only " << value << " N";
+          why << "infeasible: at t = " << t << " s the boundary conditions fix Y, and ";
           if (c.muscle >= 0) {
             double margin = 0.0;
             for (int i = 0; i < n; ++i) margin += std::abs(Ctau(c.muscle, i)) * piece.remainder_N_m[i];
-            why << " relative to its reserve of " << reserves[c.muscle] << " N (the torque model's remainder bound costs "
-                << margin << " N there: use more pieces K or a higher degree r)";
+            why << "the guaranteed " << describe(c, flat) << " is " << -value << " N below its reserve of "
+                << reserves[c.muscle] << " N (the torque model's remainder bound costs " << margin
+                << " N there: use more pieces K or a higher degree r)";
+          } else {
+            why << describe(c, flat) << " is violated by " << -value << " N";
           }
           return why.str();
         }

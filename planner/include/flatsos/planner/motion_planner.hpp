@@ -57,7 +57,9 @@ struct OpenLoopPlan {
 /// The initial muscle state fixes q, qd, qdd, q''' and Y, dY at t = 0 (forward map); terminal
 /// rest fixes qd..q'''' = 0 and dY = ddY = 0. Throws std::invalid_argument for bad input (sizes,
 /// NaN, T <= 0, negative reserves, initial state outside the model's valid domain); solver
-/// outcomes come back as statuses.
+/// outcomes come back as statuses: Infeasible also when the SOS program is solved but the plan
+/// leaves the model's valid domain on the check grid (activation above 1, excitation outside
+/// [0, 1], ...), since the muscles cannot execute it.
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& options);
 
 /// The a-posteriori check of any flat trajectory on `points` uniform times in [0, T].

@@ -6,6 +6,7 @@
 // [t, t + delta]. Excitations outside [0, 1] are clamped (by the muscle) and counted here.
 // A failed plan never stops the loop: the previous plan's tail is used and the failure recorded.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -16,8 +17,15 @@
 
 namespace flatsos::planner {
 
+/// The planning step a controller calls; replaceable (another planner, or fault injection in
+/// tests). Default: plan_receding_horizon_step.
+using RecedingHorizonPlanner = std::function<RecedingHorizonStep(const FlatOutputMap&, const Eigen::VectorXd& q_rad,
+                                                                 const Eigen::VectorXd& qd_rad_per_s,
+                                                                 const RecedingHorizonOptions&)>;
+
 struct RecedingHorizonControllerOptions {
   RecedingHorizonOptions plan;             ///< horizon, grid, target, reserves, SLP solver
+  RecedingHorizonPlanner planner = plan_receding_horizon_step;
   double control_period_s = 0.05;          ///< delta
   int excitation_samples_per_period = 11;  ///< inverse-map samples per period (linear in between)
 };

@@ -1,0 +1,242 @@
+// Reliability: bad input of every kind gets a clear error naming the problem (one table), the RH
+// loop survives failed plans on the previous plan's tail and recovers, and the forward
+// simulation stays finite and bounded under extreme excitations.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iomanip>
+#include <fstream>
+#include <functional>
+#include <limits>
+
+#include "../planner/scenario_fixture.hpp"
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/planner/receding_horizon.hpp"
+#include "flatsos/plugin/excitation_file.hpp"
+#include "flatsos/plugin/forward_simulation.hpp"
+
+namespace fp = flatsos::plugin;
+namespace fpl = flatsos::planner;
+namespace fm = flatsos::muscles;
+using flatsos::test::deg;
+
+namespace {
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct BadInput {
+  const char* what;
+  std::function<void()> call;
+  std::string message_contains;
+};
+
+std::string arm_text() {
+  std::ifstream in(flatsos::test::arm_model_path());
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  if (at == std::string::npos) throw std::logic_error("test setup: '" + from + "' not in the arm file");
+  return text.replace(at, from.size(), to);
+}
+
+class Square : public fp::ExcitationSignal {
+ public:
+  Square(double hz, double phase) : hz_(hz), phase_(phase) {}
+  double value(double t) const override { return std::fmod(t * hz_ + phase_, 1.0) < 0.5 ? 1.0 : 0.0; }
+
+ private:
+  double hz_, phase_;
+};
+}  // namespace
+
+TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
+  flatsos::test::ArmPlanning arm;
+  const auto& model = *arm.model;
+  const fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(model);
+  const fpl::OpenLoopOptions ol = flatsos::test::open_loop_options();
+  fpl::RecedingHorizonOptions rh;
+  rh.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
+  rh.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
+  const Eigen::Vector2d q(deg(20), deg(20)), zero2 = Eigen::Vector2d::Zero();
+  const std::string text = arm_text();
+  auto plan_with = [&](std::function<void(fpl::OpenLoopOptions&, fpl::MuscleState&)> spoil) {
+    return [=, &arm] {
+      auto o = ol;
+      auto s = s0;
+      spoil(o, s);
+      fpl::plan_open_loop(arm.flat, s, o);
+    };
+  };
+  auto rh_with = [&](std::function<void(fpl::RecedingHorizonOptions&)> spoil) {
+    return [=, &arm] {
+      auto o = rh;
+      spoil(o);
+      fpl::plan_receding_horizon_step(arm.flat, q, zero2, o);
+    };
+  };
+  auto model_text = [](std::string t) { return [t] { fp::MusculoskeletalModel m(fp::parse_model_json(t, "bad.json")); }; };
+  auto muscle_with = [&](std::function<void(fm::MuscleParameters&)> spoil) {
+    return [=, &model] {
+      auto p = model.muscle(0).getParameters();
+      spoil(p);
+      fm::validate(p);
+    };
+  };
+
+  const std::vector<BadInput> cases = {
+      // malformed or inconsistent model files
+      {"truncated JSON", model_text(text.substr(0, text.size() / 2)), "not valid JSON"},
+      {"negative mass", model_text(replaced(text, "\"mass_kg\": 2.24", "\"mass_kg\": -2.24")), "bodies[0].mass_kg"},
+      {"unknown joint in a moment arm", model_text(replaced(text, "{\"shoulder\": 0.05}", "{\"shouldr\": 0.05}")), "unknown joint 'shouldr'"},
+      {"pin axis zero", model_text(replaced(text, "\"location_in_parent_m\": [0.33, 0.0, 0.0]}", "\"location_in_parent_m\": [0.33, 0.0, 0.0], \"axis\": [0, 0, 0]}")), "axis"},
+      {"E row count", model_text(replaced(text, ",\n    {\"name\": \"triceps_short_force\", \"weights\": {\"triceps_short\": 1.0}}", "")), "m - N = 4 rows"},
+      {"E unknown muscle", model_text(replaced(text, "{\"triceps_short\": 1.0}", "{\"triceps\": 1.0}")), "unknown muscle 'triceps'"},
+      {"unknown key", model_text(replaced(text, "\"name\": \"arm_richter_warner\",", "\"name\": \"arm_richter_warner\", \"gravity\": 9.81,")), "gravity: unknown key"},
+      {"missing file", [] { fp::load_model_file("/no/such/model.json"); }, "cannot be opened"},
+      // non-physical muscle parameters
+      {"Fmax zero", muscle_with([](auto& p) { p.max_isometric_force_N = 0; }), "max_isometric_force_N"},
+      {"Lopt NaN", muscle_with([](auto& p) { p.optimal_fiber_length_m = kNaN; }), "optimal_fiber_length_m"},
+      {"gmax below 1", muscle_with([](auto& p) { p.max_eccentric_force_ratio = 0.8; }), "max_eccentric_force_ratio"},
+      {"deactivation faster than activation", muscle_with([](auto& p) { p.deactivation_time_constant_s = 0.005; }), "activation_time_constant_s"},
+      // boundary states outside the valid domain
+      {"activation above 1", [&] { SimTK::State s = model.defaultState(); model.muscle(1).setActivation(s, 1.2); }, "outside [0, 1]"},
+      {"negative tendon length", [&] { SimTK::State s = model.defaultState(); model.muscle(1).setTendonLength(s, -0.01); }, "tendon length"},
+      {"initial activation 0", plan_with([](auto&, auto& s) { s.activation[3] = 0.0; }), "activation of 'triceps_long' is 0"},
+      {"initial slack tendon", plan_with([](auto&, auto& s) { s.tendon_length_m[0] = 0.05; }), "tendon of 'anterior_deltoid' is slack"},
+      {"initial NaN angle", plan_with([](auto&, auto& s) { s.q_rad[1] = kNaN; }), "q must have 2 finite values"},
+      {"equilibrium without room", [&] { fp::static_equilibrium_tendon_length(model.muscle(5).getParameters(), 0.01, 0.5); }, "does not exceed the tendon slack length"},
+      {"equilibrium activation NaN", [&] { fp::static_equilibrium_tendon_length(model.muscle(5).getParameters(), 0.15, kNaN); }, "activation"},
+      // impossible targets, horizons, reserves
+      {"target NaN", plan_with([](auto& o, auto&) { o.target_q_rad[0] = kNaN; }), "target joint angles: values must be finite"},
+      {"target wrong size", plan_with([](auto& o, auto&) { o.target_q_rad = Eigen::Vector3d::Zero(); }), "target joint angles: expected 2"},
+      {"duration zero", plan_with([](auto& o, auto&) { o.duration_s = 0.0; }), "duration T must be > 0"},
+      {"duration infinite", plan_with([](auto& o, auto&) { o.duration_s = std::numeric_limits<double>::infinity(); }), "duration T must be > 0"},
+      {"reserve negative", plan_with([](auto& o, auto&) { o.reserves_N[2] = -1.0; }), "reserves must be >= 0"},
+      {"reserve NaN", plan_with([](auto& o, auto&) { o.reserves_N[2] = kNaN; }), "reserves: values must be finite"},
+      {"pieces zero", plan_with([](auto& o, auto&) { o.torque.pieces = 0; }), "pieces K must be >= 1"},
+      {"flat-output degree too low", plan_with([](auto& o, auto&) { o.sos.flat_output_degree = 2; }), "too low for 4 boundary equalities"},
+      {"RH horizon negative", rh_with([](auto& o) { o.horizon_s = -0.5; }), "horizon must be > 0"},
+      {"RH grid of one point", rh_with([](auto& o) { o.grid_points = 1; }), "at least 2 grid points"},
+      {"RH reserves wrong size", rh_with([](auto& o) { o.reserves_N = Eigen::VectorXd::Ones(4); }), "reserves: expected 6"},
+      {"RH state NaN", [&] { fpl::plan_receding_horizon_step(arm.flat, Eigen::Vector2d(kNaN, 0.0), zero2, rh); }, "joint angles: values must be finite"},
+      {"RH period above horizon", [&] { fpl::RecedingHorizonControllerOptions o; o.plan = rh; o.control_period_s = 1.0; fpl::RecedingHorizonController c(arm.flat, o); }, "must not exceed the horizon"},
+      // NaN and nonsense elsewhere
+      {"excitation NaN", [&] { SimTK::State s = model.defaultState(); model.muscle(0).setExcitation(s, kNaN); }, "excitation is NaN"},
+      {"simulation accuracy", [&] { fp::SimulationOptions o; o.accuracy = 0.0; fp::simulate(model, model.defaultState(), o); }, "accuracy"},
+      {"simulation NaN state", [&] { SimTK::State s = model.defaultState(); s.updQ()[0] = kNaN; fp::simulate(model, s, {}); }, "initial state has a non-finite value"},
+      {"SLP NaN bound", [&] { fpl::solve_slp(arm.flat.CY(), Eigen::VectorXd::Constant(6, kNaN)); }, "NaN"},
+      {"tendon force not positive", [&] { fm::tendon_length_from_force(model.muscle(2).getParameters(), -3.0); }, "biceps"},
+      {"force-velocity beyond gmax", [&] { fm::force_velocity_inverse(model.muscle(2).getParameters(), 1.7); }, "(-Ah, gmax)"},
+  };
+  ASSERT_GE(cases.size(), 30u);
+  for (const auto& c : cases) {
+    try {
+      c.call();
+      ADD_FAILURE() << "accepted: " << c.what;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(c.message_contains), std::string::npos)
+          << c.what << ": '" << c.message_contains << "' not in: " << e.what();
+    }
+  }
+}
+
+TEST(Reliability, FlatOutputsFixedCompletelyByTheEqualitiesStillGiveAnAnswer) {
+  // Degree 3 with 4 boundary equalities leaves no free coefficient: nothing to optimize, but the
+  // constraints must still be checked (this once read an empty vector's maximum and crashed).
+  flatsos::test::ArmPlanning arm;
+  auto o = flatsos::test::open_loop_options();
+  o.sos.flat_output_degree = 3;
+  const auto plan = fpl::plan_open_loop(arm.flat, flatsos::test::open_loop_initial_state(*arm.model), o);
+  EXPECT_NE(plan.status, fpl::SolveStatus::Failed) << plan.message;
+  if (plan.status == fpl::SolveStatus::Solved) EXPECT_GE(plan.check.min_reserve_margin_N, 0.0);
+  else EXPECT_FALSE(plan.message.empty());
+}
+
+TEST(Reliability, ImpossibleMotionIsReportedNotPassedOff) {
+  flatsos::test::ArmPlanning arm;
+  auto o = flatsos::test::open_loop_options();
+  o.duration_s = 0.6;  // straight up in 0.6 s needs more than the muscles can give
+  const auto plan = fpl::plan_open_loop(arm.flat, flatsos::test::open_loop_initial_state(*arm.model), o);
+  EXPECT_EQ(plan.status, fpl::SolveStatus::Infeasible);
+  EXPECT_NE(plan.message.find("leaves the model's valid domain"), std::string::npos) << plan.message;
+  EXPECT_GT(plan.check.points_outside_domain, 0);
+}
+
+TEST(Reliability, RecedingHorizonRunsOnThePreviousPlanWhenStepsFailAndRecovers) {
+  flatsos::test::ArmPlanning arm;
+  fpl::RecedingHorizonControllerOptions o;
+  o.plan.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
+  o.plan.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
+  o.plan.solver = fpl::SlpSolver::VertexEnumeration;
+  int calls = 0;
+  o.planner = [&](const fpl::FlatOutputMap& f, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                  const fpl::RecedingHorizonOptions& ro) {
+    const int k = calls++;
+    if (k >= 5 && k < 9) {  // steps 5..8: the solver "fails" (and once throws)
+      if (k == 7) throw std::runtime_error("injected solver crash");
+      fpl::RecedingHorizonStep failed;
+      failed.status = fpl::SolveStatus::Failed;
+      failed.message = "injected failure";
+      return failed;
+    }
+    return fpl::plan_receding_horizon_step(f, q, qd, ro);
+  };
+  SimTK::State s = arm.model->defaultState();
+  fpl::set_minimum_effort_rest_state(arm.flat, s, Eigen::Vector2d(deg(20), deg(20)), o.plan.reserves_N);
+  fpl::RecedingHorizonController controller(arm.flat, o);
+  const auto run = fpl::simulate_closed_loop(controller, s, 2.0, 1e-8, 5, deg(1), fp::IntegratorKind::CPodesBdf);
+  ASSERT_TRUE(run.finite);
+  EXPECT_EQ(controller.planFailures(), 4);
+  const auto& h = controller.history();
+  for (int k = 5; k < 9; ++k) {
+    EXPECT_EQ(h[k].status, fpl::SolveStatus::Failed);
+    EXPECT_TRUE(h[k].used_previous_plan) << k;
+    EXPECT_DOUBLE_EQ(h[k].plan_start_time_s, h[4].plan_start_time_s);  // the tail of step 4's plan
+    EXPECT_FALSE(h[k].message.empty());
+  }
+  EXPECT_NE(h[7].message.find("injected solver crash"), std::string::npos);
+  EXPECT_EQ(h[9].status, fpl::SolveStatus::Solved);  // recovers
+  ASSERT_GE(run.settling_time_s, 0.0);
+  const Eigen::VectorXd q_end = arm.model->jointAngles(run.final_state);
+  EXPECT_NEAR(q_end[0], deg(80), deg(1));
+  EXPECT_NEAR(q_end[1], deg(80), deg(1));
+}
+
+class ExtremeExcitations : public ::testing::TestWithParam<int> {};
+
+// 0: all excitations 0 for 5 s; 1: all 1 for 5 s; 2: bang-bang at 100 Hz for 5 s.
+TEST_P(ExtremeExcitations, ForwardSimulationStaysFiniteAndPhysicallyBounded) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = arm->defaultState();
+  arm->setJointAngles(s, Eigen::Vector2d(0.0, deg(10)));
+  fp::equilibrate_tendons(*arm, s, flatsos::test::paper_a0());
+  for (int j = 0; j < 6; ++j) {
+    if (GetParam() == 2) arm->muscle(j).setExcitationSignal(s, std::make_shared<Square>(100.0, 0.5 * (j % 2)));
+    else arm->muscle(j).setExcitation(s, GetParam() == 1 ? 1.0 : 0.0);
+  }
+  fp::SimulationOptions o;
+  o.duration_s = 5.0;
+  o.accuracy = 1e-8;  // BDF needs it tight near the activation floor (see test_hill_muscle)
+  o.report_interval_s = 0.01;
+  o.integrator = fp::IntegratorKind::CPodesBdf;
+  const auto r = fp::simulate(*arm, s, o);
+  ASSERT_TRUE(r.finite) << r.message;
+  ASSERT_EQ(r.states.rows.size(), 501u);
+  for (const auto& row : r.states.rows)
+    for (double v : row) ASSERT_TRUE(std::isfinite(v));
+  for (int j = 0; j < 6; ++j) {
+    const auto& p = arm->muscle(j).getParameters();
+    for (double a : r.states.column("/forceset/" + p.name + "/activation")) {
+      EXPECT_GE(a, 0.0);
+      EXPECT_LE(a - 1.0, 1e-12) << std::setprecision(17) << a;  // a -> 1 from below; round-off only
+    }
+    // Tendon force never exceeds what the fiber can hold eccentrically (gmax Fmax) by much:
+    // the tendon stretches only as far as the fiber lets it.
+    for (double f : r.states.column("/forceset/" + p.name + "/tendon_force")) EXPECT_LE(f, 1.6 * p.max_isometric_force_N);
+    for (double ls : r.states.column("/forceset/" + p.name + "/tendon_length")) EXPECT_GT(ls, 0.5 * p.tendon_slack_length_m);
+  }
+  for (const char* joint : {"shoulder", "elbow"})
+    for (double qd : r.states.column(std::string("/jointset/") + joint + "/qdot")) EXPECT_LT(std::abs(qd), 100.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(ZeroOneBangBang, ExtremeExcitations, ::testing::Values(0, 1, 2));
