@@ -144,11 +144,14 @@ RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const 
   initial << q, qd;
   terminal.col(0) = o.target_q_rad;
   step.path = fit_joint_path(o.horizon_s, initial, terminal);
+  const bool offset = o.torque_offset_N_m.size() > 0;
+  if (offset) require(o.torque_offset_N_m, n, "torque offset");
   step.tau_min = Eigen::VectorXd::Constant(n, 1e300);
   step.tau_max = Eigen::VectorXd::Constant(n, -1e300);
   for (int i = 0; i < o.grid_points; ++i) {
     const Jet j = step.path.jet(o.horizon_s * i / (o.grid_points - 1), 3);
-    const Eigen::VectorXd tau = flat.torque(j.col(0), j.col(1), j.col(2));
+    Eigen::VectorXd tau = flat.torque(j.col(0), j.col(1), j.col(2));
+    if (offset) tau -= o.torque_offset_N_m;
     step.tau_min = step.tau_min.cwiseMin(tau);
     step.tau_max = step.tau_max.cwiseMax(tau);
   }

@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/plugin/excitation_signal.hpp"
 
 namespace flatsos::planner {
@@ -48,14 +49,33 @@ RecedingHorizonController::RecedingHorizonController(const FlatOutputMap& flat, 
     throw std::invalid_argument("RH controller: the control period must not exceed the horizon");
 }
 
-const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {
+const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) { return step(flat_.model(), state); }
+
+const RecedingHorizonRecord& RecedingHorizonController::step(const plugin::MusculoskeletalModel& model, SimTK::State& state) {
   const auto t0 = Clock::now();
-  const auto& model = flat_.model();
+  if (model.numJoints() != flat_.numJoints() || model.numMuscles() != flat_.numMuscles())
+    throw std::invalid_argument("RH controller: the plant has other joints or muscles than the planner's model");
   RecedingHorizonRecord rec;
   rec.time_s = state.getTime();
   const Eigen::VectorXd q = model.jointAngles(state), qd = model.jointSpeeds(state);
+  RecedingHorizonOptions plan_options = options_.plan;
+  if (options_.disturbance_observer_gain > 0.0) {
+    // The measured joint torque the planner's model cannot explain from the measured muscles.
+    model.system().realize(state, SimTK::Stage::Acceleration);
+    Eigen::VectorXd qdd(model.numJoints());
+    for (int i = 0; i < model.numJoints(); ++i) qdd[i] = model.joint(i).getOneUDot(state, 0);
+    Eigen::VectorXd force(model.numMuscles());
+    const Eigen::VectorXd ls = model.tendonLengths(state);
+    for (int j = 0; j < model.numMuscles(); ++j)
+      force[j] = muscles::tendon_force(flat_.model().muscle(j).getParameters(), ls[j]);
+    const Eigen::VectorXd measured = flat_.torque(q, qd, qdd) - flat_.A() * force;
+    if (torque_offset_.size() != measured.size()) torque_offset_ = Eigen::VectorXd::Zero(measured.size());
+    if (measured.allFinite()) torque_offset_ += options_.disturbance_observer_gain * (measured - torque_offset_);
+    plan_options.torque_offset_N_m = torque_offset_;
+    rec.torque_offset_N_m = torque_offset_;
+  }
   try {
-    const RecedingHorizonStep plan = options_.planner(flat_, q, qd, options_.plan);
+    const RecedingHorizonStep plan = options_.planner(flat_, q, qd, plan_options);
     rec.plan_seconds = plan.seconds;
     rec.status = plan.status;
     rec.message = plan.message;
@@ -82,7 +102,9 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     auto jet_at = [&](double tau) { return path.jet(std::min(tau, path.duration_s), 5); };
     const auto jets = flat_.torqueJetsOnGrid([&](double tau) { return jet_at(tau).leftCols(3).eval(); }, tau0, h, ns);
     for (int i = 0; i < ns; ++i) {
-      const MusclePoint mp = flat_.inverseFromTorque(jet_at(tau0 + h * i), jets[static_cast<std::size_t>(i)], constant_jet(rec.alpha));
+      TorqueJet tj = jets[static_cast<std::size_t>(i)];
+      if (rec.torque_offset_N_m.size()) tj.tau.col(0) -= rec.torque_offset_N_m;  // constant: rates unchanged
+      const MusclePoint mp = flat_.inverseFromTorque(jet_at(tau0 + h * i), tj, constant_jet(rec.alpha));
       if (!mp.excitation.allFinite()) return false;
       values.col(i) = mp.excitation;
     }
@@ -139,9 +161,14 @@ int RecedingHorizonController::clampedSamples() const {
 ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, const SimTK::State& initial,
                                       double duration, double accuracy, int reports, double settle_tol,
                                       plugin::IntegratorKind kind) {
+  return simulate_closed_loop(controller, controller.flat().model(), initial, duration, accuracy, reports, settle_tol, kind);
+}
+
+ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, const plugin::MusculoskeletalModel& model,
+                                      const SimTK::State& initial, double duration, double accuracy, int reports,
+                                      double settle_tol, plugin::IntegratorKind kind) {
   if (!(duration > 0.0) || !std::isfinite(duration)) throw std::invalid_argument("closed loop: duration must be > 0 s");
   if (reports < 1) throw std::invalid_argument("closed loop: need at least one report per period");
-  const auto& model = controller.flat().model();
   const int n = model.numJoints();
   const double period = controller.options().control_period_s;
   ClosedLoopResult out;
@@ -162,7 +189,7 @@ ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, con
   plugin::append_state_row(model, s, out.states);
   const int steps = static_cast<int>(std::ceil(duration / period - 1e-9));
   for (int k = 0; k < steps && out.finite; ++k) {
-    const RecedingHorizonRecord& rec = controller.step(s);
+    const RecedingHorizonRecord& rec = controller.step(model, s);
     for (int i = 0; i <= 10 && rec.alpha.size(); ++i) {
       const double tau = rec.path.duration_s * i / 10.0;
       const Jet jq = rec.path.jet(tau, 1);

@@ -21,7 +21,32 @@ SimTK::Rotation axis_frame(const Eigen::Vector3d& axis) {
   return SimTK::Rotation(SimTK::UnitVec3(to_vec3(axis)), SimTK::ZAxis);
 }
 
+// An external joint torque given as a function of time (disturbances, tests).
+class JointTorqueImpl : public SimTK::Force::Custom::Implementation {
+ public:
+  JointTorqueImpl(SimTK::MobilizedBody joint, std::shared_ptr<const ExcitationSignal> torque)
+      : joint_(std::move(joint)), torque_(std::move(torque)) {}
+  void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>&, SimTK::Vector_<SimTK::Vec3>&,
+                 SimTK::Vector& mobility_forces) const override {
+    joint_.applyOneMobilityForce(s, 0, torque_->value(s.getTime()), mobility_forces);
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0.0; }
+  bool dependsOnlyOnPositions() const override { return false; }
+
+ private:
+  SimTK::MobilizedBody joint_;
+  std::shared_ptr<const ExcitationSignal> torque_;
+};
+
 }  // namespace
+
+void MusculoskeletalModel::addJointTorque(int joint, std::shared_ptr<const ExcitationSignal> torque) {
+  if (joint < 0 || joint >= numJoints()) throw std::invalid_argument("addJointTorque: no joint " + std::to_string(joint));
+  if (!torque) throw std::invalid_argument("addJointTorque: no torque signal");
+  SimTK::Force::Custom(forces_, new JointTorqueImpl(joints_[static_cast<std::size_t>(joint)], std::move(torque)));
+  system_.realizeTopology();
+  scratch_ = system_.getDefaultState();
+}
 
 MusculoskeletalModel::MusculoskeletalModel(ModelDescription description)
     : description_(std::move(description)), matter_(system_), forces_(system_) {

@@ -73,6 +73,9 @@ struct RecedingHorizonOptions {
   Eigen::VectorXd reserves_N;
   SlpSolver solver = SlpSolver::Ipopt;
   const Eigen::VectorXd* warm_start = nullptr;  ///< Ipopt's start for the SLP (e.g. the last alpha)
+  /// Joint torque the muscles need not produce (N m per joint; empty: none): the planned
+  /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
+  Eigen::VectorXd torque_offset_N_m;
 };
 
 struct RecedingHorizonStep {

@@ -27,7 +27,12 @@ struct RecedingHorizonControllerOptions {
   RecedingHorizonOptions plan;             ///< horizon, grid, target, reserves, SLP solver
   RecedingHorizonPlanner planner = plan_receding_horizon_step;
   double control_period_s = 0.05;          ///< delta
-  int excitation_samples_per_period = 11;  ///< inverse-map samples per period (linear in between)
+  int excitation_samples_per_period = 11;  ///< inverse-map samples per period (fitted by a polynomial)
+  /// Disturbance observer: every step, the joint torque the model misses is measured as
+  /// d = ID(q, qd, qdd) - A Phi_S(L_S) from the measured state and acceleration (flatness turns
+  /// the measured tendon lengths into the muscles' torque), filtered as d += gain (d_meas - d),
+  /// and the plan asks the muscles for ID(path) - d. 0 disables it (the paper's controller).
+  double disturbance_observer_gain = 0.0;
 };
 
 struct RecedingHorizonRecord {
@@ -41,6 +46,7 @@ struct RecedingHorizonRecord {
   int clamped_samples = 0;          ///< excitation samples outside [0, 1] this period
   double plan_seconds = 0.0;        ///< the SLP step
   double step_seconds = 0.0;        ///< plan + excitations
+  Eigen::VectorXd torque_offset_N_m;  ///< the observer's estimate used by this step's plan
 };
 
 class RecedingHorizonController {
@@ -51,6 +57,9 @@ class RecedingHorizonController {
 
   /// Plans from the state at its time and installs the excitation signals for the next period.
   const RecedingHorizonRecord& step(SimTK::State& state);
+  /// Same for a plant that is a different model from the planner's (same joints and muscles in
+  /// the same order, other parameters): measures on and drives `plant`.
+  const RecedingHorizonRecord& step(const plugin::MusculoskeletalModel& plant, SimTK::State& state);
 
   const std::vector<RecedingHorizonRecord>& history() const { return history_; }
   int planFailures() const;
@@ -62,6 +71,7 @@ class RecedingHorizonController {
   const FlatOutputMap& flat_;
   RecedingHorizonControllerOptions options_;
   std::vector<RecedingHorizonRecord> history_;
+  Eigen::VectorXd torque_offset_;  ///< the disturbance observer's state
 };
 
 /// A closed-loop run: the controller plans every period, Simbody integrates in between.
@@ -80,6 +90,12 @@ struct ClosedLoopResult {
 /// (Runge-Kutta-Merson or CPodes BDF at `accuracy`).
 ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, const SimTK::State& initial,
                                       double duration_s, double accuracy = 1e-8, int reports_per_period = 5,
+                                      double settle_tolerance_rad = 3.14159265358979323846 / 180.0,
+                                      plugin::IntegratorKind integrator = plugin::IntegratorKind::RungeKuttaMerson);
+/// The same with a plant model other than the planner's (model mismatch studies).
+ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, const plugin::MusculoskeletalModel& plant,
+                                      const SimTK::State& initial, double duration_s, double accuracy = 1e-8,
+                                      int reports_per_period = 5,
                                       double settle_tolerance_rad = 3.14159265358979323846 / 180.0,
                                       plugin::IntegratorKind integrator = plugin::IntegratorKind::RungeKuttaMerson);
 

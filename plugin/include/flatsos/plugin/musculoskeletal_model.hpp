@@ -60,6 +60,10 @@ class MusculoskeletalModel {
   /// Inverse dynamics without muscles: tau = M(q) qdd + C(q, qd) qd + g(q), from Simbody.
   Eigen::VectorXd inverseDynamics(const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                   const Eigen::VectorXd& qdd_rad_per_s2) const;
+  /// Adds an external torque tau(t) (N m, a function of time) on joint i, e.g. a disturbance
+  /// pulse. Re-realizes the topology: take States from defaultState() after calling this.
+  void addJointTorque(int joint, std::shared_ptr<const ExcitationSignal> torque_N_m);
+
   /// Total mechanical energy of the multibody system (kinetic + gravitational), J.
   double mechanicalEnergy(const SimTK::State& s) const;
 
