@@ -3,16 +3,7 @@
 # a bad model file exits non-zero naming the problem. Usage: test_arm_forward_cli.sh BIN SRC
 set -u
 bin=$1 src=$2
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-fail=0
-expect() {  # expect <exit code> <text in output> -- command...
-  local code=$1 text=$2; shift 3
-  local out rc
-  out=$("$@" 2>&1); rc=$?
-  if [[ $rc != "$code" ]] || ! grep -qF -- "$text" <<<"$out"; then
-    echo "FAILED: $* -> exit $rc (want $code), output lacks '$text':"; echo "$out" | head -5; fail=1
-  else echo "ok: $*"; fi
-}
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 a0=0.135,0.040,0.404,0.556,0.414,0.068
 expect 0 "--equilibrate-tendons" -- "$bin" --help
 expect 2 "--q0-deg" -- "$bin" --q0-deg 1,2,3 --equilibrate-tendons --out "$tmp/o"

@@ -3,16 +3,7 @@
 # models exit 1 naming the problem, good runs write their files. Usage: OPEN_LOOP RH
 set -u
 ol=$1 rh=$2
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-fail=0
-expect() {  # expect <exit code> <text in output> -- command...
-  local code=$1 text=$2; shift 3
-  local out rc
-  out=$("$@" 2>&1); rc=$?
-  if [[ $rc != "$code" ]] || ! grep -qF -- "$text" <<<"$out"; then
-    echo "FAILED: $* -> exit $rc (want $code), output lacks '$text':"; echo "$out" | head -5; fail=1
-  else echo "ok: $*"; fi
-}
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 expect 0 "--pieces" -- "$ol" --help
 expect 2 "--target-deg" -- "$ol" --target-deg 90 --out "$tmp/o"
 expect 2 "--reserves" -- "$ol" --reserves 1,2,3 --out "$tmp/o"
