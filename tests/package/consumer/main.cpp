@@ -5,6 +5,7 @@
 #include <Simbody.h>
 
 #include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/planner/slp.hpp"
 #include "flatsos/plugin/hill_muscle.hpp"
 
 int main() {
@@ -33,5 +34,8 @@ int main() {
   integ.stepTo(0.1);
   const double q = link.getOneQ(integ.getState(), 0);
   std::cout << "q(0.1 s) = " << q << " rad, tendon force " << muscle.getTendonForce(integ.getState()) << " N\n";
-  return std::isfinite(q) && integ.getTime() == 0.1 ? 0 : 1;
+  // The planner's Ipopt link: a 2-output SLP, min a + b s.t. a >= 1, b >= 2.
+  const auto slp = flatsos::planner::solve_slp(Eigen::Matrix2d::Identity(), Eigen::Vector2d(1.0, 2.0));
+  std::cout << "SLP cost " << slp.cost_N << " (expected 3)\n";
+  return std::isfinite(q) && integ.getTime() == 0.1 && std::abs(slp.cost_N - 3.0) < 1e-6 && !slp.used_fallback ? 0 : 1;
 }
