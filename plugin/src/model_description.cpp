@@ -237,7 +237,7 @@ ModelDescription parse_model_json(const std::string& json_text, const std::strin
   json root;
   try {
     root = json::parse(json_text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, also out_of_range: number overflow (1e400)
     throw ModelFileError("model file '" + source + "': not valid JSON: " + e.what());
   }
   ObjectReader top(root, "", source);
