@@ -113,6 +113,9 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
 
 TEST(ModelFile, MalformedJsonAndMissingFileAreRejected) {
   EXPECT_THROW(fp::parse_model_json("{\"bodies\": [", "broken.json"), fp::ModelFileError);
+  // A number beyond double's range is a JSON error too (found by the fuzzer: it escaped as
+  // nlohmann's out_of_range).
+  EXPECT_THROW(fp::parse_model_json("{\"gravity_m_per_s2\": [0, -1e400, 0]}", "huge.json"), fp::ModelFileError);
   try {
     fp::parse_model_json("{\"bodies\": [", "broken.json");
   } catch (const fp::ModelFileError& e) {
