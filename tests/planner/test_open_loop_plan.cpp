@@ -180,3 +180,27 @@ TEST_F(OpenLoopScenario, ExactExchangeRoundsGiveIpoptsOptimumWithFewerIpoptCalls
   for (std::size_t l = 0; l < fast.Y.size(); ++l)
     for (double t : {0.0, 1.0, 2.0, 3.0}) EXPECT_NEAR(fast.Y[l](t), slow.Y[l](t), 1e-4 * (1 + std::abs(slow.Y[l](t))));
 }
+
+TEST_F(OpenLoopScenario, SosProgramRejectsBoundaryConditionsOfTheWrongSizeAndBadHorizons) {
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, options);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved);
+  const Eigen::VectorXd reserves = Eigen::VectorXd::Constant(6, 10.0);
+  auto expect_message = [&](const fpl::FlatOutputBoundary& bc, double T, const std::string& text) {
+    try {
+      fpl::solve_sos_program(arm.flat, plan.torque, T, bc, reserves);
+      ADD_FAILURE() << "accepted; expected: " << text;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+    }
+  };
+  fpl::FlatOutputBoundary bc;
+  bc.initial = Eigen::MatrixXd::Zero(3, 2);  // 3 rows for 4 flat outputs
+  bc.terminal = Eigen::MatrixXd::Zero(4, 2);
+  expect_message(bc, 3.0, "one row per flat output (4)");
+  bc.initial = Eigen::MatrixXd::Zero(4, 2);
+  bc.terminal(1, 1) = std::nan("");
+  expect_message(bc, 3.0, "must be finite");
+  bc.terminal = Eigen::MatrixXd::Zero(4, 2);
+  expect_message(bc, 0.0, "horizon T must be > 0");
+  expect_message(bc, -1.0, "horizon T must be > 0");
+}
