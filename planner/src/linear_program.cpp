@@ -1,7 +1,6 @@
 #include "flatsos/planner/linear_program.hpp"
 
 #include <chrono>
-#include <string>
 #include <stdexcept>
 
 #include "ipopt_support.hpp"
@@ -103,24 +102,15 @@ LinearProgramResult solve_linear_program(const LinearProgram& lp, const LinearPr
     throw std::invalid_argument("linear program: NaN in the data");
 
   const auto t0 = std::chrono::steady_clock::now();
-  // One configured application per thread, reused: creating and initializing an
-  // IpoptApplication (option registry, journals) costs milliseconds, a large share of a small LP.
-  thread_local Ipopt::SmartPtr<Ipopt::IpoptApplication> app;
-  thread_local double app_tol = -1.0;
-  thread_local int app_max_iter = -1;
-  if (IsNull(app) || app_tol != o.tolerance || app_max_iter != o.max_iterations) {
-    app = detail::make_ipopt(o.tolerance, o.max_iterations);
-    app->Options()->SetStringValue("jac_c_constant", "yes");
-    app->Options()->SetStringValue("jac_d_constant", "yes");
-    app->Options()->SetStringValue("hessian_constant", "yes");
-    app->Options()->SetStringValue("mu_strategy", "adaptive");
-    // Constraints are tendon-force reserves in newtons: no relaxation of their bounds (Ipopt's
-    // default relaxes by 1e-8 relative, ~1e-6 N here, which showed up as reserve violations).
-    app->Options()->SetNumericValue("bound_relax_factor", 0.0);
-    app->Options()->SetNumericValue("constr_viol_tol", 1e-9);
-    app_tol = o.tolerance;
-    app_max_iter = o.max_iterations;
-  }
+  auto app = detail::make_ipopt(o.tolerance, o.max_iterations);
+  app->Options()->SetStringValue("jac_c_constant", "yes");
+  app->Options()->SetStringValue("jac_d_constant", "yes");
+  app->Options()->SetStringValue("hessian_constant", "yes");
+  app->Options()->SetStringValue("mu_strategy", "adaptive");
+  // Constraints are tendon-force reserves in newtons: no relaxation of their bounds (Ipopt's
+  // default relaxes by 1e-8 relative, ~1e-6 N here, which showed up as reserve violations).
+  app->Options()->SetNumericValue("bound_relax_factor", 0.0);
+  app->Options()->SetNumericValue("constr_viol_tol", 1e-9);
   Ipopt::SmartPtr<LinearProgramTnlp> tnlp = new LinearProgramTnlp(lp, o.start);
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(tnlp)));
 
