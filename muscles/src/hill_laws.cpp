@@ -154,6 +154,26 @@ double tendon_length_derivative(const MuscleParameters& p, double tendon_length_
   return u + musculotendon_lengthening_rate_m_per_s;
 }
 
+TendonLengthDerivativePartials tendon_length_derivative_partials(const MuscleParameters& p,
+                                                                 double tendon_length_m,
+                                                                 double activation,
+                                                                 double musculotendon_length_m) {
+  // dL_S/dt = g^-1(z) + dL/dt with z = Phi_S(L_S) / (a_eff Fmax f(L - L_S)).
+  const double fiber_length = musculotendon_length_m - tendon_length_m;
+  const double f_raw = force_length(p, fiber_length);
+  const bool f_floored = f_raw < kForceLengthFloor;  // force_ratio floors f: its slope is 0 there
+  const double f = f_floored ? kForceLengthFloor : f_raw;
+  const double df_dfiber = f_floored ? 0.0 : force_length_derivative(p, fiber_length);
+  const double a_eff = effective_activation(p, activation);
+  const double den = a_eff * p.max_isometric_force_N * f;
+  const double z = tendon_force(p, tendon_length_m) / den;
+  const double dg_inv = fiber_velocity_from_force_ratio_derivative(p, z);
+  // dL_C/dL_S = -1, so d(1/f)/dL_S = f'/f^2.
+  const double dz_dtendon = tendon_force_derivative(p, tendon_length_m) / den + z * df_dfiber / f;
+  const double dz_dactivation = activation > p.activation_floor ? -z / a_eff : 0.0;
+  return {dg_inv * dz_dtendon, dg_inv * dz_dactivation};
+}
+
 // ---------------------------------------------------------------- activation dynamics
 double activation_rate_factor(const MuscleParameters& p, double n) {
   const double beta = p.activation_beta();

@@ -185,6 +185,32 @@ TEST(ContractionDynamics, NeverNaNOrInfOverAWideSweep) {
         }
 }
 
+TEST(ContractionDynamics, TendonOdePartialsMatchFiniteDifferences) {
+  // Over the forward model's whole range (the grid avoids the slack length itself, where the
+  // tendon force has a second-derivative kink): concentric, eccentric, the extension beyond
+  // z_hi, slack tendons, activations below and above the floor.
+  const auto p = biceps();
+  int checked = 0;
+  for (double a : {0.0, 5e-5, 2e-4, 1e-3, 0.05, 0.4, 1.0})
+    for (double ls : linspace(p.tendon_slack_length_m - 0.0015, p.tendon_slack_length_m + 0.0125, 15))
+      for (double L : linspace(0.3, 0.45, 7)) {
+        const auto d = fm::tendon_length_derivative_partials(p, ls, a, L);
+        auto ode = [&](double x, double y) { return fm::tendon_length_derivative(p, x, y, L, 0.0); };
+        const double hl = 1e-9, ha = 1e-7 * std::max(a, 1e-3);
+        const double fd_l = central_difference([&](double x) { return ode(x, a); }, ls, hl);
+        EXPECT_NEAR(d.d_tendon_length_per_s, fd_l, 1e-5 * std::max(1.0, std::abs(fd_l))) << a << " " << ls << " " << L;
+        if (std::abs(a - p.activation_floor) > 2.0 * ha) {  // the floor is a kink
+          const double fd_a = central_difference([&](double y) { return ode(ls, y); }, a, ha);
+          EXPECT_NEAR(d.d_activation_m_per_s, fd_a, 1e-5 * std::max(1.0, std::abs(fd_a))) << a << " " << ls << " " << L;
+        }
+        ++checked;
+      }
+  EXPECT_EQ(checked, 7 * 15 * 7);
+  // The stiff direction: lengthening the tendon at a tiny activation must slow it strongly.
+  const auto low = fm::tendon_length_derivative_partials(p, p.tendon_slack_length_m + 0.005, 1e-3, 0.37);
+  EXPECT_LT(low.d_tendon_length_per_s, -1e3);
+}
+
 TEST(ContractionDynamics, ActivationFloorBoundsTheForceRatio) {
   const auto p = biceps();
   const double lc = p.optimal_fiber_length_m;

@@ -60,6 +60,18 @@ double tendon_length_derivative(const MuscleParameters& p, double tendon_length_
                                 double activation, double musculotendon_length_m,
                                 double musculotendon_lengthening_rate_m_per_s);
 
+/// Partial derivatives of dL_S/dt (tendon_length_derivative) with respect to the muscle's own
+/// states, at fixed path length and rate: the stiff part of the muscle's ODE, used by the
+/// linearly implicit integrator. Below the activation floor the activation partial is 0.
+struct TendonLengthDerivativePartials {
+  double d_tendon_length_per_s = 0.0;  ///< d(dL_S/dt)/dL_S, 1/s (large and negative at low a)
+  double d_activation_m_per_s = 0.0;   ///< d(dL_S/dt)/da, m/s
+};
+TendonLengthDerivativePartials tendon_length_derivative_partials(const MuscleParameters& p,
+                                                                 double tendon_length_m,
+                                                                 double activation,
+                                                                 double musculotendon_length_m);
+
 // ---- Activation dynamics: da/dt = sigma(n) (n - a), sigma(n) = (beta + (1 - beta) n) / T_act.
 double activation_rate_factor(const MuscleParameters& p, double excitation);  ///< sigma, 1/s
 double activation_derivative(const MuscleParameters& p, double excitation, double activation);
