@@ -63,8 +63,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   std::string integrator = "rkm";
   app.add_option("--integrator", integrator,
-                 "rkm (Runge-Kutta-Merson) or bdf (CPodes, for stiff runs at tiny activations)")
-      ->capture_default_str()->check(CLI::IsMember({"rkm", "bdf"}));
+                 "rkm (Runge-Kutta-Merson), bdf (CPodes) or rosenbrock (implicit in the muscles); the last "
+                 "two for stiff runs at tiny activations")
+      ->capture_default_str()->check(CLI::IsMember({"rkm", "bdf", "rosenbrock"}));
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
 
   try {
@@ -110,7 +111,7 @@ int main(int argc, char** argv) {
     fp::SimulationOptions options;
     options.duration_s = duration;
     options.accuracy = accuracy;
-    options.integrator = integrator == "bdf" ? fp::IntegratorKind::CPodesBdf : fp::IntegratorKind::RungeKuttaMerson;
+    options.integrator = fp::integrator_from_name(integrator);
     options.report_interval_s = report_interval;
     const auto result = fp::simulate(*model, s, options);
 

@@ -171,7 +171,8 @@ TendonLengthDerivativePartials tendon_length_derivative_partials(const MusclePar
   // dL_C/dL_S = -1, so d(1/f)/dL_S = f'/f^2.
   const double dz_dtendon = tendon_force_derivative(p, tendon_length_m) / den + z * df_dfiber / f;
   const double dz_dactivation = activation > p.activation_floor ? -z / a_eff : 0.0;
-  return {dg_inv * dz_dtendon, dg_inv * dz_dactivation};
+  const double dz_dpath = -z * df_dfiber / f;  // dL_C/dL = 1
+  return {dg_inv * dz_dtendon, dg_inv * dz_dactivation, dg_inv * dz_dpath};
 }
 
 // ---------------------------------------------------------------- activation dynamics

@@ -179,13 +179,7 @@ ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, con
 
   const auto wall0 = Clock::now();
   SimTK::State s = initial;
-  std::unique_ptr<SimTK::Integrator> integ_ptr;
-  if (kind == plugin::IntegratorKind::CPodesBdf)
-    integ_ptr = std::make_unique<SimTK::CPodesIntegrator>(model.system(), SimTK::CPodes::BDF, SimTK::CPodes::Newton);
-  else
-    integ_ptr = std::make_unique<SimTK::RungeKuttaMersonIntegrator>(model.system());
-  SimTK::Integrator& integ = *integ_ptr;
-  integ.setAccuracy(accuracy);
+  const auto stepper = plugin::make_time_stepper(model, kind, accuracy);
   plugin::append_state_row(model, s, out.states);
   const int steps = static_cast<int>(std::ceil(duration / period - 1e-9));
   for (int k = 0; k < steps && out.finite; ++k) {
@@ -197,22 +191,21 @@ ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, con
       for (int j = 0; j < n; ++j) row.push_back(jq(j, 0));
       out.predictions.rows.push_back(std::move(row));
     }
-    // The controller changed the State's discrete inputs: restart the integrator from it.
-    integ.initialize(s);
-    const double t_begin = s.getTime(), t_end = std::min(duration, (k + 1) * period);
+    // The controller changed the State's inputs: (re)start the integrator from it. (BDF restarts
+    // cold; the Rosenbrock method keeps its step size.)
+    stepper->initialize(s);
+    const double t_begin = s.getTime(), t_end = initial.getTime() + std::min(duration, (k + 1) * period);
     for (int r = 1; r <= reports; ++r) {
       const double t = t_begin + (t_end - t_begin) * r / reports;
-      while (integ.getTime() < t)
-        if (integ.stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
-      if (!plugin::all_states_finite(integ.getState())) {
+      if (!stepper->advanceTo(t)) {
         out.finite = false;
         break;
       }
-      plugin::append_state_row(model, integ.getState(), out.states);
+      plugin::append_state_row(model, stepper->state(), out.states);
     }
-    s = integ.getState();
-    out.integrator_steps += integ.getNumStepsTaken();
+    s = stepper->state();
   }
+  out.integrator_steps = stepper->stepsTaken();
   out.final_state = s;
   out.wall_seconds = std::max(seconds_since(wall0), 1e-9);
   out.real_time_factor = (s.getTime() - initial.getTime()) / out.wall_seconds;

@@ -62,34 +62,23 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
 
   SimulationResult result;
   result.states = make_state_table(model);
-  std::unique_ptr<SimTK::Integrator> integ_ptr;
-  if (o.integrator == IntegratorKind::CPodesBdf)
-    integ_ptr = std::make_unique<SimTK::CPodesIntegrator>(model.system(), SimTK::CPodes::BDF,
-                                                          SimTK::CPodes::Newton);
-  else
-    integ_ptr = std::make_unique<SimTK::RungeKuttaMersonIntegrator>(model.system());
-  SimTK::Integrator& integ = *integ_ptr;
-  integ.setAccuracy(o.accuracy);
-  integ.initialize(initial);
-  append_state_row(model, integ.getState(), result.states);
+  const auto stepper = make_time_stepper(model, o.integrator, o.accuracy);
+  stepper->initialize(initial);
+  append_state_row(model, stepper->state(), result.states);
 
   const double t0 = initial.getTime();
   const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
   for (long k = 1; k <= reports; ++k) {
     const double t = t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s);
-    // The first stepTo after initialize() only reports the start of the continuous interval
-    // without advancing; step until the report time is really reached.
-    while (integ.getTime() < t && all_states_finite(integ.getState()))
-      if (integ.stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
-    if (!all_states_finite(integ.getState())) {
+    if (!stepper->advanceTo(t)) {
       result.finite = false;
       result.message = "a state became non-finite before t = " + std::to_string(t) + " s";
       break;
     }
-    append_state_row(model, integ.getState(), result.states);
+    append_state_row(model, stepper->state(), result.states);
   }
-  result.final_state = integ.getState();
-  result.integrator_steps = integ.getNumStepsTaken();
+  result.final_state = stepper->state();
+  result.integrator_steps = stepper->stepsTaken();
   return result;
 }
 

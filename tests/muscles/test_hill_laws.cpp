@@ -199,6 +199,10 @@ TEST(ContractionDynamics, TendonOdePartialsMatchFiniteDifferences) {
         const double hl = 1e-9, ha = 1e-7 * std::max(a, 1e-3);
         const double fd_l = central_difference([&](double x) { return ode(x, a); }, ls, hl);
         EXPECT_NEAR(d.d_tendon_length_per_s, fd_l, 1e-5 * std::max(1.0, std::abs(fd_l))) << a << " " << ls << " " << L;
+        const double fd_path = central_difference(
+            [&](double x) { return fm::tendon_length_derivative(p, ls, a, x, 0.0); }, L, hl);
+        EXPECT_NEAR(d.d_musculotendon_length_per_s, fd_path, 1e-5 * std::max(1.0, std::abs(fd_path)))
+            << a << " " << ls << " " << L;
         if (std::abs(a - p.activation_floor) > 2.0 * ha) {  // the floor is a kink
           const double fd_a = central_difference([&](double y) { return ode(ls, y); }, a, ha);
           EXPECT_NEAR(d.d_activation_m_per_s, fd_a, 1e-5 * std::max(1.0, std::abs(fd_a))) << a << " " << ls << " " << L;

@@ -206,3 +206,35 @@ TEST(StaticEquilibrium, SolvesTheBalanceToRoundOff) {
     }
   }
 }
+
+TEST(HillMuscle, YIndexAndPartialsForIntegrators) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = paper_state(*arm);
+  arm->setActivations(s, Eigen::VectorXd::Constant(6, 0.002));
+  arm->system().realize(s, SimTK::Stage::Acceleration);
+  for (int j = 0; j < arm->numMuscles(); ++j) {
+    const auto& m = arm->muscle(j);
+    const int i = m.getTendonLengthYIndex(s);
+    ASSERT_GE(i, 0);
+    ASSERT_LT(i + 1, s.getNY());
+    EXPECT_EQ(s.getY()[i], m.getTendonLength(s));
+    EXPECT_EQ(s.getY()[i + 1], m.getActivation(s));
+    EXPECT_EQ(s.getYDot()[i], m.getTendonLengthDerivative(s));
+    EXPECT_EQ(s.getYDot()[i + 1], m.getActivationDerivative(s));
+    // The partials equal finite differences of the muscle's own state derivative in the State.
+    auto ydot_after = [&](int which, double delta) {
+      SimTK::State t = s;
+      t.updY()[i + which] += delta;
+      arm->system().realize(t, SimTK::Stage::Acceleration);
+      return t.getYDot();
+    };
+    const double hl = 1e-9, ha = 1e-7;
+    const double fd_ll = (ydot_after(0, hl)[i] - ydot_after(0, -hl)[i]) / (2 * hl);
+    const double fd_la = (ydot_after(1, ha)[i] - ydot_after(1, -ha)[i]) / (2 * ha);
+    const double fd_aa = (ydot_after(1, ha)[i + 1] - ydot_after(1, -ha)[i + 1]) / (2 * ha);
+    const auto d = m.getTendonLengthDerivativePartials(s);
+    EXPECT_NEAR(d.d_tendon_length_per_s, fd_ll, 1e-5 * std::abs(fd_ll)) << j;
+    EXPECT_NEAR(d.d_activation_m_per_s, fd_la, 1e-5 * std::abs(fd_la)) << j;
+    EXPECT_NEAR(m.getActivationDerivativePartial(s), fd_aa, 1e-6 * std::abs(fd_aa)) << j;
+  }
+}

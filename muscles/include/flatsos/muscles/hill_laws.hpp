@@ -60,12 +60,14 @@ double tendon_length_derivative(const MuscleParameters& p, double tendon_length_
                                 double activation, double musculotendon_length_m,
                                 double musculotendon_lengthening_rate_m_per_s);
 
-/// Partial derivatives of dL_S/dt (tendon_length_derivative) with respect to the muscle's own
-/// states, at fixed path length and rate: the stiff part of the muscle's ODE, used by the
-/// linearly implicit integrator. Below the activation floor the activation partial is 0.
+/// Partial derivatives of dL_S/dt (tendon_length_derivative): the stiff part of the muscle's ODE
+/// (own states) and how the path drives it, used by the linearly implicit integrator. The
+/// partial with respect to the path's lengthening rate is 1. Below the activation floor the
+/// activation partial is 0.
 struct TendonLengthDerivativePartials {
-  double d_tendon_length_per_s = 0.0;  ///< d(dL_S/dt)/dL_S, 1/s (large and negative at low a)
-  double d_activation_m_per_s = 0.0;   ///< d(dL_S/dt)/da, m/s
+  double d_tendon_length_per_s = 0.0;        ///< d(dL_S/dt)/dL_S, 1/s (large and negative at low a)
+  double d_activation_m_per_s = 0.0;         ///< d(dL_S/dt)/da, m/s
+  double d_musculotendon_length_per_s = 0.0; ///< d(dL_S/dt)/dL, 1/s
 };
 TendonLengthDerivativePartials tendon_length_derivative_partials(const MuscleParameters& p,
                                                                  double tendon_length_m,

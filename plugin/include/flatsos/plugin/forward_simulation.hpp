@@ -1,5 +1,5 @@
 #pragma once
-// Forward simulation of a MusculoskeletalModel with Simbody's Runge-Kutta-Merson integrator
+// Forward simulation of a MusculoskeletalModel with one of the integrators of time_stepper.hpp
 // (error-controlled; tendon lengths are centimetres, so keep accuracy <= 1e-6), and the
 // OpenSim-style state table it reports.
 
@@ -9,13 +9,9 @@
 
 #include "flatsos/plugin/musculoskeletal_model.hpp"
 #include "flatsos/plugin/sto_file.hpp"
+#include "flatsos/plugin/time_stepper.hpp"
 
 namespace flatsos::plugin {
-
-/// Explicit Runge-Kutta-Merson (default: accurate, fast on non-stiff runs) or CPodes' implicit
-/// BDF, for stiff runs: a loaded tendon at a tiny activation makes the tendon-length ODE stiff
-/// (its rate grows like 1/sqrt(activation)).
-enum class IntegratorKind { RungeKuttaMerson, CPodesBdf };
 
 struct SimulationOptions {
   double duration_s = 1.0;

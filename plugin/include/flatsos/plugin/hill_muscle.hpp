@@ -17,6 +17,7 @@
 
 #include <Simbody.h>
 
+#include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_parameters.hpp"
 #include "flatsos/plugin/excitation_signal.hpp"
 
@@ -74,6 +75,14 @@ class HillMuscle : public SimTK::Force::Custom {
   /// dL_S/dt and da/dt (Stage::Velocity; the excitation is read at the state's time).
   double getTendonLengthDerivative(const SimTK::State& s) const;
   double getActivationDerivative(const SimTK::State& s) const;
+
+  // --- for integrators (Stage::Velocity) ---
+  /// Position of L_S in State::getY(); the activation is the next entry.
+  int getTendonLengthYIndex(const SimTK::State& s) const;
+  /// d(dL_S/dt)/dL_S and d(dL_S/dt)/da at the state's path length: the stiff part of the muscle.
+  muscles::TendonLengthDerivativePartials getTendonLengthDerivativePartials(const SimTK::State& s) const;
+  /// d(da/dt)/da at the state's excitation.
+  double getActivationDerivativePartial(const SimTK::State& s) const;
 
  private:
   const HillMuscleImpl& impl() const;

@@ -1,0 +1,51 @@
+#pragma once
+// One interface over the integrators a muscle-driven Simbody system can be advanced with, so
+// that forward simulations and closed loops share one stepping loop:
+//  - Simbody's Runge-Kutta-Merson (explicit; fine unless a tendon is loaded at tiny activation),
+//  - Simbody's CPodes BDF (implicit, numerical Jacobian; restarts whenever inputs change),
+//  - MuscleRosenbrockIntegrator (linearly implicit in each muscle's own states, explicit in the
+//    multibody; keeps its step size across input changes). See muscle_rosenbrock_integrator.hpp.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Simbody.h>
+
+#include "flatsos/plugin/hill_muscle.hpp"
+
+namespace flatsos::plugin {
+
+class MusculoskeletalModel;
+
+/// Explicit Runge-Kutta-Merson, CPodes' implicit BDF, or the muscle Rosenbrock-W method.
+enum class IntegratorKind { RungeKuttaMerson, CPodesBdf, MuscleRosenbrock };
+
+/// "rkm", "bdf", "rosenbrock" (the command-line names) and back; the inverse throws
+/// std::invalid_argument naming the unknown name.
+const char* integrator_name(IntegratorKind kind);
+IntegratorKind integrator_from_name(const std::string& name);
+
+class TimeStepper {
+ public:
+  virtual ~TimeStepper() = default;
+  /// Starts (or restarts, after a controller changed the State's inputs) from `s`.
+  virtual void initialize(const SimTK::State& s) = 0;
+  /// Advances exactly to time t. Returns false, leaving the last finite state, when the state
+  /// became non-finite or the integrator could not proceed.
+  virtual bool advanceTo(double t) = 0;
+  virtual const SimTK::State& state() const = 0;
+  /// Steps taken since construction.
+  virtual long stepsTaken() const = 0;
+  /// Steps tried since construction, rejected ones included.
+  virtual long stepsAttempted() const = 0;
+};
+
+/// A stepper for `system` whose muscles are `muscles` (used by the Rosenbrock method only).
+/// `accuracy` is relative (Simbody's meaning); throws std::invalid_argument outside (0, 1).
+std::unique_ptr<TimeStepper> make_time_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
+                                               IntegratorKind kind, double accuracy);
+std::unique_ptr<TimeStepper> make_time_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
+                                               double accuracy);
+
+}  // namespace flatsos::plugin
