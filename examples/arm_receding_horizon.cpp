@@ -38,8 +38,9 @@ int main(int argc, char** argv) {
   app.add_option("--slp-solver", solver, "exact (vertex enumeration, tested against Ipopt) or ipopt")
       ->capture_default_str()->check(CLI::IsMember({"exact", "ipopt"}));
   app.add_option("--observer-gain", options.disturbance_observer_gain,
-                 "disturbance observer gain in [0, 1] (0: the paper's controller)")
-      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
+                 "disturbance observer gain in [0, 2]: integrates the plan's prediction error so that a model "
+                 "mismatch leaves no offset (1 recommended; 0: the paper's controller)")
+      ->capture_default_str()->check(CLI::Range(0.0, 2.0));
   app.add_option("--accuracy", accuracy, "Simbody integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
   // Planned activations go down to ~1e-3, where the tendon ODE is stiff: an explicit method
   // (rkm) needs ~4x the steps of an implicit one; see README "Benchmarks" for the measurements.

@@ -8,7 +8,6 @@
 #include <memory>
 #include <stdexcept>
 
-#include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/plugin/excitation_signal.hpp"
 
 namespace flatsos::planner {
@@ -47,6 +46,8 @@ RecedingHorizonController::RecedingHorizonController(const FlatOutputMap& flat, 
     throw std::invalid_argument("RH controller: need at least 2 excitation samples per period");
   if (!(options_.control_period_s <= options_.plan.horizon_s))
     throw std::invalid_argument("RH controller: the control period must not exceed the horizon");
+  if (!(options_.disturbance_observer_gain >= 0.0) || !std::isfinite(options_.disturbance_observer_gain))
+    throw std::invalid_argument("RH controller: the disturbance observer gain must be a finite number >= 0");
 }
 
 const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) { return step(flat_.model(), state); }
@@ -60,17 +61,26 @@ const RecedingHorizonRecord& RecedingHorizonController::step(const plugin::Muscu
   const Eigen::VectorXd q = model.jointAngles(state), qd = model.jointSpeeds(state);
   RecedingHorizonOptions plan_options = options_.plan;
   if (options_.disturbance_observer_gain > 0.0) {
-    // The measured joint torque the planner's model cannot explain from the measured muscles.
-    model.system().realize(state, SimTK::Stage::Acceleration);
-    Eigen::VectorXd qdd(model.numJoints());
-    for (int i = 0; i < model.numJoints(); ++i) qdd[i] = model.joint(i).getOneUDot(state, 0);
-    Eigen::VectorXd force(model.numMuscles());
-    const Eigen::VectorXd ls = model.tendonLengths(state);
-    for (int j = 0; j < model.numMuscles(); ++j)
-      force[j] = muscles::tendon_force(flat_.model().muscle(j).getParameters(), ls[j]);
-    const Eigen::VectorXd measured = flat_.torque(q, qd, qdd) - flat_.A() * force;
-    if (torque_offset_.size() != measured.size()) torque_offset_ = Eigen::VectorXd::Zero(measured.size());
-    if (measured.allFinite()) torque_offset_ += options_.disturbance_observer_gain * (measured - torque_offset_);
+    if (torque_offset_.size() != flat_.numJoints()) torque_offset_ = Eigen::VectorXd::Zero(flat_.numJoints());
+    // Prediction error of the plan in use: the joint torque that the measured motion needs minus
+    // the one the plan predicted for now. The plan's muscles were asked for exactly the latter,
+    // so the difference is what the plant did not deliver, whatever the cause (tendon, muscle
+    // strength, moment arms, masses, external torque). Integrating it makes the offset free: a
+    // rest away from the target leaves the plan asking for acceleration the arm does not show.
+    const RecedingHorizonRecord* in_use = nullptr;
+    for (auto it = history_.rbegin(); it != history_.rend() && !in_use; ++it)
+      if (it->alpha.size()) in_use = &*it;
+    if (in_use) {
+      model.system().realize(state, SimTK::Stage::Acceleration);
+      Eigen::VectorXd qdd(model.numJoints());
+      for (int i = 0; i < model.numJoints(); ++i) qdd[i] = model.joint(i).getOneUDot(state, 0);
+      const double tau = std::min(rec.time_s - in_use->plan_start_time_s, in_use->path.duration_s);
+      const Jet predicted = in_use->path.jet(tau, 3);  // q, qd, qdd
+      // A non-finite measurement leaves the estimate as it is (the planner then reports the state).
+      if (q.allFinite() && qd.allFinite() && qdd.allFinite())
+        torque_offset_ += options_.disturbance_observer_gain *
+                          (flat_.torque(q, qd, qdd) - flat_.torque(predicted.col(0), predicted.col(1), predicted.col(2)));
+    }
     plan_options.torque_offset_N_m = torque_offset_;
     rec.torque_offset_N_m = torque_offset_;
   }
