@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
     fpl::RecedingHorizonController controller(flat, options);
 
     const fpl::ClosedLoopResult run = fpl::simulate_closed_loop(
-        controller, s, duration, accuracy, 5, ex::kRadPerDeg,
+        controller, s, duration, accuracy, std::getenv("REP") ? atoi(std::getenv("REP")) : 5, ex::kRadPerDeg,
         fp::integrator_from_name(integrator));
     std::vector<double> plan_times, step_times;
     for (const auto& rec : controller.history()) plan_times.push_back(rec.plan_seconds), step_times.push_back(rec.step_seconds);
@@ -98,6 +98,7 @@ int main(int argc, char** argv) {
     summary["finite"] = finite;
     summary["integrator"] = integrator;
     summary["integrator_steps"] = run.integrator_steps;
+    summary["integrator_attempts"] = run.integrator_attempts;
     summary["slp_solver"] = solver;
     summary["observer_gain"] = options.disturbance_observer_gain;
     summary["horizon_s"] = options.plan.horizon_s;

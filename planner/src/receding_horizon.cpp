@@ -188,12 +188,18 @@ ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, con
   for (const auto& j : model.description().joints) out.predictions.columns.push_back("/jointset/" + j.name + "/q_predicted");
 
   const auto wall0 = Clock::now();
-  SimTK::State s = initial;
   const auto stepper = plugin::make_time_stepper(model, kind, accuracy);
-  plugin::append_state_row(model, s, out.states);
+  stepper->initialize(initial);
+  plugin::append_state_row(model, stepper->state(), out.states);
+  const auto append_row = [&](const SimTK::State& st) { plugin::append_state_row(model, st, out.states); };
+  std::vector<double> report_times(static_cast<std::size_t>(reports));
   const int steps = static_cast<int>(std::ceil(duration / period - 1e-9));
   for (int k = 0; k < steps && out.finite; ++k) {
+    // The controller changes the inputs of the integrator's own state (no copy); Simbody's
+    // integrators then restart (CPodes BDF cold), the Rosenbrock method keeps its step size.
+    SimTK::State& s = stepper->updState();
     const RecedingHorizonRecord& rec = controller.step(model, s);
+    stepper->inputsChanged();
     for (int i = 0; i <= 10 && rec.alpha.size(); ++i) {
       const double tau = rec.path.duration_s * i / 10.0;
       const Jet jq = rec.path.jet(tau, 1);
@@ -201,22 +207,15 @@ ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, con
       for (int j = 0; j < n; ++j) row.push_back(jq(j, 0));
       out.predictions.rows.push_back(std::move(row));
     }
-    // The controller changed the State's inputs: (re)start the integrator from it. (BDF restarts
-    // cold; the Rosenbrock method keeps its step size.)
-    stepper->initialize(s);
-    const double t_begin = s.getTime(), t_end = initial.getTime() + std::min(duration, (k + 1) * period);
-    for (int r = 1; r <= reports; ++r) {
-      const double t = t_begin + (t_end - t_begin) * r / reports;
-      if (!stepper->advanceTo(t)) {
-        out.finite = false;
-        break;
-      }
-      plugin::append_state_row(model, stepper->state(), out.states);
-    }
-    s = stepper->state();
+    const double t_begin = stepper->state().getTime(), t_end = initial.getTime() + std::min(duration, (k + 1) * period);
+    for (int r = 1; r <= reports; ++r) report_times[static_cast<std::size_t>(r - 1)] = t_begin + (t_end - t_begin) * r / reports;
+    report_times.back() = t_end;
+    out.finite = stepper->advanceTo(t_end, report_times, append_row);
   }
   out.integrator_steps = stepper->stepsTaken();
-  out.final_state = s;
+  out.integrator_attempts = stepper->stepsAttempted();
+  out.final_state = stepper->state();
+  const SimTK::State& s = out.final_state;
   out.wall_seconds = std::max(seconds_since(wall0), 1e-9);
   out.real_time_factor = (s.getTime() - initial.getTime()) / out.wall_seconds;
   const Eigen::VectorXd& target = controller.options().plan.target_q_rad;

@@ -68,14 +68,13 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
 
   const double t0 = initial.getTime();
   const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
-  for (long k = 1; k <= reports; ++k) {
-    const double t = t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s);
-    if (!stepper->advanceTo(t)) {
-      result.finite = false;
-      result.message = "a state became non-finite before t = " + std::to_string(t) + " s";
-      break;
-    }
-    append_state_row(model, stepper->state(), result.states);
+  std::vector<double> times;
+  for (long k = 1; k <= reports; ++k) times.push_back(t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s));
+  if (!stepper->advanceTo(t0 + o.duration_s, times,
+                          [&](const SimTK::State& s) { append_state_row(model, s, result.states); })) {
+    result.finite = false;
+    result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
+                     " s: a state became non-finite or the step size collapsed";
   }
   result.final_state = stepper->state();
   result.integrator_steps = stepper->stepsTaken();

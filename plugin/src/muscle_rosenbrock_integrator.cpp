@@ -22,6 +22,13 @@ constexpr double kB[4] = {2.4212380706095346e-01, -1.2232505839045147e+00, 1.545
                           4.3586652150845900e-01};
 constexpr double kBHat[4] = {3.7810903145819369e-01, -9.6042292212423178e-02, 5.0000000000000000e-01,
                              2.1793326075422950e-01};
+// Continuous extension (Rang & Angermann; as tabulated in PETSc's TSROSWRA34PW2): the solution
+// at t + theta h is y + sum_i b_i(theta) k_i, b_i(theta) = sum_j kDense[i][j] theta^(j+1), and
+// b_i(1) = kB[i].
+constexpr double kDense[4][3] = {{1.0564298455794094, -1.3864882699759573, 0.5721822314575016},
+                                 {2.296429974281067, -8.262611700275677, 4.742931142090097},
+                                 {-1.307599564525376, 7.250979895056055, -4.398120075195578},
+                                 {-1.045260255335102, 2.398120075195581, -0.9169932983520199}};
 constexpr int kOrderEmbedded = 2;  // error ~ h^(kOrderEmbedded + 1)
 constexpr double kSafety = 0.9;
 constexpr double kMaxGrowth = 5.0, kMaxShrink = 0.2;
@@ -196,8 +203,39 @@ void MuscleRosenbrockIntegrator::setFixedStepSize(double h) {
   if (h > 0.0) h_ = h;
 }
 
-bool MuscleRosenbrockIntegrator::advanceTo(double t_end) {
+bool MuscleRosenbrockIntegrator::advanceTo(double t_end) { return advanceTo(t_end, {}, Report()); }
+
+void MuscleRosenbrockIntegrator::inputsChanged() {
+  f0_valid_ = false;  // the excitations (discrete variables) changed: f and J must be re-evaluated
+}
+
+void MuscleRosenbrockIntegrator::reportDense(double t0, double h, const std::vector<double>& times,
+                                             std::size_t& next, double t_reached, const Report& report) {
+  // Uses state_ as workspace: the caller puts the step's end state back afterwards.
+  while (next < times.size() && times[next] <= t_reached) {
+    const double theta = std::clamp((times[next] - t0) / h, 0.0, 1.0);
+    double weight[kStages];
+    for (int i = 0; i < kStages; ++i) {
+      weight[i] = 0.0;
+      double power = theta;
+      for (int j = 0; j < 3; ++j, power *= theta) weight[i] += kDense[i][j] * power;
+    }
+    for (int e = 0; e < y_.size(); ++e) {
+      double v = y_[e];
+      for (int i = 0; i < kStages; ++i) v += weight[i] * k_[i][e];
+      y_stage_[e] = v;
+    }
+    state_.updTime() = times[next];
+    state_.updY() = y_stage_;
+    if (report) report(state_);
+    ++next;
+  }
+}
+
+bool MuscleRosenbrockIntegrator::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
   if (!initialized_) throw std::logic_error("muscle Rosenbrock integrator: advanceTo before initialize");
+  std::size_t next_report = 0;
+  while (next_report < report_times.size() && report_times[next_report] <= state_.getTime()) ++next_report;
   while (state_.getTime() < t_end) {
     const double t = state_.getTime(), remaining = t_end - t;
     // Land exactly on t_end; avoid leaving a sliver of a step behind.
@@ -219,8 +257,10 @@ bool MuscleRosenbrockIntegrator::advanceTo(double t_end) {
     }
     if (ok && err <= 1.0) {
       ++accepted_;
+      const double t_new = last ? t_end : t + h;
+      reportDense(t, h, report_times, next_report, t_new, report);  // y_ and k_ still hold this step
       y_ = y_new_;
-      state_.updTime() = last ? t_end : t + h;
+      state_.updTime() = t_new;
       state_.updY() = y_;
       f0_valid_ = false;
       // A step shortened to land on t_end says nothing against the longer step size.

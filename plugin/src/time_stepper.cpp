@@ -31,14 +31,31 @@ class SimbodyStepper final : public TimeStepper {
     return all_states_finite(integ_->getState()) && integ_->getTime() >= t;
   }
   const SimTK::State& state() const override { return integ_->getState(); }
+  // getState() may be interpolated (the advanced state lies beyond it): a controller changes
+  // a copy, and the integrator restarts from it (CPodes cold: order 1, small steps).
+  SimTK::State& updState() override {
+    changed_ = integ_->getState();
+    return changed_;
+  }
+  void inputsChanged() override { initialize(changed_); }
   long stepsTaken() const override { return steps_; }
   long stepsAttempted() const override { return attempts_; }
 
  private:
   std::unique_ptr<SimTK::Integrator> integ_;
+  SimTK::State changed_;
   long steps_ = 0, counted_ = 0, attempts_ = 0, counted_attempts_ = 0;
 };
 }  // namespace
+
+bool TimeStepper::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
+  for (double t : report_times) {
+    if (t > t_end) break;
+    if (!advanceTo(t)) return false;
+    report(state());
+  }
+  return advanceTo(t_end);
+}
 
 const char* integrator_name(IntegratorKind kind) {
   switch (kind) {

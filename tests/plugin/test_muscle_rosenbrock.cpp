@@ -124,6 +124,37 @@ TEST(MuscleRosenbrock, AgreesWithRungeKuttaMersonOnAStiffRunWithFewerSteps) {
   }
 }
 
+TEST(MuscleRosenbrock, DenseOutputAgreesWithSteppingToEachReport) {
+  // Reports from the continuous extension (steps not cut) vs the generic path that steps to
+  // every report time: the same solution to within the integration error.
+  const auto arm = flatsos::test::load_arm();
+  const SimTK::State s0 = stiff_start(*arm);
+  std::vector<double> times;
+  for (int k = 1; k <= 50; ++k) times.push_back(0.01 * k);
+  std::vector<Eigen::VectorXd> dense, stepped;
+  auto collect = [](std::vector<Eigen::VectorXd>& into) {
+    return [&into](const SimTK::State& s) {
+      Eigen::VectorXd y(s.getNY());
+      for (int i = 0; i < s.getNY(); ++i) y[i] = s.getY()[i];
+      into.push_back(y);
+    };
+  };
+  auto a = rosenbrock(*arm, 1e-8), b = rosenbrock(*arm, 1e-8);
+  a->initialize(s0);
+  b->initialize(s0);
+  ASSERT_TRUE(a->advanceTo(0.5, times, collect(dense)));
+  ASSERT_TRUE(b->fp::TimeStepper::advanceTo(0.5, times, collect(stepped)));
+  ASSERT_EQ(dense.size(), times.size());
+  ASSERT_EQ(stepped.size(), times.size());
+  double q_diff = 0.0;
+  for (std::size_t k = 0; k < times.size(); ++k) q_diff = std::max(q_diff, (dense[k] - stepped[k]).head(2).cwiseAbs().maxCoeff());
+  EXPECT_LT(q_diff, 1e-6);  // rad
+  EXPECT_LT(a->stepsTaken(), b->stepsTaken());  // reports no longer cut steps
+  // The last report is the end of the run itself.
+  EXPECT_EQ(a->state().getTime(), 0.5);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(dense.back()[i], a->state().getY()[i], 1e-12);
+}
+
 TEST(MuscleRosenbrock, KeepsItsStepSizeAcrossInitialize) {
   const auto arm = flatsos::test::load_arm();
   const SimTK::State s0 = stiff_start(*arm);

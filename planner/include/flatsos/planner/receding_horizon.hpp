@@ -87,6 +87,7 @@ struct ClosedLoopResult {
   double wall_seconds = 0.0;
   double real_time_factor = 0.0;  ///< simulated time / wall time
   long integrator_steps = 0;
+  long integrator_attempts = 0;  ///< steps tried, rejected ones included
 };
 
 /// Runs `controller` on the model's Simbody system from `initial` for `duration_s`

@@ -33,7 +33,11 @@ class MuscleRosenbrockIntegrator final : public TimeStepper {
 
   void initialize(const SimTK::State& s) override;
   bool advanceTo(double t) override;
+  /// Reports come from the method's continuous extension (third order): steps are not cut.
+  bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) override;
   const SimTK::State& state() const override { return state_; }
+  SimTK::State& updState() override { return state_; }
+  void inputsChanged() override;
   long stepsTaken() const override { return accepted_; }
   long stepsAttempted() const override { return accepted_ + rejected_; }
   /// The step size the next step will try, s.
@@ -61,6 +65,10 @@ class MuscleRosenbrockIntegrator final : public TimeStepper {
   // r = (I - c J)^-1 r; false if a pivot is too small (the step is too long for the muscle).
   bool solveInPlace(double c, SimTK::Vector& r) const;
   bool tryStep(double h, double& error_norm);
+  // Calls `report` for times[next..] <= t_reached by the continuous extension of the step
+  // [t0, t0 + h] just accepted (y_ and k_ still hold it).
+  void reportDense(double t0, double h, const std::vector<double>& times, std::size_t& next, double t_reached,
+                   const Report& report);
 
   const SimTK::System& system_;
   std::vector<MuscleSlot> slots_;

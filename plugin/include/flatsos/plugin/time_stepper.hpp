@@ -6,6 +6,7 @@
 //  - MuscleRosenbrockIntegrator (linearly implicit in each muscle's own states, explicit in the
 //    multibody; keeps its step size across input changes). See muscle_rosenbrock_integrator.hpp.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,13 +29,25 @@ IntegratorKind integrator_from_name(const std::string& name);
 
 class TimeStepper {
  public:
+  /// Receives the state at a report time (valid during the call only).
+  using Report = std::function<void(const SimTK::State&)>;
+
   virtual ~TimeStepper() = default;
-  /// Starts (or restarts, after a controller changed the State's inputs) from `s`.
+  /// Starts (or restarts) from `s`.
   virtual void initialize(const SimTK::State& s) = 0;
   /// Advances exactly to time t. Returns false, leaving the last finite state, when the state
   /// became non-finite or the integrator could not proceed.
   virtual bool advanceTo(double t) = 0;
+  /// Advances exactly to t_end and calls `report` at each of `report_times` (ascending, in
+  /// (now, t_end]). Steppers with a continuous extension interpolate instead of cutting their
+  /// steps at the report times; the others step to each.
+  virtual bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report);
   virtual const SimTK::State& state() const = 0;
+  /// The state at the current time, for a controller to change its inputs (discrete variables);
+  /// call inputsChanged() afterwards. Continuous states must not change. (The Rosenbrock
+  /// stepper hands out its own state, no copy; Simbody's integrators a copy they restart from.)
+  virtual SimTK::State& updState() = 0;
+  virtual void inputsChanged() = 0;
   /// Steps taken since construction.
   virtual long stepsTaken() const = 0;
   /// Steps tried since construction, rejected ones included.
