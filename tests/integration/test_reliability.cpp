@@ -3,6 +3,8 @@
 // simulation stays finite and bounded under extreme excitations.
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include <cmath>
 #include <iomanip>
 #include <fstream>
@@ -121,6 +123,9 @@ TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
       {"RH state NaN", [&] { fpl::plan_receding_horizon_step(arm.flat, Eigen::Vector2d(kNaN, 0.0), zero2, rh); }, "joint angles: values must be finite"},
       {"RH period above horizon", [&] { fpl::RecedingHorizonControllerOptions o; o.plan = rh; o.control_period_s = 1.0; fpl::RecedingHorizonController c(arm.flat, o); }, "must not exceed the horizon"},
       // NaN and nonsense elsewhere
+      {"RH observer gain NaN", [&] { fpl::RecedingHorizonControllerOptions o; o.plan = rh; o.disturbance_observer_gain = kNaN; fpl::RecedingHorizonController c(arm.flat, o); }, "observer gain must be a finite number >= 0"},
+      {"unknown integrator", [&] { fp::integrator_from_name("rk4"); }, "unknown integrator 'rk4'"},
+      {"simulation NaN state, Rosenbrock", [&] { SimTK::State s = model.defaultState(); s.updU()[1] = kNaN; fp::SimulationOptions o; o.integrator = fp::IntegratorKind::MuscleRosenbrock; fp::simulate(model, s, o); }, "initial state has a non-finite value"},
       {"excitation NaN", [&] { SimTK::State s = model.defaultState(); model.muscle(0).setExcitation(s, kNaN); }, "excitation is NaN"},
       {"simulation accuracy", [&] { fp::SimulationOptions o; o.accuracy = 0.0; fp::simulate(model, model.defaultState(), o); }, "accuracy"},
       {"simulation NaN state", [&] { SimTK::State s = model.defaultState(); s.updQ()[0] = kNaN; fp::simulate(model, s, {}); }, "initial state has a non-finite value"},
@@ -202,23 +207,25 @@ TEST(Reliability, RecedingHorizonRunsOnThePreviousPlanWhenStepsFailAndRecovers) 
   EXPECT_NEAR(q_end[1], deg(80), deg(1));
 }
 
-class ExtremeExcitations : public ::testing::TestWithParam<int> {};
+class ExtremeExcitations : public ::testing::TestWithParam<std::tuple<int, fp::IntegratorKind>> {};
 
-// 0: all excitations 0 for 5 s; 1: all 1 for 5 s; 2: bang-bang at 100 Hz for 5 s.
+// 0: all excitations 0 for 5 s; 1: all 1 for 5 s; 2: bang-bang at 100 Hz for 5 s; with CPodes
+// BDF and with the muscle Rosenbrock method.
 TEST_P(ExtremeExcitations, ForwardSimulationStaysFiniteAndPhysicallyBounded) {
+  const int kind_of_input = std::get<0>(GetParam());
   const auto arm = flatsos::test::load_arm();
   SimTK::State s = arm->defaultState();
   arm->setJointAngles(s, Eigen::Vector2d(0.0, deg(10)));
   fp::equilibrate_tendons(*arm, s, flatsos::test::paper_a0());
   for (int j = 0; j < 6; ++j) {
-    if (GetParam() == 2) arm->muscle(j).setExcitationSignal(s, std::make_shared<Square>(100.0, 0.5 * (j % 2)));
-    else arm->muscle(j).setExcitation(s, GetParam() == 1 ? 1.0 : 0.0);
+    if (kind_of_input == 2) arm->muscle(j).setExcitationSignal(s, std::make_shared<Square>(100.0, 0.5 * (j % 2)));
+    else arm->muscle(j).setExcitation(s, kind_of_input == 1 ? 1.0 : 0.0);
   }
   fp::SimulationOptions o;
   o.duration_s = 5.0;
   o.accuracy = 1e-8;  // BDF needs it tight near the activation floor (see test_hill_muscle)
   o.report_interval_s = 0.01;
-  o.integrator = fp::IntegratorKind::CPodesBdf;
+  o.integrator = std::get<1>(GetParam());
   const auto r = fp::simulate(*arm, s, o);
   ASSERT_TRUE(r.finite) << r.message;
   ASSERT_EQ(r.states.rows.size(), 501u);
@@ -239,4 +246,6 @@ TEST_P(ExtremeExcitations, ForwardSimulationStaysFiniteAndPhysicallyBounded) {
     for (double qd : r.states.column(std::string("/jointset/") + joint + "/qdot")) EXPECT_LT(std::abs(qd), 100.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(ZeroOneBangBang, ExtremeExcitations, ::testing::Values(0, 1, 2));
+INSTANTIATE_TEST_SUITE_P(ZeroOneBangBang, ExtremeExcitations,
+                         ::testing::Combine(::testing::Values(0, 1, 2),
+                                            ::testing::Values(fp::IntegratorKind::CPodesBdf, fp::IntegratorKind::MuscleRosenbrock)));
