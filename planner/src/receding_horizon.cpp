@@ -188,7 +188,7 @@ ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, con
   for (const auto& j : model.description().joints) out.predictions.columns.push_back("/jointset/" + j.name + "/q_predicted");
 
   const auto wall0 = Clock::now();
-  const auto stepper = plugin::make_time_stepper(model, kind, accuracy);
+  const auto stepper = plugin::make_stepper(model, kind, accuracy);
   stepper->initialize(initial);
   plugin::append_state_row(model, stepper->state(), out.states);
   const auto append_row = [&](const SimTK::State& st) { plugin::append_state_row(model, st, out.states); };

@@ -62,7 +62,7 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
 
   SimulationResult result;
   result.states = make_state_table(model);
-  const auto stepper = make_time_stepper(model, o.integrator, o.accuracy);
+  const auto stepper = make_stepper(model, o.integrator, o.accuracy);
   stepper->initialize(initial);
   append_state_row(model, stepper->state(), result.states);
 

@@ -44,7 +44,7 @@ SimTK::State stiff_start(const fp::MusculoskeletalModel& arm) {
 }
 
 
-Eigen::VectorXd final_y(const fp::MusculoskeletalModel& arm, const SimTK::State& s0, fp::TimeStepper& stepper,
+Eigen::VectorXd final_y(const fp::MusculoskeletalModel& arm, const SimTK::State& s0, fp::Stepper& stepper,
                         double t_end) {
   stepper.initialize(s0);
   EXPECT_TRUE(stepper.advanceTo(t_end));
@@ -104,13 +104,13 @@ TEST(MuscleRosenbrock, AgreesWithRungeKuttaMersonOnAStiffRunWithFewerSteps) {
   const auto arm = flatsos::test::load_arm();
   const SimTK::State s0 = stiff_start(*arm);
   const double t_end = 1.0;
-  auto reference = fp::make_time_stepper(*arm, fp::IntegratorKind::RungeKuttaMerson, 1e-11);
+  auto reference = fp::make_stepper(*arm, fp::IntegratorKind::RungeKuttaMerson, 1e-11);
   const Eigen::VectorXd ref = final_y(*arm, s0, *reference, t_end);
   double previous_error = 1e9;
   for (double accuracy : {1e-5, 1e-7}) {
     auto integ = rosenbrock(*arm, accuracy);
     const Eigen::VectorXd y = final_y(*arm, s0, *integ, t_end);
-    auto rkm = fp::make_time_stepper(*arm, fp::IntegratorKind::RungeKuttaMerson, accuracy);
+    auto rkm = fp::make_stepper(*arm, fp::IntegratorKind::RungeKuttaMerson, accuracy);
     final_y(*arm, s0, *rkm, t_end);
     const double q_error_deg = (y.head(2) - ref.head(2)).cwiseAbs().maxCoeff() * 180.0 / flatsos::test::kPi;
     // Error control: the global error follows the requested accuracy down.
@@ -143,7 +143,7 @@ TEST(MuscleRosenbrock, DenseOutputAgreesWithSteppingToEachReport) {
   a->initialize(s0);
   b->initialize(s0);
   ASSERT_TRUE(a->advanceTo(0.5, times, collect(dense)));
-  ASSERT_TRUE(b->fp::TimeStepper::advanceTo(0.5, times, collect(stepped)));
+  ASSERT_TRUE(b->fp::Stepper::advanceTo(0.5, times, collect(stepped)));
   ASSERT_EQ(dense.size(), times.size());
   ASSERT_EQ(stepped.size(), times.size());
   double q_diff = 0.0;

@@ -90,8 +90,9 @@ struct ClosedLoopResult {
   long integrator_attempts = 0;  ///< steps tried, rejected ones included
 };
 
-/// Runs `controller` on the model's Simbody system from `initial` for `duration_s`
-/// (Runge-Kutta-Merson or CPodes BDF at `accuracy`).
+/// Runs `controller` on the model's Simbody system from `initial` for `duration_s` with the
+/// integrator `integrator` at `accuracy` (see plugin/stepper.hpp; the muscle Rosenbrock method
+/// keeps its step size across the controller's input changes, Simbody's integrators restart).
 ClosedLoopResult simulate_closed_loop(RecedingHorizonController& controller, const SimTK::State& initial,
                                       double duration_s, double accuracy = 1e-8, int reports_per_period = 5,
                                       double settle_tolerance_rad = 3.14159265358979323846 / 180.0,

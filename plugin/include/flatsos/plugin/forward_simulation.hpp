@@ -1,5 +1,5 @@
 #pragma once
-// Forward simulation of a MusculoskeletalModel with one of the integrators of time_stepper.hpp
+// Forward simulation of a MusculoskeletalModel with one of the integrators of stepper.hpp
 // (error-controlled; tendon lengths are centimetres, so keep accuracy <= 1e-6), and the
 // OpenSim-style state table it reports.
 
@@ -9,7 +9,7 @@
 
 #include "flatsos/plugin/musculoskeletal_model.hpp"
 #include "flatsos/plugin/sto_file.hpp"
-#include "flatsos/plugin/time_stepper.hpp"
+#include "flatsos/plugin/stepper.hpp"
 
 namespace flatsos::plugin {
 

@@ -23,11 +23,11 @@
 
 #include <vector>
 
-#include "flatsos/plugin/time_stepper.hpp"
+#include "flatsos/plugin/stepper.hpp"
 
 namespace flatsos::plugin {
 
-class MuscleRosenbrockIntegrator final : public TimeStepper {
+class MuscleRosenbrockIntegrator final : public Stepper {
  public:
   MuscleRosenbrockIntegrator(const SimTK::System& system, std::vector<HillMuscle> muscles, double accuracy);
 

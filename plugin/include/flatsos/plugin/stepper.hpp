@@ -27,12 +27,12 @@ enum class IntegratorKind { RungeKuttaMerson, CPodesBdf, MuscleRosenbrock };
 const char* integrator_name(IntegratorKind kind);
 IntegratorKind integrator_from_name(const std::string& name);
 
-class TimeStepper {
+class Stepper {
  public:
   /// Receives the state at a report time (valid during the call only).
   using Report = std::function<void(const SimTK::State&)>;
 
-  virtual ~TimeStepper() = default;
+  virtual ~Stepper() = default;
   /// Starts (or restarts) from `s`.
   virtual void initialize(const SimTK::State& s) = 0;
   /// Advances exactly to time t. Returns false, leaving the last finite state, when the state
@@ -56,9 +56,9 @@ class TimeStepper {
 
 /// A stepper for `system` whose muscles are `muscles` (used by the Rosenbrock method only).
 /// `accuracy` is relative (Simbody's meaning); throws std::invalid_argument outside (0, 1).
-std::unique_ptr<TimeStepper> make_time_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
+std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
                                                IntegratorKind kind, double accuracy);
-std::unique_ptr<TimeStepper> make_time_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
+std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
                                                double accuracy);
 
 }  // namespace flatsos::plugin

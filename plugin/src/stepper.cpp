@@ -1,4 +1,4 @@
-#include "flatsos/plugin/time_stepper.hpp"
+#include "flatsos/plugin/stepper.hpp"
 
 #include <stdexcept>
 
@@ -9,8 +9,8 @@
 namespace flatsos::plugin {
 
 namespace {
-// Simbody's own integrators behind the TimeStepper interface.
-class SimbodyStepper final : public TimeStepper {
+// Simbody's own integrators behind the Stepper interface.
+class SimbodyStepper final : public Stepper {
  public:
   explicit SimbodyStepper(std::unique_ptr<SimTK::Integrator> integrator) : integ_(std::move(integrator)) {}
 
@@ -48,7 +48,7 @@ class SimbodyStepper final : public TimeStepper {
 };
 }  // namespace
 
-bool TimeStepper::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
+bool Stepper::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
   for (double t : report_times) {
     if (t > t_end) break;
     if (!advanceTo(t)) return false;
@@ -72,7 +72,7 @@ IntegratorKind integrator_from_name(const std::string& name) {
   throw std::invalid_argument("unknown integrator '" + name + "' (rkm, bdf or rosenbrock)");
 }
 
-std::unique_ptr<TimeStepper> make_time_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
+std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
                                                IntegratorKind kind, double accuracy) {
   if (!(accuracy > 0.0 && accuracy < 1.0)) throw std::invalid_argument("integrator accuracy must be in (0, 1)");
   std::unique_ptr<SimTK::Integrator> integ;
@@ -90,11 +90,11 @@ std::unique_ptr<TimeStepper> make_time_stepper(const SimTK::System& system, std:
   return std::make_unique<SimbodyStepper>(std::move(integ));
 }
 
-std::unique_ptr<TimeStepper> make_time_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
+std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
                                                double accuracy) {
   std::vector<HillMuscle> muscles;
   for (int j = 0; j < model.numMuscles(); ++j) muscles.push_back(model.muscle(j));
-  return make_time_stepper(model.system(), std::move(muscles), kind, accuracy);
+  return make_stepper(model.system(), std::move(muscles), kind, accuracy);
 }
 
 }  // namespace flatsos::plugin
