@@ -44,6 +44,7 @@ class MuscleRosenbrockIntegrator final : public Stepper {
   double nextStepSize() const { return h_; }
   /// Fixed steps of h seconds without error control (0, the default: adaptive). For
   /// convergence studies and hard real-time use; the last step before a target time is shortened.
+  /// A step too long for a muscle's own time scale (see kMinPivot) stops advanceTo (false).
   void setFixedStepSize(double h_s);
 
  private:

@@ -35,8 +35,9 @@ class Stepper {
   virtual ~Stepper() = default;
   /// Starts (or restarts) from `s`.
   virtual void initialize(const SimTK::State& s) = 0;
-  /// Advances exactly to time t. Returns false, leaving the last finite state, when the state
-  /// became non-finite or the integrator could not proceed.
+  /// Advances exactly to time t. Returns false when the state became non-finite or the
+  /// integrator could not proceed (the Rosenbrock method then keeps its last accepted state,
+  /// Simbody's integrators the state where they stopped).
   virtual bool advanceTo(double t) = 0;
   /// Advances exactly to t_end and calls `report` at each of `report_times` (ascending, in
   /// (now, t_end]). Steppers with a continuous extension interpolate instead of cutting their
