@@ -31,6 +31,14 @@ class PolynomialSignal final : public plugin::ExcitationSignal {
 };
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// The plan's joint jet at tau; from its end on the plan rests at its target (the cubic's
+// acceleration at T is not zero, a rest's is).
+Jet plan_jet(const JointPath& path, double tau, int orders) {
+  Jet j = path.jet(std::min(tau, path.duration_s), orders);
+  if (tau >= path.duration_s && orders > 1) j.rightCols(orders - 1).setZero();
+  return j;
+}
+
 Jet constant_jet(const Eigen::VectorXd& alpha) {
   Jet j = Jet::Zero(alpha.size(), 3);
   j.col(0) = alpha;
@@ -74,8 +82,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(const plugin::Muscu
       model.system().realize(state, SimTK::Stage::Acceleration);
       Eigen::VectorXd qdd(model.numJoints());
       for (int i = 0; i < model.numJoints(); ++i) qdd[i] = model.joint(i).getOneUDot(state, 0);
-      const double tau = std::min(rec.time_s - in_use->plan_start_time_s, in_use->path.duration_s);
-      const Jet predicted = in_use->path.jet(tau, 3);  // q, qd, qdd
+      const Jet predicted = plan_jet(in_use->path, rec.time_s - in_use->plan_start_time_s, 3);  // q, qd, qdd
       // A non-finite measurement leaves the estimate as it is (the planner then reports the state).
       if (q.allFinite() && qd.allFinite() && qdd.allFinite())
         torque_offset_ += options_.disturbance_observer_gain *
@@ -108,8 +115,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(const plugin::Muscu
     values.resize(model.numMuscles(), ns);
     const JointPath& path = rec.path;
     const double tau0 = rec.time_s - rec.plan_start_time_s;
-    // Beyond the plan's end the path rests at its target (the cubic's end state).
-    auto jet_at = [&](double tau) { return path.jet(std::min(tau, path.duration_s), 5); };
+    auto jet_at = [&](double tau) { return plan_jet(path, tau, 5); };
     const auto jets = flat_.torqueJetsOnGrid([&](double tau) { return jet_at(tau).leftCols(3).eval(); }, tau0, h, ns);
     for (int i = 0; i < ns; ++i) {
       TorqueJet tj = jets[static_cast<std::size_t>(i)];
@@ -150,7 +156,11 @@ const RecedingHorizonRecord& RecedingHorizonController::step(const plugin::Muscu
       model.muscle(j).setExcitationSignal(
           state, std::make_shared<PolynomialSignal>(fit, rec.time_s, options_.control_period_s));
     }
-  }  // else: no plan ever succeeded; the muscles keep their current inputs.
+  } else {
+    // No plan ever succeeded: the muscles keep their current inputs, and no plan is in use.
+    rec.alpha.resize(0);
+    rec.path = JointPath{};
+  }
   rec.step_seconds = seconds_since(t0);
   history_.push_back(std::move(rec));
   return history_.back();

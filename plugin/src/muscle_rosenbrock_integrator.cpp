@@ -32,7 +32,8 @@ constexpr double kDense[4][3] = {{1.0564298455794094, -1.3864882699759573, 0.572
 constexpr int kOrderEmbedded = 2;  // error ~ h^(kOrderEmbedded + 1)
 constexpr double kSafety = 0.9;
 constexpr double kMaxGrowth = 5.0, kMaxShrink = 0.2;
-constexpr double kMinStep = 1e-12;  // s: below this the integrator gives up
+constexpr double kMinStep = 1e-12;   // s: below this the integrator gives up
+constexpr double kFirstStep = 1e-4;  // s: the first trial step
 // A muscle block of W = I - gamma h J with a diagonal below this is a step far beyond an
 // unstable time scale of the muscle (J > 0 on the descending limb): the step is rejected.
 constexpr double kMinPivot = 0.5;
@@ -88,8 +89,14 @@ void MuscleRosenbrockIntegrator::initialize(const SimTK::State& s) {
       slot.path.push_back(c);
     }
   }
+  for (std::size_t a = 0; a < slots_.size(); ++a)
+    for (std::size_t b = a + 1; b < slots_.size(); ++b)
+      if (slots_[a].tendon_index == slots_[b].tendon_index)
+        throw std::invalid_argument("muscle Rosenbrock integrator: muscle '" + slots_[a].muscle.getParameters().name +
+                                    "' is listed twice");
   // The step size of the previous interval is kept: inputs changing at a control period do not
-  // force the cold start an implicit multistep method needs.
+  // force the cold start an implicit multistep method needs (unless the last run collapsed it).
+  if (!(h_ >= kMinStep)) h_ = kFirstStep;
   initialized_ = true;
   f0_valid_ = false;
 }
@@ -207,6 +214,9 @@ bool MuscleRosenbrockIntegrator::advanceTo(double t_end) { return advanceTo(t_en
 
 void MuscleRosenbrockIntegrator::inputsChanged() {
   f0_valid_ = false;  // the excitations (discrete variables) changed: f and J must be re-evaluated
+  // Continuous states edited through updState() are taken over, as Simbody's restart does.
+  if (!finite(state_.getY())) throw std::invalid_argument("muscle Rosenbrock integrator: the changed state is not finite");
+  y_ = state_.getY();
 }
 
 void MuscleRosenbrockIntegrator::reportDense(double t0, double h, const std::vector<double>& times,
@@ -234,13 +244,19 @@ void MuscleRosenbrockIntegrator::reportDense(double t0, double h, const std::vec
 
 bool MuscleRosenbrockIntegrator::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
   if (!initialized_) throw std::logic_error("muscle Rosenbrock integrator: advanceTo before initialize");
+  check_times(t_end, report_times);
   std::size_t next_report = 0;
   while (next_report < report_times.size() && report_times[next_report] <= state_.getTime()) ++next_report;
   while (state_.getTime() < t_end) {
     const double t = state_.getTime(), remaining = t_end - t;
-    // Land exactly on t_end; avoid leaving a sliver of a step behind.
+    if (!f0_valid_) {
+      // Not finite at the start of the step: no step size helps.
+      if (!evaluate(state_, t, y_, f0_, true)) return false;
+      f0_valid_ = true;
+    }
+    // Land exactly on t_end; rather two equal steps than a full one and a costly sliver.
     const bool last = h_ >= remaining * (1.0 - 1e-10) || remaining - h_ < 1e-3 * h_;
-    const double h = last ? remaining : h_;
+    const double h = last ? remaining : (remaining < 2.0 * h_ ? 0.5 * remaining : h_);
     double err = 0.0;
     const bool ok = tryStep(h, err);
     const double factor =
@@ -263,15 +279,17 @@ bool MuscleRosenbrockIntegrator::advanceTo(double t_end, const std::vector<doubl
       state_.updTime() = t_new;
       state_.updY() = y_;
       f0_valid_ = false;
-      // A step shortened to land on t_end says nothing against the longer step size.
       if (fixed_step_ > 0.0) continue;
-      h_ = last ? std::max(h_, h * factor) : h * std::min(factor, previous_rejected_ ? 1.0 : kMaxGrowth);
+      const double growth = std::min(factor, previous_rejected_ ? 1.0 : kMaxGrowth);
+      // A step shortened to land on t_end says nothing against the longer step size.
+      h_ = last ? std::max(h_, h * growth) : h * growth;
       previous_rejected_ = false;
     } else {
       ++rejected_;
       h_ = h * std::min(factor, kSafety);
       previous_rejected_ = true;
-      if (h_ < kMinStep) return false;
+      // Relative to t as well: t + h must still differ from t.
+      if (h_ < std::max(kMinStep, 1e-14 * std::abs(t))) return false;
     }
   }
   return true;

@@ -1,5 +1,6 @@
 #include "flatsos/plugin/stepper.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "flatsos/plugin/forward_simulation.hpp"
@@ -15,40 +16,59 @@ class SimbodyStepper final : public Stepper {
   explicit SimbodyStepper(std::unique_ptr<SimTK::Integrator> integrator) : integ_(std::move(integrator)) {}
 
   void initialize(const SimTK::State& s) override {
+    pending_ = false;
     integ_->initialize(s);
     counted_ = integ_->getNumStepsTaken();
     counted_attempts_ = integ_->getNumStepsAttempted();
   }
   bool advanceTo(double t) override {
-    // The first stepTo after initialize() only reports the start of the interval without
-    // advancing: step until t is really reached.
-    while (integ_->getTime() < t && all_states_finite(integ_->getState()))
-      if (integ_->stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
+    if (pending_) inputsChanged();
+    check_times(t, {});
+    bool failed = false;
+    try {
+      // The first stepTo after initialize() only reports the start of the interval without
+      // advancing: step until t is really reached.
+      while (integ_->getTime() < t && all_states_finite(integ_->getState()))
+        if (integ_->stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
+    } catch (const std::exception&) {
+      failed = true;  // StepFailed (step size collapsed) or the model threw: the contract is false
+    }
     steps_ += integ_->getNumStepsTaken() - counted_;
     counted_ = integ_->getNumStepsTaken();
     attempts_ += integ_->getNumStepsAttempted() - counted_attempts_;
     counted_attempts_ = integ_->getNumStepsAttempted();
-    return all_states_finite(integ_->getState()) && integ_->getTime() >= t;
+    return !failed && all_states_finite(integ_->getState()) && integ_->getTime() >= t;
   }
-  const SimTK::State& state() const override { return integ_->getState(); }
+  const SimTK::State& state() const override { return pending_ ? changed_ : integ_->getState(); }
   // getState() may be interpolated (the advanced state lies beyond it): a controller changes
   // a copy, and the integrator restarts from it (CPodes cold: order 1, small steps).
   SimTK::State& updState() override {
-    changed_ = integ_->getState();
+    if (!pending_) changed_ = integ_->getState();
+    pending_ = true;
     return changed_;
   }
-  void inputsChanged() override { initialize(changed_); }
+  void inputsChanged() override {
+    if (pending_) initialize(changed_);
+  }
   long stepsTaken() const override { return steps_; }
   long stepsAttempted() const override { return attempts_; }
 
  private:
   std::unique_ptr<SimTK::Integrator> integ_;
   SimTK::State changed_;
+  bool pending_ = false;  // changed_ holds edits not yet handed to the integrator
   long steps_ = 0, counted_ = 0, attempts_ = 0, counted_attempts_ = 0;
 };
 }  // namespace
 
+void check_times(double t_end, const std::vector<double>& report_times) {
+  if (!std::isfinite(t_end)) throw std::invalid_argument("integrator: the target time is not finite");
+  for (double t : report_times)
+    if (!std::isfinite(t)) throw std::invalid_argument("integrator: a report time is not finite");
+}
+
 bool Stepper::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
+  check_times(t_end, report_times);
   for (double t : report_times) {
     if (t > t_end) break;
     if (!advanceTo(t)) return false;

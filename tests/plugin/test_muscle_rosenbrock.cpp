@@ -197,3 +197,37 @@ TEST(MuscleRosenbrock, IntegratorNamesRoundTrip) {
     EXPECT_NE(std::string(e.what()).find("euler"), std::string::npos);
   }
 }
+
+TEST(Stepper, ContractIsTheSameForEveryIntegrator) {
+  // updState() + inputsChanged(): edits of inputs and of continuous states are taken over, also
+  // after several updState() calls; non-finite times are rejected by name.
+  const auto arm = flatsos::test::load_arm();
+  const SimTK::State s0 = stiff_start(*arm);
+  for (auto kind : {fp::IntegratorKind::RungeKuttaMerson, fp::IntegratorKind::CPodesBdf, fp::IntegratorKind::MuscleRosenbrock}) {
+    auto stepper = fp::make_stepper(*arm, kind, 1e-7);
+    stepper->initialize(s0);
+    ASSERT_TRUE(stepper->advanceTo(0.02)) << fp::integrator_name(kind);
+    const double q_before = arm->jointAngles(stepper->state())[0];
+    arm->muscle(0).setExcitation(stepper->updState(), 0.9);
+    arm->setJointSpeeds(stepper->updState(), Eigen::Vector2d(0.5, -0.5));  // a second call keeps the first edit
+    stepper->inputsChanged();
+    EXPECT_EQ(arm->muscle(0).getExcitation(stepper->state()), 0.9) << fp::integrator_name(kind);
+    EXPECT_EQ(arm->jointSpeeds(stepper->state())[0], 0.5) << fp::integrator_name(kind);
+    ASSERT_TRUE(stepper->advanceTo(0.021)) << fp::integrator_name(kind);
+    // Started from the edited speeds: the shoulder moved up by about 0.5 rad/s x 1 ms.
+    EXPECT_NEAR(arm->jointAngles(stepper->state())[0] - q_before, 5e-4, 5e-5) << fp::integrator_name(kind);
+    EXPECT_THROW(stepper->advanceTo(std::nan("")), std::invalid_argument);
+    EXPECT_THROW(stepper->advanceTo(1.0, {0.5, std::nan("")}, [](const SimTK::State&) {}), std::invalid_argument);
+  }
+}
+
+TEST(MuscleRosenbrock, RejectsAMuscleListedTwice) {
+  const auto arm = flatsos::test::load_arm();
+  fp::MuscleRosenbrockIntegrator integ(arm->system(), {arm->muscle(1), arm->muscle(1)}, 1e-6);
+  try {
+    integ.initialize(arm->defaultState());
+    FAIL() << "a muscle listed twice was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("posterior_deltoid' is listed twice"), std::string::npos) << e.what();
+  }
+}

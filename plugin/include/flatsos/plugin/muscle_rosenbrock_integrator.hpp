@@ -33,7 +33,8 @@ class MuscleRosenbrockIntegrator final : public Stepper {
 
   void initialize(const SimTK::State& s) override;
   bool advanceTo(double t) override;
-  /// Reports come from the method's continuous extension (third order): steps are not cut.
+  /// Reports come from the method's continuous extension (second order with the approximate
+  /// Jacobian, within the controlled error): steps are not cut.
   bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) override;
   const SimTK::State& state() const override { return state_; }
   SimTK::State& updState() override { return state_; }
@@ -79,7 +80,7 @@ class MuscleRosenbrockIntegrator final : public Stepper {
   SimTK::Vector y_, f0_, y_stage_, sum_gamma_, jv_, y_new_, err_;
   SimTK::Vector k_[kStages];
   std::vector<double> j_ll_, j_la_, j_aa_, j_lpath_;  // per muscle: the Jacobian entries at (t_n, y_n)
-  double h_ = 1e-4;
+  double h_ = 1e-4;  // the next trial step, s
   bool initialized_ = false, f0_valid_ = false, previous_rejected_ = false;
   long accepted_ = 0, rejected_ = 0;
 };

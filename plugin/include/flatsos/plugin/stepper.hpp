@@ -22,6 +22,9 @@ class MusculoskeletalModel;
 /// Explicit Runge-Kutta-Merson, CPodes' implicit BDF, or the muscle Rosenbrock-W method.
 enum class IntegratorKind { RungeKuttaMerson, CPodesBdf, MuscleRosenbrock };
 
+/// Throws std::invalid_argument if t_end or a report time is not finite.
+void check_times(double t_end, const std::vector<double>& report_times);
+
 /// "rkm", "bdf", "rosenbrock" (the command-line names) and back; the inverse throws
 /// std::invalid_argument naming the unknown name.
 const char* integrator_name(IntegratorKind kind);
@@ -41,11 +44,14 @@ class Stepper {
   virtual bool advanceTo(double t) = 0;
   /// Advances exactly to t_end and calls `report` at each of `report_times` (ascending, in
   /// (now, t_end]). Steppers with a continuous extension interpolate instead of cutting their
-  /// steps at the report times; the others step to each.
+  /// steps at the report times; the others step to each. Non-finite times throw
+  /// std::invalid_argument.
   virtual bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report);
+  /// The state at the current time. Not necessarily realized: realize it before reading
+  /// accelerations.
   virtual const SimTK::State& state() const = 0;
   /// The state at the current time, for a controller to change its inputs (discrete variables);
-  /// call inputsChanged() afterwards. Continuous states must not change. (The Rosenbrock
+  /// call inputsChanged() afterwards; changed continuous states are taken over too. (The Rosenbrock
   /// stepper hands out its own state, no copy; Simbody's integrators a copy they restart from.)
   virtual SimTK::State& updState() = 0;
   virtual void inputsChanged() = 0;
