@@ -82,7 +82,7 @@ struct ClosedLoopResult {
   plugin::StoTable states;       ///< plugin::make_state_table columns, `reports_per_period` rows per period
   plugin::StoTable predictions;  ///< time, /controller/step, /jointset/<joint>/q_predicted (11 per step)
   SimTK::State final_state;
-  bool finite = true;            ///< false: a state became NaN/Inf and the run stopped there
+  bool finite = true;            ///< false: a state became NaN/Inf, or the integrator could not continue; the run stopped there
   double settling_time_s = -1;   ///< every joint within `settle_tolerance_rad` of the target from then on; -1: never
   double wall_seconds = 0.0;
   double real_time_factor = 0.0;  ///< simulated time / wall time
