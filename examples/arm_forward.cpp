@@ -2,11 +2,10 @@
 // Warner) from a given state under an excitation schedule; writes OUT/states.sto.
 #include <CLI/CLI.hpp>
 
-#include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <sstream>
 
+#include "example_support.hpp"
 #include "flatsos/plugin/excitation_file.hpp"
 #include "flatsos/plugin/forward_simulation.hpp"
 #include "flatsos/plugin/musculoskeletal_model.hpp"
@@ -17,27 +16,13 @@
 #endif
 
 namespace fp = flatsos::plugin;
+namespace ex = flatsos::examples;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-Eigen::VectorXd to_vector(const std::vector<double>& v) {
-  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+// Sizes of the optional per-joint / per-muscle lists (empty: the default applies).
+void require_count_if_given(const std::vector<double>& v, int n, const std::string& option) {
+  if (!v.empty()) ex::require_count(v, n, option);
 }
-
-void require_size(const std::vector<double>& v, int n, const std::string& option) {
-  if (!v.empty() && static_cast<int>(v.size()) != n)
-    throw CLI::ValidationError(option, "expects " + std::to_string(n) + " comma-separated values, got " +
-                                           std::to_string(v.size()));
-}
-
-std::string format_number(double x) {
-  std::ostringstream out;
-  out << x;
-  return out.str();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -62,27 +47,21 @@ int main(int argc, char** argv) {
   app.add_option("--report-interval", report_interval, "time between rows of states.sto, s")
       ->capture_default_str()->check(CLI::PositiveNumber);
   std::string integrator = "rkm";
-  app.add_option("--integrator", integrator,
-                 "rkm (Runge-Kutta-Merson), bdf (CPodes) or rosenbrock (implicit in the muscles); the last "
-                 "two for stiff runs at tiny activations")
-      ->capture_default_str()->check(CLI::IsMember({"rkm", "bdf", "rosenbrock"}));
+  ex::add_integrator_option(app, integrator,
+                            "rkm (Runge-Kutta-Merson), bdf (CPodes) or rosenbrock (implicit in the muscles); the "
+                            "last two for stiff runs at tiny activations");
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return e.get_exit_code() == 0 ? rc : 2;
-  }
+  if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
     const auto model = fp::MusculoskeletalModel::fromFile(model_path);
     const int n = model->numJoints(), m = model->numMuscles();
     try {
-      require_size(q0_deg, n, "--q0-deg");
-      require_size(qd0, n, "--qd0");
-      require_size(a0, m, "--a0");
-      require_size(ls0, m, "--ls0");
+      require_count_if_given(q0_deg, n, "--q0-deg");
+      require_count_if_given(qd0, n, "--qd0");
+      require_count_if_given(a0, m, "--a0");
+      require_count_if_given(ls0, m, "--ls0");
       if (ls0.empty() && !equilibrate)
         throw CLI::ValidationError("--ls0", "give initial tendon lengths or --equilibrate-tendons");
     } catch (const CLI::Error& e) {
@@ -90,14 +69,14 @@ int main(int argc, char** argv) {
       return 2;
     }
     SimTK::State s = model->defaultState();
-    model->setJointAngles(s, q0_deg.empty() ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(to_vector(q0_deg) * kPi / 180.0));
-    model->setJointSpeeds(s, qd0.empty() ? Eigen::VectorXd::Zero(n) : to_vector(qd0));
-    const Eigen::VectorXd a = a0.empty() ? Eigen::VectorXd::Constant(m, 0.05) : to_vector(a0);
+    model->setJointAngles(s, q0_deg.empty() ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(ex::to_vector(q0_deg) * ex::kRadPerDeg));
+    model->setJointSpeeds(s, qd0.empty() ? Eigen::VectorXd::Zero(n) : ex::to_vector(qd0));
+    const Eigen::VectorXd a = a0.empty() ? Eigen::VectorXd::Constant(m, 0.05) : ex::to_vector(a0);
     if (equilibrate) {
       fp::equilibrate_tendons(*model, s, a);
     } else {
       model->setActivations(s, a);
-      model->setTendonLengths(s, to_vector(ls0));
+      model->setTendonLengths(s, ex::to_vector(ls0));
     }
     if (excitation_path.empty()) {
       model->setExcitations(s, a);
@@ -118,7 +97,7 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(out_dir);
     auto table = result.states;
     table.metadata = {{"model", model_path},
-                      {"accuracy", format_number(accuracy)},
+                      {"accuracy", ex::format(accuracy)},
                       {"integrator", integrator},
                       {"integrator_steps", std::to_string(result.integrator_steps)},
                       {"success", result.finite ? "true" : "false"}};
@@ -126,7 +105,7 @@ int main(int argc, char** argv) {
     const std::string out_file = (std::filesystem::path(out_dir) / "states.sto").string();
     fp::write_sto(out_file, table);
 
-    const Eigen::VectorXd q = model->jointAngles(result.final_state) * 180.0 / kPi;
+    const Eigen::VectorXd q = model->jointAngles(result.final_state) / ex::kRadPerDeg;
     std::cout << "arm_forward: " << model->description().name << ", " << duration << " s, "
               << result.integrator_steps << " integrator steps\n  final joint angles (deg):";
     for (int i = 0; i < n; ++i) std::cout << ' ' << model->description().joints[i].name << '=' << q[i];

@@ -44,12 +44,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--accuracy", accuracy, "Simbody integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return e.get_exit_code() == 0 ? rc : 2;
-  }
+  if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
     const auto model = fp::MusculoskeletalModel::fromFile(model_path);

@@ -49,17 +49,11 @@ int main(int argc, char** argv) {
   // Planned activations go down to ~1e-3, where the tendon ODE is stiff: an explicit method
   // (rkm) needs ~4x the steps of an implicit one; see README "Benchmarks" for the measurements.
   std::string integrator = "rosenbrock";
-  app.add_option("--integrator", integrator,
-                 "rosenbrock (implicit in the muscles, explicit in the multibody), bdf (CPodes) or rkm "
-                 "(Runge-Kutta-Merson)")
-      ->capture_default_str()->check(CLI::IsMember({"rosenbrock", "bdf", "rkm"}));
+  ex::add_integrator_option(app, integrator,
+                            "rosenbrock (implicit in the muscles, explicit in the multibody), bdf (CPodes) or rkm "
+                            "(Runge-Kutta-Merson)");
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return e.get_exit_code() == 0 ? rc : 2;
-  }
+  if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
     const auto model = fp::MusculoskeletalModel::fromFile(model_path);

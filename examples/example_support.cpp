@@ -15,6 +15,24 @@ void require_count(const std::vector<double>& v, int n, const std::string& optio
     throw CLI::ValidationError(option, "expects " + std::to_string(n) + " comma-separated values, got " + std::to_string(v.size()));
 }
 
+int parse_arguments(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return e.get_exit_code() == 0 ? rc : 2;
+  }
+  return -1;
+}
+
+CLI::Option* add_integrator_option(CLI::App& app, std::string& name, const std::string& help) {
+  std::vector<std::string> names;
+  for (auto kind : {plugin::IntegratorKind::RungeKuttaMerson, plugin::IntegratorKind::CPodesBdf,
+                    plugin::IntegratorKind::MuscleRosenbrock})
+    names.emplace_back(plugin::integrator_name(kind));
+  return app.add_option("--integrator", name, help)->capture_default_str()->check(CLI::IsMember(names));
+}
+
 Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option) {
   if (v.size() == 1) return Eigen::VectorXd::Constant(m, v[0]);
   require_count(v, m, option);

@@ -20,6 +20,11 @@ constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
 Eigen::VectorXd to_vector(const std::vector<double>& v);
 /// Throws CLI::ValidationError unless v has n entries.
 void require_count(const std::vector<double>& v, int n, const std::string& option);
+/// Parses the command line: -1 to go on, otherwise the exit code (0 after --help, 2 for bad
+/// arguments, with CLI11's message printed).
+int parse_arguments(CLI::App& app, int argc, char** argv);
+/// --integrator with the names of plugin::integrator_name as its only accepted values.
+CLI::Option* add_integrator_option(CLI::App& app, std::string& name, const std::string& help);
 /// One value for all muscles or one per muscle.
 Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option);
 std::string format(double x);

@@ -89,6 +89,13 @@ void MuscleRosenbrockIntegrator::initialize(const SimTK::State& s) {
       slot.path.push_back(c);
     }
   }
+  // Error scales: tendon length by its stretch at Fmax, activation absolutely; 0 for the
+  // multibody states (rad, rad/s: relative above 1, computed per step).
+  error_scale_.assign(static_cast<std::size_t>(ny), 0.0);
+  for (const auto& slot : slots_) {
+    error_scale_[static_cast<std::size_t>(slot.tendon_index)] = slot.stretch_scale_m;
+    error_scale_[static_cast<std::size_t>(slot.tendon_index) + 1] = 1.0;
+  }
   for (std::size_t a = 0; a < slots_.size(); ++a)
     for (std::size_t b = a + 1; b < slots_.size(); ++b)
       if (slots_[a].tendon_index == slots_[b].tendon_index)
@@ -192,15 +199,13 @@ bool MuscleRosenbrockIntegrator::tryStep(double h, double& error_norm) {
   // W^-1 once more (as RADAU5 does) removes that stiff part and leaves the smooth part as is.
   if (!solveInPlace(kGamma * h, err_)) return false;
 
-  // Per state in its natural scale: rad and rad/s (relative above 1), activation, tendon
-  // stretch at Fmax.
+  // Per state in its natural scale (error_scale_): muscle states fixed, the others relative above 1.
   error_norm = 0.0;
-  for (int i = 0; i < y_.size(); ++i) y_stage_[i] = std::max(1.0, std::abs(y_[i]));  // reused as scale
-  for (const auto& slot : slots_) {
-    y_stage_[slot.tendon_index] = slot.stretch_scale_m;
-    y_stage_[slot.tendon_index + 1] = 1.0;
+  for (int i = 0; i < y_.size(); ++i) {
+    const double scale = error_scale_[static_cast<std::size_t>(i)] > 0.0 ? error_scale_[static_cast<std::size_t>(i)]
+                                                                          : std::max(1.0, std::abs(y_[i]));
+    error_norm = std::max(error_norm, std::abs(err_[i]) / (accuracy_ * scale));
   }
-  for (int i = 0; i < y_.size(); ++i) error_norm = std::max(error_norm, std::abs(err_[i]) / (accuracy_ * y_stage_[i]));
   return std::isfinite(error_norm);
 }
 

@@ -81,6 +81,7 @@ class MuscleRosenbrockIntegrator final : public Stepper {
   SimTK::State state_;  // also the workspace of the stage evaluations
   SimTK::Vector y_, f0_, y_stage_, sum_gamma_, jv_, y_new_, err_;
   SimTK::Vector k_[kStages];
+  std::vector<double> error_scale_;  // per Y entry; 0: relative above 1
   std::vector<double> j_ll_, j_la_, j_aa_, j_lpath_;  // per muscle: the Jacobian entries at (t_n, y_n)
   double h_ = 1e-4;  // the next trial step, s
   bool initialized_ = false, f0_valid_ = false, previous_rejected_ = false;
