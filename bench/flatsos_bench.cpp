@@ -16,8 +16,8 @@
 
 #include "example_support.hpp"
 #include "flatsos/planner/receding_horizon.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;

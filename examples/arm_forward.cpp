@@ -6,10 +6,10 @@
 #include <iostream>
 
 #include "example_support.hpp"
-#include "flatsos/plugin/excitation_file.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
-#include "flatsos/plugin/musculoskeletal_model.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/io/excitation_file.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 #ifndef FLATSOS_DEFAULT_MODEL
 #define FLATSOS_DEFAULT_MODEL "models/arm_richter_warner.json"

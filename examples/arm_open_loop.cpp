@@ -12,8 +12,8 @@
 
 #include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "example_support.hpp"
 
 namespace fp = flatsos::plugin;

@@ -12,7 +12,7 @@
 
 #include "example_support.hpp"
 #include "flatsos/planner/receding_horizon.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;

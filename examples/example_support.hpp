@@ -9,9 +9,9 @@
 #include <nlohmann/json.hpp>
 
 #include "flatsos/planner/motion_planner.hpp"
-#include "flatsos/plugin/musculoskeletal_model.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
-#include "flatsos/plugin/sto_file.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/io/sto_file.hpp"
 
 namespace flatsos::examples {
 

@@ -8,7 +8,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "flatsos/plugin/excitation_signal.hpp"
+#include "flatsos/plugin/force/excitation_signal.hpp"
 
 namespace flatsos::planner {
 

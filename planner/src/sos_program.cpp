@@ -8,8 +8,8 @@
 
 #include <Eigen/Dense>
 
-#include "flatsos/planner/small_lp.hpp"
-#include "flatsos/planner/sos_certificate.hpp"
+#include "flatsos/planner/numerics/small_lp.hpp"
+#include "flatsos/planner/numerics/sos_certificate.hpp"
 
 namespace flatsos::planner {
 

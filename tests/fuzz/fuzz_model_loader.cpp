@@ -10,8 +10,9 @@
 #include <string>
 #include <utility>
 
-#include "flatsos/plugin/model_description.hpp"
-#include "flatsos/plugin/musculoskeletal_model.hpp"
+#include "flatsos/plugin/io/model_file.hpp"
+#include "flatsos/plugin/model/model_description.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

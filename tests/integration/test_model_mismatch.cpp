@@ -10,6 +10,7 @@
 #include <iostream>
 
 #include "../planner/scenario_fixture.hpp"
+#include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/planner/receding_horizon.hpp"
 
 namespace fp = flatsos::plugin;

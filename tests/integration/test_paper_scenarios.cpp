@@ -12,7 +12,7 @@
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "flatsos/planner/receding_horizon.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;

@@ -12,10 +12,11 @@
 #include <limits>
 
 #include "../planner/scenario_fixture.hpp"
+#include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/planner/receding_horizon.hpp"
-#include "flatsos/plugin/excitation_file.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/io/excitation_file.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;

@@ -3,7 +3,7 @@
 #include <memory>
 
 #include "../plugin/arm_fixture.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/motion_planner.hpp"
 

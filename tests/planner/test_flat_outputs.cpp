@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "flatsos/planner/polynomial.hpp"
+#include "flatsos/planner/numerics/polynomial.hpp"
 
 namespace fpl = flatsos::planner;
 

@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "flatsos/planner/small_lp.hpp"
+#include "flatsos/planner/numerics/small_lp.hpp"
 
 namespace fpl = flatsos::planner;
 

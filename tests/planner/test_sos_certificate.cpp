@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "flatsos/planner/sos_certificate.hpp"
+#include "flatsos/planner/numerics/sos_certificate.hpp"
 
 namespace {
 

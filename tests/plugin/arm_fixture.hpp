@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "flatsos/plugin/musculoskeletal_model.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::test {
 

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "arm_fixture.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 using flatsos::test::deg;
 

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "flatsos/plugin/excitation_file.hpp"
-#include "flatsos/plugin/sto_file.hpp"
+#include "flatsos/plugin/io/excitation_file.hpp"
+#include "flatsos/plugin/io/sto_file.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fs = std::filesystem;

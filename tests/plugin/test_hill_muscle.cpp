@@ -7,8 +7,8 @@
 
 #include "arm_fixture.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace fp = flatsos::plugin;
 using flatsos::test::deg;

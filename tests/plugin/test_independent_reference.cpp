@@ -23,10 +23,11 @@
 
 #include <Eigen/Core>
 
-#include "flatsos/plugin/excitation_signal.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
-#include "flatsos/plugin/musculoskeletal_model.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/io/model_file.hpp"
+#include "flatsos/plugin/force/excitation_signal.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace {
 

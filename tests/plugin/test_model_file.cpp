@@ -8,7 +8,8 @@
 #include <sstream>
 
 #include "arm_fixture.hpp"
-#include "flatsos/plugin/model_description.hpp"
+#include "flatsos/plugin/io/model_file.hpp"
+#include "flatsos/plugin/model/model_description.hpp"
 
 namespace fp = flatsos::plugin;
 using nlohmann::json;

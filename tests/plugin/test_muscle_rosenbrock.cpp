@@ -8,9 +8,9 @@
 #include <memory>
 
 #include "arm_fixture.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
-#include "flatsos/plugin/muscle_rosenbrock_integrator.hpp"
-#include "flatsos/plugin/static_equilibrium.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/integration/muscle_rosenbrock_integrator.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace fp = flatsos::plugin;
 using flatsos::test::deg;

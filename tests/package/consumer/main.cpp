@@ -6,8 +6,8 @@
 
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/planner/slp.hpp"
-#include "flatsos/plugin/hill_muscle.hpp"
-#include "flatsos/plugin/muscle_rosenbrock_integrator.hpp"
+#include "flatsos/plugin/force/hill_muscle.hpp"
+#include "flatsos/plugin/integration/muscle_rosenbrock_integrator.hpp"
 
 int main() {
   SimTK::MultibodySystem system;

@@ -8,7 +8,7 @@
 #include <Eigen/Core>
 
 #include "flatsos/planner/flat_outputs.hpp"
-#include "flatsos/planner/polynomial.hpp"
+#include "flatsos/planner/numerics/polynomial.hpp"
 
 namespace flatsos::planner {
 

@@ -9,7 +9,7 @@
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
-#include "flatsos/plugin/excitation_signal.hpp"
+#include "flatsos/plugin/force/excitation_signal.hpp"
 
 namespace flatsos::planner {
 

@@ -13,7 +13,7 @@
 #include <Simbody.h>
 
 #include "flatsos/planner/motion_planner.hpp"
-#include "flatsos/plugin/forward_simulation.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
 
 namespace flatsos::planner {
 

@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "flatsos/planner/linear_program.hpp"
+#include "flatsos/planner/numerics/linear_program.hpp"
 
 namespace flatsos::planner {
 

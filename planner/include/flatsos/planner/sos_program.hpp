@@ -20,8 +20,8 @@
 #include <Eigen/Core>
 
 #include "flatsos/planner/flat_outputs.hpp"
-#include "flatsos/planner/linear_program.hpp"
-#include "flatsos/planner/polynomial.hpp"
+#include "flatsos/planner/numerics/linear_program.hpp"
+#include "flatsos/planner/numerics/polynomial.hpp"
 #include "flatsos/planner/torque_model.hpp"
 
 namespace flatsos::planner {

@@ -12,7 +12,7 @@
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
-#include "flatsos/planner/polynomial.hpp"
+#include "flatsos/planner/numerics/polynomial.hpp"
 
 namespace flatsos::planner {
 

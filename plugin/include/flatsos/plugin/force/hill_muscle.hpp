@@ -1,0 +1,91 @@
+#pragma once
+// A Hill-type muscle as a Simbody force element (DESIGN.md 2.2-2.3).
+//
+// States (continuous, Simbody z variables): tendon length L_S (m) and activation a (-).
+// Input: the neural excitation n, a discrete State variable a controller writes, either a held
+// value or an ExcitationSignal of time; it is clamped to [0, 1] when read.
+// Path: constant moment arms, L(q) = l0 - sum_i d_i q_i; the tendon force F = Phi_S(L_S) acts
+// as the mobility force d_i F on each crossed joint (positive d_i: the muscle drives q_i up).
+//
+// Usage with your own Simbody system (any Pin mobilizers):
+//   flatsos::plugin::HillMuscle biceps(forces, params, path);
+//   ... system.realizeTopology(); State s = system.getDefaultState();
+//   biceps.setActivation(s, 0.4); biceps.setTendonLength(s, 0.2347); biceps.setExcitation(s, 0.4);
+
+#include <memory>
+#include <vector>
+
+#include <Simbody.h>
+
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/muscles/muscle_parameters.hpp"
+#include "flatsos/plugin/force/excitation_signal.hpp"
+
+namespace flatsos::plugin {
+
+/// One joint coordinate a muscle crosses: the mobilizer and the muscle's moment arm about it.
+struct MomentArm {
+  SimTK::MobilizedBody mobilizer;  ///< a mobilizer with one generalized coordinate (Pin)
+  double moment_arm_m = 0.0;       ///< d_i; positive: shortening the muscle increases q_i
+};
+
+/// Constant-moment-arm path: musculotendon length L(q) = l0 - sum_i d_i q_i.
+struct MusclePath {
+  double length_at_zero_angles_m = 0.0;  ///< l0
+  std::vector<MomentArm> moment_arms;
+};
+
+class HillMuscleImpl;
+
+class HillMuscle : public SimTK::Force::Custom {
+ public:
+  /// Validates the parameters (std::invalid_argument names the muscle and the field) and adds
+  /// the muscle to `forces`. The defaults of the states are a = 0.05 and a tendon at slack
+  /// length; set the real initial states on your State.
+  HillMuscle(SimTK::GeneralForceSubsystem& forces, const muscles::MuscleParameters& parameters,
+             MusclePath path);
+  HillMuscle() = default;
+
+  const muscles::MuscleParameters& getParameters() const;
+  const MusclePath& getPath() const;
+
+  // --- states (Stage::Model or later) ---
+  double getActivation(const SimTK::State& s) const;
+  void setActivation(SimTK::State& s, double activation) const;
+  double getTendonLength(const SimTK::State& s) const;
+  void setTendonLength(SimTK::State& s, double tendon_length_m) const;
+
+  // --- excitation input ---
+  /// Hold a constant excitation (replaces any signal). Throws for NaN.
+  void setExcitation(SimTK::State& s, double excitation) const;
+  /// Drive the excitation by a signal of time (nullptr: back to the held value).
+  void setExcitationSignal(SimTK::State& s, std::shared_ptr<const ExcitationSignal> signal) const;
+  /// Excitation in effect at the state's time, clamped to [0, 1].
+  double getExcitation(const SimTK::State& s) const;
+  /// Same before clamping (to count and report clamps).
+  double getUnclampedExcitation(const SimTK::State& s) const;
+
+  // --- outputs ---
+  double getMusculotendonLength(const SimTK::State& s) const;          ///< L(q), Stage::Position
+  double getMusculotendonLengtheningRate(const SimTK::State& s) const; ///< dL/dt, Stage::Velocity
+  double getFiberLength(const SimTK::State& s) const;                  ///< L_C = L - L_S
+  double getTendonForce(const SimTK::State& s) const;                  ///< Phi_S(L_S), N
+  /// u = -dL_C/dt from the contraction dynamics (Stage::Velocity).
+  double getFiberShorteningVelocity(const SimTK::State& s) const;
+  /// dL_S/dt and da/dt (Stage::Velocity; the excitation is read at the state's time).
+  double getTendonLengthDerivative(const SimTK::State& s) const;
+  double getActivationDerivative(const SimTK::State& s) const;
+
+  // --- for integrators (Stage::Velocity) ---
+  /// Position of L_S in State::getY(); the activation is the next entry.
+  int getTendonLengthYIndex(const SimTK::State& s) const;
+  /// d(dL_S/dt)/dL_S and d(dL_S/dt)/da at the state's path length: the stiff part of the muscle.
+  muscles::TendonLengthDerivativePartials getTendonLengthDerivativePartials(const SimTK::State& s) const;
+  /// d(da/dt)/da at the state's excitation.
+  double getActivationDerivativePartial(const SimTK::State& s) const;
+
+ private:
+  const HillMuscleImpl& impl() const;
+};
+
+}  // namespace flatsos::plugin

@@ -1,0 +1,46 @@
+#pragma once
+// Forward simulation of a MusculoskeletalModel with one of the integrators of stepper.hpp
+// (error-controlled; tendon lengths are centimetres, so keep accuracy <= 1e-6), and the
+// OpenSim-style state table it reports.
+
+#include <string>
+
+#include <Simbody.h>
+
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/io/sto_file.hpp"
+#include "flatsos/plugin/integration/stepper.hpp"
+
+namespace flatsos::plugin {
+
+struct SimulationOptions {
+  double duration_s = 1.0;
+  IntegratorKind integrator = IntegratorKind::RungeKuttaMerson;
+  double accuracy = 1e-8;           ///< Simbody integrator accuracy (relative)
+  double report_interval_s = 0.01;  ///< rows of the state table
+};
+
+struct SimulationResult {
+  StoTable states;
+  SimTK::State final_state;
+  long integrator_steps = 0;
+  bool finite = true;    ///< false: a state became NaN/Inf, integration stopped there
+  std::string message;   ///< why it stopped early, empty otherwise
+};
+
+/// An empty state table with columns time, /jointset/<joint>/q, /jointset/<joint>/qdot (rad,
+/// rad/s), and per muscle /forceset/<muscle>/{excitation, activation, tendon_length,
+/// tendon_force, fiber_length, fiber_velocity} (SI; fiber_velocity is the lengthening rate).
+StoTable make_state_table(const MusculoskeletalModel& model, const std::string& name = "states");
+/// Appends one row for `s` (realized here to Stage::Velocity).
+void append_state_row(const MusculoskeletalModel& model, const SimTK::State& s, StoTable& table);
+
+/// Integrates from `initial` for options.duration_s; never throws for NaN: it stops and says so.
+/// Throws std::invalid_argument for a non-positive duration, accuracy or report interval.
+SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State& initial,
+                          const SimulationOptions& options);
+
+/// True when every continuous state (q, u, z) of `s` is finite.
+bool all_states_finite(const SimTK::State& s);
+
+}  // namespace flatsos::plugin

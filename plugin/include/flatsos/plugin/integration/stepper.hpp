@@ -1,0 +1,71 @@
+#pragma once
+// One interface over the integrators a muscle-driven Simbody system can be advanced with, so
+// that forward simulations and closed loops share one stepping loop:
+//  - Simbody's Runge-Kutta-Merson (explicit; fine unless a tendon is loaded at tiny activation),
+//  - Simbody's CPodes BDF (implicit, numerical Jacobian; restarts whenever inputs change),
+//  - MuscleRosenbrockIntegrator (linearly implicit in each muscle's own states, explicit in the
+//    multibody; keeps its step size across input changes). See muscle_rosenbrock_integrator.hpp.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Simbody.h>
+
+#include "flatsos/plugin/force/hill_muscle.hpp"
+
+namespace flatsos::plugin {
+
+class MusculoskeletalModel;
+
+/// Explicit Runge-Kutta-Merson, CPodes' implicit BDF, or the muscle Rosenbrock-W method.
+enum class IntegratorKind { RungeKuttaMerson, CPodesBdf, MuscleRosenbrock };
+
+/// Throws std::invalid_argument if t_end or a report time is not finite.
+void check_times(double t_end, const std::vector<double>& report_times);
+
+/// "rkm", "bdf", "rosenbrock" (the command-line names) and back; the inverse throws
+/// std::invalid_argument naming the unknown name.
+const char* integrator_name(IntegratorKind kind);
+IntegratorKind integrator_from_name(const std::string& name);
+
+class Stepper {
+ public:
+  /// Receives the state at a report time (valid during the call only).
+  using Report = std::function<void(const SimTK::State&)>;
+
+  virtual ~Stepper() = default;
+  /// Starts (or restarts) from `s`.
+  virtual void initialize(const SimTK::State& s) = 0;
+  /// Advances exactly to time t. Returns false when the state became non-finite or the
+  /// integrator could not proceed (the Rosenbrock method then keeps its last accepted state,
+  /// Simbody's integrators the state where they stopped).
+  virtual bool advanceTo(double t) = 0;
+  /// Advances exactly to t_end and calls `report` at each of `report_times` (ascending, in
+  /// (now, t_end]). Steppers with a continuous extension interpolate instead of cutting their
+  /// steps at the report times; the others step to each. Non-finite times throw
+  /// std::invalid_argument.
+  virtual bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report);
+  /// The state at the current time. Not necessarily realized: realize it before reading
+  /// accelerations.
+  virtual const SimTK::State& state() const = 0;
+  /// The state at the current time, for a controller to change its inputs (discrete variables);
+  /// call inputsChanged() afterwards; changed continuous states are taken over too. (The Rosenbrock
+  /// stepper hands out its own state, no copy; Simbody's integrators a copy they restart from.)
+  virtual SimTK::State& updState() = 0;
+  virtual void inputsChanged() = 0;
+  /// Steps taken since construction.
+  virtual long stepsTaken() const = 0;
+  /// Steps tried since construction, rejected ones included.
+  virtual long stepsAttempted() const = 0;
+};
+
+/// A stepper for `system` whose muscles are `muscles` (used by the Rosenbrock method only).
+/// `accuracy` is relative (Simbody's meaning); throws std::invalid_argument outside (0, 1).
+std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
+                                               IntegratorKind kind, double accuracy);
+std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
+                                               double accuracy);
+
+}  // namespace flatsos::plugin

@@ -1,0 +1,16 @@
+#pragma once
+// Model files: JSON text -> a validated ModelDescription (the format is documented in
+// model/model_description.hpp). A bad file throws ModelFileError naming the field.
+
+#include <string>
+
+#include "flatsos/plugin/model/model_description.hpp"
+
+namespace flatsos::plugin {
+
+/// Parse and validate a model from JSON text. `source` names it in messages (a path).
+ModelDescription parse_model_json(const std::string& json_text, const std::string& source);
+/// Read, parse and validate a model file.
+ModelDescription load_model_file(const std::string& path);
+
+}  // namespace flatsos::plugin

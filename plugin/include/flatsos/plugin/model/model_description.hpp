@@ -1,0 +1,88 @@
+#pragma once
+// A musculoskeletal model as data: bodies, pin joints, gravity, muscles with constant moment
+// arms, and the flat-output matrix E. Loaded from JSON (models/*.json) and validated whole:
+// a bad file throws ModelFileError naming the field, never yields a half-built model.
+//
+// File format (SI units; see models/arm_richter_warner.json):
+// {
+//   "name": "...",
+//   "gravity_m_per_s2": [0, -9.81, 0],
+//   "bodies": [{"name", "mass_kg", "mass_center_m": [x,y,z] (body frame, origin at its joint),
+//               "inertia_about_mass_center_kg_m2": Izz | [Ixx,Iyy,Izz] | [Ixx,Iyy,Izz,Ixy,Ixz,Iyz],
+//               "length_m" (optional, for drawing and chains)}],
+//   "joints": [{"name", "type": "pin", "parent": "ground" | body, "child": body,
+//               "location_in_parent_m": [x,y,z], "axis": [0,0,1] (optional)}],
+//   "muscle_defaults": {any MuscleParameters field except the three below} (optional),
+//   "muscles": [{"name", "max_isometric_force_N", "optimal_fiber_length_m",
+//                "tendon_slack_length_m", "length_at_zero_angles_m",
+//                "moment_arms_m": {"<joint>": d, ...} | [d per joint, in joint order],
+//                ...optional overrides of muscle_defaults}],
+//   "flat_outputs": [{"name", "weights": {"<muscle>": w, ...}}]   (optional; m - N rows)
+// }
+// Joints are listed parents first; joint order is generalized-coordinate order.
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flatsos/muscles/muscle_parameters.hpp"
+
+namespace flatsos::plugin {
+
+class ModelFileError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+struct BodyDescription {
+  std::string name;
+  double mass_kg = 0.0;
+  Eigen::Vector3d mass_center_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d principal_inertia_kg_m2 = Eigen::Vector3d::Zero();  ///< Ixx, Iyy, Izz about COM
+  Eigen::Vector3d product_inertia_kg_m2 = Eigen::Vector3d::Zero();    ///< Ixy, Ixz, Iyz about COM
+  double length_m = 0.0;  ///< 0 when not given
+};
+
+struct JointDescription {
+  std::string name;
+  std::string parent;  ///< "ground" or a body name
+  std::string child;
+  Eigen::Vector3d location_in_parent_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit vector, parent frame
+};
+
+struct MuscleDescription {
+  muscles::MuscleParameters parameters;
+  double length_at_zero_angles_m = 0.0;  ///< l0 of L(q) = l0 - sum_i d_i q_i
+  Eigen::VectorXd moment_arms_m;         ///< d_i per joint (joint order), N entries
+};
+
+struct FlatOutputDescription {
+  std::string name;
+  Eigen::VectorXd weights;  ///< one per muscle (muscle order)
+};
+
+struct ModelDescription {
+  std::string name;
+  Eigen::Vector3d gravity_m_per_s2 = Eigen::Vector3d(0.0, -9.81, 0.0);
+  std::vector<BodyDescription> bodies;
+  std::vector<JointDescription> joints;
+  std::vector<MuscleDescription> muscles;
+  std::vector<FlatOutputDescription> flat_outputs;  ///< empty when the file has none
+
+  int numJoints() const { return static_cast<int>(joints.size()); }
+  int numMuscles() const { return static_cast<int>(muscles.size()); }
+  /// A (N x m): A(i, j) = d_ij, moment arm of muscle j about joint i.
+  Eigen::MatrixXd momentArmMatrix() const;
+  /// E (p x m) from flat_outputs.
+  Eigen::MatrixXd flatOutputMatrix() const;
+  int muscleIndex(const std::string& name) const;  ///< -1 when absent
+  int jointIndex(const std::string& name) const;   ///< -1 when absent
+};
+
+/// Validate a description built in code (the loader calls this too).
+void validate(const ModelDescription& model, const std::string& source = "model");
+
+}  // namespace flatsos::plugin

@@ -1,0 +1,86 @@
+#pragma once
+// A Simbody system built from a ModelDescription: a tree of Pin mobilizers with gravity and one
+// HillMuscle per muscle. Vectors are in the description's order (joints = generalized
+// coordinates, muscles). Not copyable: Simbody subsystems refer to each other.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Simbody.h>
+
+#include "flatsos/plugin/force/hill_muscle.hpp"
+#include "flatsos/plugin/model/model_description.hpp"
+
+namespace flatsos::plugin {
+
+class MusculoskeletalModel {
+ public:
+  /// Builds and realizes the topology. Throws ModelFileError if the description is invalid.
+  explicit MusculoskeletalModel(ModelDescription description);
+  static std::unique_ptr<MusculoskeletalModel> fromFile(const std::string& path);
+  MusculoskeletalModel(const MusculoskeletalModel&) = delete;
+  MusculoskeletalModel& operator=(const MusculoskeletalModel&) = delete;
+
+  const ModelDescription& description() const { return description_; }
+  int numJoints() const { return description_.numJoints(); }
+  int numMuscles() const { return description_.numMuscles(); }
+
+  const SimTK::MultibodySystem& system() const { return system_; }
+  SimTK::MultibodySystem& updSystem() { return system_; }
+  const SimTK::SimbodyMatterSubsystem& matter() const { return matter_; }
+  const SimTK::MobilizedBody& joint(int i) const { return joints_.at(i); }
+  const HillMuscle& muscle(int j) const { return muscles_.at(j); }
+
+  /// A fresh default state (topology realized; q = qd = 0, muscle defaults).
+  SimTK::State defaultState() const { return system_.getDefaultState(); }
+
+  // --- state access in description order ---
+  Eigen::VectorXd jointAngles(const SimTK::State& s) const;  ///< q, rad
+  Eigen::VectorXd jointSpeeds(const SimTK::State& s) const;  ///< qd, rad/s
+  void setJointAngles(SimTK::State& s, const Eigen::VectorXd& q_rad) const;
+  void setJointSpeeds(SimTK::State& s, const Eigen::VectorXd& qd_rad_per_s) const;
+  Eigen::VectorXd activations(const SimTK::State& s) const;
+  Eigen::VectorXd tendonLengths(const SimTK::State& s) const;
+  Eigen::VectorXd tendonForces(const SimTK::State& s) const;
+  Eigen::VectorXd excitations(const SimTK::State& s) const;  ///< clamped, at the state's time
+  void setActivations(SimTK::State& s, const Eigen::VectorXd& a) const;
+  void setTendonLengths(SimTK::State& s, const Eigen::VectorXd& ls_m) const;
+  void setExcitations(SimTK::State& s, const Eigen::VectorXd& n) const;  ///< held values
+
+  // --- model quantities ---
+  const Eigen::MatrixXd& momentArmMatrix() const { return moment_arms_; }  ///< A, N x m
+  /// Musculotendon lengths L(q) = l0 - A^T q.
+  Eigen::VectorXd musculotendonLengths(const Eigen::VectorXd& q_rad) const;
+  /// Joint torques tau = A F of the given tendon forces.
+  Eigen::VectorXd muscleTorques(const Eigen::VectorXd& tendon_forces_N) const;
+  /// Mass matrix M(q) from Simbody.
+  Eigen::MatrixXd massMatrix(const Eigen::VectorXd& q_rad) const;
+  /// Inverse dynamics without muscles: tau = M(q) qdd + C(q, qd) qd + g(q), from Simbody.
+  Eigen::VectorXd inverseDynamics(const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
+                                  const Eigen::VectorXd& qdd_rad_per_s2) const;
+  /// Adds an external torque tau(t) (N m, a function of time) on joint i, e.g. a disturbance
+  /// pulse. Re-realizes the topology: take States from defaultState() after calling this.
+  void addJointTorque(int joint, std::shared_ptr<const ExcitationSignal> torque_N_m);
+
+  /// Total mechanical energy of the multibody system (kinetic + gravitational), J.
+  double mechanicalEnergy(const SimTK::State& s) const;
+
+ private:
+  void checkSize(const Eigen::VectorXd& v, int n, const char* what) const;
+  SimTK::State& scratch(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) const;
+
+  ModelDescription description_;
+  SimTK::MultibodySystem system_;
+  SimTK::SimbodyMatterSubsystem matter_;
+  SimTK::GeneralForceSubsystem forces_;
+  SimTK::Force::Gravity gravity_;
+  std::vector<SimTK::MobilizedBody> joints_;
+  std::vector<HillMuscle> muscles_;
+  Eigen::MatrixXd moment_arms_;
+  Eigen::VectorXd zero_angle_lengths_;
+  mutable SimTK::State scratch_;  ///< for inverse dynamics and mass matrix (not thread-safe)
+};
+
+}  // namespace flatsos::plugin

@@ -1,0 +1,208 @@
+#include "flatsos/plugin/force/hill_muscle.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "flatsos/muscles/hill_laws.hpp"
+
+namespace flatsos::plugin {
+
+namespace fm = flatsos::muscles;
+using SignalPtr = std::shared_ptr<const ExcitationSignal>;
+
+// The implementation owns parameters and path (topology); the states live in the State.
+// Indices are allocated in realizeTopology and kept in mutable members, as Simbody's own force
+// elements do; the force subsystem is referred to by its index, never by a copied handle.
+class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
+ public:
+  HillMuscleImpl(SimTK::SubsystemIndex forces, fm::MuscleParameters p, MusclePath path)
+      : forces_(forces), p_(std::move(p)), path_(std::move(path)) {}
+
+  const fm::MuscleParameters& parameters() const { return p_; }
+  const MusclePath& path() const { return path_; }
+
+  // ---- topology ----
+  void realizeTopology(SimTK::State& s) const override {
+    SimTK::Vector z_init(2);
+    z_init[0] = p_.tendon_slack_length_m;
+    z_init[1] = kDefaultActivation;
+    first_z_ = s.allocateZ(forces_, z_init);
+    held_excitation_ = s.allocateDiscreteVariable(forces_, SimTK::Stage::Dynamics,
+                                                  new SimTK::Value<double>(kDefaultActivation));
+    signal_ = s.allocateDiscreteVariable(forces_, SimTK::Stage::Dynamics,
+                                         new SimTK::Value<SignalPtr>(SignalPtr()));
+  }
+
+  // ---- state access ----
+  double tendonLength(const SimTK::State& s) const { return s.getZ(forces_)[first_z_]; }
+  double activation(const SimTK::State& s) const { return s.getZ(forces_)[first_z_ + 1]; }
+  void setZ(SimTK::State& s, int which, double v) const { s.updZ(forces_)[first_z_ + which] = v; }
+
+  void setHeldExcitation(SimTK::State& s, double n) const {
+    SimTK::Value<double>::updDowncast(s.updDiscreteVariable(forces_, held_excitation_)) = n;
+    setSignal(s, SignalPtr());
+  }
+  void setSignal(SimTK::State& s, SignalPtr signal) const {
+    SimTK::Value<SignalPtr>::updDowncast(s.updDiscreteVariable(forces_, signal_)) = std::move(signal);
+  }
+  double unclampedExcitation(const SimTK::State& s) const {
+    // static_cast: both variables were allocated with these types in realizeTopology, and
+    // Value<T>::downcast's dynamic_cast measured ~10 % of an integration step.
+    const SignalPtr& signal =
+        static_cast<const SimTK::Value<SignalPtr>&>(s.getDiscreteVariable(forces_, signal_)).get();
+    if (signal) return signal->value(s.getTime());
+    return static_cast<const SimTK::Value<double>&>(s.getDiscreteVariable(forces_, held_excitation_)).get();
+  }
+  double excitation(const SimTK::State& s) const {
+    const double n = unclampedExcitation(s);
+    // NaN from a faulty signal becomes 0 (no drive) rather than poisoning the integration.
+    return std::isnan(n) ? 0.0 : std::clamp(n, 0.0, 1.0);
+  }
+
+  // ---- kinematics of the path ----
+  double length(const SimTK::State& s) const {
+    double l = path_.length_at_zero_angles_m;
+    for (const auto& arm : path_.moment_arms) l -= arm.moment_arm_m * arm.mobilizer.getOneQ(s, 0);
+    return l;
+  }
+  double lengtheningRate(const SimTK::State& s) const {
+    double ldot = 0.0;
+    for (const auto& arm : path_.moment_arms) ldot -= arm.moment_arm_m * arm.mobilizer.getOneU(s, 0);
+    return ldot;
+  }
+
+  double tendonLengthDerivative(const SimTK::State& s) const {
+    return fm::tendon_length_derivative(p_, tendonLength(s), activation(s), length(s),
+                                        lengtheningRate(s));
+  }
+  double activationDerivative(const SimTK::State& s) const {
+    return fm::activation_derivative(p_, excitation(s), activation(s));
+  }
+
+  int tendonLengthYIndex(const SimTK::State& s) const {
+    return static_cast<int>(s.getZStart()) + static_cast<int>(s.getZStart(forces_)) + first_z_;
+  }
+  fm::TendonLengthDerivativePartials tendonLengthDerivativePartials(const SimTK::State& s) const {
+    return fm::tendon_length_derivative_partials(p_, tendonLength(s), activation(s), length(s));
+  }
+  double activationDerivativePartial(const SimTK::State& s) const {
+    return fm::activation_derivative_d_activation(p_, excitation(s), activation(s));
+  }
+
+  // ---- Force::Custom::Implementation ----
+  void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>&,
+                 SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector& mobility_forces) const override {
+    const double f = fm::tendon_force(p_, tendonLength(s));
+    for (const auto& arm : path_.moment_arms)
+      arm.mobilizer.applyOneMobilityForce(s, 0, arm.moment_arm_m * f, mobility_forces);
+  }
+  // The tendon stores energy, but the muscle-tendon unit is dissipative and its states are
+  // first-order: no potential energy is reported to the multibody system.
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0.0; }
+
+  void realizeAcceleration(const SimTK::State& s) const override {
+    SimTK::Vector& zdot = s.updZDot(forces_);
+    zdot[first_z_] = tendonLengthDerivative(s);
+    zdot[first_z_ + 1] = activationDerivative(s);
+  }
+
+  static constexpr double kDefaultActivation = 0.05;
+
+ private:
+  SimTK::SubsystemIndex forces_;
+  fm::MuscleParameters p_;
+  MusclePath path_;
+  mutable SimTK::ZIndex first_z_;
+  mutable SimTK::DiscreteVariableIndex held_excitation_;
+  mutable SimTK::DiscreteVariableIndex signal_;
+};
+
+namespace {
+HillMuscleImpl* make_impl(SimTK::GeneralForceSubsystem& forces, const fm::MuscleParameters& p,
+                          MusclePath path) {
+  fm::validate(p);
+  if (!std::isfinite(path.length_at_zero_angles_m))
+    throw std::invalid_argument("muscle '" + p.name + "': path length_at_zero_angles_m is not finite");
+  for (const auto& arm : path.moment_arms) {
+    if (!std::isfinite(arm.moment_arm_m))
+      throw std::invalid_argument("muscle '" + p.name + "': a moment arm is not finite");
+    if (arm.mobilizer.isEmptyHandle())
+      throw std::invalid_argument("muscle '" + p.name + "': a moment arm has no mobilizer");
+  }
+  return new HillMuscleImpl(forces.getMySubsystemIndex(), p, std::move(path));
+}
+}  // namespace
+
+HillMuscle::HillMuscle(SimTK::GeneralForceSubsystem& forces, const fm::MuscleParameters& parameters,
+                       MusclePath path)
+    : SimTK::Force::Custom(forces, make_impl(forces, parameters, std::move(path))) {}
+
+const HillMuscleImpl& HillMuscle::impl() const {
+  return static_cast<const HillMuscleImpl&>(getImplementation());
+}
+
+const fm::MuscleParameters& HillMuscle::getParameters() const { return impl().parameters(); }
+const MusclePath& HillMuscle::getPath() const { return impl().path(); }
+
+double HillMuscle::getActivation(const SimTK::State& s) const { return impl().activation(s); }
+void HillMuscle::setActivation(SimTK::State& s, double activation) const {
+  if (!(activation >= 0.0 && activation <= 1.0))  // also rejects NaN
+    throw std::invalid_argument("muscle '" + getParameters().name + "': activation " +
+                                std::to_string(activation) + " is outside [0, 1]");
+  impl().setZ(s, 1, activation);
+}
+double HillMuscle::getTendonLength(const SimTK::State& s) const { return impl().tendonLength(s); }
+void HillMuscle::setTendonLength(SimTK::State& s, double tendon_length_m) const {
+  if (!(std::isfinite(tendon_length_m) && tendon_length_m > 0.0))
+    throw std::invalid_argument("muscle '" + getParameters().name + "': tendon length " +
+                                std::to_string(tendon_length_m) + " m is not a finite length > 0");
+  impl().setZ(s, 0, tendon_length_m);
+}
+
+void HillMuscle::setExcitation(SimTK::State& s, double excitation) const {
+  if (std::isnan(excitation))
+    throw std::invalid_argument("muscle '" + getParameters().name + "': excitation is NaN");
+  impl().setHeldExcitation(s, excitation);
+}
+void HillMuscle::setExcitationSignal(SimTK::State& s, std::shared_ptr<const ExcitationSignal> signal) const {
+  impl().setSignal(s, std::move(signal));
+}
+double HillMuscle::getExcitation(const SimTK::State& s) const { return impl().excitation(s); }
+double HillMuscle::getUnclampedExcitation(const SimTK::State& s) const {
+  return impl().unclampedExcitation(s);
+}
+
+double HillMuscle::getMusculotendonLength(const SimTK::State& s) const { return impl().length(s); }
+double HillMuscle::getMusculotendonLengtheningRate(const SimTK::State& s) const {
+  return impl().lengtheningRate(s);
+}
+double HillMuscle::getFiberLength(const SimTK::State& s) const {
+  return impl().length(s) - impl().tendonLength(s);
+}
+double HillMuscle::getTendonForce(const SimTK::State& s) const {
+  return fm::tendon_force(getParameters(), impl().tendonLength(s));
+}
+double HillMuscle::getFiberShorteningVelocity(const SimTK::State& s) const {
+  return fm::fiber_shortening_velocity(getParameters(), getTendonForce(s), getActivation(s),
+                                       getFiberLength(s));
+}
+double HillMuscle::getTendonLengthDerivative(const SimTK::State& s) const {
+  return impl().tendonLengthDerivative(s);
+}
+double HillMuscle::getActivationDerivative(const SimTK::State& s) const {
+  return impl().activationDerivative(s);
+}
+
+}  // namespace flatsos::plugin
+
+namespace flatsos::plugin {
+int HillMuscle::getTendonLengthYIndex(const SimTK::State& s) const { return impl().tendonLengthYIndex(s); }
+fm::TendonLengthDerivativePartials HillMuscle::getTendonLengthDerivativePartials(const SimTK::State& s) const {
+  return impl().tendonLengthDerivativePartials(s);
+}
+double HillMuscle::getActivationDerivativePartial(const SimTK::State& s) const {
+  return impl().activationDerivativePartial(s);
+}
+}  // namespace flatsos::plugin

@@ -1,0 +1,84 @@
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+namespace flatsos::plugin {
+
+StoTable make_state_table(const MusculoskeletalModel& model, const std::string& name) {
+  StoTable t;
+  t.name = name;
+  t.columns.push_back("time");
+  for (const auto& j : model.description().joints) {
+    t.columns.push_back("/jointset/" + j.name + "/q");
+    t.columns.push_back("/jointset/" + j.name + "/qdot");
+  }
+  for (const auto& m : model.description().muscles)
+    for (const char* what : {"excitation", "activation", "tendon_length", "tendon_force",
+                             "fiber_length", "fiber_velocity"})
+      t.columns.push_back("/forceset/" + m.parameters.name + "/" + what);
+  return t;
+}
+
+void append_state_row(const MusculoskeletalModel& model, const SimTK::State& s, StoTable& table) {
+  model.system().realize(s, SimTK::Stage::Velocity);
+  std::vector<double> row;
+  row.reserve(table.columns.size());
+  row.push_back(s.getTime());
+  for (int i = 0; i < model.numJoints(); ++i) {
+    row.push_back(model.joint(i).getOneQ(s, 0));
+    row.push_back(model.joint(i).getOneU(s, 0));
+  }
+  for (int j = 0; j < model.numMuscles(); ++j) {
+    const HillMuscle& m = model.muscle(j);
+    row.push_back(m.getExcitation(s));
+    row.push_back(m.getActivation(s));
+    row.push_back(m.getTendonLength(s));
+    row.push_back(m.getTendonForce(s));
+    row.push_back(m.getFiberLength(s));
+    row.push_back(-m.getFiberShorteningVelocity(s));
+  }
+  table.rows.push_back(std::move(row));
+}
+
+bool all_states_finite(const SimTK::State& s) {
+  const SimTK::Vector& y = s.getY();
+  for (int i = 0; i < y.size(); ++i)
+    if (!std::isfinite(y[i])) return false;
+  return true;
+}
+
+SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State& initial,
+                          const SimulationOptions& o) {
+  if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s))
+    throw std::invalid_argument("simulation duration must be a finite number > 0 s");
+  if (!(o.accuracy > 0.0 && o.accuracy < 1.0))
+    throw std::invalid_argument("integrator accuracy must be in (0, 1)");
+  if (!(o.report_interval_s > 0.0) || !std::isfinite(o.report_interval_s))
+    throw std::invalid_argument("report interval must be a finite number > 0 s");
+  if (!all_states_finite(initial))
+    throw std::invalid_argument("initial state has a non-finite value");
+
+  SimulationResult result;
+  result.states = make_state_table(model);
+  const auto stepper = make_stepper(model, o.integrator, o.accuracy);
+  stepper->initialize(initial);
+  append_state_row(model, stepper->state(), result.states);
+
+  const double t0 = initial.getTime();
+  const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
+  std::vector<double> times;
+  for (long k = 1; k <= reports; ++k) times.push_back(t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s));
+  if (!stepper->advanceTo(t0 + o.duration_s, times,
+                          [&](const SimTK::State& s) { append_state_row(model, s, result.states); })) {
+    result.finite = false;
+    result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
+                     " s: a state became non-finite or the step size collapsed";
+  }
+  result.final_state = stepper->state();
+  result.integrator_steps = stepper->stepsTaken();
+  return result;
+}
+
+}  // namespace flatsos::plugin

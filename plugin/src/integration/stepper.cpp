@@ -1,0 +1,120 @@
+#include "flatsos/plugin/integration/stepper.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/integration/muscle_rosenbrock_integrator.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+
+namespace flatsos::plugin {
+
+namespace {
+// Simbody's own integrators behind the Stepper interface.
+class SimbodyStepper final : public Stepper {
+ public:
+  explicit SimbodyStepper(std::unique_ptr<SimTK::Integrator> integrator) : integ_(std::move(integrator)) {}
+
+  void initialize(const SimTK::State& s) override {
+    pending_ = false;
+    integ_->initialize(s);
+    counted_ = integ_->getNumStepsTaken();
+    counted_attempts_ = integ_->getNumStepsAttempted();
+  }
+  bool advanceTo(double t) override {
+    if (pending_) inputsChanged();
+    check_times(t, {});
+    bool failed = false;
+    try {
+      // The first stepTo after initialize() only reports the start of the interval without
+      // advancing: step until t is really reached.
+      while (integ_->getTime() < t && all_states_finite(integ_->getState()))
+        if (integ_->stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
+    } catch (const std::exception&) {
+      failed = true;  // StepFailed (step size collapsed) or the model threw: the contract is false
+    }
+    steps_ += integ_->getNumStepsTaken() - counted_;
+    counted_ = integ_->getNumStepsTaken();
+    attempts_ += integ_->getNumStepsAttempted() - counted_attempts_;
+    counted_attempts_ = integ_->getNumStepsAttempted();
+    return !failed && all_states_finite(integ_->getState()) && integ_->getTime() >= t;
+  }
+  const SimTK::State& state() const override { return pending_ ? changed_ : integ_->getState(); }
+  // getState() may be interpolated (the advanced state lies beyond it): a controller changes
+  // a copy, and the integrator restarts from it (CPodes cold: order 1, small steps).
+  SimTK::State& updState() override {
+    if (!pending_) changed_ = integ_->getState();
+    pending_ = true;
+    return changed_;
+  }
+  void inputsChanged() override {
+    if (pending_) initialize(changed_);
+  }
+  long stepsTaken() const override { return steps_; }
+  long stepsAttempted() const override { return attempts_; }
+
+ private:
+  std::unique_ptr<SimTK::Integrator> integ_;
+  SimTK::State changed_;
+  bool pending_ = false;  // changed_ holds edits not yet handed to the integrator
+  long steps_ = 0, counted_ = 0, attempts_ = 0, counted_attempts_ = 0;
+};
+}  // namespace
+
+void check_times(double t_end, const std::vector<double>& report_times) {
+  if (!std::isfinite(t_end)) throw std::invalid_argument("integrator: the target time is not finite");
+  for (double t : report_times)
+    if (!std::isfinite(t)) throw std::invalid_argument("integrator: a report time is not finite");
+}
+
+bool Stepper::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
+  check_times(t_end, report_times);
+  for (double t : report_times) {
+    if (t > t_end) break;
+    if (!advanceTo(t)) return false;
+    report(state());
+  }
+  return advanceTo(t_end);
+}
+
+const char* integrator_name(IntegratorKind kind) {
+  switch (kind) {
+    case IntegratorKind::RungeKuttaMerson: return "rkm";
+    case IntegratorKind::CPodesBdf: return "bdf";
+    case IntegratorKind::MuscleRosenbrock: return "rosenbrock";
+  }
+  return "?";
+}
+
+IntegratorKind integrator_from_name(const std::string& name) {
+  for (auto kind : {IntegratorKind::RungeKuttaMerson, IntegratorKind::CPodesBdf, IntegratorKind::MuscleRosenbrock})
+    if (name == integrator_name(kind)) return kind;
+  throw std::invalid_argument("unknown integrator '" + name + "' (rkm, bdf or rosenbrock)");
+}
+
+std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
+                                               IntegratorKind kind, double accuracy) {
+  if (!(accuracy > 0.0 && accuracy < 1.0)) throw std::invalid_argument("integrator accuracy must be in (0, 1)");
+  std::unique_ptr<SimTK::Integrator> integ;
+  switch (kind) {
+    case IntegratorKind::MuscleRosenbrock:
+      return std::make_unique<MuscleRosenbrockIntegrator>(system, std::move(muscles), accuracy);
+    case IntegratorKind::CPodesBdf:
+      integ = std::make_unique<SimTK::CPodesIntegrator>(system, SimTK::CPodes::BDF, SimTK::CPodes::Newton);
+      break;
+    case IntegratorKind::RungeKuttaMerson:
+      integ = std::make_unique<SimTK::RungeKuttaMersonIntegrator>(system);
+      break;
+  }
+  integ->setAccuracy(accuracy);
+  return std::make_unique<SimbodyStepper>(std::move(integ));
+}
+
+std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
+                                               double accuracy) {
+  std::vector<HillMuscle> muscles;
+  for (int j = 0; j < model.numMuscles(); ++j) muscles.push_back(model.muscle(j));
+  return make_stepper(model.system(), std::move(muscles), kind, accuracy);
+}
+
+}  // namespace flatsos::plugin

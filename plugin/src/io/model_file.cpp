@@ -1,0 +1,290 @@
+#include "flatsos/plugin/io/model_file.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace flatsos::plugin {
+
+using nlohmann::json;
+
+namespace {
+
+// Reads fields of one JSON object, naming each by its path ("muscles[2].mass_kg") in errors,
+// and rejects keys nobody read (a typo must not silently fall back to a default).
+class ObjectReader {
+ public:
+  ObjectReader(const json& j, std::string path, const std::string& source)
+      : j_(j), path_(std::move(path)), source_(source) {
+    if (!j_.is_object()) fail(path_, "must be an object");
+  }
+
+  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+    throw ModelFileError("model file '" + source_ + "': " + where + ": " + what);
+  }
+  std::string at(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  bool has(const std::string& key) const { return j_.contains(key); }
+
+  const json& get(const std::string& key) {
+    if (!j_.contains(key)) fail(at(key), "missing required key");
+    read_.insert(key);
+    return j_.at(key);
+  }
+  const json* find(const std::string& key) {
+    if (!j_.contains(key)) return nullptr;
+    read_.insert(key);
+    return &j_.at(key);
+  }
+
+  double number(const json& v, const std::string& where) const {
+    if (!v.is_number()) fail(where, "must be a number");
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail(where, "must be finite");
+    return x;
+  }
+  double number(const std::string& key) { return number(get(key), at(key)); }
+  double positive(const std::string& key) {
+    const double x = number(key);
+    if (x <= 0.0) fail(at(key), "must be > 0 (got " + std::to_string(x) + ")");
+    return x;
+  }
+  std::string string(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_string() || v.get<std::string>().empty()) fail(at(key), "must be a non-empty string");
+    return v.get<std::string>();
+  }
+  Eigen::Vector3d vec3(const json& v, const std::string& where) const {
+    if (!v.is_array() || v.size() != 3)
+      fail(where, "must be an array of 3 numbers (wrong dimension)");
+    return {number(v[0], where + "[0]"), number(v[1], where + "[1]"), number(v[2], where + "[2]")};
+  }
+  Eigen::Vector3d vec3(const std::string& key) { return vec3(get(key), at(key)); }
+
+  void reject_unknown_keys() const {
+    for (const auto& item : j_.items())
+      if (!read_.count(item.key())) fail(at(item.key()), "unknown key");
+  }
+
+ private:
+  const json& j_;
+  std::string path_;
+  const std::string& source_;
+  std::set<std::string> read_;
+};
+
+std::string indexed(const std::string& list, std::size_t i) {
+  return list + "[" + std::to_string(i) + "]";
+}
+
+const json& array_of_objects(ObjectReader& top, const std::string& key, bool required) {
+  static const json empty = json::array();
+  const json* v = required ? &top.get(key) : top.find(key);
+  if (!v) return empty;
+  if (!v->is_array()) top.fail(key, "must be an array");
+  if (required && v->empty()) top.fail(key, "must not be empty");
+  return *v;
+}
+
+BodyDescription read_body(const json& j, const std::string& path, const std::string& source) {
+  ObjectReader r(j, path, source);
+  BodyDescription b;
+  b.name = r.string("name");
+  b.mass_kg = r.positive("mass_kg");
+  b.mass_center_m = r.vec3("mass_center_m");
+  const std::string inertia_key = "inertia_about_mass_center_kg_m2";
+  const json& inertia = r.get(inertia_key);
+  if (inertia.is_number()) {
+    const double izz = r.number(inertia, r.at(inertia_key));
+    b.principal_inertia_kg_m2 = Eigen::Vector3d::Constant(izz);
+  } else if (inertia.is_array() && (inertia.size() == 3 || inertia.size() == 6)) {
+    for (int k = 0; k < 3; ++k)
+      b.principal_inertia_kg_m2[k] = r.number(inertia[k], indexed(r.at(inertia_key), k));
+    if (inertia.size() == 6)
+      for (int k = 0; k < 3; ++k)
+        b.product_inertia_kg_m2[k] = r.number(inertia[3 + k], indexed(r.at(inertia_key), 3 + k));
+  } else {
+    r.fail(r.at(inertia_key), "must be a number (Izz) or an array of 3 or 6 numbers (wrong dimension)");
+  }
+  const Eigen::Vector3d& I = b.principal_inertia_kg_m2;
+  if (I.minCoeff() < 0.0) r.fail(r.at(inertia_key), "moments of inertia must be >= 0");
+  if (I.maxCoeff() <= 0.0) r.fail(r.at(inertia_key), "moments of inertia must not all be 0");
+  const double slack = 1e-12 * I.sum();
+  if (I[0] + I[1] < I[2] - slack || I[0] + I[2] < I[1] - slack || I[1] + I[2] < I[0] - slack)
+    r.fail(r.at(inertia_key), "moments of inertia violate the triangle inequality");
+  if (const json* len = r.find("length_m")) {
+    b.length_m = r.number(*len, r.at("length_m"));
+    if (b.length_m < 0.0) r.fail(r.at("length_m"), "must be >= 0");
+  }
+  r.reject_unknown_keys();
+  return b;
+}
+
+JointDescription read_joint(const json& j, const std::string& path, const std::string& source) {
+  ObjectReader r(j, path, source);
+  JointDescription d;
+  d.name = r.string("name");
+  const std::string type = r.string("type");
+  if (type != "pin") r.fail(r.at("type"), "unsupported joint type '" + type + "' (only \"pin\")");
+  d.parent = r.string("parent");
+  d.child = r.string("child");
+  d.location_in_parent_m = r.vec3("location_in_parent_m");
+  if (const json* axis = r.find("axis")) {
+    d.axis = r.vec3(*axis, r.at("axis"));
+    if (d.axis.norm() < 1e-12) r.fail(r.at("axis"), "must not be the zero vector");
+    d.axis.normalize();
+  }
+  r.reject_unknown_keys();
+  return d;
+}
+
+// The optional MuscleParameters fields, by their JSON names.
+using ParameterSetter = std::function<void(muscles::MuscleParameters&, double)>;
+const std::map<std::string, ParameterSetter>& optional_muscle_fields() {
+  static const std::map<std::string, ParameterSetter> fields = {
+      {"tendon_strain_at_max_force", [](auto& p, double v) { p.tendon_strain_at_max_force = v; }},
+      {"force_length_width", [](auto& p, double v) { p.force_length_width = v; }},
+      {"max_shortening_velocity_in_optimal_lengths_per_s",
+       [](auto& p, double v) { p.max_shortening_velocity_in_optimal_lengths_per_s = v; }},
+      {"hill_constant", [](auto& p, double v) { p.hill_constant = v; }},
+      {"max_eccentric_force_ratio", [](auto& p, double v) { p.max_eccentric_force_ratio = v; }},
+      {"activation_time_constant_s", [](auto& p, double v) { p.activation_time_constant_s = v; }},
+      {"deactivation_time_constant_s",
+       [](auto& p, double v) { p.deactivation_time_constant_s = v; }},
+      {"activation_floor", [](auto& p, double v) { p.activation_floor = v; }},
+  };
+  return fields;
+}
+
+void read_optional_muscle_fields(ObjectReader& r, muscles::MuscleParameters& p) {
+  for (const auto& [key, set] : optional_muscle_fields())
+    if (const json* v = r.find(key)) set(p, r.number(*v, r.at(key)));
+}
+
+MuscleDescription read_muscle(const json& j, const std::string& path, const std::string& source,
+                              const muscles::MuscleParameters& defaults,
+                              const std::vector<JointDescription>& joints) {
+  ObjectReader r(j, path, source);
+  MuscleDescription m;
+  m.parameters = defaults;
+  m.parameters.name = r.string("name");
+  m.parameters.max_isometric_force_N = r.number("max_isometric_force_N");
+  m.parameters.optimal_fiber_length_m = r.number("optimal_fiber_length_m");
+  m.parameters.tendon_slack_length_m = r.number("tendon_slack_length_m");
+  read_optional_muscle_fields(r, m.parameters);
+  try {
+    muscles::validate(m.parameters);
+  } catch (const std::invalid_argument& e) {
+    r.fail(path, e.what());
+  }
+  m.length_at_zero_angles_m = r.positive("length_at_zero_angles_m");
+
+  const auto n = static_cast<Eigen::Index>(joints.size());
+  m.moment_arms_m = Eigen::VectorXd::Zero(n);
+  const std::string arms_key = "moment_arms_m";
+  const json& arms = r.get(arms_key);
+  if (arms.is_object()) {
+    for (const auto& item : arms.items()) {
+      Eigen::Index i = 0;
+      while (i < n && joints[i].name != item.key()) ++i;
+      if (i == n) r.fail(r.at(arms_key) + "." + item.key(), "unknown joint '" + item.key() + "'");
+      m.moment_arms_m[i] = r.number(item.value(), r.at(arms_key) + "." + item.key());
+    }
+  } else if (arms.is_array()) {
+    if (static_cast<Eigen::Index>(arms.size()) != n)
+      r.fail(r.at(arms_key), "moment-arm row has " + std::to_string(arms.size()) +
+                                 " entries, the model has " + std::to_string(n) +
+                                 " joints (the moment-arm matrix must be N x m)");
+    for (Eigen::Index i = 0; i < n; ++i)
+      m.moment_arms_m[i] = r.number(arms[i], indexed(r.at(arms_key), i));
+  } else {
+    r.fail(r.at(arms_key), "must be an object {joint: moment arm} or an array, one per joint");
+  }
+  if (m.moment_arms_m.cwiseAbs().maxCoeff() == 0.0)
+    r.fail(r.at(arms_key), "the muscle crosses no joint (all moment arms are 0)");
+  r.reject_unknown_keys();
+  return m;
+}
+
+FlatOutputDescription read_flat_output(const json& j, const std::string& path,
+                                       const std::string& source,
+                                       const std::vector<MuscleDescription>& muscles) {
+  ObjectReader r(j, path, source);
+  FlatOutputDescription y;
+  y.name = r.string("name");
+  const json& weights = r.get("weights");
+  if (!weights.is_object() || weights.empty())
+    r.fail(r.at("weights"), "must be a non-empty object {muscle: weight}");
+  y.weights = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(muscles.size()));
+  for (const auto& item : weights.items()) {
+    Eigen::Index k = 0;
+    while (k < y.weights.size() && muscles[k].parameters.name != item.key()) ++k;
+    if (k == y.weights.size())
+      r.fail(r.at("weights") + "." + item.key(), "unknown muscle '" + item.key() + "'");
+    y.weights[k] = r.number(item.value(), r.at("weights") + "." + item.key());
+  }
+  r.reject_unknown_keys();
+  return y;
+}
+
+}  // namespace
+
+ModelDescription parse_model_json(const std::string& json_text, const std::string& source) {
+  json root;
+  try {
+    root = json::parse(json_text);
+  } catch (const json::exception& e) {  // parse_error, also out_of_range: number overflow (1e400)
+    throw ModelFileError("model file '" + source + "': not valid JSON: " + e.what());
+  }
+  ObjectReader top(root, "", source);
+  ModelDescription model;
+  if (const json* name = top.find("name")) {
+    if (!name->is_string()) top.fail("name", "must be a string");
+    model.name = name->get<std::string>();
+  }
+  if (const json* g = top.find("gravity_m_per_s2")) model.gravity_m_per_s2 = top.vec3(*g, "gravity_m_per_s2");
+
+  const json& bodies = array_of_objects(top, "bodies", true);
+  for (std::size_t i = 0; i < bodies.size(); ++i)
+    model.bodies.push_back(read_body(bodies[i], indexed("bodies", i), source));
+  const json& joints = array_of_objects(top, "joints", true);
+  for (std::size_t i = 0; i < joints.size(); ++i)
+    model.joints.push_back(read_joint(joints[i], indexed("joints", i), source));
+
+  muscles::MuscleParameters defaults;
+  if (const json* d = top.find("muscle_defaults")) {
+    ObjectReader r(*d, "muscle_defaults", source);
+    read_optional_muscle_fields(r, defaults);
+    r.reject_unknown_keys();
+  }
+  const json& muscle_list = array_of_objects(top, "muscles", true);
+  for (std::size_t i = 0; i < muscle_list.size(); ++i) {
+    model.muscles.push_back(
+        read_muscle(muscle_list[i], indexed("muscles", i), source, defaults, model.joints));
+    // Checked here, before flat outputs refer to muscles by name, so the root cause is reported.
+    if (model.muscleIndex(model.muscles.back().parameters.name) != static_cast<int>(i))
+      top.fail(indexed("muscles", i) + ".name",
+               "duplicate muscle name '" + model.muscles.back().parameters.name + "'");
+  }
+  const json& flat = array_of_objects(top, "flat_outputs", false);
+  for (std::size_t i = 0; i < flat.size(); ++i)
+    model.flat_outputs.push_back(read_flat_output(flat[i], indexed("flat_outputs", i), source, model.muscles));
+  top.reject_unknown_keys();
+
+  validate(model, source);
+  return model;
+}
+
+ModelDescription load_model_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ModelFileError("model file '" + path + "': cannot be opened");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_model_json(text.str(), path);
+}
+
+}  // namespace flatsos::plugin

@@ -1,0 +1,107 @@
+#include "flatsos/plugin/model/model_description.hpp"
+
+#include <cmath>
+#include <set>
+#include <string>
+
+namespace flatsos::plugin {
+
+namespace {
+std::string indexed(const std::string& list, std::size_t i) { return list + "[" + std::to_string(i) + "]"; }
+}  // namespace
+
+void validate(const ModelDescription& model, const std::string& source) {
+  auto fail = [&](const std::string& where, const std::string& what) {
+    throw ModelFileError("model file '" + source + "': " + where + ": " + what);
+  };
+  if (model.bodies.empty()) fail("bodies", "must not be empty");
+  if (model.joints.empty()) fail("joints", "must not be empty");
+  if (model.muscles.empty()) fail("muscles", "must not be empty");
+  if (!model.gravity_m_per_s2.allFinite()) fail("gravity_m_per_s2", "must be finite");
+
+  std::set<std::string> body_names;
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const auto& b = model.bodies[i];
+    if (b.name == "ground") fail(indexed("bodies", i) + ".name", "'ground' is reserved");
+    if (!body_names.insert(b.name).second)
+      fail(indexed("bodies", i) + ".name", "duplicate body name '" + b.name + "'");
+    if (!(b.mass_kg > 0.0) || !std::isfinite(b.mass_kg)) fail(indexed("bodies", i) + ".mass_kg", "must be > 0");
+  }
+  // Joints: parents first, every body attached exactly once (a tree rooted at ground).
+  std::set<std::string> attached = {"ground"}, joint_names;
+  for (std::size_t i = 0; i < model.joints.size(); ++i) {
+    const auto& jd = model.joints[i];
+    const std::string at = indexed("joints", i);
+    if (!joint_names.insert(jd.name).second) fail(at + ".name", "duplicate joint name '" + jd.name + "'");
+    if (!body_names.count(jd.child)) fail(at + ".child", "unknown body '" + jd.child + "'");
+    if (jd.parent != "ground" && !body_names.count(jd.parent))
+      fail(at + ".parent", "unknown body '" + jd.parent + "'");
+    if (!attached.count(jd.parent))
+      fail(at + ".parent", "body '" + jd.parent + "' is not attached yet: list parent joints first");
+    if (!attached.insert(jd.child).second)
+      fail(at + ".child", "body '" + jd.child + "' already has a joint");
+  }
+  for (const auto& b : model.bodies)
+    if (!attached.count(b.name)) fail("bodies", "body '" + b.name + "' has no joint");
+
+  std::set<std::string> muscle_names;
+  for (std::size_t j = 0; j < model.muscles.size(); ++j) {
+    const auto& m = model.muscles[j];
+    const std::string at = indexed("muscles", j);
+    if (!muscle_names.insert(m.parameters.name).second)
+      fail(at + ".name", "duplicate muscle name '" + m.parameters.name + "'");
+    try {
+      muscles::validate(m.parameters);
+    } catch (const std::invalid_argument& e) {
+      fail(at, e.what());
+    }
+    if (m.moment_arms_m.size() != model.numJoints())
+      fail(at + ".moment_arms_m", "must have one entry per joint (the moment-arm matrix must be N x m)");
+    if (!m.moment_arms_m.allFinite()) fail(at + ".moment_arms_m", "must be finite");
+    if (!(m.length_at_zero_angles_m > 0.0) || !std::isfinite(m.length_at_zero_angles_m))
+      fail(at + ".length_at_zero_angles_m", "must be > 0");
+  }
+  if (!model.flat_outputs.empty()) {
+    const int expected = model.numMuscles() - model.numJoints();
+    if (static_cast<int>(model.flat_outputs.size()) != expected)
+      fail("flat_outputs", "E must have m - N = " + std::to_string(expected) + " rows (" +
+                               std::to_string(model.numMuscles()) + " muscles, " +
+                               std::to_string(model.numJoints()) + " joints), the file has " +
+                               std::to_string(model.flat_outputs.size()));
+    std::set<std::string> names;
+    for (std::size_t k = 0; k < model.flat_outputs.size(); ++k) {
+      const auto& y = model.flat_outputs[k];
+      if (!names.insert(y.name).second)
+        fail(indexed("flat_outputs", k) + ".name", "duplicate flat output name '" + y.name + "'");
+      if (y.weights.size() != model.numMuscles() || !y.weights.allFinite())
+        fail(indexed("flat_outputs", k) + ".weights", "must have one finite weight per muscle");
+    }
+  }
+}
+
+Eigen::MatrixXd ModelDescription::momentArmMatrix() const {
+  Eigen::MatrixXd a(numJoints(), numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) a.col(j) = muscles[j].moment_arms_m;
+  return a;
+}
+
+Eigen::MatrixXd ModelDescription::flatOutputMatrix() const {
+  Eigen::MatrixXd e(static_cast<Eigen::Index>(flat_outputs.size()), numMuscles());
+  for (std::size_t k = 0; k < flat_outputs.size(); ++k)
+    e.row(static_cast<Eigen::Index>(k)) = flat_outputs[k].weights.transpose();
+  return e;
+}
+
+int ModelDescription::muscleIndex(const std::string& n) const {
+  for (int j = 0; j < numMuscles(); ++j)
+    if (muscles[j].parameters.name == n) return j;
+  return -1;
+}
+
+int ModelDescription::jointIndex(const std::string& n) const {
+  for (int i = 0; i < numJoints(); ++i)
+    if (joints[i].name == n) return i;
+  return -1;
+}
+
+}  // namespace flatsos::plugin

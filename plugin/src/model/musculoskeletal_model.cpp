@@ -1,0 +1,194 @@
+#include "flatsos/plugin/io/model_file.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+
+#include <map>
+#include <stdexcept>
+
+namespace flatsos::plugin {
+
+namespace {
+
+SimTK::Vec3 to_vec3(const Eigen::Vector3d& v) { return SimTK::Vec3(v[0], v[1], v[2]); }
+
+SimTK::MassProperties mass_properties(const BodyDescription& b) {
+  const SimTK::Inertia about_com(to_vec3(b.principal_inertia_kg_m2), to_vec3(b.product_inertia_kg_m2));
+  // Simbody wants the inertia about the body origin (the joint): shift from the mass center.
+  const SimTK::Vec3 com = to_vec3(b.mass_center_m);
+  return SimTK::MassProperties(b.mass_kg, com, about_com.shiftFromMassCenter(com, b.mass_kg));
+}
+
+// Pin mobilizers rotate about their frames' z axis: orient both frames so z is the joint axis.
+SimTK::Rotation axis_frame(const Eigen::Vector3d& axis) {
+  return SimTK::Rotation(SimTK::UnitVec3(to_vec3(axis)), SimTK::ZAxis);
+}
+
+// An external joint torque given as a function of time (disturbances, tests).
+class JointTorqueImpl : public SimTK::Force::Custom::Implementation {
+ public:
+  JointTorqueImpl(SimTK::MobilizedBody joint, std::shared_ptr<const ExcitationSignal> torque)
+      : joint_(std::move(joint)), torque_(std::move(torque)) {}
+  void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>&, SimTK::Vector_<SimTK::Vec3>&,
+                 SimTK::Vector& mobility_forces) const override {
+    joint_.applyOneMobilityForce(s, 0, torque_->value(s.getTime()), mobility_forces);
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0.0; }
+  bool dependsOnlyOnPositions() const override { return false; }
+
+ private:
+  SimTK::MobilizedBody joint_;
+  std::shared_ptr<const ExcitationSignal> torque_;
+};
+
+}  // namespace
+
+void MusculoskeletalModel::addJointTorque(int joint, std::shared_ptr<const ExcitationSignal> torque) {
+  if (joint < 0 || joint >= numJoints()) throw std::invalid_argument("addJointTorque: no joint " + std::to_string(joint));
+  if (!torque) throw std::invalid_argument("addJointTorque: no torque signal");
+  SimTK::Force::Custom(forces_, new JointTorqueImpl(joints_[static_cast<std::size_t>(joint)], std::move(torque)));
+  system_.realizeTopology();
+  scratch_ = system_.getDefaultState();
+}
+
+MusculoskeletalModel::MusculoskeletalModel(ModelDescription description)
+    : description_(std::move(description)), matter_(system_), forces_(system_) {
+  validate(description_);
+  gravity_ = SimTK::Force::Gravity(forces_, matter_, to_vec3(description_.gravity_m_per_s2));
+
+  std::map<std::string, const BodyDescription*> bodies;
+  for (const auto& b : description_.bodies) bodies[b.name] = &b;
+  std::map<std::string, SimTK::MobilizedBody> built = {{"ground", matter_.Ground()}};
+  for (const auto& jd : description_.joints) {
+    const SimTK::Rotation r = axis_frame(jd.axis);
+    SimTK::MobilizedBody::Pin pin(built.at(jd.parent), SimTK::Transform(r, to_vec3(jd.location_in_parent_m)),
+                                  SimTK::Body::Rigid(mass_properties(*bodies.at(jd.child))),
+                                  SimTK::Transform(r, SimTK::Vec3(0)));
+    built[jd.child] = pin;
+    joints_.push_back(pin);
+  }
+
+  moment_arms_ = description_.momentArmMatrix();
+  zero_angle_lengths_.resize(numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) {
+    const auto& md = description_.muscles[j];
+    zero_angle_lengths_[j] = md.length_at_zero_angles_m;
+    MusclePath path;
+    path.length_at_zero_angles_m = md.length_at_zero_angles_m;
+    for (int i = 0; i < numJoints(); ++i)
+      if (md.moment_arms_m[i] != 0.0) path.moment_arms.push_back({joints_[i], md.moment_arms_m[i]});
+    muscles_.emplace_back(forces_, md.parameters, std::move(path));
+  }
+  system_.realizeTopology();
+  scratch_ = system_.getDefaultState();
+}
+
+std::unique_ptr<MusculoskeletalModel> MusculoskeletalModel::fromFile(const std::string& path) {
+  return std::make_unique<MusculoskeletalModel>(load_model_file(path));
+}
+
+void MusculoskeletalModel::checkSize(const Eigen::VectorXd& v, int n, const char* what) const {
+  if (v.size() != n)
+    throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(n) +
+                                " values, got " + std::to_string(v.size()));
+  if (!v.allFinite()) throw std::invalid_argument(std::string(what) + ": values must be finite");
+}
+
+Eigen::VectorXd MusculoskeletalModel::jointAngles(const SimTK::State& s) const {
+  Eigen::VectorXd q(numJoints());
+  for (int i = 0; i < numJoints(); ++i) q[i] = joints_[i].getOneQ(s, 0);
+  return q;
+}
+Eigen::VectorXd MusculoskeletalModel::jointSpeeds(const SimTK::State& s) const {
+  Eigen::VectorXd qd(numJoints());
+  for (int i = 0; i < numJoints(); ++i) qd[i] = joints_[i].getOneU(s, 0);
+  return qd;
+}
+void MusculoskeletalModel::setJointAngles(SimTK::State& s, const Eigen::VectorXd& q) const {
+  checkSize(q, numJoints(), "joint angles");
+  for (int i = 0; i < numJoints(); ++i) joints_[i].setOneQ(s, 0, q[i]);
+}
+void MusculoskeletalModel::setJointSpeeds(SimTK::State& s, const Eigen::VectorXd& qd) const {
+  checkSize(qd, numJoints(), "joint speeds");
+  for (int i = 0; i < numJoints(); ++i) joints_[i].setOneU(s, 0, qd[i]);
+}
+
+Eigen::VectorXd MusculoskeletalModel::activations(const SimTK::State& s) const {
+  Eigen::VectorXd v(numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) v[j] = muscles_[j].getActivation(s);
+  return v;
+}
+Eigen::VectorXd MusculoskeletalModel::tendonLengths(const SimTK::State& s) const {
+  Eigen::VectorXd v(numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) v[j] = muscles_[j].getTendonLength(s);
+  return v;
+}
+Eigen::VectorXd MusculoskeletalModel::tendonForces(const SimTK::State& s) const {
+  Eigen::VectorXd v(numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) v[j] = muscles_[j].getTendonForce(s);
+  return v;
+}
+Eigen::VectorXd MusculoskeletalModel::excitations(const SimTK::State& s) const {
+  Eigen::VectorXd v(numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) v[j] = muscles_[j].getExcitation(s);
+  return v;
+}
+void MusculoskeletalModel::setActivations(SimTK::State& s, const Eigen::VectorXd& a) const {
+  checkSize(a, numMuscles(), "activations");
+  for (int j = 0; j < numMuscles(); ++j) muscles_[j].setActivation(s, a[j]);
+}
+void MusculoskeletalModel::setTendonLengths(SimTK::State& s, const Eigen::VectorXd& ls) const {
+  checkSize(ls, numMuscles(), "tendon lengths");
+  for (int j = 0; j < numMuscles(); ++j) muscles_[j].setTendonLength(s, ls[j]);
+}
+void MusculoskeletalModel::setExcitations(SimTK::State& s, const Eigen::VectorXd& n) const {
+  checkSize(n, numMuscles(), "excitations");
+  for (int j = 0; j < numMuscles(); ++j) muscles_[j].setExcitation(s, n[j]);
+}
+
+Eigen::VectorXd MusculoskeletalModel::musculotendonLengths(const Eigen::VectorXd& q) const {
+  checkSize(q, numJoints(), "joint angles");
+  return zero_angle_lengths_ - moment_arms_.transpose() * q;
+}
+
+Eigen::VectorXd MusculoskeletalModel::muscleTorques(const Eigen::VectorXd& f) const {
+  checkSize(f, numMuscles(), "tendon forces");
+  return moment_arms_ * f;
+}
+
+SimTK::State& MusculoskeletalModel::scratch(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) const {
+  setJointAngles(scratch_, q);
+  setJointSpeeds(scratch_, qd);
+  system_.realize(scratch_, SimTK::Stage::Velocity);
+  return scratch_;
+}
+
+Eigen::MatrixXd MusculoskeletalModel::massMatrix(const Eigen::VectorXd& q) const {
+  const SimTK::State& s = scratch(q, Eigen::VectorXd::Zero(numJoints()));
+  SimTK::Matrix m;
+  matter_.calcM(s, m);
+  Eigen::MatrixXd out(numJoints(), numJoints());
+  for (int r = 0; r < numJoints(); ++r)
+    for (int c = 0; c < numJoints(); ++c)
+      out(r, c) = m(joints_[r].getFirstUIndex(s), joints_[c].getFirstUIndex(s));
+  return out;
+}
+
+Eigen::VectorXd MusculoskeletalModel::inverseDynamics(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                                      const Eigen::VectorXd& qdd) const {
+  checkSize(qdd, numJoints(), "joint accelerations");
+  const SimTK::State& s = scratch(q, qd);
+  SimTK::Vector udot(s.getNU(), 0.0);
+  for (int i = 0; i < numJoints(); ++i) udot[joints_[i].getFirstUIndex(s)] = qdd[i];
+  SimTK::Vector residual;
+  matter_.calcResidualForceIgnoringConstraints(s, SimTK::Vector(), gravity_.getBodyForces(s), udot,
+                                               residual);
+  Eigen::VectorXd tau(numJoints());
+  for (int i = 0; i < numJoints(); ++i) tau[i] = residual[joints_[i].getFirstUIndex(s)];
+  return tau;
+}
+
+double MusculoskeletalModel::mechanicalEnergy(const SimTK::State& s) const {
+  system_.realize(s, SimTK::Stage::Dynamics);
+  return system_.calcEnergy(s);
+}
+
+}  // namespace flatsos::plugin
