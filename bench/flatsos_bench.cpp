@@ -15,7 +15,8 @@
 #include <tuple>
 
 #include "example_support.hpp"
-#include "flatsos/planner/receding_horizon.hpp"
+#include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 
@@ -64,7 +65,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   const auto model = fp::MusculoskeletalModel::fromFile(model_path);
-  const fpl::FlatOutputMap flat(*model);
+  const fpl::FlatOutputMap flat(model);
+  fp::ModelWorkspace ws = flat.makeWorkspace();  // the planner's scratch, as a controller owns it
   json j;
   j["machine"] = {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}};
   j["repetitions"] = reps;
@@ -116,10 +118,10 @@ int main(int argc, char** argv) {
   {
     const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, ms0, ol);
     j["open_loop_check_301_points"] =
-        stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, plan.path, plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
+        stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, ws, plan.path, plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
     const fpl::Jet qj = plan.jointJet(1.3), yj = plan.flatOutputJet(1.3);
-    j["inverse_map_one_time"] = stats(repeat(reps * 20, [&] { flat.inverse(qj, yj); }), 1e6, "us");
-    j["inverse_dynamics_one_call"] = stats(repeat(reps * 50, [&] { flat.torque(qj.col(0), qj.col(1), qj.col(2)); }), 1e6, "us");
+    j["inverse_map_one_time"] = stats(repeat(reps * 20, [&] { flat.inverse(ws, qj, yj); }), 1e6, "us");
+    j["inverse_dynamics_one_call"] = stats(repeat(reps * 50, [&] { flat.torque(ws, qj.col(0), qj.col(1), qj.col(2)); }), 1e6, "us");
   }
 
   // ---- SLP and one RH step, at the first step of the RH scenario ----
@@ -127,7 +129,7 @@ int main(int argc, char** argv) {
   rh.target_q_rad = Eigen::Vector2d(80.0 * ex::kRadPerDeg, 80.0 * ex::kRadPerDeg);
   rh.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
   const Eigen::Vector2d q_rh(20.0 * ex::kRadPerDeg, 20.0 * ex::kRadPerDeg);
-  const fpl::RecedingHorizonStep first = fpl::plan_receding_horizon_step(flat, q_rh, Eigen::Vector2d::Zero(), rh);
+  const fpl::RecedingHorizonStep first = fpl::plan_receding_horizon_step(flat, ws, q_rh, Eigen::Vector2d::Zero(), rh);
   const Eigen::VectorXd B = fpl::slp_bound_vector(flat.Ctau(), first.tau_min, first.tau_max, rh.reserves_N);
   const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(flat.CY(), B); });
   const auto slp_exact = repeat(reps * 20, [&] { fpl::solve_slp(flat.CY(), B, fpl::SlpSolver::VertexEnumeration); });
@@ -148,18 +150,18 @@ int main(int argc, char** argv) {
   const Eigen::VectorXd q1 = after.col(0), qd1 = after.col(1);
   const Eigen::VectorXd alpha0 = first.alpha();
   fpl::RecedingHorizonOptions warm = rh;
-  warm.warm_start = &alpha0;
-  const auto cold_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, q1, qd1, rh); });
-  const auto warm_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, q1, qd1, warm); });
+  warm.warm_start = alpha0;
+  const auto cold_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, ws, q1, qd1, rh); });
+  const auto warm_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, ws, q1, qd1, warm); });
   fpl::RecedingHorizonOptions exact = rh;
   exact.solver = fpl::SlpSolver::VertexEnumeration;
-  const auto exact_t = repeat(reps * 5, [&] { fpl::plan_receding_horizon_step(flat, q1, qd1, exact); });
+  const auto exact_t = repeat(reps * 5, [&] { fpl::plan_receding_horizon_step(flat, ws, q1, qd1, exact); });
   j["rh_plan_step"] = {{"ipopt_cold", stats(cold_t, 1e3, "ms")},
                        {"ipopt_warm", stats(warm_t, 1e3, "ms")},
                        {"exact", stats(exact_t, 1e3, "ms")},
                        {"warm_over_cold_time", ex::median(warm_t) / ex::median(cold_t)},
-                       {"cold_iterations", fpl::plan_receding_horizon_step(flat, q1, qd1, rh).slp.iterations},
-                       {"warm_iterations", fpl::plan_receding_horizon_step(flat, q1, qd1, warm).slp.iterations}};
+                       {"cold_iterations", fpl::plan_receding_horizon_step(flat, ws, q1, qd1, rh).slp.iterations},
+                       {"warm_iterations", fpl::plan_receding_horizon_step(flat, ws, q1, qd1, warm).slp.iterations}};
 
   // ---- the closed-loop scenario ----
   SimTK::State rest = model->defaultState();
@@ -170,18 +172,26 @@ int main(int argc, char** argv) {
   std::vector<double> full_steps;
   // Accuracy of each variant: the largest joint-angle deviation over the run from the same
   // controller integrated by CPodes BDF at 1e-10 (same report times).
-  std::map<double, fpl::ClosedLoopResult> references;  // by observer gain
-  auto deviation_deg = [&](const fpl::ClosedLoopResult& run, const fpl::RecedingHorizonControllerOptions& options) {
-    auto it = references.find(options.disturbance_observer_gain);
+  std::map<double, fp::ClosedLoopResult> references;  // by observer gain
+  const auto loop_options = [](fp::IntegratorKind kind, double accuracy) {
+    fp::ClosedLoopOptions o;
+    o.duration_s = 2.0;
+    o.integrator = kind;
+    o.accuracy = accuracy;
+    return o;
+  };
+  auto deviation_deg = [&](const fp::ClosedLoopResult& run, const fpl::RecedingHorizonControllerOptions& options) {
+    auto it = references.find(options.disturbance_observer_gain_per_s);
     if (it == references.end()) {
       fpl::RecedingHorizonController reference_controller(flat, options);
       it = references
-               .emplace(options.disturbance_observer_gain,
-                        fpl::simulate_closed_loop(reference_controller, rest, 2.0, 1e-10, 5, ex::kRadPerDeg,
-                                                  fp::IntegratorKind::CPodesBdf))
+               .emplace(options.disturbance_observer_gain_per_s,
+                        fpl::run_receding_horizon(reference_controller, rest,
+                                                  loop_options(fp::IntegratorKind::CPodesBdf, 1e-10))
+                            .loop)
                .first;
     }
-    const fpl::ClosedLoopResult& reference = it->second;
+    const fp::ClosedLoopResult& reference = it->second;
     double worst = 0.0;
     for (std::size_t r = 0; r < std::min(run.states.rows.size(), reference.states.rows.size()); ++r)
       for (std::size_t c : {std::size_t{1}, std::size_t{3}})
@@ -191,31 +201,32 @@ int main(int argc, char** argv) {
   struct Variant {
     const char* name;
     fp::IntegratorKind kind;
-    double accuracy, observer_gain;
+    double accuracy, observer_gain_per_s;
   };
   for (const Variant& v : {Variant{"rosenbrock_1e-5", fp::IntegratorKind::MuscleRosenbrock, 1e-5, 0.0},
-                           Variant{"rosenbrock_1e-5_observer", fp::IntegratorKind::MuscleRosenbrock, 1e-5, 1.0},
+                           Variant{"rosenbrock_1e-5_observer", fp::IntegratorKind::MuscleRosenbrock, 1e-5, 20.0},
                            Variant{"rosenbrock_1e-6", fp::IntegratorKind::MuscleRosenbrock, 1e-6, 0.0},
                            Variant{"rosenbrock_1e-7", fp::IntegratorKind::MuscleRosenbrock, 1e-7, 0.0},
                            Variant{"bdf_1e-8", fp::IntegratorKind::CPodesBdf, 1e-8, 0.0},
                            Variant{"rkm_1e-8", fp::IntegratorKind::RungeKuttaMerson, 1e-8, 0.0}}) {
     std::vector<double> rtf, controller_share;
     fpl::RecedingHorizonControllerOptions vo = co;
-    vo.disturbance_observer_gain = v.observer_gain;
+    vo.disturbance_observer_gain_per_s = v.observer_gain_per_s;
     for (int i = 0; i < std::max(3, reps / 5); ++i) {
       fpl::RecedingHorizonController controller(flat, vo);
-      const auto run = fpl::simulate_closed_loop(controller, rest, 2.0, v.accuracy, 5, ex::kRadPerDeg, v.kind);
+      const fpl::RecedingHorizonRun rh_run = fpl::run_receding_horizon(controller, rest, loop_options(v.kind, v.accuracy));
+      const fp::ClosedLoopResult& run = rh_run.loop;
       rtf.push_back(run.real_time_factor);
       double controller_s = 0.0;
       for (const auto& rec : controller.history()) {
-        controller_s += rec.step_seconds;
-        if (v.kind == fp::IntegratorKind::MuscleRosenbrock && v.accuracy == 1e-5 && v.observer_gain == 0.0)
-          full_steps.push_back(rec.step_seconds);
+        controller_s += rec.wall_seconds;
+        if (v.kind == fp::IntegratorKind::MuscleRosenbrock && v.accuracy == 1e-5 && v.observer_gain_per_s == 0.0)
+          full_steps.push_back(rec.wall_seconds);
       }
       controller_share.push_back(controller_s / run.wall_seconds);
       closed[v.name]["integrator_steps"] = run.integrator_steps;
       closed[v.name]["integrator_attempts"] = run.integrator_attempts;
-      closed[v.name]["settling_time_s"] = run.settling_time_s;
+      closed[v.name]["settling_time_s"] = rh_run.settling_time_s;
       closed[v.name]["max_deviation_from_bdf_1e-10_deg"] = deviation_deg(run, vo);
     }
     closed[v.name]["real_time_factor"] = stats(rtf, 1.0, "simulated s per wall s");

@@ -5,13 +5,13 @@
 // OUT/summary.json.
 #include <CLI/CLI.hpp>
 
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 
 #include "example_support.hpp"
-#include "flatsos/planner/receding_horizon.hpp"
+#include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 
 namespace fp = flatsos::plugin;
@@ -37,10 +37,10 @@ int main(int argc, char** argv) {
   app.add_option("--reserves", reserves, "minimum tendon forces, N (one for all or one per muscle)")->delimiter(',')->capture_default_str();
   app.add_option("--slp-solver", solver, "exact (vertex enumeration, tested against Ipopt) or ipopt")
       ->capture_default_str()->check(CLI::IsMember({"exact", "ipopt"}));
-  app.add_option("--observer-gain", options.disturbance_observer_gain,
-                 "disturbance observer gain in [0, 2]: integrates the plan's prediction error so that a model "
-                 "mismatch leaves no offset (1 recommended; 0: the paper's controller)")
-      ->capture_default_str()->check(CLI::Range(0.0, 2.0));
+  app.add_option("--observer-gain-per-s", options.disturbance_observer_gain_per_s,
+                 "disturbance observer gain in [0, 40] 1/s: integrates the plan's prediction error so that a model "
+                 "mismatch leaves no offset (20 recommended; 0: the paper's controller)")
+      ->capture_default_str()->check(CLI::Range(0.0, 40.0));
   // Defaults measured on this scenario against CPodes BDF at 1e-10 (README, Benchmarks): the
   // Rosenbrock method at 1e-5 stays within 8e-4 deg of it (RTF ~70); BDF and RKM at 1e-8.
   app.add_option("--accuracy", accuracy,
@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
 
   try {
     const auto model = fp::MusculoskeletalModel::fromFile(model_path);
-    const fpl::FlatOutputMap flat(*model);
+    const fpl::FlatOutputMap flat(model);
     const int n = model->numJoints(), m = model->numMuscles();
     ex::require_count(q0_deg, n, "--q0-deg");
     ex::require_count(target_deg, n, "--target-deg");
@@ -66,20 +66,23 @@ int main(int argc, char** argv) {
     options.plan.solver = solver == "ipopt" ? fpl::SlpSolver::Ipopt : fpl::SlpSolver::VertexEnumeration;
     if (options.control_period_s > options.plan.horizon_s)
       throw CLI::ValidationError("--period", "must not exceed --horizon");
+    const fp::IntegratorKind kind = fp::integrator_from_name(integrator);
+    if (accuracy == 0.0) accuracy = kind == fp::IntegratorKind::MuscleRosenbrock ? 1e-5 : 1e-8;
 
     SimTK::State s = model->defaultState();
     fpl::set_minimum_effort_rest_state(flat, s, ex::to_vector(q0_deg) * ex::kRadPerDeg, options.plan.reserves_N);
     fpl::RecedingHorizonController controller(flat, options);
-    const fp::IntegratorKind kind = fp::integrator_from_name(integrator);
-    if (accuracy == 0.0) accuracy = kind == fp::IntegratorKind::MuscleRosenbrock ? 1e-5 : 1e-8;
-
-    const fpl::ClosedLoopResult run = fpl::simulate_closed_loop(
-        controller, s, duration, accuracy, 5, ex::kRadPerDeg, kind);
+    fp::ClosedLoopOptions loop_options;
+    loop_options.duration_s = duration;
+    loop_options.integrator = kind;
+    loop_options.accuracy = accuracy;
+    const fpl::RecedingHorizonRun rh_run = fpl::run_receding_horizon(controller, s, loop_options, ex::kRadPerDeg);
+    const fp::ClosedLoopResult& run = rh_run.loop;
     std::vector<double> plan_times, step_times;
-    for (const auto& rec : controller.history()) plan_times.push_back(rec.plan_seconds), step_times.push_back(rec.step_seconds);
+    for (const auto& rec : controller.history()) plan_times.push_back(rec.plan_seconds), step_times.push_back(rec.wall_seconds);
     const int steps = static_cast<int>(controller.history().size());
     const bool finite = run.finite;
-    const double settling = run.settling_time_s;
+    const double settling = rh_run.settling_time_s;
     const Eigen::VectorXd target = options.plan.target_q_rad;
     const Eigen::VectorXd q_final = model->jointAngles(run.final_state) / ex::kRadPerDeg;
     nlohmann::json summary;
@@ -89,7 +92,7 @@ int main(int argc, char** argv) {
     summary["settling_time_s"] = settling >= 0.0 ? nlohmann::json(settling) : nlohmann::json(nullptr);
     summary["steps"] = steps;
     summary["plan_seconds"] = {{"median", ex::median(plan_times)}, {"max", *std::max_element(plan_times.begin(), plan_times.end())}};
-    summary["step_seconds"] = {{"median", ex::median(step_times)}, {"max", *std::max_element(step_times.begin(), step_times.end())}};
+    summary["control_step_seconds"] = {{"median", ex::median(step_times)}, {"max", *std::max_element(step_times.begin(), step_times.end())}};
     summary["wall_seconds"] = run.wall_seconds;
     summary["real_time_factor"] = run.real_time_factor;
     summary["excitation_clamps"] = controller.clampedSamples();
@@ -100,7 +103,7 @@ int main(int argc, char** argv) {
     summary["integrator_steps"] = run.integrator_steps;
     summary["integrator_attempts"] = run.integrator_attempts;
     summary["slp_solver"] = solver;
-    summary["observer_gain"] = options.disturbance_observer_gain;
+    summary["observer_gain_per_s"] = options.disturbance_observer_gain_per_s;
     summary["horizon_s"] = options.plan.horizon_s;
     summary["control_period_s"] = options.control_period_s;
     summary["reserves_N"] = reserves;
@@ -109,7 +112,7 @@ int main(int argc, char** argv) {
     fp::StoTable sim = run.states;
     sim.metadata = {{"success", finite ? "true" : "false"}, {"integrator_accuracy", ex::format(accuracy)}};
     fp::write_sto(out_dir + "/simulation.sto", sim);
-    fp::write_sto(out_dir + "/predictions.sto", run.predictions);
+    fp::write_sto(out_dir + "/predictions.sto", rh_run.predictions);
     ex::write_json(out_dir + "/summary.json", summary);
     std::cout << "arm_receding_horizon: " << steps << " steps, final q = [" << q_final.transpose() << "] deg, settling "
               << (settling >= 0 ? ex::format(settling) + " s" : std::string("never")) << ", plan failures "

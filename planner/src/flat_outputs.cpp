@@ -91,12 +91,19 @@ void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::Matr
   }
 }
 
-FlatOutputMap::FlatOutputMap(const plugin::MusculoskeletalModel& model)
-    : FlatOutputMap(model, model.description().flatOutputMatrix()) {}
+namespace {
+const plugin::MusculoskeletalModel& require_model(const std::shared_ptr<const plugin::MusculoskeletalModel>& model) {
+  if (!model) throw std::invalid_argument("flat-output map: no model (null pointer)");
+  return *model;
+}
+}  // namespace
 
-FlatOutputMap::FlatOutputMap(const plugin::MusculoskeletalModel& model, Eigen::MatrixXd E)
-    : model_(model), A_(model.momentArmMatrix()), E_(std::move(E)) {
-  if (E_.rows() == 0) throw FlatnessError("the model '" + model.description().name + "' defines no flat_outputs (E)");
+FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model)
+    : FlatOutputMap(model, require_model(model).description().flatOutputMatrix()) {}
+
+FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E)
+    : model_(std::move(model)), A_(require_model(model_).momentArmMatrix()), E_(std::move(E)) {
+  if (E_.rows() == 0) throw FlatnessError("the model '" + model_->description().name + "' defines no flat_outputs (E)");
   checkAssumption1(A_, E_);
   C_.resize(numMuscles(), numMuscles());
   C_ << A_, E_;
@@ -105,19 +112,29 @@ FlatOutputMap::FlatOutputMap(const plugin::MusculoskeletalModel& model, Eigen::M
   CY_ = Cinv.rightCols(numFlatOutputs());
 }
 
+Eigen::VectorXd FlatOutputMap::torque(plugin::ModelWorkspace& ws, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                      const Eigen::VectorXd& qdd) const {
+  return model_->inverseDynamics(ws, q, qd, qdd);
+}
+
 Eigen::VectorXd FlatOutputMap::torque(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                       const Eigen::VectorXd& qdd) const {
-  return model_.inverseDynamics(q, qd, qdd);
+  return model_->inverseDynamics(q, qd, qdd);
 }
 
 TorqueJet FlatOutputMap::torqueJet(const Jet& q_jet) const {
+  plugin::ModelWorkspace ws = makeWorkspace();
+  return torqueJet(ws, q_jet);
+}
+
+TorqueJet FlatOutputMap::torqueJet(plugin::ModelWorkspace& ws, const Jet& q_jet) const {
   if (q_jet.rows() != numJoints() || q_jet.cols() < 3)
     throw std::invalid_argument("joint jet must be N x (3..5): q, qd, qdd[, q''', q'''']");
   TorqueJet out;
   out.tau = Eigen::MatrixXd::Zero(numJoints(), 3);
   for (int k = -4; k <= 4; ++k) {
     const double s = k * kJetStep_s;
-    const Eigen::VectorXd t = torque(taylor(q_jet, 0, s), taylor(q_jet, 1, s), taylor(q_jet, 2, s));
+    const Eigen::VectorXd t = torque(ws, taylor(q_jet, 0, s), taylor(q_jet, 1, s), taylor(q_jet, 2, s));
     if (k == 0) out.tau.col(0) = t;
     out.tau.col(1) += kD1[k + 4] / kJetStep_s * t;
     out.tau.col(2) += kD2[k + 4] / (kJetStep_s * kJetStep_s) * t;
@@ -125,8 +142,13 @@ TorqueJet FlatOutputMap::torqueJet(const Jet& q_jet) const {
   return out;
 }
 
+MusclePoint FlatOutputMap::inverse(plugin::ModelWorkspace& ws, const Jet& q_jet, const Jet& Y_jet) const {
+  return inverseFromTorque(q_jet, torqueJet(ws, q_jet), Y_jet);
+}
+
 MusclePoint FlatOutputMap::inverse(const Jet& q_jet, const Jet& Y_jet) const {
-  return inverseFromTorque(q_jet, torqueJet(q_jet), Y_jet);
+  plugin::ModelWorkspace ws = makeWorkspace();
+  return inverse(ws, q_jet, Y_jet);
 }
 
 MusclePoint FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, const Jet& Y_jet) const {
@@ -137,7 +159,7 @@ MusclePoint FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& 
   const Eigen::VectorXd F = Ctau_ * tj.tau.col(0) + CY_ * col(Y_jet, 0);
   const Eigen::VectorXd dF = Ctau_ * tj.tau.col(1) + CY_ * col(Y_jet, 1);
   const Eigen::VectorXd ddF = Ctau_ * tj.tau.col(2) + CY_ * col(Y_jet, 2);
-  const Eigen::VectorXd L = model_.musculotendonLengths(q_jet.col(0));
+  const Eigen::VectorXd L = model_->musculotendonLengths(q_jet.col(0));
   const Eigen::VectorXd dL = -A_.transpose() * col(q_jet, 1);
   const Eigen::VectorXd ddL = -A_.transpose() * col(q_jet, 2);
 
@@ -151,7 +173,7 @@ MusclePoint FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& 
   p.tendon_force_rate_N_per_s = dF;
 
   for (int j = 0; j < m; ++j) {
-    const fm::MuscleParameters& mp = model_.muscle(j).getParameters();
+    const fm::MuscleParameters& mp = model_->muscle(j).getParameters();
     std::string& why = p.domain_violation[static_cast<std::size_t>(j)];
     if (!(F[j] > 0.0)) {
       why = "slack tendon (planned tendon force " + std::to_string(F[j]) + " N <= 0)";
@@ -199,6 +221,11 @@ MusclePoint FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& 
 }
 
 FlatState FlatOutputMap::forward(const MuscleState& s) const {
+  plugin::ModelWorkspace ws = makeWorkspace();
+  return forward(ws, s);
+}
+
+FlatState FlatOutputMap::forward(plugin::ModelWorkspace& ws, const MuscleState& s) const {
   const int n = numJoints(), m = numMuscles();
   auto check = [](const Eigen::VectorXd& v, int size, const char* what) {
     if (v.size() != size || !v.allFinite())
@@ -210,25 +237,25 @@ FlatState FlatOutputMap::forward(const MuscleState& s) const {
   check(s.tendon_length_m, m, "tendon lengths");
   check(s.activation, m, "activations");
   Eigen::VectorXd F(m), dF(m);
-  const Eigen::VectorXd L = model_.musculotendonLengths(s.q_rad);
+  const Eigen::VectorXd L = model_->musculotendonLengths(s.q_rad);
   const Eigen::VectorXd dL = -A_.transpose() * s.qd_rad_per_s;
   for (int j = 0; j < m; ++j) {
-    const fm::MuscleParameters& mp = model_.muscle(j).getParameters();
+    const fm::MuscleParameters& mp = model_->muscle(j).getParameters();
     F[j] = fm::tendon_force(mp, s.tendon_length_m[j]);
     const double dls = fm::tendon_length_derivative(mp, s.tendon_length_m[j], s.activation[j], L[j], dL[j]);
     dF[j] = fm::tendon_force_derivative(mp, s.tendon_length_m[j]) * dls;
   }
   const Eigen::VectorXd tau = A_ * F, dtau = A_ * dF;
-  const Eigen::MatrixXd M = model_.massMatrix(s.q_rad);
+  const Eigen::MatrixXd M = model_->massMatrix(ws, s.q_rad);
   const Eigen::LDLT<Eigen::MatrixXd> Minv(M);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
-  const Eigen::VectorXd qdd = Minv.solve(tau - torque(s.q_rad, s.qd_rad_per_s, zero));
+  const Eigen::VectorXd qdd = Minv.solve(tau - torque(ws, s.q_rad, s.qd_rad_per_s, zero));
   // dtau = d/dt ID(q, qd, qdd) = [terms with q''' = 0] + M q'''.
   Jet jet = Eigen::MatrixXd::Zero(n, 4);
   jet.col(0) = s.q_rad;
   jet.col(1) = s.qd_rad_per_s;
   jet.col(2) = qdd;
-  const Eigen::VectorXd dtau0 = torqueJet(jet).tau.col(1);
+  const Eigen::VectorXd dtau0 = torqueJet(ws, jet).tau.col(1);
   FlatState out;
   out.q = jet;
   out.q.col(3) = Minv.solve(dtau - dtau0);

@@ -1,18 +1,15 @@
 #include "flatsos/planner/motion_planner.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 #include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
 void require(const Eigen::VectorXd& v, int size, const std::string& what) {
   if (v.size() != size) throw std::invalid_argument(what + ": expected " + std::to_string(size) + " values, got " + std::to_string(v.size()));
   if (!v.allFinite()) throw std::invalid_argument(what + ": values must be finite (NaN or Inf given)");
@@ -33,15 +30,15 @@ Jet polynomial_jet(const std::vector<Polynomial>& polys, double t, int orders) {
 
 Jet OpenLoopPlan::flatOutputJet(double t) const { return polynomial_jet(Y, t, 3); }
 
-PlanCheck check_plan(const FlatOutputMap& flat, const JointPath& path, const std::vector<Polynomial>& Y,
-                     const Eigen::VectorXd& reserves, int points) {
+PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                     const std::vector<Polynomial>& Y, const Eigen::VectorXd& reserves, int points) {
   if (points < 2) throw std::invalid_argument("plan check: need at least 2 points");
   PlanCheck c;
   c.points = points;
   c.min_tendon_force_N = c.min_reserve_margin_N = c.min_activation = c.min_excitation = 1e300;
   c.max_activation = c.max_excitation = -1e300;
   const double h = path.duration_s / (points - 1);
-  const std::vector<TorqueJet> jets = flat.torqueJetsOnGrid([&](double t) { return path.jet(t, 3); }, 0.0, h, points);
+  const std::vector<TorqueJet> jets = flat.torqueJetsOnGrid(workspace, [&](double t) { return path.jet(t, 3); }, 0.0, h, points);
   for (int i = 0; i < points; ++i) {
     const double t = h * i;
     const MusclePoint mp = flat.inverseFromTorque(path.jet(t, 5), jets[static_cast<std::size_t>(i)], polynomial_jet(Y, t, 3));
@@ -72,7 +69,7 @@ PlanCheck check_plan(const FlatOutputMap& flat, const JointPath& path, const std
 }
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& o) {
-  const auto t_setup = Clock::now();
+  const Stopwatch setup;
   const int n = flat.numJoints(), m = flat.numMuscles(), p = flat.numFlatOutputs();
   if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s)) throw std::invalid_argument("open-loop plan: duration T must be > 0 s");
   require(o.target_q_rad, n, "target joint angles");
@@ -90,18 +87,19 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
                                   std::to_string(initial.tendon_length_m[j]) + " m <= slack length " +
                                   std::to_string(mp.tendon_slack_length_m) + " m): flat outputs need taut tendons");
   }
-  const FlatState y0 = flat.forward(initial);  // validates q, qd sizes too
+  plugin::ModelWorkspace workspace = flat.makeWorkspace();
+  const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
   OpenLoopPlan plan;
   Eigen::MatrixXd terminal = Eigen::MatrixXd::Zero(n, 5);
   terminal.col(0) = o.target_q_rad;
   plan.path = fit_joint_path(o.duration_s, y0.q, terminal);
-  plan.torque = build_torque_model(flat, plan.path, o.torque);
+  plan.torque = build_torque_model(flat, workspace, plan.path, o.torque);
   FlatOutputBoundary bc;
   bc.initial = y0.Y;                          // Y(0), dY(0)
   bc.terminal = Eigen::MatrixXd::Zero(p, 2);  // dY(T) = ddY(T) = 0
   bc.terminal_first_order = 1;
-  const double before_sos = seconds_since(t_setup);
+  const double before_sos = setup.seconds();
   plan.sos = solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos);
   plan.setup_seconds = before_sos + plan.sos.setup_seconds;
   plan.solve_seconds = plan.sos.solve_seconds;
@@ -111,9 +109,9 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
   if (plan.status != SolveStatus::Solved) return plan;
   plan.Y = plan.sos.Y;
 
-  const auto t_check = Clock::now();
-  plan.check = check_plan(flat, plan.path, plan.Y, o.reserves_N, o.check_points);
-  plan.check_seconds = seconds_since(t_check);
+  const Stopwatch check;
+  plan.check = check_plan(flat, workspace, plan.path, plan.Y, o.reserves_N, o.check_points);
+  plan.check_seconds = check.seconds();
   if (plan.check.min_reserve_margin_N < -1e-6) {
     plan.status = SolveStatus::Failed;
     plan.message = "the plan violates a tendon-force reserve on the check grid by " +
@@ -128,16 +126,30 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
   return plan;
 }
 
-RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
-                                               const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
-  const auto t0 = Clock::now();
+void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
   const int n = flat.numJoints();
   if (!(o.horizon_s > 0.0) || !std::isfinite(o.horizon_s)) throw std::invalid_argument("RH step: horizon must be > 0 s");
   if (o.grid_points < 2) throw std::invalid_argument("RH step: need at least 2 grid points");
-  require(q, n, "joint angles");
-  require(qd, n, "joint speeds");
   require(o.target_q_rad, n, "target joint angles");
   require_reserves(o.reserves_N, flat.numMuscles());
+  if (o.torque_offset_N_m.size() > 0) require(o.torque_offset_N_m, n, "torque offset");
+  if (o.warm_start) require(*o.warm_start, flat.numFlatOutputs(), "SLP warm start");
+}
+
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
+                                               const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
+  plugin::ModelWorkspace workspace = flat.makeWorkspace();
+  return plan_receding_horizon_step(flat, workspace, q, qd, o);
+}
+
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                               const RecedingHorizonOptions& o) {
+  const Stopwatch wall;
+  const int n = flat.numJoints();
+  validate(o, flat);
+  require(q, n, "joint angles");
+  require(qd, n, "joint speeds");
 
   RecedingHorizonStep step;
   Eigen::MatrixXd initial(n, 2), terminal = Eigen::MatrixXd::Zero(n, 2);
@@ -145,12 +157,11 @@ RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const 
   terminal.col(0) = o.target_q_rad;
   step.path = fit_joint_path(o.horizon_s, initial, terminal);
   const bool offset = o.torque_offset_N_m.size() > 0;
-  if (offset) require(o.torque_offset_N_m, n, "torque offset");
   step.tau_min = Eigen::VectorXd::Constant(n, 1e300);
   step.tau_max = Eigen::VectorXd::Constant(n, -1e300);
   for (int i = 0; i < o.grid_points; ++i) {
     const Jet j = step.path.jet(o.horizon_s * i / (o.grid_points - 1), 3);
-    Eigen::VectorXd tau = flat.torque(j.col(0), j.col(1), j.col(2));
+    Eigen::VectorXd tau = flat.torque(workspace, j.col(0), j.col(1), j.col(2));
     if (offset) tau -= o.torque_offset_N_m;
     step.tau_min = step.tau_min.cwiseMin(tau);
     step.tau_max = step.tau_max.cwiseMax(tau);
@@ -159,7 +170,7 @@ RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const 
   step.slp = solve_slp(flat.CY(), B, o.solver, o.warm_start);
   step.status = step.slp.status;
   step.message = step.slp.message;
-  step.seconds = seconds_since(t0);
+  step.wall_seconds = wall.seconds();
   return step;
 }
 

@@ -1,6 +1,8 @@
 #include "flatsos/planner/planned_excitation.hpp"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace flatsos::planner {
 
@@ -8,38 +10,65 @@ namespace {
 class MuscleOfPlan final : public plugin::ExcitationSignal {
  public:
   MuscleOfPlan(std::shared_ptr<const PlannedExcitation> plan, int muscle) : plan_(std::move(plan)), muscle_(muscle) {}
-  double value(double time_s) const override { return plan_->at(time_s).excitation[muscle_]; }
+  double value(double time_s) const override { return plan_->excitation(muscle_, time_s); }
 
  private:
-  std::shared_ptr<const PlannedExcitation> plan_;
+  std::shared_ptr<const PlannedExcitation> plan_;  // keeps the plan, its map and its model alive
   int muscle_;
 };
 }  // namespace
 
-std::shared_ptr<PlannedExcitation> PlannedExcitation::create(const FlatOutputMap& flat, JointPath path,
-                                                             std::vector<Polynomial> Y, double start_time_s) {
-  return std::shared_ptr<PlannedExcitation>(new PlannedExcitation(flat, std::move(path), std::move(Y), start_time_s));
+std::shared_ptr<const PlannedExcitation> PlannedExcitation::create(FlatOutputMap flat, JointPath path,
+                                                                   std::vector<Polynomial> Y, double start_time_s) {
+  if (static_cast<int>(Y.size()) != flat.numFlatOutputs())
+    throw std::invalid_argument("planned excitation: " + std::to_string(Y.size()) + " flat-output polynomials for " +
+                                std::to_string(flat.numFlatOutputs()) + " flat outputs");
+  if (static_cast<int>(path.q.size()) != flat.numJoints())
+    throw std::invalid_argument("planned excitation: the joint path has " + std::to_string(path.q.size()) +
+                                " joints, the model " + std::to_string(flat.numJoints()));
+  return std::shared_ptr<const PlannedExcitation>(
+      new PlannedExcitation(std::move(flat), std::move(path), std::move(Y), start_time_s));
 }
 
-PlannedExcitation::PlannedExcitation(const FlatOutputMap& flat, JointPath path, std::vector<Polynomial> Y,
-                                     double start_time_s)
-    : flat_(flat), path_(std::move(path)), Y_(std::move(Y)), start_time_s_(start_time_s) {}
+PlannedExcitation::PlannedExcitation(FlatOutputMap flat, JointPath path, std::vector<Polynomial> Y, double start_time_s)
+    : flat_(std::move(flat)),
+      path_(std::move(path)),
+      Y_(std::move(Y)),
+      start_time_s_(start_time_s),
+      workspace_(flat_.makeWorkspace()) {}
 
-const MusclePoint& PlannedExcitation::at(double time_s) const {
+const MusclePoint& PlannedExcitation::evaluateLocked(double time_s) const {
   if (time_s != cached_time_) {
     const double t = std::clamp(time_s - start_time_s_, 0.0, path_.duration_s);
     Jet yj(static_cast<Eigen::Index>(Y_.size()), 3);
     for (std::size_t l = 0; l < Y_.size(); ++l)
       for (int k = 0; k < 3; ++k) yj(static_cast<Eigen::Index>(l), k) = Y_[l].derivativeAt(t, k);
-    cached_ = flat_.inverse(path_.jet(t, 5), yj);
+    cached_ = flat_.inverse(workspace_, path_.jet(t, 5), yj);
     cached_time_ = time_s;
     ++evaluations_;
   }
   return cached_;
 }
 
+MusclePoint PlannedExcitation::at(double time_s) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return evaluateLocked(time_s);
+}
+
+double PlannedExcitation::excitation(int muscle, double time_s) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return evaluateLocked(time_s).excitation[muscle];
+}
+
 std::shared_ptr<const plugin::ExcitationSignal> PlannedExcitation::signal(int muscle) const {
+  if (muscle < 0 || muscle >= flat_.numMuscles())
+    throw std::out_of_range("planned excitation: no muscle " + std::to_string(muscle));
   return std::make_shared<MuscleOfPlan>(shared_from_this(), muscle);
+}
+
+int PlannedExcitation::evaluations() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return evaluations_;
 }
 
 }  // namespace flatsos::planner

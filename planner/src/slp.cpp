@@ -1,12 +1,13 @@
 #include "flatsos/planner/slp.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <stdexcept>
 
 #include <Eigen/Dense>
+
+#include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner {
 
@@ -74,8 +75,8 @@ Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::V
 }
 
 SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
-                    const Eigen::VectorXd* warm_start) {
-  const auto t0 = std::chrono::steady_clock::now();
+                    const std::optional<Eigen::VectorXd>& warm_start) {
+  const Stopwatch wall;
   const Eigen::VectorXd start = slp_appendix_solution(CY, B);  // also validates
   SlpResult r;
   if (solver == SlpSolver::VertexEnumeration) {
@@ -93,7 +94,7 @@ SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolv
     if (warm_start && (warm_start->size() != p || !warm_start->allFinite()))
       throw std::invalid_argument("SLP: warm start must have " + std::to_string(p) + " finite entries");
     LinearProgramOptions o;
-    o.start = warm_start ? warm_start : &start;
+    o.start = warm_start ? *warm_start : start;
     const LinearProgramResult lr = solve_linear_program(lp, o);
     r.iterations = lr.iterations;
     const double scale = 1.0 + B.cwiseAbs().maxCoeff();
@@ -110,7 +111,7 @@ SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolv
     }
   }
   r.cost_N = r.alpha.sum();
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.wall_seconds = wall.seconds();
   return r;
 }
 

@@ -248,7 +248,7 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
   // reported optimum is Ipopt's.
   auto ipopt_round = [&](int round) -> bool {
     LinearProgramOptions lpo;
-    lpo.start = round > 0 || o.exact_exchange ? &theta : nullptr;
+    if (round > 0 || o.exact_exchange) lpo.start = theta;
     const LinearProgramResult lr = solve_linear_program(lp, lpo);
     result.ipopt_iterations += lr.iterations;
     ++result.ipopt_calls;

@@ -7,8 +7,8 @@
 
 namespace flatsos::planner {
 
-
-TorqueModel build_torque_model(const FlatOutputMap& flat, const JointPath& path, const TorqueModelOptions& o) {
+TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                               const TorqueModelOptions& o) {
   if (o.pieces < 1) throw std::invalid_argument("torque model: pieces K must be >= 1");
   if (o.degree < 0) throw std::invalid_argument("torque model: degree r must be >= 0");
   if (o.samples_per_piece < 2 || o.samples_per_piece < o.degree + 1)
@@ -18,7 +18,7 @@ TorqueModel build_torque_model(const FlatOutputMap& flat, const JointPath& path,
   const double T = path.duration_s;
   auto tau_at = [&](double t) {
     const Jet j = path.jet(t, 3);
-    return flat.torque(j.col(0), j.col(1), j.col(2));
+    return flat.torque(workspace, j.col(0), j.col(1), j.col(2));
   };
 
   TorqueModel model;

@@ -15,15 +15,19 @@ expect 1 "bodies: must not be empty" -- "$ol" --model "$tmp/bad.json" --out "$tm
 expect 1 "infeasible" -- "$ol" --pieces 1 --degree 0 --out "$tmp/box"
 grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box summary lacks the status"; fail=1; }
 [[ ! -e "$tmp/box/simulation.sto" ]] || { echo "FAILED: a failed plan left a simulation"; fail=1; }
+# The open-loop simulation's integrator is chosen and recorded like the other programs'.
+expect 2 "--integrator" -- "$ol" --integrator euler --out "$tmp/o"
+expect 0 "simulated open loop" -- "$ol" --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
+grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
 expect 0 "--horizon" -- "$rh" --help
 expect 2 "--period" -- "$rh" --period 1.0 --horizon 0.5 --out "$tmp/o"
 expect 2 "--slp-solver" -- "$rh" --slp-solver simplex --out "$tmp/o"
 expect 2 "--q0-deg" -- "$rh" --q0-deg 1,2,3 --out "$tmp/o"
 expect 2 "--integrator" -- "$rh" --integrator euler --out "$tmp/o"
-expect 2 "--observer-gain" -- "$rh" --observer-gain 3 --out "$tmp/o"
+expect 2 "--observer-gain-per-s" -- "$rh" --observer-gain-per-s 50 --out "$tmp/o"
 expect 0 "settling" -- "$rh" --duration 0.2 --out "$tmp/rh"
 grep -q '"integrator_accuracy": 1e-05' "$tmp/rh/summary.json" || { echo "FAILED: rosenbrock default accuracy not 1e-5"; fail=1; }
-expect 0 "settling" -- "$rh" --duration 0.1 --integrator bdf --observer-gain 1 --out "$tmp/rhb"
+expect 0 "settling" -- "$rh" --duration 0.1 --integrator bdf --observer-gain-per-s 20 --out "$tmp/rhb"
 grep -q '"integrator_accuracy": 1e-08' "$tmp/rhb/summary.json" || { echo "FAILED: bdf default accuracy not 1e-8"; fail=1; }
 for f in simulation.sto predictions.sto summary.json; do
   [[ -s "$tmp/rh/$f" ]] || { echo "FAILED: $f missing"; fail=1; }

@@ -11,7 +11,7 @@
 
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
-#include "flatsos/planner/receding_horizon.hpp"
+#include "rh_scenario.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 
 namespace fp = flatsos::plugin;
@@ -62,57 +62,45 @@ TEST(PaperScenarios, OpenLoopPlanIsReproducedBySimbody) {
 }
 
 TEST(PaperScenarios, RecedingHorizonSettlesAtTheTarget) {
-  flatsos::test::ArmPlanning arm;
-  const auto& model = *arm.model;
-  fpl::RecedingHorizonControllerOptions o;
-  o.plan.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
-  o.plan.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
-  o.plan.solver = fpl::SlpSolver::VertexEnumeration;
-  SimTK::State s = model.defaultState();
-  fpl::set_minimum_effort_rest_state(arm.flat, s, Eigen::Vector2d(deg(20), deg(20)), o.plan.reserves_N);
+  const flatsos::test::RecedingHorizonScenario rh;
+  const auto& model = *rh.model;
+  SimTK::State s = rh.restState();
   // At rest in equilibrium: nothing moves before the controller acts.
   model.system().realize(s, SimTK::Stage::Acceleration);
   EXPECT_LT(s.getUDot().normInf(), 1e-9);
   for (int j = 0; j < 6; ++j) EXPECT_NEAR(model.muscle(j).getTendonLengthDerivative(s), 0.0, 1e-12);
 
-  fpl::RecedingHorizonController controller(arm.flat, o);
-  const fpl::ClosedLoopResult run = fpl::simulate_closed_loop(controller, s, 2.0);
+  const auto outcome = rh.run(rh.loop(2.0));
+  const fp::ClosedLoopResult& run = outcome.run.loop;
+  const auto& controller = *outcome.controller;
   ASSERT_TRUE(run.finite);
   EXPECT_EQ(controller.planFailures(), 0);
   EXPECT_EQ(controller.history().size(), 40u);
   for (const auto& row : run.states.rows)
     for (double v : row) ASSERT_TRUE(std::isfinite(v));
-  ASSERT_GE(run.settling_time_s, 0.0) << "never settled within 1 deg";
-  EXPECT_LT(run.settling_time_s, 1.5);
-  const Eigen::VectorXd q_end = model.jointAngles(run.final_state);
-  EXPECT_NEAR(q_end[0], deg(80), deg(0.1));
-  EXPECT_NEAR(q_end[1], deg(80), deg(0.1));
+  ASSERT_GE(outcome.run.settling_time_s, 0.0) << "never settled within 1 deg";
+  EXPECT_LT(outcome.run.settling_time_s, 1.5);
+  EXPECT_LT(outcome.final_error_deg, 0.1);
   EXPECT_GT(run.real_time_factor, 0.0);  // reported; its size is the benchmark's business
   // Every step's plan starts where the arm is and ends at the target.
   for (const auto& rec : controller.history()) {
-    EXPECT_NEAR(rec.path.jet(rec.path.duration_s, 1)(0, 0), deg(80), 1e-12);
-    EXPECT_GE(rec.alpha.minCoeff(), 0.0);
+    EXPECT_NEAR(rec.plan.path.jet(rec.plan.path.duration_s, 1)(0, 0), deg(80), 1e-12);
+    EXPECT_GE(rec.plan.alpha.minCoeff(), 0.0);
   }
+  // The predictions table: 11 points of each step's plan.
+  EXPECT_EQ(outcome.run.predictions.rows.size(), 40u * 11u);
 }
 
 TEST(PaperScenarios, RecedingHorizonIsTheSameWithEveryIntegrator) {
   // The closed loop with RKM at 1e-8 as the reference: CPodes BDF (restarted every period) and
   // the muscle Rosenbrock method (step size kept, reports from its continuous extension).
-  flatsos::test::ArmPlanning arm;
-  fpl::RecedingHorizonControllerOptions o;
-  o.plan.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
-  o.plan.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
-  o.plan.solver = fpl::SlpSolver::VertexEnumeration;
-  SimTK::State s = arm.model->defaultState();
-  fpl::set_minimum_effort_rest_state(arm.flat, s, Eigen::Vector2d(deg(20), deg(20)), o.plan.reserves_N);
-  fpl::RecedingHorizonController rkm(arm.flat, o);
-  const auto a = fpl::simulate_closed_loop(rkm, s, 2.0, 1e-8);
+  const flatsos::test::RecedingHorizonScenario rh;
+  const auto a = rh.run(rh.loop(2.0)).run.loop;
   ASSERT_TRUE(a.finite);
   for (auto [kind, accuracy, tolerance_deg] : {std::make_tuple(fp::IntegratorKind::CPodesBdf, 1e-8, 0.01),
                                                std::make_tuple(fp::IntegratorKind::MuscleRosenbrock, 1e-7, 0.001),
                                                std::make_tuple(fp::IntegratorKind::MuscleRosenbrock, 1e-5, 0.01)}) {
-    fpl::RecedingHorizonController other(arm.flat, o);
-    const auto b = fpl::simulate_closed_loop(other, s, 2.0, accuracy, 5, deg(1), kind);
+    const auto b = rh.run(rh.loop(2.0, kind, accuracy)).run.loop;
     ASSERT_TRUE(b.finite);
     ASSERT_EQ(a.states.rows.size(), b.states.rows.size());
     double q_diff = 0.0;
@@ -127,18 +115,15 @@ TEST(PaperScenarios, RecedingHorizonIsTheSameWithEveryIntegrator) {
 }
 
 TEST(PaperScenarios, RecedingHorizonWithIpoptAgreesWithTheExactSlp) {
-  flatsos::test::ArmPlanning arm;
-  fpl::RecedingHorizonControllerOptions o;
-  o.plan.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
-  o.plan.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
-  SimTK::State s = arm.model->defaultState();
-  fpl::set_minimum_effort_rest_state(arm.flat, s, Eigen::Vector2d(deg(20), deg(20)), o.plan.reserves_N);
-  fpl::RecedingHorizonController ipopt(arm.flat, o);
-  o.plan.solver = fpl::SlpSolver::VertexEnumeration;
-  fpl::RecedingHorizonController exact(arm.flat, o);
-  const auto a = fpl::simulate_closed_loop(ipopt, s, 0.5);
-  const auto b = fpl::simulate_closed_loop(exact, s, 0.5);
-  for (std::size_t k = 0; k < ipopt.history().size(); ++k)
-    EXPECT_LT((ipopt.history()[k].alpha - exact.history()[k].alpha).norm(), 1e-4 * (1 + exact.history()[k].alpha.norm()));
-  EXPECT_NEAR(arm.model->jointAngles(a.final_state)[0], arm.model->jointAngles(b.final_state)[0], deg(1e-3));
+  flatsos::test::RecedingHorizonScenario rh;
+  const auto exact = rh.run(rh.loop(0.5));
+  rh.options.plan.solver = fpl::SlpSolver::Ipopt;
+  const auto ipopt = rh.run(rh.loop(0.5));
+  const auto& hi = ipopt.controller->history();
+  const auto& he = exact.controller->history();
+  ASSERT_EQ(hi.size(), he.size());
+  for (std::size_t k = 0; k < hi.size(); ++k)
+    EXPECT_LT((hi[k].plan.alpha - he[k].plan.alpha).norm(), 1e-4 * (1 + he[k].plan.alpha.norm()));
+  EXPECT_NEAR(rh.model->jointAngles(ipopt.run.loop.final_state)[0], rh.model->jointAngles(exact.run.loop.final_state)[0],
+              deg(1e-3));
 }

@@ -14,7 +14,7 @@
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
-#include "flatsos/planner/receding_horizon.hpp"
+#include "rh_scenario.hpp"
 #include "flatsos/plugin/io/excitation_file.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 
@@ -62,6 +62,14 @@ TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
   rh.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
   const Eigen::Vector2d q(deg(20), deg(20)), zero2 = Eigen::Vector2d::Zero();
   const std::string text = arm_text();
+  auto controller_with = [&](std::function<void(fpl::RecedingHorizonControllerOptions&)> spoil) {
+    return [=, &arm] {
+      fpl::RecedingHorizonControllerOptions o;
+      o.plan = rh;
+      spoil(o);
+      fpl::RecedingHorizonController c(arm.flat, o);
+    };
+  };
   auto plan_with = [&](std::function<void(fpl::OpenLoopOptions&, fpl::MuscleState&)> spoil) {
     return [=, &arm] {
       auto o = ol;
@@ -123,8 +131,27 @@ TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
       {"RH reserves wrong size", rh_with([](auto& o) { o.reserves_N = Eigen::VectorXd::Ones(4); }), "reserves: expected 6"},
       {"RH state NaN", [&] { fpl::plan_receding_horizon_step(arm.flat, Eigen::Vector2d(kNaN, 0.0), zero2, rh); }, "joint angles: values must be finite"},
       {"RH period above horizon", [&] { fpl::RecedingHorizonControllerOptions o; o.plan = rh; o.control_period_s = 1.0; fpl::RecedingHorizonController c(arm.flat, o); }, "must not exceed the horizon"},
+      // the controller checks its options when it is made (a bad option used to fail every step silently)
+      {"RH controller reserves wrong size", controller_with([](auto& o) { o.plan.reserves_N = Eigen::VectorXd::Ones(4); }), "reserves: expected 6"},
+      {"RH controller reserve negative", controller_with([](auto& o) { o.plan.reserves_N[1] = -2.0; }), "reserves must be >= 0"},
+      {"RH controller target wrong size", controller_with([](auto& o) { o.plan.target_q_rad = Eigen::Vector3d::Zero(); }), "target joint angles: expected 2"},
+      {"RH controller target NaN", controller_with([](auto& o) { o.plan.target_q_rad[1] = kNaN; }), "target joint angles: values must be finite"},
+      {"RH controller horizon zero", controller_with([](auto& o) { o.plan.horizon_s = 0.0; }), "horizon must be > 0"},
+      {"RH controller grid of one point", controller_with([](auto& o) { o.plan.grid_points = 1; }), "at least 2 grid points"},
+      {"RH controller warm start wrong size", controller_with([](auto& o) { o.plan.warm_start = Eigen::VectorXd::Ones(6); }), "SLP warm start: expected 4"},
+      {"RH controller torque offset wrong size", controller_with([](auto& o) { o.plan.torque_offset_N_m = Eigen::VectorXd::Ones(3); }), "torque offset: expected 2"},
+      {"RH controller one sample", controller_with([](auto& o) { o.excitation_samples_per_period = 1; }), "at least 2 excitation samples"},
+      {"RH controller period NaN", controller_with([](auto& o) { o.control_period_s = kNaN; }), "control period must be > 0"},
+      {"RH controller no planner", controller_with([](auto& o) { o.planner = nullptr; }), "no planner function"},
+      {"RH controller plant of another size", [&] {
+         fp::ModelDescription d = fp::load_model_file(flatsos::test::arm_model_path());
+         d.muscles.pop_back();
+         d.flat_outputs.clear();
+         fpl::RecedingHorizonControllerOptions o; o.plan = rh;
+         fpl::RecedingHorizonController c(arm.flat, o, std::make_shared<const fp::MusculoskeletalModel>(d)); }, "other joints or muscles"},
+      {"flat-output map without a model", [&] { fpl::FlatOutputMap f(nullptr); }, "no model"},
       // NaN and nonsense elsewhere
-      {"RH observer gain NaN", [&] { fpl::RecedingHorizonControllerOptions o; o.plan = rh; o.disturbance_observer_gain = kNaN; fpl::RecedingHorizonController c(arm.flat, o); }, "observer gain must be a finite number >= 0"},
+      {"RH observer gain NaN", [&] { fpl::RecedingHorizonControllerOptions o; o.plan = rh; o.disturbance_observer_gain_per_s = kNaN; fpl::RecedingHorizonController c(arm.flat, o); }, "observer gain must be a finite number >= 0"},
       {"unknown integrator", [&] { fp::integrator_from_name("rk4"); }, "unknown integrator 'rk4'"},
       {"simulation NaN state, Rosenbrock", [&] { SimTK::State s = model.defaultState(); s.updU()[1] = kNaN; fp::SimulationOptions o; o.integrator = fp::IntegratorKind::MuscleRosenbrock; fp::simulate(model, s, o); }, "initial state has a non-finite value"},
       {"excitation NaN", [&] { SimTK::State s = model.defaultState(); model.muscle(0).setExcitation(s, kNaN); }, "excitation is NaN"},
@@ -169,14 +196,10 @@ TEST(Reliability, ImpossibleMotionIsReportedNotPassedOff) {
 }
 
 TEST(Reliability, RecedingHorizonRunsOnThePreviousPlanWhenStepsFailAndRecovers) {
-  flatsos::test::ArmPlanning arm;
-  fpl::RecedingHorizonControllerOptions o;
-  o.plan.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
-  o.plan.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
-  o.plan.solver = fpl::SlpSolver::VertexEnumeration;
+  flatsos::test::RecedingHorizonScenario rh;
   int calls = 0;
-  o.planner = [&](const fpl::FlatOutputMap& f, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
-                  const fpl::RecedingHorizonOptions& ro) {
+  rh.options.planner = [&](const fpl::FlatOutputMap& f, fp::ModelWorkspace& ws, const Eigen::VectorXd& q,
+                           const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& ro) {
     const int k = calls++;
     if (k >= 5 && k < 9) {  // steps 5..8: the solver "fails" (and once throws)
       if (k == 7) throw std::runtime_error("injected solver crash");
@@ -185,27 +208,24 @@ TEST(Reliability, RecedingHorizonRunsOnThePreviousPlanWhenStepsFailAndRecovers) 
       failed.message = "injected failure";
       return failed;
     }
-    return fpl::plan_receding_horizon_step(f, q, qd, ro);
+    return fpl::plan_receding_horizon_step(f, ws, q, qd, ro);
   };
-  SimTK::State s = arm.model->defaultState();
-  fpl::set_minimum_effort_rest_state(arm.flat, s, Eigen::Vector2d(deg(20), deg(20)), o.plan.reserves_N);
-  fpl::RecedingHorizonController controller(arm.flat, o);
-  const auto run = fpl::simulate_closed_loop(controller, s, 2.0, 1e-8, 5, deg(1), fp::IntegratorKind::CPodesBdf);
-  ASSERT_TRUE(run.finite);
+  const auto outcome = rh.run(rh.loop(2.0, fp::IntegratorKind::CPodesBdf));
+  const auto& run = outcome.run;
+  const auto& controller = *outcome.controller;
+  ASSERT_TRUE(run.loop.finite);
   EXPECT_EQ(controller.planFailures(), 4);
   const auto& h = controller.history();
   for (int k = 5; k < 9; ++k) {
     EXPECT_EQ(h[k].status, fpl::SolveStatus::Failed);
     EXPECT_TRUE(h[k].used_previous_plan) << k;
-    EXPECT_DOUBLE_EQ(h[k].plan_start_time_s, h[4].plan_start_time_s);  // the tail of step 4's plan
+    EXPECT_DOUBLE_EQ(h[k].plan.start_time_s, h[4].plan.start_time_s);  // the tail of step 4's plan
     EXPECT_FALSE(h[k].message.empty());
   }
   EXPECT_NE(h[7].message.find("injected solver crash"), std::string::npos);
   EXPECT_EQ(h[9].status, fpl::SolveStatus::Solved);  // recovers
   ASSERT_GE(run.settling_time_s, 0.0);
-  const Eigen::VectorXd q_end = arm.model->jointAngles(run.final_state);
-  EXPECT_NEAR(q_end[0], deg(80), deg(1));
-  EXPECT_NEAR(q_end[1], deg(80), deg(1));
+  EXPECT_LT(outcome.final_error_deg, 1.0);
 }
 
 class ExtremeExcitations : public ::testing::TestWithParam<std::tuple<int, fp::IntegratorKind>> {};

@@ -10,8 +10,8 @@
 namespace flatsos::test {
 
 struct ArmPlanning {
-  std::unique_ptr<plugin::MusculoskeletalModel> model = load_arm();
-  planner::FlatOutputMap flat{*model};
+  std::shared_ptr<const plugin::MusculoskeletalModel> model = load_arm();
+  planner::FlatOutputMap flat{model};
 };
 
 /// q0 = [0, 10 deg], qd0 = [0.001, 0.002] rad/s, a0 of the paper, tendons in static equilibrium.

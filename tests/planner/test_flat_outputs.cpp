@@ -151,7 +151,8 @@ TEST(FlatOutputs, TorqueJetsOnAGridEqualThePointwiseJets) {
   // h = 0.3 s is refined internally to 10 ms; h = 5 ms is used as is.
   for (const double h : {0.3, 0.005}) {
     const int count = 11;
-    const auto jets = arm.flat.torqueJetsOnGrid([&](double t) { return plan.path.jet(t, 3); }, 0.2, h, count);
+    fp::ModelWorkspace ws = arm.flat.makeWorkspace();
+    const auto jets = arm.flat.torqueJetsOnGrid(ws, [&](double t) { return plan.path.jet(t, 3); }, 0.2, h, count);
     ASSERT_EQ(jets.size(), 11u);
     for (int i = 0; i < count; ++i) {
       const fpl::TorqueJet pointwise = arm.flat.torqueJet(plan.jointJet(0.2 + h * i));

@@ -11,7 +11,7 @@ namespace flatsos::test {
 
 inline std::string arm_model_path() { return std::string(FLATSOS_SOURCE_DIR) + "/models/arm_richter_warner.json"; }
 
-inline std::unique_ptr<plugin::MusculoskeletalModel> load_arm() {
+inline std::shared_ptr<const plugin::MusculoskeletalModel> load_arm() {
   return plugin::MusculoskeletalModel::fromFile(arm_model_path());
 }
 

@@ -1,8 +1,8 @@
 #include "flatsos/planner/numerics/linear_program.hpp"
 
-#include <chrono>
 #include <stdexcept>
 
+#include "flatsos/plugin/stopwatch.hpp"
 #include "numerics/ipopt_support.hpp"
 
 namespace flatsos::planner {
@@ -14,7 +14,7 @@ using Ipopt::Number;
 
 class LinearProgramTnlp : public Ipopt::TNLP {
  public:
-  LinearProgramTnlp(const LinearProgram& lp, const Eigen::VectorXd* start) : lp_(lp), start_(start) {}
+  LinearProgramTnlp(const LinearProgram& lp, const std::optional<Eigen::VectorXd>& start) : lp_(lp), start_(start) {}
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac, Index& nnz_h, IndexStyleEnum& style) override {
     n = static_cast<Index>(lp_.cost.size());
@@ -78,7 +78,7 @@ class LinearProgramTnlp : public Ipopt::TNLP {
 
  private:
   const LinearProgram& lp_;
-  const Eigen::VectorXd* start_;
+  const std::optional<Eigen::VectorXd>& start_;
 };
 
 }  // namespace
@@ -93,7 +93,7 @@ LinearProgramResult solve_linear_program(const LinearProgram& lp, const LinearPr
       lp.x_lower.hasNaN() || lp.x_upper.hasNaN())
     throw std::invalid_argument("linear program: NaN in the data");
 
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch wall;
   auto app = detail::make_ipopt(o.tolerance, o.max_iterations);
   app->Options()->SetStringValue("jac_c_constant", "yes");
   app->Options()->SetStringValue("jac_d_constant", "yes");
@@ -116,7 +116,7 @@ LinearProgramResult solve_linear_program(const LinearProgram& lp, const LinearPr
   r.objective = tnlp->objective_;
   if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); IsValid(stats))
     r.iterations = stats->IterationCount();
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.wall_seconds = wall.seconds();
   return r;
 }
 

@@ -41,17 +41,18 @@ class JointTorqueImpl : public SimTK::Force::Custom::Implementation {
 
 }  // namespace
 
-void MusculoskeletalModel::addJointTorque(int joint, std::shared_ptr<const ExcitationSignal> torque) {
-  if (joint < 0 || joint >= numJoints()) throw std::invalid_argument("addJointTorque: no joint " + std::to_string(joint));
-  if (!torque) throw std::invalid_argument("addJointTorque: no torque signal");
-  SimTK::Force::Custom(forces_, new JointTorqueImpl(joints_[static_cast<std::size_t>(joint)], std::move(torque)));
-  system_.realizeTopology();
-  scratch_ = system_.getDefaultState();
-}
+ModelWorkspace::ModelWorkspace(const MusculoskeletalModel& model)
+    : model_(&model), state_(model.defaultState()), udot_(state_.getNU(), 0.0) {}
 
-MusculoskeletalModel::MusculoskeletalModel(ModelDescription description)
+MusculoskeletalModel::MusculoskeletalModel(ModelDescription description, std::vector<ExternalJointTorque> external)
     : description_(std::move(description)), matter_(system_), forces_(system_) {
   validate(description_);
+  for (const auto& e : external) {
+    if (e.joint < 0 || e.joint >= numJoints())
+      throw std::invalid_argument("external joint torque: no joint " + std::to_string(e.joint) + " (the model has " +
+                                  std::to_string(numJoints()) + ")");
+    if (!e.torque_N_m) throw std::invalid_argument("external joint torque on joint " + std::to_string(e.joint) + ": no torque signal");
+  }
   gravity_ = SimTK::Force::Gravity(forces_, matter_, to_vec3(description_.gravity_m_per_s2));
 
   std::map<std::string, const BodyDescription*> bodies;
@@ -77,12 +78,13 @@ MusculoskeletalModel::MusculoskeletalModel(ModelDescription description)
       if (md.moment_arms_m[i] != 0.0) path.moment_arms.push_back({joints_[i], md.moment_arms_m[i]});
     muscles_.emplace_back(forces_, md.parameters, std::move(path));
   }
+  for (auto& e : external)
+    SimTK::Force::Custom(forces_, new JointTorqueImpl(joints_[static_cast<std::size_t>(e.joint)], std::move(e.torque_N_m)));
   system_.realizeTopology();
-  scratch_ = system_.getDefaultState();
 }
 
-std::unique_ptr<MusculoskeletalModel> MusculoskeletalModel::fromFile(const std::string& path) {
-  return std::make_unique<MusculoskeletalModel>(load_model_file(path));
+std::shared_ptr<const MusculoskeletalModel> MusculoskeletalModel::fromFile(const std::string& path) {
+  return std::make_shared<const MusculoskeletalModel>(load_model_file(path));
 }
 
 void MusculoskeletalModel::checkSize(const Eigen::VectorXd& v, int n, const char* what) const {
@@ -154,36 +156,45 @@ Eigen::VectorXd MusculoskeletalModel::muscleTorques(const Eigen::VectorXd& f) co
   return moment_arms_ * f;
 }
 
-SimTK::State& MusculoskeletalModel::scratch(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) const {
-  setJointAngles(scratch_, q);
-  setJointSpeeds(scratch_, qd);
-  system_.realize(scratch_, SimTK::Stage::Velocity);
-  return scratch_;
+const SimTK::State& MusculoskeletalModel::realizeVelocity(ModelWorkspace& ws, const Eigen::VectorXd& q,
+                                                         const Eigen::VectorXd& qd) const {
+  if (ws.model_ != this) throw std::invalid_argument("model workspace: made for another model");
+  setJointAngles(ws.state_, q);
+  setJointSpeeds(ws.state_, qd);
+  system_.realize(ws.state_, SimTK::Stage::Velocity);
+  return ws.state_;
 }
 
-Eigen::MatrixXd MusculoskeletalModel::massMatrix(const Eigen::VectorXd& q) const {
-  const SimTK::State& s = scratch(q, Eigen::VectorXd::Zero(numJoints()));
-  SimTK::Matrix m;
-  matter_.calcM(s, m);
+Eigen::MatrixXd MusculoskeletalModel::massMatrix(ModelWorkspace& ws, const Eigen::VectorXd& q) const {
+  const SimTK::State& s = realizeVelocity(ws, q, Eigen::VectorXd::Zero(numJoints()));
+  matter_.calcM(s, ws.mass_);
   Eigen::MatrixXd out(numJoints(), numJoints());
   for (int r = 0; r < numJoints(); ++r)
     for (int c = 0; c < numJoints(); ++c)
-      out(r, c) = m(joints_[r].getFirstUIndex(s), joints_[c].getFirstUIndex(s));
+      out(r, c) = ws.mass_(joints_[r].getFirstUIndex(s), joints_[c].getFirstUIndex(s));
   return out;
+}
+
+Eigen::MatrixXd MusculoskeletalModel::massMatrix(const Eigen::VectorXd& q) const {
+  ModelWorkspace ws(*this);
+  return massMatrix(ws, q);
+}
+
+Eigen::VectorXd MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::VectorXd& q,
+                                                      const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) const {
+  checkSize(qdd, numJoints(), "joint accelerations");
+  const SimTK::State& s = realizeVelocity(ws, q, qd);
+  for (int i = 0; i < numJoints(); ++i) ws.udot_[joints_[i].getFirstUIndex(s)] = qdd[i];
+  matter_.calcResidualForceIgnoringConstraints(s, SimTK::Vector(), gravity_.getBodyForces(s), ws.udot_, ws.residual_);
+  Eigen::VectorXd tau(numJoints());
+  for (int i = 0; i < numJoints(); ++i) tau[i] = ws.residual_[joints_[i].getFirstUIndex(s)];
+  return tau;
 }
 
 Eigen::VectorXd MusculoskeletalModel::inverseDynamics(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                                       const Eigen::VectorXd& qdd) const {
-  checkSize(qdd, numJoints(), "joint accelerations");
-  const SimTK::State& s = scratch(q, qd);
-  SimTK::Vector udot(s.getNU(), 0.0);
-  for (int i = 0; i < numJoints(); ++i) udot[joints_[i].getFirstUIndex(s)] = qdd[i];
-  SimTK::Vector residual;
-  matter_.calcResidualForceIgnoringConstraints(s, SimTK::Vector(), gravity_.getBodyForces(s), udot,
-                                               residual);
-  Eigen::VectorXd tau(numJoints());
-  for (int i = 0; i < numJoints(); ++i) tau[i] = residual[joints_[i].getFirstUIndex(s)];
-  return tau;
+  ModelWorkspace ws(*this);
+  return inverseDynamics(ws, q, qd, qdd);
 }
 
 double MusculoskeletalModel::mechanicalEnergy(const SimTK::State& s) const {

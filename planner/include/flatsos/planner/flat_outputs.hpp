@@ -1,6 +1,11 @@
 #pragma once
-// Flat outputs y = [q; Y], Y = E Phi_S(L_S) (DESIGN.md 3), and the maps between muscle states and
-// flat outputs with their derivatives.
+// Flat outputs y = [q; Y], Y = E Phi_S(L_S) (docs/method/flatness.md), and the maps between muscle
+// states and flat outputs with their derivatives.
+//
+// A FlatOutputMap is a value: it shares its (immutable) model and owns its matrices, so a copy
+// or a temporary can never leave a dangling reference behind, and its const members are safe
+// from several threads. Inverse dynamics go through a plugin::ModelWorkspace the caller owns;
+// the overloads without one make a temporary workspace (tens of microseconds) per call.
 //
 // Inverse map (flat outputs -> muscle states and excitations) at one time, from the joint jet
 // (q and its first four time derivatives) and the flat-output jet (Y, dY, ddY):
@@ -14,11 +19,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "flatsos/plugin/model/model_workspace.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::planner {
@@ -70,10 +77,14 @@ class FlatOutputMap {
  public:
   /// E from the model file's flat_outputs. Throws FlatnessError naming each violated condition
   /// of Assumption 1 (E shape, C singular, rows of E not summing to 1, 1 - C_tau s_tau > 0).
-  explicit FlatOutputMap(const plugin::MusculoskeletalModel& model);
-  FlatOutputMap(const plugin::MusculoskeletalModel& model, Eigen::MatrixXd E);
+  /// Throws std::invalid_argument for a null model.
+  explicit FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model);
+  FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E);
 
-  const plugin::MusculoskeletalModel& model() const { return model_; }
+  const plugin::MusculoskeletalModel& model() const { return *model_; }
+  const std::shared_ptr<const plugin::MusculoskeletalModel>& sharedModel() const { return model_; }
+  /// Scratch for the calls below that take one (one per thread).
+  plugin::ModelWorkspace makeWorkspace() const { return model_->makeWorkspace(); }
   int numJoints() const { return static_cast<int>(A_.rows()); }
   int numMuscles() const { return static_cast<int>(A_.cols()); }
   int numFlatOutputs() const { return static_cast<int>(E_.rows()); }
@@ -87,10 +98,12 @@ class FlatOutputMap {
   static void checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E);
 
   /// tau(q, qd, qdd) from Simbody (muscles excluded).
-  Eigen::VectorXd torque(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+  Eigen::VectorXd torque(plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                          const Eigen::VectorXd& qdd) const;
+  Eigen::VectorXd torque(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) const;
   /// tau and its first two time derivatives along a joint motion with the given jet
   /// (N x 5: q .. q''''). Columns beyond those given are taken as 0.
+  TorqueJet torqueJet(plugin::ModelWorkspace& workspace, const Jet& q_jet) const;
   TorqueJet torqueJet(const Jet& q_jet) const;
 
   /// Torque jets at the `count` uniform times t0 + i h along a joint motion given as a function
@@ -98,18 +111,21 @@ class FlatOutputMap {
   /// neighbouring times share their inverse-dynamics calls: about one call per time instead of
   /// nine (the grid is refined internally to a step <= 10 ms).
   template <class JointJetAt>
-  std::vector<TorqueJet> torqueJetsOnGrid(const JointJetAt& jet_at, double t0, double h, int count) const;
+  std::vector<TorqueJet> torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const JointJetAt& jet_at, double t0,
+                                          double h, int count) const;
 
   /// Inverse map at one time: q_jet N x 5 (q..q''''), Y_jet p x 3 (Y, dY, ddY).
+  MusclePoint inverse(plugin::ModelWorkspace& workspace, const Jet& q_jet, const Jet& Y_jet) const;
   MusclePoint inverse(const Jet& q_jet, const Jet& Y_jet) const;
-  /// Same with a precomputed torque jet.
+  /// Same with a precomputed torque jet (no inverse dynamics: no workspace).
   MusclePoint inverseFromTorque(const Jet& q_jet, const TorqueJet& tau, const Jet& Y_jet) const;
 
   /// Forward map of a muscle state. Throws std::invalid_argument for sizes or NaN.
+  FlatState forward(plugin::ModelWorkspace& workspace, const MuscleState& s) const;
   FlatState forward(const MuscleState& s) const;
 
  private:
-  const plugin::MusculoskeletalModel& model_;
+  std::shared_ptr<const plugin::MusculoskeletalModel> model_;
   Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;
 };
 
@@ -121,7 +137,8 @@ constexpr double kMaxJetStep_s = 1e-2;
 }  // namespace detail
 
 template <class JointJetAt>
-std::vector<TorqueJet> FlatOutputMap::torqueJetsOnGrid(const JointJetAt& jet_at, double t0, double h, int count) const {
+std::vector<TorqueJet> FlatOutputMap::torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const JointJetAt& jet_at,
+                                                       double t0, double h, int count) const {
   if (count < 1 || !(h > 0.0)) throw std::invalid_argument("torque jets on a grid: need count >= 1 and h > 0");
   const int sub = std::max(1, static_cast<int>(std::ceil(h / detail::kMaxJetStep_s - 1e-12)));
   const double hf = h / sub;
@@ -129,7 +146,7 @@ std::vector<TorqueJet> FlatOutputMap::torqueJetsOnGrid(const JointJetAt& jet_at,
   std::vector<Eigen::VectorXd> tau(static_cast<std::size_t>(fine));
   for (int k = 0; k < fine; ++k) {
     const Jet j = jet_at(t0 + (k - 4) * hf);
-    tau[static_cast<std::size_t>(k)] = torque(j.col(0), j.col(1), j.col(2));
+    tau[static_cast<std::size_t>(k)] = torque(workspace, j.col(0), j.col(1), j.col(2));
   }
   std::vector<TorqueJet> out(static_cast<std::size_t>(count));
   for (int i = 0; i < count; ++i) {

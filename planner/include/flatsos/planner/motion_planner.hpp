@@ -3,6 +3,7 @@
 // muscle state and a rest target (PMPP + torque model + SOS program + dense a-posteriori check),
 // or one receding-horizon step (cubic path + torque box + SLP).
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -63,8 +64,8 @@ struct OpenLoopPlan {
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& options);
 
 /// The a-posteriori check of any flat trajectory on `points` uniform times in [0, T].
-PlanCheck check_plan(const FlatOutputMap& flat, const JointPath& path, const std::vector<Polynomial>& Y,
-                     const Eigen::VectorXd& reserves_N, int points);
+PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                     const std::vector<Polynomial>& Y, const Eigen::VectorXd& reserves_N, int points);
 
 struct RecedingHorizonOptions {
   double horizon_s = 0.5;
@@ -72,7 +73,7 @@ struct RecedingHorizonOptions {
   Eigen::VectorXd target_q_rad;
   Eigen::VectorXd reserves_N;
   SlpSolver solver = SlpSolver::Ipopt;
-  const Eigen::VectorXd* warm_start = nullptr;  ///< Ipopt's start for the SLP (e.g. the last alpha)
+  std::optional<Eigen::VectorXd> warm_start;  ///< Ipopt's start for the SLP (e.g. the last alpha), p entries
   /// Joint torque the muscles need not produce (N m per joint; empty: none): the planned
   /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
   Eigen::VectorXd torque_offset_N_m;
@@ -84,13 +85,23 @@ struct RecedingHorizonStep {
   JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon
   Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
   SlpResult slp;
-  Eigen::VectorXd alpha() const { return slp.alpha; }  ///< constant Y, N
-  double seconds = 0.0;
+  const Eigen::VectorXd& alpha() const { return slp.alpha; }  ///< constant Y, N
+  double wall_seconds = 0.0;
 };
 
+/// Checks RH options against the model: horizon > 0 s, >= 2 grid points, target and reserves
+/// (>= 0 N) of the model's sizes and finite, a torque offset (if any) of one entry per joint,
+/// a warm start (if any) of one entry per flat output. Throws std::invalid_argument naming the
+/// field.
+void validate(const RecedingHorizonOptions& options, const FlatOutputMap& flat);
+
 /// One RH step from the measured joint state (the SLP formulation: no initial constraints on Y,
-/// terminal equilibrium). Throws std::invalid_argument for bad sizes, NaN, horizon <= 0,
-/// fewer than 2 grid points or negative reserves.
+/// terminal equilibrium). Throws std::invalid_argument for bad options (see validate) or a
+/// joint state of the wrong size or not finite.
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
+                                               const RecedingHorizonOptions& options);
+/// The same with a temporary workspace.
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad,
                                                const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions& options);
 

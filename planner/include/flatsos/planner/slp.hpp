@@ -7,6 +7,7 @@
 // gamma = max(max_j B_j / sigma_j, 0) is always feasible. (The paper writes alpha = gamma sigma,
 // which has the wrong size: sigma has m entries, alpha p.)
 
+#include <optional>
 #include <string>
 
 #include <Eigen/Core>
@@ -36,7 +37,7 @@ struct SlpResult {
   double cost_N = 0.0;         ///< sum(alpha)
   bool used_fallback = false;  ///< the solver failed and the appendix construction was used
   int iterations = 0;
-  double seconds = 0.0;
+  double wall_seconds = 0.0;
 };
 
 /// Solves the SLP. Ipopt starts from the appendix construction; if it fails, the result falls
@@ -46,6 +47,6 @@ struct SlpResult {
 /// `warm_start` (optional, p entries): Ipopt's initial point instead of the appendix construction,
 /// e.g. the previous RH step's alpha.
 SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::Ipopt,
-                    const Eigen::VectorXd* warm_start = nullptr);
+                    const std::optional<Eigen::VectorXd>& warm_start = std::nullopt);
 
 }  // namespace flatsos::planner

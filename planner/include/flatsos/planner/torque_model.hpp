@@ -35,6 +35,7 @@ struct TorqueModel {
 };
 
 /// Throws std::invalid_argument for K < 1, r < 0, samples < 2 or fewer samples than r + 1.
-TorqueModel build_torque_model(const FlatOutputMap& flat, const JointPath& path, const TorqueModelOptions& options);
+TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                               const TorqueModelOptions& options);
 
 }  // namespace flatsos::planner

@@ -3,6 +3,7 @@
 // Hessian):  minimize c^T x  subject to  row_lower <= G x <= row_upper,  x_lower <= x <= x_upper.
 // Infinite bounds are +-1e19 (Ipopt's convention for "none").
 
+#include <optional>
 #include <string>
 
 #include <Eigen/Core>
@@ -25,13 +26,13 @@ struct LinearProgramResult {
   Eigen::VectorXd row_multipliers;  ///< Ipopt's lambda (>= 0 on active lower bounds here: sign per Ipopt)
   double objective = 0.0;
   int iterations = 0;
-  double seconds = 0.0;
+  double wall_seconds = 0.0;
 };
 
 struct LinearProgramOptions {
   double tolerance = 1e-10;
   int max_iterations = 500;
-  const Eigen::VectorXd* start = nullptr;  ///< optional initial x
+  std::optional<Eigen::VectorXd> start;  ///< initial x (default: 0 pushed inside the bounds)
 };
 
 /// Throws std::invalid_argument for inconsistent sizes or NaN data.

@@ -8,7 +8,7 @@
 #include <Simbody.h>
 
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
-#include "flatsos/plugin/io/sto_file.hpp"
+#include "flatsos/plugin/io/state_table.hpp"
 #include "flatsos/plugin/integration/stepper.hpp"
 
 namespace flatsos::plugin {
@@ -27,13 +27,6 @@ struct SimulationResult {
   bool finite = true;    ///< false: a state became NaN/Inf, integration stopped there
   std::string message;   ///< why it stopped early, empty otherwise
 };
-
-/// An empty state table with columns time, /jointset/<joint>/q, /jointset/<joint>/qdot (rad,
-/// rad/s), and per muscle /forceset/<muscle>/{excitation, activation, tendon_length,
-/// tendon_force, fiber_length, fiber_velocity} (SI; fiber_velocity is the lengthening rate).
-StoTable make_state_table(const MusculoskeletalModel& model, const std::string& name = "states");
-/// Appends one row for `s` (realized here to Stage::Velocity).
-void append_state_row(const MusculoskeletalModel& model, const SimTK::State& s, StoTable& table);
 
 /// Integrates from `initial` for options.duration_s; never throws for NaN: it stops and says so.
 /// Throws std::invalid_argument for a non-positive duration, accuracy or report interval.

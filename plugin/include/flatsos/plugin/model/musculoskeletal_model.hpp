@@ -2,6 +2,11 @@
 // A Simbody system built from a ModelDescription: a tree of Pin mobilizers with gravity and one
 // HillMuscle per muscle. Vectors are in the description's order (joints = generalized
 // coordinates, muscles). Not copyable: Simbody subsystems refer to each other.
+//
+// Immutable once built and meant to be shared (std::shared_ptr<const MusculoskeletalModel>):
+// every const member is safe to call from several threads at once. Calculations that need a
+// Simbody State as scratch (mass matrix, inverse dynamics) take a ModelWorkspace that the caller
+// owns (one per thread); the overloads without one make a temporary workspace per call.
 
 #include <memory>
 #include <string>
@@ -12,14 +17,23 @@
 
 #include "flatsos/plugin/force/hill_muscle.hpp"
 #include "flatsos/plugin/model/model_description.hpp"
+#include "flatsos/plugin/model/model_workspace.hpp"
 
 namespace flatsos::plugin {
 
+/// A torque tau(t) (N m, a function of time) applied on one joint, e.g. a disturbance pulse.
+struct ExternalJointTorque {
+  int joint = -1;  ///< joint index (description order)
+  std::shared_ptr<const ExcitationSignal> torque_N_m;
+};
+
 class MusculoskeletalModel {
  public:
-  /// Builds and realizes the topology. Throws ModelFileError if the description is invalid.
-  explicit MusculoskeletalModel(ModelDescription description);
-  static std::unique_ptr<MusculoskeletalModel> fromFile(const std::string& path);
+  /// Builds and realizes the topology. Throws ModelFileError if the description is invalid,
+  /// std::invalid_argument for an external torque on a joint that does not exist or without a
+  /// signal.
+  explicit MusculoskeletalModel(ModelDescription description, std::vector<ExternalJointTorque> external_torques = {});
+  static std::shared_ptr<const MusculoskeletalModel> fromFile(const std::string& path);
   MusculoskeletalModel(const MusculoskeletalModel&) = delete;
   MusculoskeletalModel& operator=(const MusculoskeletalModel&) = delete;
 
@@ -35,6 +49,8 @@ class MusculoskeletalModel {
 
   /// A fresh default state (topology realized; q = qd = 0, muscle defaults).
   SimTK::State defaultState() const { return system_.getDefaultState(); }
+  /// Scratch for massMatrix and inverseDynamics (one per thread).
+  ModelWorkspace makeWorkspace() const { return ModelWorkspace(*this); }
 
   // --- state access in description order ---
   Eigen::VectorXd jointAngles(const SimTK::State& s) const;  ///< q, rad
@@ -56,20 +72,22 @@ class MusculoskeletalModel {
   /// Joint torques tau = A F of the given tendon forces.
   Eigen::VectorXd muscleTorques(const Eigen::VectorXd& tendon_forces_N) const;
   /// Mass matrix M(q) from Simbody.
+  Eigen::MatrixXd massMatrix(ModelWorkspace& workspace, const Eigen::VectorXd& q_rad) const;
   Eigen::MatrixXd massMatrix(const Eigen::VectorXd& q_rad) const;
-  /// Inverse dynamics without muscles: tau = M(q) qdd + C(q, qd) qd + g(q), from Simbody.
+  /// Inverse dynamics without muscles (external torques excluded too):
+  /// tau = M(q) qdd + C(q, qd) qd + g(q), from Simbody.
+  Eigen::VectorXd inverseDynamics(ModelWorkspace& workspace, const Eigen::VectorXd& q_rad,
+                                  const Eigen::VectorXd& qd_rad_per_s, const Eigen::VectorXd& qdd_rad_per_s2) const;
   Eigen::VectorXd inverseDynamics(const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                   const Eigen::VectorXd& qdd_rad_per_s2) const;
-  /// Adds an external torque tau(t) (N m, a function of time) on joint i, e.g. a disturbance
-  /// pulse. Re-realizes the topology: take States from defaultState() after calling this.
-  void addJointTorque(int joint, std::shared_ptr<const ExcitationSignal> torque_N_m);
 
   /// Total mechanical energy of the multibody system (kinetic + gravitational), J.
   double mechanicalEnergy(const SimTK::State& s) const;
 
  private:
   void checkSize(const Eigen::VectorXd& v, int n, const char* what) const;
-  SimTK::State& scratch(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) const;
+  const SimTK::State& realizeVelocity(ModelWorkspace& workspace, const Eigen::VectorXd& q,
+                                      const Eigen::VectorXd& qd) const;
 
   ModelDescription description_;
   SimTK::MultibodySystem system_;
@@ -80,7 +98,6 @@ class MusculoskeletalModel {
   std::vector<HillMuscle> muscles_;
   Eigen::MatrixXd moment_arms_;
   Eigen::VectorXd zero_angle_lengths_;
-  mutable SimTK::State scratch_;  ///< for inverse dynamics and mass matrix (not thread-safe)
 };
 
 }  // namespace flatsos::plugin

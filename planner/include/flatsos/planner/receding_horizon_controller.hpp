@@ -1,0 +1,119 @@
+#pragma once
+// The receding-horizon (RH) controller of the paper (docs/method/receding_horizon.md), a
+// plugin::Controller that drives Simbody muscles through their excitation inputs. Every control
+// period delta: read q, qd (and qdd, for the observer) from the plant's State, update the
+// disturbance observer, plan one RH step (cubic to the target over the horizon, torque box, SLP),
+// evaluate the plan's excitations on the first period by the exact inverse map, and give each
+// muscle a polynomial signal over [t, t + delta]. Excitations outside [0, 1] are clamped (by
+// the muscle) and counted here. A failed step never stops the loop: the previous plan's tail,
+// with the torque offset it was planned for, is used and the failure recorded.
+//
+// Prepared once in the constructor (validated options, the planner's and the plant's
+// workspaces, the excitation fit's factorization); per period only the feedback work remains.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Simbody.h>
+
+#include "flatsos/planner/disturbance_observer.hpp"
+#include "flatsos/planner/excitation_fitter.hpp"
+#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/plugin/integration/closed_loop.hpp"
+
+namespace flatsos::planner {
+
+/// The planning step a controller calls; replaceable (another planner, or fault injection in
+/// tests). Default: plan_receding_horizon_step.
+using RecedingHorizonPlanner =
+    std::function<RecedingHorizonStep(const FlatOutputMap&, plugin::ModelWorkspace&, const Eigen::VectorXd& q_rad,
+                                      const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions&)>;
+
+struct RecedingHorizonControllerOptions {
+  RecedingHorizonOptions plan;             ///< horizon, grid, target, reserves, SLP solver
+  RecedingHorizonPlanner planner = [](const FlatOutputMap& f, plugin::ModelWorkspace& w, const Eigen::VectorXd& q,
+                                      const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
+    return plan_receding_horizon_step(f, w, q, qd, o);
+  };
+  double control_period_s = 0.05;          ///< delta
+  int excitation_samples_per_period = 11;  ///< inverse-map samples per period (fitted by a polynomial)
+  /// Disturbance observer gain, 1/s (see disturbance_observer.hpp); 0: the paper's controller.
+  double disturbance_observer_gain_per_s = 0.0;
+};
+
+/// A plan the controller runs on: constant flat outputs, the predicted joint motion, when it
+/// started, and the torque offset it was planned for (its excitations must use that one).
+struct PlanInUse {
+  Eigen::VectorXd alpha;             ///< constant Y, N
+  JointPath path;                    ///< predicted joint motion (the cubic)
+  double start_time_s = 0.0;         ///< simulation time of the plan's t = 0
+  Eigen::VectorXd torque_offset_N_m; ///< what the muscles were relieved of when it was planned
+  bool empty() const { return alpha.size() == 0; }
+};
+
+struct RecedingHorizonRecord {
+  double time_s = 0.0;
+  SolveStatus status = SolveStatus::Failed;
+  std::string message;
+  bool used_previous_plan = false;   ///< this step failed and ran on the previous plan's tail
+  PlanInUse plan;                    ///< the plan in use for this period (empty: none yet)
+  Eigen::VectorXd observer_offset_N_m;  ///< the observer's estimate at this step (what a new plan was asked for)
+  int clamped_samples = 0;           ///< excitation samples outside [0, 1] this period
+  double plan_seconds = 0.0;         ///< the planning step
+  double wall_seconds = 0.0;         ///< the whole control step (observer, plan, excitations)
+};
+
+class RecedingHorizonController final : public plugin::Controller {
+ public:
+  /// `plant`: the model whose States step() reads and drives (same joints and muscles in the same
+  /// order as the planner's, other parameters allowed: model mismatch); null: the planner's own.
+  /// Throws std::invalid_argument for bad options (naming the field) or a plant of other size.
+  RecedingHorizonController(FlatOutputMap planner_map, RecedingHorizonControllerOptions options,
+                            std::shared_ptr<const plugin::MusculoskeletalModel> plant = nullptr);
+
+  /// Plans from the state at its time and installs the excitation signals for the next period.
+  const RecedingHorizonRecord& step(SimTK::State& state);
+  void control(SimTK::State& state) override { step(state); }
+
+  const std::vector<RecedingHorizonRecord>& history() const { return history_; }
+  int planFailures() const;
+  int clampedSamples() const;
+  const RecedingHorizonControllerOptions& options() const { return options_; }
+  const FlatOutputMap& flat() const { return flat_; }
+  const plugin::MusculoskeletalModel& plant() const { return *plant_; }
+  const DisturbanceObserver& observer() const { return observer_; }
+
+ private:
+  void observe(const SimTK::State& state, const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double t);
+  // Inverse-map excitations of `plan` over the period from t (muscles x samples); false when
+  // they are not finite (the plan left the valid domain).
+  bool sampleExcitations(const PlanInUse& plan, double t, Eigen::MatrixXd& values);
+
+  FlatOutputMap flat_;
+  std::shared_ptr<const plugin::MusculoskeletalModel> plant_;
+  RecedingHorizonControllerOptions options_;
+  plugin::ModelWorkspace workspace_;  ///< the planner model's inverse dynamics
+  DisturbanceObserver observer_;
+  ExcitationFitter fitter_;
+  PlanInUse in_use_;
+  std::vector<RecedingHorizonRecord> history_;
+};
+
+/// A closed-loop run of the controller on its plant (plugin::simulate_closed_loop, control
+/// period from the controller), with the settling time and the predicted joint paths.
+struct RecedingHorizonRun {
+  plugin::ClosedLoopResult loop;
+  /// time, /controller/step, /jointset/<joint>/q_predicted: 11 points along each step's plan.
+  plugin::StoTable predictions;
+  double settling_time_s = -1.0;  ///< every joint within the tolerance of the target from then on; -1: never
+};
+RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, const SimTK::State& initial,
+                                        const plugin::ClosedLoopOptions& options,
+                                        double settle_tolerance_rad = 3.14159265358979323846 / 180.0);
+
+/// The predicted joint paths of the controller's history (see RecedingHorizonRun::predictions).
+plugin::StoTable prediction_table(const RecedingHorizonController& controller);
+
+}  // namespace flatsos::planner

@@ -1,0 +1,18 @@
+#pragma once
+// Rest states the planner can start from.
+
+#include <Eigen/Core>
+#include <Simbody.h>
+
+#include "flatsos/planner/flat_outputs.hpp"
+
+namespace flatsos::planner {
+
+/// Minimum-effort static equilibrium at joint angles q: the SLP with the target at q gives the
+/// constant flat outputs; the inverse map at rest gives tendon lengths and activations (u = 0).
+/// Sets q, qd = 0, L_S, a and held excitations n = a on `state` (a State of flat.model()).
+/// Throws std::runtime_error when the SLP fails or the rest lies outside the valid domain.
+void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& state, const Eigen::VectorXd& q_rad,
+                                   const Eigen::VectorXd& reserves_N);
+
+}  // namespace flatsos::planner

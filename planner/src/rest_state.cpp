@@ -1,0 +1,31 @@
+#include "flatsos/planner/rest_state.hpp"
+
+#include <stdexcept>
+
+#include "flatsos/planner/motion_planner.hpp"
+
+namespace flatsos::planner {
+
+void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& state, const Eigen::VectorXd& q,
+                                   const Eigen::VectorXd& reserves) {
+  RecedingHorizonOptions o;
+  o.target_q_rad = q;
+  o.reserves_N = reserves;
+  plugin::ModelWorkspace workspace = flat.makeWorkspace();
+  const RecedingHorizonStep rest = plan_receding_horizon_step(flat, workspace, q, Eigen::VectorXd::Zero(q.size()), o);
+  if (rest.status != SolveStatus::Solved) throw std::runtime_error("rest state: the SLP failed: " + rest.message);
+  Jet Y = Jet::Zero(rest.alpha().size(), 3);
+  Y.col(0) = rest.alpha();
+  const MusclePoint mp = flat.inverse(workspace, rest.path.jet(0.0, 5), Y);
+  if (!mp.inDomain())
+    for (const auto& why : mp.domain_violation)
+      if (!why.empty()) throw std::runtime_error("rest state outside the model's valid domain: " + why);
+  const auto& model = flat.model();
+  model.setJointAngles(state, q);
+  model.setJointSpeeds(state, Eigen::VectorXd::Zero(q.size()));
+  model.setTendonLengths(state, mp.tendon_length_m);
+  model.setActivations(state, mp.activation);
+  model.setExcitations(state, mp.activation);
+}
+
+}  // namespace flatsos::planner

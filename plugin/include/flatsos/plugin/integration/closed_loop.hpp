@@ -1,0 +1,55 @@
+#pragma once
+// A closed-loop simulation harness: a controller changes the muscles' inputs at the start of
+// every control period, one of the steppers of stepper.hpp integrates in between. It knows
+// nothing of how the controller decides (the planner's receding-horizon controller is one).
+
+#include <Simbody.h>
+
+#include <Eigen/Core>
+
+#include "flatsos/plugin/integration/stepper.hpp"
+#include "flatsos/plugin/io/state_table.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+
+namespace flatsos::plugin {
+
+/// What a closed loop calls every control period.
+class Controller {
+ public:
+  virtual ~Controller() = default;
+  /// Reads the state at its time and changes its inputs (excitations, discrete variables) for
+  /// the next period. `state` is the stepper's own state: change it, do not keep it.
+  virtual void control(SimTK::State& state) = 0;
+};
+
+struct ClosedLoopOptions {
+  double duration_s = 2.0;
+  double control_period_s = 0.05;
+  IntegratorKind integrator = IntegratorKind::RungeKuttaMerson;
+  double accuracy = 1e-8;      ///< relative, the stepper's meaning
+  int reports_per_period = 5;  ///< rows of the state table per period
+};
+
+struct ClosedLoopResult {
+  StoTable states;                ///< make_state_table columns, one row at the start and reports_per_period per period
+  SimTK::State final_state;
+  bool finite = true;             ///< false: a state became NaN/Inf or the integrator could not continue; the run stopped there
+  double wall_seconds = 0.0;      ///< controller and integration
+  double real_time_factor = 0.0;  ///< simulated time / wall time
+  long integrator_steps = 0;
+  long integrator_attempts = 0;   ///< steps tried, rejected ones included
+};
+
+/// Runs `controller` on `plant` from `initial`. The controller acts at initial time + k period
+/// (k = 0, 1, ...) on the stepper's own state; the muscle Rosenbrock method keeps its step size
+/// across these input changes, Simbody's integrators restart. Throws std::invalid_argument for a
+/// non-positive duration or period, or reports_per_period < 1.
+ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Controller& controller,
+                                      const SimTK::State& initial, const ClosedLoopOptions& options);
+
+/// The first time of `states` (a make_state_table of `model`) from which every joint stays within
+/// `tolerance_rad` of `target_q_rad` until the end; -1 when the last row is outside.
+double settling_time(const MusculoskeletalModel& model, const StoTable& states, const Eigen::VectorXd& target_q_rad,
+                     double tolerance_rad);
+
+}  // namespace flatsos::plugin
