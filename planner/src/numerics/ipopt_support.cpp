@@ -1,11 +1,14 @@
 #include "numerics/ipopt_support.hpp"
 
+#include <mutex>
 #include <stdexcept>
 
 namespace flatsos::planner::detail {
 
-Ipopt::SmartPtr<Ipopt::IpoptApplication> make_ipopt(double tol, int max_iter) {
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
+IpoptSession make_ipopt(double tol, int max_iter) {
+  static std::recursive_mutex mumps;
+  IpoptSession session{std::unique_lock<std::recursive_mutex>(mumps), IpoptApplicationFactory()};
+  Ipopt::IpoptApplication* app = Ipopt::GetRawPtr(session.app);
   app->Options()->SetIntegerValue("print_level", 0);
   app->Options()->SetStringValue("sb", "yes");  // no banner
   app->Options()->SetStringValue("linear_solver", "mumps");
@@ -13,7 +16,7 @@ Ipopt::SmartPtr<Ipopt::IpoptApplication> make_ipopt(double tol, int max_iter) {
   app->Options()->SetIntegerValue("max_iter", max_iter);
   if (app->Initialize("") != Ipopt::Solve_Succeeded)
     throw std::runtime_error("Ipopt failed to initialize");
-  return app;
+  return session;
 }
 
 std::string ipopt_status_name(Ipopt::ApplicationReturnStatus s) {

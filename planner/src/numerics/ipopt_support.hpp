@@ -5,13 +5,27 @@
 #include <IpSolveStatistics.hpp>
 #include <IpTNLP.hpp>
 
+#include <mutex>
 #include <string>
 
 namespace flatsos::planner::detail {
 
+/// An Ipopt application together with the process-wide lock of Debian's sequential MUMPS, which
+/// keeps global state (its stand-in MPI layer): two solves at once, or a solver torn down while
+/// another runs, abort the process ("PB allocation in DMUMPS_LOAD_INIT", "Instance Error 1 in
+/// DMUMPS_F77", measured with two planning threads). The lock is held from creation until the
+/// application (and the MUMPS instance inside it) is destroyed; members are destroyed in reverse
+/// order, so the application goes first. The same thread may open nested sessions.
+struct IpoptSession {
+  std::unique_lock<std::recursive_mutex> lock;
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app;
+  Ipopt::IpoptApplication* operator->() const { return Ipopt::GetRawPtr(app); }
+  Ipopt::IpoptApplication& operator*() const { return *app; }
+};
+
 /// A quiet Ipopt application with MUMPS (the only linear solver of Debian's Ipopt). Initialize("")
 /// so that no stray ipopt.opt in the working directory is read.
-Ipopt::SmartPtr<Ipopt::IpoptApplication> make_ipopt(double tol, int max_iter);
+IpoptSession make_ipopt(double tol, int max_iter);
 
 /// Ipopt's status as text, for messages.
 std::string ipopt_status_name(Ipopt::ApplicationReturnStatus status);

@@ -715,8 +715,7 @@ IpoptRun run_ipopt(std::vector<Block>& blocks, FactorLayout layout,
   // With the block weights, a constraint violation tau means a relative monomial residual
   // <= tau; ask Ipopt for a tenth of the certification tolerance (re-checked by the caller).
   const double ipopt_tol = std::min(1e-8, 0.1 * tol);
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app =
-      detail::make_ipopt(ipopt_tol, options.max_iterations);
+  const detail::IpoptSession app = detail::make_ipopt(ipopt_tol, options.max_iterations);
   app->Options()->SetNumericValue("constr_viol_tol", ipopt_tol);
   // No early "acceptable" exit: at polynomials with exact zeros the solution is singular and
   // Newton converges linearly; Ipopt would otherwise stop there short of the tolerance.
