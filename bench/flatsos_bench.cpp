@@ -14,6 +14,7 @@
 #include <thread>
 #include <tuple>
 
+#include "allocation_counter.hpp"
 #include "example_support.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatsos/planner/rest_state.hpp"
@@ -24,10 +25,9 @@ namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 namespace ex = flatsos::examples;
 using nlohmann::json;
-using Clock = std::chrono::steady_clock;
-
 namespace {
 
+using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 json stats(std::vector<double> v, double scale, const std::string& unit) {
@@ -234,6 +234,19 @@ int main(int argc, char** argv) {
   }
   j["closed_loop_rh"] = closed;
   j["rh_controller_step"] = stats(full_steps, 1e3, "ms (SLP plan + excitations of the next period)");
+  {
+    // Heap allocations of one control period (the scenario's controller, exact SLP), after the first.
+    fpl::RecedingHorizonController controller(flat, co);
+    SimTK::State s = rest;
+    std::vector<double> per_step;
+    for (int k = 0; k < 10; ++k) {
+      s.updTime() = 0.05 * k;
+      const long before = heap_allocations();
+      controller.step(s);
+      if (k > 0) per_step.push_back(static_cast<double>(heap_allocations() - before));
+    }
+    j["rh_controller_step_heap_allocations"] = stats(per_step, 1.0, "operator new calls per control period");
+  }
 
   // ---- forward simulation: wall seconds per simulated second ----
   SimTK::State held = s0;
