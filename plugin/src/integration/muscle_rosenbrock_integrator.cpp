@@ -215,7 +215,7 @@ void MuscleRosenbrockIntegrator::setFixedStepSize(double h) {
   if (h > 0.0) h_ = h;
 }
 
-bool MuscleRosenbrockIntegrator::advanceTo(double t_end) { return advanceTo(t_end, {}, Report()); }
+bool MuscleRosenbrockIntegrator::advanceUnchecked(double t_end) { return advanceUnchecked(t_end, {}, Report()); }
 
 void MuscleRosenbrockIntegrator::inputsChanged() {
   f0_valid_ = false;  // the excitations (discrete variables) changed: f and J must be re-evaluated
@@ -247,11 +247,10 @@ void MuscleRosenbrockIntegrator::reportDense(double t0, double h, const std::vec
   }
 }
 
-bool MuscleRosenbrockIntegrator::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
+bool MuscleRosenbrockIntegrator::advanceUnchecked(double t_end, const std::vector<double>& report_times,
+                                                  const Report& report) {
   if (!initialized_) throw std::logic_error("muscle Rosenbrock integrator: advanceTo before initialize");
-  check_times(t_end, report_times);
-  std::size_t next_report = 0;
-  while (next_report < report_times.size() && report_times[next_report] <= state_.getTime()) ++next_report;
+  std::size_t next_report = 0;  // the times are in (now, t_end], ascending (checked by Stepper::advanceTo)
   while (state_.getTime() < t_end) {
     const double t = state_.getTime(), remaining = t_end - t;
     if (!f0_valid_) {

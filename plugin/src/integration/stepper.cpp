@@ -1,6 +1,9 @@
 #include "flatsos/plugin/integration/stepper.hpp"
 
 #include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <string>
 #include <stdexcept>
 
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -21,9 +24,8 @@ class SimbodyStepper final : public Stepper {
     counted_ = integ_->getNumStepsTaken();
     counted_attempts_ = integ_->getNumStepsAttempted();
   }
-  bool advanceTo(double t) override {
+  bool advanceUnchecked(double t) override {
     if (pending_) inputsChanged();
-    check_times(t, {});
     bool failed = false;
     try {
       // The first stepTo after initialize() only reports the start of the interval without
@@ -61,20 +63,43 @@ class SimbodyStepper final : public Stepper {
 };
 }  // namespace
 
-void check_times(double t_end, const std::vector<double>& report_times) {
-  if (!std::isfinite(t_end)) throw std::invalid_argument("integrator: the target time is not finite");
-  for (double t : report_times)
-    if (!std::isfinite(t)) throw std::invalid_argument("integrator: a report time is not finite");
+void check_times(double now, double t_end, const std::vector<double>& report_times, bool have_report) {
+  const auto fail = [](const std::string& why) { throw std::invalid_argument("integrator: " + why); };
+  const auto time = [](double t) {
+    std::ostringstream s;
+    s << std::setprecision(17) << t << " s";
+    return s.str();
+  };
+  if (!std::isfinite(t_end)) fail("the target time is not finite");
+  if (t_end < now) fail("the target time " + time(t_end) + " lies before the current time " + time(now));
+  if (!report_times.empty() && !have_report) fail("report times given but no report callback");
+  double previous = now;
+  for (std::size_t i = 0; i < report_times.size(); ++i) {
+    const double t = report_times[i];
+    const std::string which = "report time " + std::to_string(i) + " (" + time(t) + ")";
+    if (!std::isfinite(t)) fail("report time " + std::to_string(i) + " is not finite");
+    if (t > t_end) fail(which + " lies after the target time " + time(t_end));
+    if (!(t > previous)) fail(which + (i == 0 ? " is not after the current time " + time(now) : " is not after the one before it"));
+    previous = t;
+  }
+}
+
+bool Stepper::advanceTo(double t) {
+  check_times(state().getTime(), t, {}, false);
+  return advanceUnchecked(t);
 }
 
 bool Stepper::advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) {
-  check_times(t_end, report_times);
+  check_times(state().getTime(), t_end, report_times, static_cast<bool>(report));
+  return advanceUnchecked(t_end, report_times, report);
+}
+
+bool Stepper::advanceUnchecked(double t_end, const std::vector<double>& report_times, const Report& report) {
   for (double t : report_times) {
-    if (t > t_end) break;
-    if (!advanceTo(t)) return false;
+    if (!advanceUnchecked(t)) return false;
     report(state());
   }
-  return advanceTo(t_end);
+  return advanceUnchecked(t_end);
 }
 
 const char* integrator_name(IntegratorKind kind) {

@@ -34,10 +34,6 @@ class MuscleRosenbrockIntegrator final : public Stepper {
   MuscleRosenbrockIntegrator(const SimTK::System& system, std::vector<HillMuscle> muscles, double accuracy);
 
   void initialize(const SimTK::State& s) override;
-  bool advanceTo(double t) override;
-  /// Reports come from the method's continuous extension (second order with the approximate
-  /// Jacobian, within the controlled error): steps are not cut.
-  bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report) override;
   const SimTK::State& state() const override { return state_; }
   SimTK::State& updState() override { return state_; }
   void inputsChanged() override;
@@ -49,6 +45,12 @@ class MuscleRosenbrockIntegrator final : public Stepper {
   /// convergence studies and hard real-time use; the last step before a target time is shortened.
   /// A step too long for a muscle's own time scale (see kMinPivot) stops advanceTo (false).
   void setFixedStepSize(double h_s);
+
+ protected:
+  /// Reports come from the method's continuous extension (second order with the approximate
+  /// Jacobian, within the controlled error): steps are not cut.
+  bool advanceUnchecked(double t_end, const std::vector<double>& report_times, const Report& report) override;
+  bool advanceUnchecked(double t) override;
 
  private:
   static constexpr int kStages = 4;

@@ -22,8 +22,10 @@ class MusculoskeletalModel;
 /// Explicit Runge-Kutta-Merson, CPodes' implicit BDF, or the muscle Rosenbrock-W method.
 enum class IntegratorKind { RungeKuttaMerson, CPodesBdf, MuscleRosenbrock };
 
-/// Throws std::invalid_argument if t_end or a report time is not finite.
-void check_times(double t_end, const std::vector<double>& report_times);
+/// The contract of Stepper::advanceTo, checked in one place for every stepper: `t_end` finite and
+/// not before `now`; report times finite, strictly ascending and each in (now, t_end]; a
+/// callback when there are report times. Throws std::invalid_argument naming the time and why.
+void check_times(double now, double t_end, const std::vector<double>& report_times, bool have_report);
 
 /// "rkm", "bdf", "rosenbrock" (the command-line names) and back; the inverse throws
 /// std::invalid_argument naming the unknown name.
@@ -38,15 +40,17 @@ class Stepper {
   virtual ~Stepper() = default;
   /// Starts (or restarts) from `s`.
   virtual void initialize(const SimTK::State& s) = 0;
-  /// Advances exactly to time t. Returns false when the state became non-finite or the
-  /// integrator could not proceed (the Rosenbrock method then keeps its last accepted state,
-  /// Simbody's integrators the state where they stopped).
-  virtual bool advanceTo(double t) = 0;
-  /// Advances exactly to t_end and calls `report` at each of `report_times` (ascending, in
-  /// (now, t_end]). Steppers with a continuous extension interpolate instead of cutting their
-  /// steps at the report times; the others step to each. Non-finite times throw
-  /// std::invalid_argument.
-  virtual bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report);
+  /// Advances exactly to time t (t == now: nothing to do). Returns false when the state became
+  /// non-finite or the integrator could not proceed (the Rosenbrock method then keeps its last
+  /// accepted state, Simbody's integrators the state where they stopped). Throws
+  /// std::invalid_argument for a t that is not finite or lies before the current time.
+  bool advanceTo(double t);
+  /// Advances exactly to t_end and calls `report` once at each of `report_times`, in order, with
+  /// the state at exactly that time. The times must be strictly ascending and in (now, t_end],
+  /// and `report` must be set when there are any (see check_times: std::invalid_argument
+  /// otherwise, before anything moves). Steppers with a continuous extension interpolate instead
+  /// of cutting their steps at the report times; the others step to each.
+  bool advanceTo(double t_end, const std::vector<double>& report_times, const Report& report);
   /// The state at the current time. Not necessarily realized: realize it before reading
   /// accelerations.
   virtual const SimTK::State& state() const = 0;
@@ -59,6 +63,13 @@ class Stepper {
   virtual long stepsTaken() const = 0;
   /// Steps tried since construction, rejected ones included.
   virtual long stepsAttempted() const = 0;
+
+ protected:
+  /// advanceTo(t) after the checks.
+  virtual bool advanceUnchecked(double t) = 0;
+  /// advanceTo(t_end, report_times, report) after the checks; the default steps to each report
+  /// time.
+  virtual bool advanceUnchecked(double t_end, const std::vector<double>& report_times, const Report& report);
 };
 
 /// A stepper for `system` whose muscles are `muscles` (used by the Rosenbrock method only).
