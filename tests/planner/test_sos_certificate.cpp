@@ -12,11 +12,11 @@
 #include <random>
 #include <vector>
 
-#include "flatsos/planner/numerics/sos_certificate.hpp"
+#include "flatsos/planner/numerics/sos_certificate_study.hpp"
 
 namespace {
 
-using flatsos::planner::CertificationOptions;
+using flatsos::planner::CertificationStudyOptions;
 using flatsos::planner::CertificationResult;
 using flatsos::planner::certify_nonnegative_on_unit_interval;
 using flatsos::planner::GramBasis;
@@ -109,15 +109,15 @@ void expect_all_certified(const std::vector<Polynomial>& ps, const Certification
 }
 
 // No closed-form shortcut: what is not split off goes to Ipopt.
-CertificationOptions ipopt_only(double tol = kTol) {
-  CertificationOptions o;
+CertificationStudyOptions ipopt_only(double tol = kTol) {
+  CertificationStudyOptions o;
   o.tolerance = tol;
   o.closed_form_shortcut = false;
   return o;
 }
 // Nothing but the L L^T program: no shortcut, no deflation of near-zero minima, no retry.
-CertificationOptions raw_ipopt(double tol = kTol) {
-  CertificationOptions o = ipopt_only(tol);
+CertificationStudyOptions raw_ipopt(double tol = kTol) {
+  CertificationStudyOptions o = ipopt_only(tol);
   o.deflate_near_zeros = false;
   o.retry_other_layout = false;
   return o;
@@ -175,7 +175,7 @@ TEST(SosCertificate, DoubleRootsInsideAndZerosAtTheEnds) {
           poly({1.0, 0.5}),  // degree 7, 3 double roots
   };
   for (const Polynomial& p : ps) EXPECT_NEAR(minimum_on_interval(p, 0.0, 1.0).value, 0.0, 1e-12);
-  for (const CertificationOptions& o : {CertificationOptions{}, ipopt_only()}) {
+  for (const CertificationStudyOptions& o : {CertificationStudyOptions{}, ipopt_only()}) {
     const CertificationResult res = certify_nonnegative_on_unit_interval(ps, o);
     expect_all_certified(ps, res, kTol);
     EXPECT_LE(res.ipopt_calls, 1);
@@ -237,12 +237,12 @@ TEST(SosCertificate, StrictlyPositiveDegreesZeroToEight) {
   // Every basis gives a valid certificate (cross-check of the three coefficient maps).
   for (GramBasis basis : {GramBasis::Bernstein, GramBasis::Chebyshev, GramBasis::Monomial}) {
     SCOPED_TRACE(flatsos::planner::gram_basis_name(basis));
-    CertificationOptions o = ipopt_only();
+    CertificationStudyOptions o = ipopt_only();
     o.basis = basis;
     expect_all_certified(ps, certify_nonnegative_on_unit_interval(ps, o), kTol);
   }
-  // Lower-triangular variables (the DESIGN.md recipe) also work on strictly positive ones.
-  CertificationOptions tri = ipopt_only();
+  // Lower-triangular variables (the textbook recipe) also work on strictly positive ones.
+  CertificationStudyOptions tri = ipopt_only();
   tri.triangular_factors = true;
   expect_all_certified(ps, certify_nonnegative_on_unit_interval(ps, tri), kTol);
 }
@@ -314,7 +314,7 @@ TEST(SosCertificate, NegativeSomewhereIsRefused) {
   }
   // Without the pre-check, Ipopt alone (infeasible, or a residual that stays too large) must
   // not certify any of them either.
-  CertificationOptions no_precheck = ipopt_only();
+  CertificationStudyOptions no_precheck = ipopt_only();
   no_precheck.precheck = false;
   no_precheck.max_iterations = 100;
   const CertificationResult raw = certify_nonnegative_on_unit_interval(ps, no_precheck);
@@ -455,7 +455,7 @@ TEST(SosCertificate, IpoptDerivativeCheckerFindsNoError) {
                         Case{"triangular+proximal", true, 0.3, GramBasis::Bernstein},
                         Case{"chebyshev", false, 0.1, GramBasis::Chebyshev}}) {
     SCOPED_TRACE(k.name);
-    CertificationOptions o = raw_ipopt();
+    CertificationStudyOptions o = raw_ipopt();
     o.derivative_test = true;
     o.triangular_factors = k.triangular;
     o.proximal_weight = k.proximal;

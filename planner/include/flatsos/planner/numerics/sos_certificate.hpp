@@ -1,5 +1,5 @@
 #pragma once
-// Markov-Lukacs sum-of-squares certificates of nonnegativity on [0, 1] (DESIGN.md 4).
+// Markov-Lukacs sum-of-squares certificates of nonnegativity on [0, 1] (docs/method/sos_certificates.md).
 //
 // A polynomial p of degree n is >= 0 on [0, 1] iff
 //   n = 2d:     p(s) = v_d(s)^T Q0 v_d(s) + s (1 - s) v_{d-1}(s)^T Q1 v_{d-1}(s),  Q0 (d+1), Q1 (d)
@@ -23,7 +23,8 @@
 // L L^T program nearly singular. They are first split at their global minimum, exactly:
 // p = s q + p(0), (1-s) q + p(1) or (s-r)^2 q + (linear >= 0), repeatedly; q (well conditioned)
 // goes to Ipopt or the closed form, and the certificate of p is assembled from q's. The
-// measurements behind these choices are at the end of sos_certificate.cpp.
+// measurements behind these choices: docs/method/sos_certificates.md; the knobs they compared:
+// sos_certificate_study.hpp.
 //
 // What "certified" proves. The certificate's factors rebuild a polynomial r that is >= 0 on [0, 1]
 // by construction (up to rounding in forming L L^T). The residual e = p - r is reported, with a
@@ -77,39 +78,7 @@ struct LukacsCertificate {
 struct CertificationOptions {
   /// Relative: certified when max_k |r_k - p_k| <= tolerance * max_k |p_k|.
   double tolerance = 1e-9;
-  GramBasis basis = GramBasis::Bernstein;
-  /// Diagonal Bernstein certificate without Ipopt when all Bernstein coefficients are >= 0.
-  bool closed_form_shortcut = true;
-  /// Refuse, without Ipopt, polynomials whose minimum on [0,1] is < -tolerance * scale. Only
-  /// tests switch it off (to see that Ipopt alone refuses negative polynomials).
-  bool precheck = true;
   int max_iterations = 100;  ///< per Ipopt call
-  /// Objective 0.5 w ||x - x_start||^2 over the (normalized) factor entries: a proximal term that
-  /// picks one point of the Gram family without biasing anything outside (0 = pure feasibility).
-  double proximal_weight = 0.0;
-  /// Ipopt's variables: full square factors (default) or lower-triangular ones. The returned
-  /// factors are lower triangular either way (QR of the full factor).
-  bool triangular_factors = false;
-  /// While the minimum of p on [0, 1] is <= deflation_threshold * max|Bernstein coefficient|,
-  /// split p at its global minimizer r: p = w q + rest, w = s (r = 0), 1 - s (r = 1) or (s - r)^2,
-  /// rest of degree <= 1 and >= 0 (or negligible). q is certified (closed form or Ipopt), then
-  /// the certificate of p is assembled exactly: w's multiplication matrix conjugates the Grams
-  /// and rest's diagonal Bernstein Gram is added. The L L^T program is nearly singular at such
-  /// minima (Ipopt stalls on zeros of multiplicity >= 2 at an end, or double roots near an end).
-  bool deflate_near_zeros = true;
-  double deflation_threshold = 1e-3;
-  /// Blocks left uncertified by the first call get a second call (all together) with the other
-  /// factor layout: full factors fail on some zeros of high multiplicity at the ends, triangular
-  /// ones on some generic double roots.
-  bool retry_other_layout = true;
-  /// Bounds L_ii >= 0 (removes the sign symmetry of each column).
-  bool nonnegative_diagonal = false;
-  /// Floor, relative to the largest, of the Bernstein coefficients used for the diagonal start.
-  double start_floor = 0.01;
-  /// Run Ipopt's derivative checker ("second-order") at a perturbed start; the report is returned.
-  bool derivative_test = false;
-  /// Ipopt's print_level (0: silent), for diagnosis.
-  int ipopt_print_level = 0;
 };
 
 struct CertificationResult {
@@ -124,7 +93,7 @@ struct CertificationResult {
   int ipopt_constraints = 0;
   int ipopt_iterations = 0;    ///< summed over the calls
   double solve_seconds = 0.0;  ///< wall time of the Ipopt calls (setup of the TNLPs included)
-  double total_seconds = 0.0;  ///< wall time of the whole certification
+  double wall_seconds = 0.0;   ///< wall time of the whole certification
   std::string ipopt_status = "not_called";  ///< of the first call
   int retried_blocks = 0;                   ///< polynomials sent to the second call
   std::string retry_status = "not_called";
