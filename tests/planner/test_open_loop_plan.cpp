@@ -169,7 +169,7 @@ TEST_F(OpenLoopScenario, BadInputIsRejectedByName) {
 TEST_F(OpenLoopScenario, ExactExchangeRoundsGiveIpoptsOptimumWithFewerIpoptCalls) {
   const auto fast = fpl::plan_open_loop(arm.flat, s0, options);
   auto ipopt_only = options;
-  ipopt_only.sos.exact_exchange = false;
+  ipopt_only.sos.study.exact_exchange = false;
   const auto slow = fpl::plan_open_loop(arm.flat, s0, ipopt_only);
   ASSERT_EQ(fast.status, fpl::SolveStatus::Solved) << fast.message;
   ASSERT_EQ(slow.status, fpl::SolveStatus::Solved) << slow.message;

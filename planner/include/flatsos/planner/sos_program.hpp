@@ -1,5 +1,5 @@
 #pragma once
-// The secondary optimization problem (SOP, DESIGN.md 4):
+// The secondary optimization problem (SOP; docs/method/sos_certificates.md for the certificates):
 //   minimize  integral_0^T sum_l Y_l(t) dt  over polynomial Y of degree d
 //   subject to  F_j(t) = C_tau,j tau(t) + C_Y,j Y(t) >= F_reserve,j  and  Y(t) >= 0 on [0, T],
 //               boundary equalities on Y and its derivatives at 0 and T.
@@ -33,17 +33,23 @@ struct FlatOutputBoundary {
   int terminal_first_order = 1;       ///< 1: Y(T) free, rates fixed (terminal equilibrium)
 };
 
+/// Settings of the exchange method that were compared while building it (tests and
+/// measurements); the defaults are the measured choices.
+struct SosExchangeStudyOptions {
+  /// Exchange rounds by the exact small-LP simplex, then Ipopt on the final points (one Ipopt
+  /// call instead of one per round; the reported optimum is still Ipopt's). false: Ipopt always.
+  bool exact_exchange = true;
+  double coefficient_bound_N = 1e7;    ///< |theta| box keeping early LPs bounded
+  double prune_slack_N = 20.0;         ///< after an LP, initial points with more slack are dropped
+};
+
 struct SosProgramOptions {
   int flat_output_degree = 4;          ///< d
   double feasibility_margin_N = 1e-6;  ///< constraints are imposed >= this at the LP points
   int max_exchange_rounds = 40;
-  double coefficient_bound_N = 1e7;    ///< |theta| box keeping early LPs bounded
-  double prune_slack_N = 20.0;         ///< after an LP, initial points with more slack are dropped
-  /// Exchange rounds by the exact small-LP simplex, then Ipopt on the final points (one Ipopt
-  /// call instead of one per round; the reported optimum is still Ipopt's). false: Ipopt always.
-  bool exact_exchange = true;
   bool certify = true;                 ///< Lukacs certificates for the near-active pieces
   double near_active_N = 1.0;          ///< pieces whose minimum is below this get certified
+  SosExchangeStudyOptions study;
 };
 
 struct SosProgramResult {

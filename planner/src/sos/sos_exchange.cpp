@@ -1,0 +1,150 @@
+#include "sos/sos_exchange.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "flatsos/planner/numerics/small_lp.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
+
+namespace flatsos::planner::detail {
+
+namespace {
+constexpr double kNoBound = 1e19;
+}  // namespace
+
+bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::VectorXd& theta, SosProgramResult& result) {
+  const Stopwatch solve;
+  auto& constraints = setup.constraints;
+  LinearProgram& lp = setup.lp;
+  const int n_theta = setup.free_coefficients;
+
+  auto build_rows = [&]() {
+    std::size_t rows = 0;
+    for (const auto& c : constraints) rows += c.points.size();
+    lp.G.resize(static_cast<Eigen::Index>(rows), n_theta);
+    lp.row_lower.resize(static_cast<Eigen::Index>(rows));
+    lp.row_upper = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(rows), kNoBound);
+    Eigen::Index row = 0;
+    for (const auto& c : constraints)
+      for (double s : c.points) {
+        const Eigen::RowVectorXd v = monomials(s, c.base.size());
+        lp.G.row(row) = v * c.G;
+        lp.row_lower[row] = o.feasibility_margin_N - v.dot(c.base);
+        ++row;
+      }
+    result.lp_points = static_cast<int>(rows);
+  };
+
+  if (const std::string reason = fixed_violation(setup, o.feasibility_margin_N); !reason.empty()) {
+    result.status = SolveStatus::Infeasible;
+    result.message = reason;
+    result.solve_seconds = solve.seconds();
+    return false;
+  }
+  theta = Eigen::VectorXd::Zero(n_theta);
+  bool converged = false;
+  // Ipopt solves an exchange LP when the exact solver cannot, and always the final one: the
+  // reported optimum is Ipopt's.
+  auto ipopt_round = [&](int round) -> bool {
+    LinearProgramOptions lpo;
+    if (round > 0 || o.study.exact_exchange) lpo.start = theta;
+    const LinearProgramResult lr = solve_linear_program(lp, lpo);
+    result.ipopt_iterations += lr.iterations;
+    ++result.ipopt_calls;
+    if (lr.status != SolveStatus::Solved) {
+      const std::string reason = fixed_violation(setup, o.feasibility_margin_N);
+      result.status = lr.status == SolveStatus::Infeasible || !reason.empty() ? SolveStatus::Infeasible : SolveStatus::Failed;
+      result.message = !reason.empty() ? reason
+                                       : "the exchange LP of round " + std::to_string(round + 1) +
+                                             " was not solved (Ipopt: " + lr.solver_status + ")";
+      result.solve_seconds = solve.seconds();
+      return false;
+    }
+    theta = lr.x;
+    return true;
+  };
+  bool last_by_ipopt = false;
+  for (int round = 0; round < o.max_exchange_rounds; ++round) {
+    result.exchange_rounds = round + 1;
+    if (n_theta > 0) {
+      build_rows();
+      SmallLpResult exact;
+      if (o.study.exact_exchange) {
+        exact = solve_small_lp(lp);
+        result.exact_lp_pivots += exact.pivots;
+      }
+      if (exact.status == SolveStatus::Solved) {
+        theta = exact.x;
+        last_by_ipopt = false;
+      } else {
+        if (!ipopt_round(round)) return false;
+        last_by_ipopt = true;
+      }
+      // Keep the LPs small: initial points far from active leave the next LP (Ipopt's cost per
+      // iteration grows with the rows). A pruned constraint that becomes violated is caught by
+      // the exact minimum below and comes back as a sticky point.
+      for (auto& c : constraints) {
+        const Polynomial g = c.at(theta);
+        for (std::size_t i = c.points.size(); i-- > 0;)
+          if (!c.sticky[i] && g(c.points[i]) > o.study.prune_slack_N) {
+            c.points.erase(c.points.begin() + static_cast<std::ptrdiff_t>(i));
+            c.sticky.erase(c.sticky.begin() + static_cast<std::ptrdiff_t>(i));
+          }
+      }
+    }
+    // Exact minimum of every constraint polynomial; add the violated points.
+    auto add_violated = [&]() {
+      bool added = false;
+      result.min_constraint_value_N = kNoBound;
+      for (auto& c : constraints) {
+        const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
+        result.min_constraint_value_N = std::min(result.min_constraint_value_N, mn.value);
+        if (mn.value < 0.0) {
+          const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
+          if (!known) {
+            c.points.push_back(mn.at);
+            c.sticky.push_back(true);
+            added = true;
+          }
+        }
+      }
+      return added;
+    };
+    if (add_violated()) continue;
+    if (n_theta > 0 && !last_by_ipopt) {
+      // The exact solver converged: Ipopt solves the final LP (on the final points, started there).
+      build_rows();
+      if (!ipopt_round(round)) return false;
+      last_by_ipopt = true;
+      if (add_violated()) continue;
+    }
+    converged = true;
+    break;
+  }
+  result.solve_seconds = solve.seconds();
+
+  if (const std::string reason = fixed_violation(setup, o.feasibility_margin_N); !reason.empty()) {
+    result.status = SolveStatus::Infeasible;
+    result.message = reason;
+    return false;
+  }
+  if (!converged || result.min_constraint_value_N < -1e-6) {
+    result.status = SolveStatus::Failed;
+    std::ostringstream why;
+    why << "the exchange method did not converge in " << o.max_exchange_rounds << " rounds (worst constraint value "
+        << result.min_constraint_value_N << " N)";
+    result.message = why.str();
+    return false;
+  }
+  if (n_theta > 0 && (theta.cwiseAbs().maxCoeff() > 0.999 * o.study.coefficient_bound_N)) {
+    result.status = SolveStatus::Failed;
+    result.message = "the SOS program is unbounded: a free coefficient of Y reached the bound " +
+                     std::to_string(o.study.coefficient_bound_N) + " N";
+    return false;
+  }
+
+  return true;
+}
+
+}  // namespace flatsos::planner::detail

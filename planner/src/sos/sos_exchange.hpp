@@ -1,0 +1,23 @@
+#pragma once
+// The SOS program's solvers: the exchange (cutting-plane) method on the set-up program, and the
+// Lukacs certification of the pieces that come near zero.
+
+#include <Eigen/Core>
+
+#include "sos/sos_setup.hpp"
+
+namespace flatsos::planner::detail {
+
+/// Solves the semi-infinite LP by exchange: LPs on finitely many points (the exact small simplex
+/// for the rounds, Ipopt for the final LP), the exact minimum of every constraint polynomial
+/// adding violated points, until none is violated. Fills theta and the result's status, message,
+/// counts and solve_seconds; returns whether a feasible optimum was found.
+bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& options, Eigen::VectorXd& theta,
+                       SosProgramResult& result);
+
+/// Lukacs certificates (one Ipopt problem) for the pieces whose constraint minimum is below
+/// options.near_active_N; fills the certification fields and certify_seconds.
+void certify_near_active_pieces(const SosSetup& setup, const Eigen::VectorXd& theta, const SosProgramOptions& options,
+                                SosProgramResult& result);
+
+}  // namespace flatsos::planner::detail

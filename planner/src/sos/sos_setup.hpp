@@ -1,0 +1,69 @@
+#pragma once
+// The SOS program's setup: the boundary equalities on Y eliminated (Y_l = particular + N theta_l
+// in global scaled time), one constraint polynomial per piece and muscle (tendon force >= its
+// reserve) or flat output (Y_l >= 0), affine in the free coefficients theta, and the LP's cost.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/numerics/linear_program.hpp"
+#include "flatsos/planner/numerics/polynomial.hpp"
+#include "flatsos/planner/sos_program.hpp"
+#include "flatsos/planner/torque_model.hpp"
+
+namespace flatsos::planner::detail {
+
+/// One constraint polynomial on one piece, in the piece's scaled time s in [0, 1], affine in
+/// theta: coefficients = base + G theta. It keeps what it constrains, for messages.
+struct ConstraintPolynomial {
+  Eigen::VectorXd base;
+  Eigen::MatrixXd G;
+  int piece = 0;
+  int muscle = -1;            ///< >= 0: tendon-force constraint of this muscle
+  int flat_output = -1;       ///< >= 0: Y_l >= 0
+  std::string name;           ///< "tendon force of muscle 'biceps'" or "flat output 'co1' >= 0"
+  double reserve_N = 0.0;     ///< the muscle's reserve (0 for Y_l >= 0)
+  double remainder_cost_N = 0.0;  ///< what the torque model's remainder bound costs here
+  std::vector<double> points;     ///< where the exchange LP imposes it
+  std::vector<bool> sticky;       ///< added by the exchange: never pruned
+  Polynomial at(const Eigen::VectorXd& theta) const { return Polynomial(base + G * theta); }
+};
+
+/// Y_l = particular + nullspace theta_l in the global scaled time sigma = t / T.
+struct OutputParameterization {
+  Eigen::VectorXd particular;
+  Eigen::MatrixXd nullspace;
+  int offset = 0;  ///< of theta_l in theta
+};
+
+struct SosSetup {
+  double duration_s = 0.0;
+  int degree = 0;
+  int free_coefficients = 0;  ///< size of theta
+  std::vector<OutputParameterization> outputs;
+  std::vector<ConstraintPolynomial> constraints;
+  const TorqueModel* torque = nullptr;
+  LinearProgram lp;           ///< cost and bounds on theta; rows built by the exchange
+  double cost_constant = 0.0; ///< cost = cost_constant + lp.cost . theta
+};
+
+/// [1, s, s^2, ...] (size entries).
+Eigen::RowVectorXd monomials(double s, Eigen::Index size);
+
+/// Validates the inputs (std::invalid_argument naming the problem) and builds the program.
+SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
+                            const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
+                            const SosProgramOptions& options);
+
+/// A constraint that no free coefficient can change (the equalities fix Y there) and that is
+/// violated at one of its points: the program is infeasible for a reason that can be named.
+/// Empty when there is none.
+std::string fixed_violation(const SosSetup& setup, double margin_N);
+
+/// The flat outputs of theta in seconds (ascending powers of t).
+std::vector<Polynomial> flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta);
+
+}  // namespace flatsos::planner::detail
