@@ -6,7 +6,6 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -20,15 +19,14 @@
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 namespace ex = flatsos::examples;
 using nlohmann::json;
-namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+namespace {
 
 json stats(std::vector<double> v, double scale, const std::string& unit) {
   std::sort(v.begin(), v.end());
@@ -39,9 +37,9 @@ template <class F>
 std::vector<double> repeat(int reps, F f) {
   std::vector<double> out;
   for (int i = 0; i < reps; ++i) {
-    const auto t0 = Clock::now();
+    const flatsos::Stopwatch wall;
     f();
-    out.push_back(seconds_since(t0));
+    out.push_back(wall.seconds());
   }
   return out;
 }
