@@ -3,6 +3,8 @@
 // and the safe extension of the forward model.
 #include <gtest/gtest.h>
 
+#include "finite_difference.hpp"
+
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -22,11 +24,8 @@ fm::MuscleParameters biceps() {
   return p;
 }
 
-// Central difference with a step relative to the scale of x; error O(h^2).
-template <class F>
-double central_difference(F f, double x, double h) {
-  return (f(x + h) - f(x - h)) / (2.0 * h);
-}
+using flatsos::test::central_difference;
+using flatsos::test::default_step;
 
 std::vector<double> linspace(double a, double b, int n) {
   std::vector<double> v;
@@ -68,13 +67,14 @@ TEST(Tendon, InverseRejectsNonPositiveAndNaNForce) {
 
 TEST(Tendon, DerivativesMatchFiniteDifferences) {
   const auto p = biceps();
+  // Steps well inside the distance to the slack length (the kink of the tendon law).
   const double h = 1e-7;
   for (double ls : linspace(1.001 * p.tendon_slack_length_m, 1.05 * p.tendon_slack_length_m, 20)) {
-    const double d1 = central_difference([&](double x) { return fm::tendon_force(p, x); }, ls, h);
-    EXPECT_NEAR(fm::tendon_force_derivative(p, ls), d1, 1e-6 * std::abs(d1));
-    const double d2 =
-        central_difference([&](double x) { return fm::tendon_force_derivative(p, x); }, ls, h);
-    EXPECT_NEAR(fm::tendon_force_second_derivative(p, ls), d2, 1e-6 * std::abs(d2));
+    EXPECT_MATCHES_FINITE_DIFFERENCE(fm::tendon_force_derivative(p, ls),
+                                     central_difference([&](double x) { return fm::tendon_force(p, x); }, ls, h));
+    EXPECT_MATCHES_FINITE_DIFFERENCE(
+        fm::tendon_force_second_derivative(p, ls),
+        central_difference([&](double x) { return fm::tendon_force_derivative(p, x); }, ls, h));
   }
 }
 
@@ -87,8 +87,9 @@ TEST(ForceLength, PeakAtOptimalLengthAndDerivative) {
     const double f = fm::force_length(p, lc);
     EXPECT_GT(f, 0.0);
     EXPECT_LE(f, 1.0);
-    const double d = central_difference([&](double x) { return fm::force_length(p, x); }, lc, 1e-7);
-    EXPECT_NEAR(fm::force_length_derivative(p, lc), d, 1e-7 * std::max(1.0, std::abs(d)));
+    EXPECT_MATCHES_FINITE_DIFFERENCE(
+        fm::force_length_derivative(p, lc),
+        central_difference([&](double x) { return fm::force_length(p, x); }, lc, default_step(lc, p.optimal_fiber_length_m)));
   }
 }
 
@@ -108,9 +109,11 @@ TEST(ForceVelocity, StrictlyDecreasingAndDerivativeMatchesFiniteDifferences) {
   for (std::size_t i = 1; i < us.size(); ++i)
     EXPECT_LT(fm::force_velocity(p, us[i]), fm::force_velocity(p, us[i - 1])) << us[i];
   for (double u : us) {
-    if (std::abs(u) < 1e-6) continue;  // the two branches meet (C1) at u = 0
-    const double d = central_difference([&](double x) { return fm::force_velocity(p, x); }, u, 1e-7);
-    EXPECT_NEAR(fm::force_velocity_derivative(p, u), d, 1e-6 * std::max(1.0, std::abs(d))) << u;
+    const double h = default_step(0.0, 1e-3 * vmax);
+    if (std::abs(u) < 3 * h) continue;  // the two branches meet (C1) at u = 0
+    EXPECT_MATCHES_FINITE_DIFFERENCE(fm::force_velocity_derivative(p, u),
+                                     central_difference([&](double x) { return fm::force_velocity(p, x); }, u, h))
+        << u;
     EXPECT_LT(fm::force_velocity_derivative(p, u), 0.0);
   }
   // C1 at u = 0: both branches have the same slope there.
@@ -155,11 +158,12 @@ TEST(ForceVelocity, SafeExtensionIsExactInsideC1AtTheSeamsAndMonotone) {
     EXPECT_LT(u, fm::fiber_velocity_from_force_ratio(p, zs[i - 1]));
   }
   for (double z : linspace(-3.0, 5.0, 161)) {
-    if (std::abs(z) < 1e-6 || std::abs(z - z_hi) < 1e-6 || std::abs(z - 1.0) < 1e-6) continue;
-    const double d =
-        central_difference([&](double x) { return fm::fiber_velocity_from_force_ratio(p, x); }, z, 1e-7);
-    EXPECT_NEAR(fm::fiber_velocity_from_force_ratio_derivative(p, z), d,
-                1e-6 * std::max(1.0, std::abs(d)))
+    const double h = default_step(0.0, 1e-3);
+    // The branches meet at 0, z_hi and 1: keep the samples 3 steps away.
+    if (std::abs(z) < 3 * h || std::abs(z - z_hi) < 3 * h || std::abs(z - 1.0) < 3 * h) continue;
+    EXPECT_MATCHES_FINITE_DIFFERENCE(
+        fm::fiber_velocity_from_force_ratio_derivative(p, z),
+        central_difference([&](double x) { return fm::fiber_velocity_from_force_ratio(p, x); }, z, h))
         << z;
   }
 }
@@ -196,16 +200,20 @@ TEST(ContractionDynamics, TendonOdePartialsMatchFiniteDifferences) {
       for (double L : linspace(0.3, 0.45, 7)) {
         const auto d = fm::tendon_length_derivative_partials(p, ls, a, L);
         auto ode = [&](double x, double y) { return fm::tendon_length_derivative(p, x, y, L, 0.0); };
-        const double hl = 1e-9, ha = 1e-7 * std::max(a, 1e-3);
-        const double fd_l = central_difference([&](double x) { return ode(x, a); }, ls, hl);
-        EXPECT_NEAR(d.d_tendon_length_per_s, fd_l, 1e-5 * std::max(1.0, std::abs(fd_l))) << a << " " << ls << " " << L;
-        const double fd_path = central_difference(
-            [&](double x) { return fm::tendon_length_derivative(p, ls, a, x, 0.0); }, L, hl);
-        EXPECT_NEAR(d.d_musculotendon_length_per_s, fd_path, 1e-5 * std::max(1.0, std::abs(fd_path)))
-            << a << " " << ls << " " << L;
-        if (std::abs(a - p.activation_floor) > 2.0 * ha) {  // the floor is a kink
-          const double fd_a = central_difference([&](double y) { return ode(ls, y); }, a, ha);
-          EXPECT_NEAR(d.d_activation_m_per_s, fd_a, 1e-5 * std::max(1.0, std::abs(fd_a))) << a << " " << ls << " " << L;
+        // Lengths on the scale of the tendon's stretch at Fmax (0.04 L_slack, ~9 mm), which the
+        // samples keep away from slack; activations on their own scale.
+        const double hl = default_step(0.0, 1e-3 * p.tendon_slack_length_m), ha = default_step(0.0, 1e-2 * std::max(a, 1e-3));
+        if (std::abs(ls - p.tendon_slack_length_m) > 3 * hl) {  // slack is a kink
+          EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_tendon_length_per_s, central_difference([&](double x) { return ode(x, a); }, ls, hl))
+              << a << " " << ls << " " << L;
+          EXPECT_MATCHES_FINITE_DIFFERENCE(
+              d.d_musculotendon_length_per_s,
+              central_difference([&](double x) { return fm::tendon_length_derivative(p, ls, a, x, 0.0); }, L, hl))
+              << a << " " << ls << " " << L;
+        }
+        if (std::abs(a - p.activation_floor) > 3.0 * ha) {  // the floor is a kink
+          EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_activation_m_per_s, central_difference([&](double y) { return ode(ls, y); }, a, ha))
+              << a << " " << ls << " " << L;
         }
         ++checked;
       }
@@ -235,10 +243,11 @@ TEST(ActivationDynamics, PartialDerivativesMatchFiniteDifferences) {
   const auto p = biceps();
   for (double n : linspace(0.0, 1.0, 11))
     for (double a : linspace(0.0, 1.0, 11)) {
-      const double dn = central_difference([&](double x) { return fm::activation_derivative(p, x, a); }, n, 1e-6);
-      const double da = central_difference([&](double x) { return fm::activation_derivative(p, n, x); }, a, 1e-6);
-      EXPECT_NEAR(fm::activation_derivative_d_excitation(p, n, a), dn, 1e-7 * std::max(1.0, std::abs(dn)));
-      EXPECT_NEAR(fm::activation_derivative_d_activation(p, n, a), da, 1e-7 * std::max(1.0, std::abs(da)));
+      const double h = default_step(0.0, 1.0);
+      EXPECT_MATCHES_FINITE_DIFFERENCE(fm::activation_derivative_d_excitation(p, n, a),
+                                       central_difference([&](double x) { return fm::activation_derivative(p, x, a); }, n, h));
+      EXPECT_MATCHES_FINITE_DIFFERENCE(fm::activation_derivative_d_activation(p, n, a),
+                                       central_difference([&](double x) { return fm::activation_derivative(p, n, x); }, a, h));
     }
 }
 

@@ -2,6 +2,8 @@
 // model is singular (a -> 0, slack tendon, extreme excitations): never NaN or Inf.
 #include <gtest/gtest.h>
 
+#include "finite_difference.hpp"
+
 #include <cmath>
 #include <limits>
 
@@ -222,19 +224,24 @@ TEST(HillMuscle, YIndexAndPartialsForIntegrators) {
     EXPECT_EQ(s.getYDot()[i], m.getTendonLengthDerivative(s));
     EXPECT_EQ(s.getYDot()[i + 1], m.getActivationDerivative(s));
     // The partials equal finite differences of the muscle's own state derivative in the State.
-    auto ydot_after = [&](int which, double delta) {
-      SimTK::State t = s;
-      t.updY()[i + which] += delta;
-      arm->system().realize(t, SimTK::Stage::Acceleration);
-      return t.getYDot();
+    // Entry `of` of YDot as a function of state entry `which` (the others as in s).
+    auto ydot = [&](int of, int which) {
+      return [&, of, which](double value) {
+        SimTK::State t = s;
+        t.updY()[i + which] = value;
+        arm->system().realize(t, SimTK::Stage::Acceleration);
+        return t.getYDot()[i + of];
+      };
     };
-    const double hl = 1e-9, ha = 1e-7;
-    const double fd_ll = (ydot_after(0, hl)[i] - ydot_after(0, -hl)[i]) / (2 * hl);
-    const double fd_la = (ydot_after(1, ha)[i] - ydot_after(1, -ha)[i]) / (2 * ha);
-    const double fd_aa = (ydot_after(1, ha)[i + 1] - ydot_after(1, -ha)[i + 1]) / (2 * ha);
+    const double ls = s.getY()[i], a = s.getY()[i + 1];
+    const auto& p = m.getParameters();
+    // Steps on the scales of the tendon's stretch (kept clear of slack) and of the activation.
+    const double hl = flatsos::test::default_step(0.0, 1e-3 * p.tendon_slack_length_m);
+    const double ha = flatsos::test::default_step(0.0, 1e-2 * a);
     const auto d = m.getTendonLengthDerivativePartials(s);
-    EXPECT_NEAR(d.d_tendon_length_per_s, fd_ll, 1e-5 * std::abs(fd_ll)) << j;
-    EXPECT_NEAR(d.d_activation_m_per_s, fd_la, 1e-5 * std::abs(fd_la)) << j;
-    EXPECT_NEAR(m.getActivationDerivativePartial(s), fd_aa, 1e-6 * std::abs(fd_aa)) << j;
+    EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_tendon_length_per_s, flatsos::test::central_difference(ydot(0, 0), ls, hl)) << j;
+    EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_activation_m_per_s, flatsos::test::central_difference(ydot(0, 1), a, ha)) << j;
+    EXPECT_MATCHES_FINITE_DIFFERENCE(m.getActivationDerivativePartial(s), flatsos::test::central_difference(ydot(1, 1), a, ha))
+        << j;
   }
 }
