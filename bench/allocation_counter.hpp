@@ -1,5 +1,5 @@
 #pragma once
-// Heap allocations through the global operator new since the program started (replaced in
-// allocation_counter.cpp), to measure what a stage allocates. C++ allocations only: Fortran's
-// and C's malloc are not seen.
+// Heap allocations of the whole process since it started (malloc family and operator new,
+// replaced in allocation_counter.cpp), to measure what a stage allocates.
+/// -1 in AddressSanitizer builds (which own malloc).
 long heap_allocations();

@@ -234,6 +234,7 @@ int main(int argc, char** argv) {
   j["rh_controller_step"] = stats(full_steps, 1e3, "ms (SLP plan + excitations of the next period)");
   {
     // Heap allocations of one control period (the scenario's controller, exact SLP), after the first.
+    // Measured: the exact SLP's vertex enumeration ~1800, Simbody's inverse dynamics ~16 per call.
     fpl::RecedingHorizonController controller(flat, co);
     SimTK::State s = rest;
     std::vector<double> per_step;
@@ -243,7 +244,7 @@ int main(int argc, char** argv) {
       controller.step(s);
       if (k > 0) per_step.push_back(static_cast<double>(heap_allocations() - before));
     }
-    j["rh_controller_step_heap_allocations"] = stats(per_step, 1.0, "operator new calls per control period");
+    j["rh_controller_step_heap_allocations"] = stats(per_step, 1.0, "heap allocations (malloc family and operator new) per control period");
   }
 
   // ---- forward simulation: wall seconds per simulated second ----
