@@ -1,7 +1,7 @@
 #include "flatsos/planner/slp.hpp"
 
 #include <cmath>
-#include <functional>
+#include <vector>
 #include <limits>
 #include <stdexcept>
 
@@ -41,35 +41,45 @@ Eigen::VectorXd slp_appendix_solution(const Eigen::MatrixXd& CY, const Eigen::Ve
 
 Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B) {
   check(CY, B);
-  const Eigen::Index m = CY.rows(), p = CY.cols();
+  const Eigen::Index m = CY.rows(), p = CY.cols(), n = m + p;
   // Constraint rows: C_Y alpha >= B, then alpha >= 0.
-  Eigen::MatrixXd rows(m + p, p);
+  Eigen::MatrixXd rows(n, p);
   rows << CY, Eigen::MatrixXd::Identity(p, p);
-  Eigen::VectorXd rhs(m + p);
+  Eigen::VectorXd rhs(n);
   rhs << B, Eigen::VectorXd::Zero(p);
   const double scale = 1.0 + B.cwiseAbs().maxCoeff();
   double best = std::numeric_limits<double>::infinity();
   Eigen::VectorXd best_alpha;
-  std::vector<Eigen::Index> pick;
-  std::function<void(Eigen::Index)> choose = [&](Eigen::Index start) {
-    if (static_cast<Eigen::Index>(pick.size()) == p) {
-      Eigen::MatrixXd M(p, p);
-      Eigen::VectorXd b(p);
-      for (Eigen::Index k = 0; k < p; ++k) M.row(k) = rows.row(pick[k]), b[k] = rhs[pick[k]];
-      Eigen::FullPivLU<Eigen::MatrixXd> lu(M);
-      if (!lu.isInvertible()) return;
-      const Eigen::VectorXd alpha = lu.solve(b);
-      if ((rows * alpha - rhs).minCoeff() < -1e-10 * scale) return;
-      if (alpha.sum() < best) best = alpha.sum(), best_alpha = alpha;
-      return;
+  // Every choice of p active rows, in lexicographic order, with the work matrices allocated once
+  // (a closed-loop step enumerates C(m + p, p) vertices: 210 for the arm).
+  std::vector<Eigen::Index> pick(static_cast<std::size_t>(p));
+  for (Eigen::Index k = 0; k < p; ++k) pick[static_cast<std::size_t>(k)] = k;
+  Eigen::MatrixXd M(p, p);
+  Eigen::VectorXd b(p), alpha(p), slack(n);
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(p, p);
+  while (true) {
+    for (Eigen::Index k = 0; k < p; ++k) {
+      const Eigen::Index r = pick[static_cast<std::size_t>(k)];
+      M.row(k) = rows.row(r);
+      b[k] = rhs[r];
     }
-    for (Eigen::Index i = start; i < m + p; ++i) {
-      pick.push_back(i);
-      choose(i + 1);
-      pick.pop_back();
+    lu.compute(M);
+    if (lu.isInvertible()) {
+      alpha.noalias() = lu.solve(b);
+      slack.noalias() = rows * alpha;
+      slack -= rhs;
+      if (slack.minCoeff() >= -1e-10 * scale && alpha.sum() < best) {
+        best = alpha.sum();
+        best_alpha = alpha;
+      }
     }
-  };
-  choose(0);
+    // Next combination: raise the last index that can still move, reset the ones after it.
+    Eigen::Index k = p - 1;
+    while (k >= 0 && pick[static_cast<std::size_t>(k)] == n - p + k) --k;
+    if (k < 0) break;
+    ++pick[static_cast<std::size_t>(k)];
+    for (Eigen::Index l = k + 1; l < p; ++l) pick[static_cast<std::size_t>(l)] = pick[static_cast<std::size_t>(l - 1)] + 1;
+  }
   if (best_alpha.size() == 0) throw std::runtime_error("SLP: no feasible vertex (violates Assumption 1?)");
   return best_alpha;
 }
