@@ -130,8 +130,8 @@ TEST(ModelMismatch, ObserverConvergesToAConstantDisturbanceTorque) {
   const Eigen::Vector2d external(1.5, -1.0);
   const auto plant = std::make_shared<const fp::MusculoskeletalModel>(
       fp::load_model_file(flatsos::test::arm_model_path()),
-      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<TorquePulse>(0.0, 1e9, external[0])},
-                                           {1, std::make_shared<TorquePulse>(0.0, 1e9, external[1])}});
+      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<flatsos::test::ConstantSignal>(external[0])},
+                                           {1, std::make_shared<flatsos::test::ConstantSignal>(external[1])}});
   const auto with = run(plant, kGainPerSecond);
   const Eigen::VectorXd d = with.controller->observer().torqueOffset_N_m();
   std::cout << std::setprecision(9) << "constant disturbance [" << external.transpose() << "] N m: observer estimate [" << d.transpose()

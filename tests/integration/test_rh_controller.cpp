@@ -10,14 +10,6 @@ namespace fpl = flatsos::planner;
 using flatsos::test::deg;
 
 namespace {
-class ConstantTorque : public fp::ExcitationSignal {
- public:
-  explicit ConstantTorque(double torque) : torque_(torque) {}
-  double value(double) const override { return torque_; }
-
- private:
-  double torque_;
-};
 
 // Calls the RH controller, then lets the test look at the state it changed.
 class Probe final : public fp::Controller {
@@ -65,7 +57,7 @@ TEST(RecedingHorizonController, AFailedStepRunsThePreviousPlanWithTheOffsetItWas
   // A constant torque the planner's model does not have: the observer's estimate moves every step.
   const auto plant = std::make_shared<const fp::MusculoskeletalModel>(
       fp::load_model_file(flatsos::test::arm_model_path()),
-      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<ConstantTorque>(1.5)}, {1, std::make_shared<ConstantTorque>(-1.0)}});
+      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<flatsos::test::ConstantSignal>(1.5)}, {1, std::make_shared<flatsos::test::ConstantSignal>(-1.0)}});
   fpl::RecedingHorizonController controller(rh.flat, rh.options, plant);
   Eigen::VectorXd applied, with_old_offset, with_new_offset;
   Probe probe(controller, [&](int period, const SimTK::State& s) {

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace flatsos::test {
 
@@ -24,5 +25,25 @@ inline Eigen::VectorXd paper_a0() {
   a << 0.135, 0.040, 0.404, 0.556, 0.414, 0.068;
   return a;
 }
+
+/// The arm at q = [0, 10 deg] with the paper's activations, tendons in static equilibrium, and
+/// held excitations equal to the activations.
+inline SimTK::State paper_state(const plugin::MusculoskeletalModel& arm) {
+  SimTK::State s = arm.defaultState();
+  arm.setJointAngles(s, Eigen::Vector2d(0.0, deg(10)));
+  plugin::equilibrate_tendons(arm, s, paper_a0());
+  arm.setExcitations(s, paper_a0());
+  return s;
+}
+
+/// A signal that is the same at every time (an excitation or an external torque).
+class ConstantSignal : public plugin::ExcitationSignal {
+ public:
+  explicit ConstantSignal(double v) : v_(v) {}
+  double value(double) const override { return v_; }
+
+ private:
+  double v_;
+};
 
 }  // namespace flatsos::test

@@ -13,17 +13,11 @@
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace fp = flatsos::plugin;
+using flatsos::test::ConstantSignal;
 using flatsos::test::deg;
+using flatsos::test::paper_state;
 
 namespace {
-
-SimTK::State paper_state(const fp::MusculoskeletalModel& arm) {
-  SimTK::State s = arm.defaultState();
-  arm.setJointAngles(s, Eigen::Vector2d(0.0, deg(10)));
-  fp::equilibrate_tendons(arm, s, flatsos::test::paper_a0());
-  arm.setExcitations(s, flatsos::test::paper_a0());
-  return s;
-}
 
 // Every state finite and physically bounded along the run: activations in [0, 1], tendons
 // never shorter than half their slack length, joint speeds below 100 rad/s.
@@ -44,14 +38,6 @@ void expect_bounded(const fp::MusculoskeletalModel& arm, const fp::SimulationRes
     for (double qd : r.states.column("/jointset/" + joint.name + "/qdot")) EXPECT_LT(std::abs(qd), 100.0);
 }
 
-class ConstantSignal : public fp::ExcitationSignal {
- public:
-  explicit ConstantSignal(double v) : v_(v) {}
-  double value(double) const override { return v_; }
-
- private:
-  double v_;
-};
 
 }  // namespace
 

@@ -10,20 +10,11 @@
 
 #include "arm_fixture.hpp"
 #include "flatsos/plugin/integration/stepper.hpp"
-#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace fp = flatsos::plugin;
 using flatsos::test::deg;
 
 namespace {
-
-SimTK::State arm_start(const fp::MusculoskeletalModel& arm) {
-  SimTK::State s = arm.defaultState();
-  arm.setJointAngles(s, Eigen::Vector2d(0.0, deg(10)));
-  fp::equilibrate_tendons(arm, s, flatsos::test::paper_a0());
-  arm.setExcitations(s, Eigen::VectorXd::Constant(6, 0.3));
-  return s;
-}
 
 void expect_rejected(fp::Stepper& stepper, double t_end, const std::vector<double>& times, bool with_report,
                      const std::string& why) {
@@ -47,7 +38,7 @@ class StepperContract : public ::testing::TestWithParam<fp::IntegratorKind> {};
 TEST_P(StepperContract, BadTimesAreRefusedBeforeAnythingMoves) {
   const auto arm = flatsos::test::load_arm();
   const auto stepper = fp::make_stepper(*arm, GetParam(), 1e-8);
-  stepper->initialize(arm_start(*arm));
+  stepper->initialize(flatsos::test::paper_state(*arm));
   const double nan = std::numeric_limits<double>::quiet_NaN();
   expect_rejected(*stepper, 0.1, {0.02, 0.05}, false, "no report callback");
   expect_rejected(*stepper, 0.1, {0.05, 0.02}, true, "report time 1 (0.02");
@@ -65,7 +56,7 @@ TEST_P(StepperContract, BadTimesAreRefusedBeforeAnythingMoves) {
 
 TEST_P(StepperContract, EveryReportTimeIsReportedOnceWithItsState) {
   const auto arm = flatsos::test::load_arm();
-  const SimTK::State start = arm_start(*arm);
+  const SimTK::State start = flatsos::test::paper_state(*arm);
   const std::vector<double> times = {0.013, 0.05, 0.0501, 0.2, 0.3};
   std::vector<double> reported, q_elbow;
   const auto stepper = fp::make_stepper(*arm, GetParam(), 1e-9);
