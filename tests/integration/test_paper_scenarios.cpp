@@ -1,9 +1,9 @@
-// The paper's two scenarios end to end on the Simbody arm (DESIGN.md 5).
+// The paper's two scenarios end to end on the Simbody arm.
 // Open loop: the planned excitations, applied open loop, reproduce the planned motion. An
 // independent reference implementation of the same plan reaches 1e-6 deg, so a larger error is
 // a defect of the inverse map, the excitation input or the integrator settings. Measured here
-// at accuracy 1e-10: 5.9e-8 deg, activations 1.5e-10, tendon lengths 2.6e-11 m; the tolerances
-// below leave a factor of ~15 for other platforms.
+// at accuracy 1e-10: 4.9e-8 deg, activations 2.6e-10, tendon lengths 3.7e-11 m; the tolerances
+// below leave a factor of 20-40 for other platforms.
 // Receding horizon: no plan failure, no NaN, both joints settle within 1 deg of [80, 80] deg.
 #include <gtest/gtest.h>
 
