@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
     std::vector<double> setup, solve, certify, total;
     fpl::OpenLoopPlan last;
     for (int i = 0; i < reps; ++i) {
-      last = fpl::plan_open_loop(flat, ms0, o);
+      last = fpl::plan_open_loop(flat, ws, ms0, o);
       setup.push_back(last.setup_seconds);
       solve.push_back(last.solve_seconds);
       certify.push_back(last.certify_seconds);

@@ -69,6 +69,12 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
 }
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& o) {
+  plugin::ModelWorkspace workspace = flat.makeWorkspace();
+  return plan_open_loop(flat, workspace, initial, o);
+}
+
+OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
+                            const OpenLoopOptions& o) {
   const Stopwatch setup;
   const int n = flat.numJoints(), m = flat.numMuscles(), p = flat.numFlatOutputs();
   if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s)) throw std::invalid_argument("open-loop plan: duration T must be > 0 s");
@@ -87,7 +93,6 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
                                   std::to_string(initial.tendon_length_m[j]) + " m <= slack length " +
                                   std::to_string(mp.tendon_slack_length_m) + " m): flat outputs need taut tendons");
   }
-  plugin::ModelWorkspace workspace = flat.makeWorkspace();
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
   OpenLoopPlan plan;

@@ -76,10 +76,10 @@ void check_times(double now, double t_end, const std::vector<double>& report_tim
   double previous = now;
   for (std::size_t i = 0; i < report_times.size(); ++i) {
     const double t = report_times[i];
-    const std::string which = "report time " + std::to_string(i) + " (" + time(t) + ")";
+    const auto which = [&] { return "report time " + std::to_string(i) + " (" + time(t) + ")"; };  // only to fail
     if (!std::isfinite(t)) fail("report time " + std::to_string(i) + " is not finite");
-    if (t > t_end) fail(which + " lies after the target time " + time(t_end));
-    if (!(t > previous)) fail(which + (i == 0 ? " is not after the current time " + time(now) : " is not after the one before it"));
+    if (t > t_end) fail(which() + " lies after the target time " + time(t_end));
+    if (!(t > previous)) fail(which() + (i == 0 ? " is not after the current time " + time(now) : " is not after the one before it"));
     previous = t;
   }
 }

@@ -61,6 +61,9 @@ struct OpenLoopPlan {
 /// outcomes come back as statuses: Infeasible also when the SOS program is solved but the plan
 /// leaves the model's valid domain on the check grid (activation above 1, excitation outside
 /// [0, 1], ...), since the muscles cannot execute it.
+OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
+                            const OpenLoopOptions& options);
+/// The same with a temporary workspace (a State copy, tens of microseconds).
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& options);
 
 /// The a-posteriori check of any flat trajectory on `points` uniform times in [0, T].
