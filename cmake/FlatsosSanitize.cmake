@@ -8,7 +8,7 @@
 # FLATSOS_FUZZ=ON (clang only, implies FLATSOS_SANITIZE): also coverage instrumentation for
 #   libFuzzer (-fsanitize=fuzzer-no-link) and the fuzz targets in tests/fuzz/.
 # Include this before add_subdirectory() of the libraries: the options apply to targets created
-# afterwards. Never add -DNDEBUG here (DESIGN.md §7).
+# afterwards. Never add -DNDEBUG here (Debian's Simbody 3.7 changes its State layout with it).
 option(FLATSOS_SANITIZE "Build flatsos with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
 option(FLATSOS_FUZZ "Build the libFuzzer targets in tests/fuzz (clang; implies FLATSOS_SANITIZE)"
   OFF)

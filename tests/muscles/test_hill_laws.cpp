@@ -1,4 +1,4 @@
-// Property tests for the Hill muscle laws (DESIGN.md 2.3): values at known points,
+// Property tests for the Hill muscle laws (docs/method/flatness.md): values at known points,
 // monotonicity, limits, inverse round trips, finite-difference twins of every derivative,
 // and the safe extension of the forward model.
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's open-loop scenario (DESIGN.md 5) on the arm model.
+// The paper's open-loop scenario (the paper, section 5) on the arm model.
 #include <memory>
 
 #include "../plugin/arm_fixture.hpp"

@@ -1,4 +1,4 @@
-// The SOS program on the paper's open-loop scenario (DESIGN.md 5): solved by default with every
+// The SOS program on the paper's open-loop scenario (the paper, section 5): solved by default with every
 // tendon force at or above its reserve on a 10x denser grid; its optimum checked against an
 // independent lower bound (an LP written here, with the exact torques at a dense grid); the
 // paper's single torque box reported infeasible with the reason; bad input rejected by name.

@@ -1,5 +1,5 @@
 #pragma once
-// Shared test data: the arm of DESIGN.md 2.4 and the paper's open-loop initial state.
+// Shared test data: the paper's arm (models/arm_richter_warner.json) and the paper's open-loop initial state.
 #include <memory>
 #include <string>
 

@@ -1,5 +1,5 @@
 // The Simbody arm built from models/arm_richter_warner.json reproduces the regression facts of
-// DESIGN.md 2.4, computed independently from the parameter table.
+// the paper's arm data, computed independently from the parameter table.
 #include <gtest/gtest.h>
 
 #include "arm_fixture.hpp"

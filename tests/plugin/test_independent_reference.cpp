@@ -1,12 +1,12 @@
 // An independent check of the Simbody arm: the planar 2-link equations of motion and the Hill
-// muscle ODE of DESIGN.md 2.3-2.4 are written out here by hand (no flatsos muscle law, no
+// muscle ODE of the paper's arm are written out here by hand (no flatsos muscle law, no
 // Simbody), integrated with a plain fixed-step RK4, and compared with
 //   - flatsos::plugin::simulate on the arm model file, driven by smooth time-varying
 //     excitations (joint angles, activations, tendon lengths at every report time);
 //   - a passive swing under gravity (muscles that cannot pull): energy conservation and the
 //     joint angles of the muscle-free reference;
 //   - MusculoskeletalModel::massMatrix and ::inverseDynamics at a few poses.
-// The reference's numbers are typed from DESIGN.md 2.4, not read from the model file, so a wrong
+// The reference's numbers are typed from the paper's arm data, not read from the model file, so a wrong
 // file, a wrong loader and a wrong force element are all caught.
 
 #include <algorithm>
@@ -41,7 +41,7 @@ std::string arm_model_path() {
 }
 
 // =============================================================================================
-// The hand-written reference (DESIGN.md 2.4): q1 shoulder angle from +x, counter-clockwise,
+// The hand-written reference (the paper's arm): q1 shoulder angle from +x, counter-clockwise,
 // q2 elbow angle relative to the upper arm; gravity 9.81 m/s^2 along -y.
 // =============================================================================================
 namespace ref {
@@ -103,7 +103,7 @@ double energy(const Vec2& q, const Vec2& qd) {
   return kinetic + kGravity * (kM1 * y1 + kM2 * y2);
 }
 
-// ---- the six muscles (DESIGN.md 2.4 table) and the Hill laws (DESIGN.md 2.3) ----
+// ---- the six muscles (the paper's arm, models/arm_richter_warner.json) and the Hill laws (docs/method/flatness.md) ----
 constexpr int kMuscles = 6;
 constexpr std::array<double, kMuscles> kD1 = {0.05, -0.05, 0.03, -0.03, 0.0, 0.0};
 constexpr std::array<double, kMuscles> kD2 = {0.0, 0.0, 0.03, -0.03, -0.03, 0.03};
@@ -308,7 +308,7 @@ TEST(IndependentReference, ForwardSimulationWithVaryingExcitationsMatchesHandWri
   fp::equilibrate_tendons(*model, s, paper_a0());
   for (int j = 0; j < ref::kMuscles; ++j) model->muscle(j).setExcitationSignal(s, signals[j]);
   const Eigen::VectorXd ls0 = model->tendonLengths(s);
-  // Sanity of the starting point: DESIGN.md 2.4's equilibrium tendon lengths (4 decimals).
+  // Sanity of the starting point: the paper's equilibrium tendon lengths (4 decimals).
   const std::array<double, ref::kMuscles> design_ls0 = {0.0546, 0.0540, 0.2347, 0.1919, 0.1941, 0.0176};
   for (int j = 0; j < ref::kMuscles; ++j) EXPECT_NEAR(ls0[j], design_ls0[j], 0.5e-4) << "muscle " << j;
 
@@ -404,7 +404,7 @@ double relative_difference(const Eigen::VectorXd& simbody, const ref::Vec2& refe
 }
 
 TEST(IndependentReference, HandWrittenModelReproducesDesignRegressionFacts) {
-  // Checks the reference itself against DESIGN.md 2.4 (computed there independently).
+  // Checks the reference itself against the paper's arm data (computed independently of the code).
   const ref::Mat2 m = ref::mass_matrix({0.3, 0.0});
   EXPECT_NEAR(m[0][0], 0.64011, 1e-5);
   EXPECT_NEAR(m[0][1], 0.25003, 1e-5);

@@ -1,4 +1,4 @@
-// The model loader: the arm file loads to the DESIGN.md 2.4 numbers, and every kind of bad file
+// The model loader: the arm file loads to the paper's arm numbers, and every kind of bad file
 // is rejected with a message naming the field, before anything is built.
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 #pragma once
 // Private helpers for the planner's Ipopt problems (C++ TNLP interface only: Simbody's
-// libSimTKmath exports Ipopt's C-API symbol names, DESIGN.md 7).
+// libSimTKmath exports Ipopt's C-API symbol names).
 #include <IpIpoptApplication.hpp>
 #include <IpSolveStatistics.hpp>
 #include <IpTNLP.hpp>

@@ -1,5 +1,5 @@
 #pragma once
-// The Hill muscle laws of DESIGN.md section 2.3 as pure functions. Both the Simbody force
+// The Hill muscle laws (docs/method/flatness.md, the model) as pure functions. Both the Simbody force
 // element (forward dynamics) and the planner (inverse map) call these, so planned and simulated
 // trajectories share one set of laws. SI units: lengths m, velocities m/s, forces N, time s.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Parameters of one Hill-type muscle-tendon unit (DESIGN.md section 2.3). SI units throughout.
+// Parameters of one Hill-type muscle-tendon unit (docs/method/flatness.md). SI units throughout.
 
 #include <string>
 
@@ -21,7 +21,7 @@ struct MuscleParameters {
   /// itself is not clamped). It keeps the forward model finite where a -> 0. It must stay
   /// far below every planned activation or the plant is biased against the plan: planned
   /// activations in the receding-horizon scenario go down to about 1e-3, and a floor of 1e-2
-  /// (OpenSim's) drifts the closed loop by degrees, so the default is 1e-4 (DESIGN.md 2.3).
+  /// (OpenSim's) drifts the closed loop by degrees, so the default is 1e-4 (measured with the RH scenario).
   double activation_floor = 1e-4;
 
   /// Vmax in m/s.

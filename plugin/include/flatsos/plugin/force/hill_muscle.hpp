@@ -1,5 +1,5 @@
 #pragma once
-// A Hill-type muscle as a Simbody force element (DESIGN.md 2.2-2.3).
+// A Hill-type muscle as a Simbody force element (docs/method/flatness.md, the model).
 //
 // States (continuous, Simbody z variables): tendon length L_S (m) and activation a (-).
 // Input: the neural excitation n, a discrete State variable a controller writes, either a held
