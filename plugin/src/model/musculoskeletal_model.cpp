@@ -42,11 +42,13 @@ class JointTorqueImpl : public SimTK::Force::Custom::Implementation {
 }  // namespace
 
 ModelWorkspace::ModelWorkspace(const MusculoskeletalModel& model)
-    : model_(&model), state_(model.defaultState()), udot_(state_.getNU(), 0.0) {}
+    : model_(&model), state_(model.defaultState()), tree_(model.pinTree().makeScratch()) {}
 
 MusculoskeletalModel::MusculoskeletalModel(ModelDescription description, std::vector<ExternalJointTorque> external)
-    : description_(std::move(description)), matter_(system_), forces_(system_) {
-  validate(description_);
+    : description_((validate(description), std::move(description))),
+      matter_(system_),
+      forces_(system_),
+      tree_(description_) {
   for (const auto& e : external) {
     if (e.joint < 0 || e.joint >= numJoints())
       throw std::invalid_argument("external joint torque: no joint " + std::to_string(e.joint) + " (the model has " +
@@ -87,7 +89,11 @@ std::shared_ptr<const MusculoskeletalModel> MusculoskeletalModel::fromFile(const
   return std::make_shared<const MusculoskeletalModel>(load_model_file(path));
 }
 
-void MusculoskeletalModel::checkSize(const Eigen::VectorXd& v, int n, const char* what) const {
+void MusculoskeletalModel::checkWorkspace(const ModelWorkspace& ws) const {
+  if (ws.model_ != this) throw std::invalid_argument("model workspace: made for another model");
+}
+
+void MusculoskeletalModel::checkSize(const Eigen::Ref<const Eigen::VectorXd>& v, int n, const char* what) const {
   if (v.size() != n)
     throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(n) +
                                 " values, got " + std::to_string(v.size()));
@@ -158,7 +164,7 @@ Eigen::VectorXd MusculoskeletalModel::muscleTorques(const Eigen::VectorXd& f) co
 
 const SimTK::State& MusculoskeletalModel::realizeVelocity(ModelWorkspace& ws, const Eigen::VectorXd& q,
                                                          const Eigen::VectorXd& qd) const {
-  if (ws.model_ != this) throw std::invalid_argument("model workspace: made for another model");
+  checkWorkspace(ws);
   setJointAngles(ws.state_, q);
   setJointSpeeds(ws.state_, qd);
   system_.realize(ws.state_, SimTK::Stage::Velocity);
@@ -180,14 +186,24 @@ Eigen::MatrixXd MusculoskeletalModel::massMatrix(const Eigen::VectorXd& q) const
   return massMatrix(ws, q);
 }
 
+void MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                           const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                           const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                           Eigen::Ref<Eigen::VectorXd> tau) const {
+  checkWorkspace(ws);
+  checkSize(q, numJoints(), "joint angles");
+  checkSize(qd, numJoints(), "joint speeds");
+  checkSize(qdd, numJoints(), "joint accelerations");
+  if (tau.size() != numJoints())
+    throw std::invalid_argument("inverse dynamics: the torque output has " + std::to_string(tau.size()) +
+                                " entries, the model " + std::to_string(numJoints()) + " joints");
+  tree_.inverseDynamics(ws.tree_, q, qd, qdd, tau);
+}
+
 Eigen::VectorXd MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::VectorXd& q,
                                                       const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) const {
-  checkSize(qdd, numJoints(), "joint accelerations");
-  const SimTK::State& s = realizeVelocity(ws, q, qd);
-  for (int i = 0; i < numJoints(); ++i) ws.udot_[joints_[i].getFirstUIndex(s)] = qdd[i];
-  matter_.calcResidualForceIgnoringConstraints(s, SimTK::Vector(), gravity_.getBodyForces(s), ws.udot_, ws.residual_);
   Eigen::VectorXd tau(numJoints());
-  for (int i = 0; i < numJoints(); ++i) tau[i] = ws.residual_[joints_[i].getFirstUIndex(s)];
+  inverseDynamics(ws, q, qd, qdd, tau);
   return tau;
 }
 

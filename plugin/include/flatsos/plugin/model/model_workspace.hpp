@@ -1,9 +1,11 @@
 #pragma once
-// The scratch a MusculoskeletalModel needs for calculations that go through a Simbody State
-// (mass matrix, inverse dynamics): the model stays immutable and shareable, and each thread (or
-// controller, or plan) owns its workspace, as Pinocchio splits Model and Data.
+// The scratch a MusculoskeletalModel needs for its calculations (a Simbody State for the mass
+// matrix, per-body kinematics for inverse dynamics): the model stays immutable and shareable, and
+// each thread (or controller, or plan) owns its workspace, as Pinocchio splits Model and Data.
 
 #include <Simbody.h>
+
+#include "flatsos/plugin/model/pin_tree_dynamics.hpp"
 
 namespace flatsos::plugin {
 
@@ -18,8 +20,8 @@ class ModelWorkspace {
   friend class MusculoskeletalModel;
   const MusculoskeletalModel* model_;  ///< which model it belongs to (checked on use)
   SimTK::State state_;
-  SimTK::Vector udot_, residual_;
   SimTK::Matrix mass_;
+  PinTreeDynamics::Scratch tree_;
 };
 
 }  // namespace flatsos::plugin

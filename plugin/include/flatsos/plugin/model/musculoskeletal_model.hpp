@@ -4,9 +4,9 @@
 // coordinates, muscles). Not copyable: Simbody subsystems refer to each other.
 //
 // Immutable once built and meant to be shared (std::shared_ptr<const MusculoskeletalModel>):
-// every const member is safe to call from several threads at once. Calculations that need a
-// Simbody State as scratch (mass matrix, inverse dynamics) take a ModelWorkspace that the caller
-// owns (one per thread); the overloads without one make a temporary workspace per call.
+// every const member is safe to call from several threads at once. Calculations that need
+// scratch (the mass matrix through a Simbody State, inverse dynamics) take a ModelWorkspace that
+// the caller owns (one per thread); the overloads without one make a temporary workspace per call.
 
 #include <memory>
 #include <string>
@@ -18,6 +18,7 @@
 #include "flatsos/plugin/force/hill_muscle.hpp"
 #include "flatsos/plugin/model/model_description.hpp"
 #include "flatsos/plugin/model/model_workspace.hpp"
+#include "flatsos/plugin/model/pin_tree_dynamics.hpp"
 
 namespace flatsos::plugin {
 
@@ -46,6 +47,7 @@ class MusculoskeletalModel {
   const SimTK::SimbodyMatterSubsystem& matter() const { return matter_; }
   const SimTK::MobilizedBody& joint(int i) const { return joints_.at(i); }
   const HillMuscle& muscle(int j) const { return muscles_.at(j); }
+  const PinTreeDynamics& pinTree() const { return tree_; }
 
   /// A fresh default state (topology realized; q = qd = 0, muscle defaults).
   SimTK::State defaultState() const { return system_.getDefaultState(); }
@@ -75,7 +77,11 @@ class MusculoskeletalModel {
   Eigen::MatrixXd massMatrix(ModelWorkspace& workspace, const Eigen::VectorXd& q_rad) const;
   Eigen::MatrixXd massMatrix(const Eigen::VectorXd& q_rad) const;
   /// Inverse dynamics without muscles (external torques excluded too):
-  /// tau = M(q) qdd + C(q, qd) qd + g(q), from Simbody.
+  /// tau = M(q) qdd + C(q, qd) qd + g(q), by recursive Newton-Euler on the pin tree
+  /// (pin_tree_dynamics.hpp; agrees with Simbody's to round-off). Allocates nothing.
+  void inverseDynamics(ModelWorkspace& workspace, const Eigen::Ref<const Eigen::VectorXd>& q_rad,
+                       const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
+                       const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2, Eigen::Ref<Eigen::VectorXd> tau_N_m) const;
   Eigen::VectorXd inverseDynamics(ModelWorkspace& workspace, const Eigen::VectorXd& q_rad,
                                   const Eigen::VectorXd& qd_rad_per_s, const Eigen::VectorXd& qdd_rad_per_s2) const;
   Eigen::VectorXd inverseDynamics(const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
@@ -85,7 +91,8 @@ class MusculoskeletalModel {
   double mechanicalEnergy(const SimTK::State& s) const;
 
  private:
-  void checkSize(const Eigen::VectorXd& v, int n, const char* what) const;
+  void checkSize(const Eigen::Ref<const Eigen::VectorXd>& v, int n, const char* what) const;
+  void checkWorkspace(const ModelWorkspace& workspace) const;
   const SimTK::State& realizeVelocity(ModelWorkspace& workspace, const Eigen::VectorXd& q,
                                       const Eigen::VectorXd& qd) const;
 
@@ -98,6 +105,7 @@ class MusculoskeletalModel {
   std::vector<HillMuscle> muscles_;
   Eigen::MatrixXd moment_arms_;
   Eigen::VectorXd zero_angle_lengths_;
+  PinTreeDynamics tree_;
 };
 
 }  // namespace flatsos::plugin

@@ -1,0 +1,133 @@
+// The pin-tree inverse dynamics (recursive Newton-Euler, pin_tree_dynamics.hpp) against
+// Simbody's own inverse dynamics of the same model (calcResidualForceIgnoringConstraints with
+// the gravity body forces Simbody computes), on random trees: branching, joint axes in any
+// direction, joint locations off the parent's origin, mass centres off the joint, products of
+// inertia, gravity in any direction. Simbody is what simulates the plant, so this is the
+// agreement the planner's plans rely on.
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+
+namespace {
+
+namespace fp = flatsos::plugin;
+
+Eigen::Vector3d random_vector(std::mt19937& rng, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  return {u(rng), u(rng), u(rng)};
+}
+
+// A random tree of `joints` pins; body k hangs from a random earlier body (or ground) and
+// carries one muscle so the description is valid (muscles do not enter inverse dynamics).
+fp::ModelDescription random_tree(std::mt19937& rng, int joints) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  fp::ModelDescription d;
+  d.name = "random tree";
+  d.gravity_m_per_s2 = random_vector(rng, 10.0);
+  for (int k = 0; k < joints; ++k) {
+    fp::BodyDescription b;
+    b.name = "body" + std::to_string(k);
+    b.mass_kg = 0.5 + 3.0 * u(rng);
+    b.mass_center_m = random_vector(rng, 0.3);
+    // A physical inertia about the mass centre: principal moments from second moments of mass
+    // (so they satisfy the triangle inequality), rotated randomly.
+    const Eigen::Matrix3d R = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+    const Eigen::Vector3d second(0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng));
+    const Eigen::Vector3d moments(second[1] + second[2], second[0] + second[2], second[0] + second[1]);
+    const Eigen::Matrix3d I = R * moments.asDiagonal() * R.transpose();
+    b.principal_inertia_kg_m2 = I.diagonal();
+    b.product_inertia_kg_m2 = Eigen::Vector3d(I(0, 1), I(0, 2), I(1, 2));
+    d.bodies.push_back(b);
+    fp::JointDescription j;
+    j.name = "joint" + std::to_string(k);
+    j.child = b.name;
+    const int parent = std::uniform_int_distribution<int>(-1, k - 1)(rng);
+    j.parent = parent < 0 ? "ground" : "body" + std::to_string(parent);
+    j.location_in_parent_m = random_vector(rng, 0.4);
+    j.axis = random_vector(rng, 1.0).normalized();
+    d.joints.push_back(j);
+  }
+  fp::MuscleDescription m;
+  m.parameters.name = "muscle";
+  m.parameters.max_isometric_force_N = 100.0;
+  m.parameters.optimal_fiber_length_m = 0.1;
+  m.parameters.tendon_slack_length_m = 0.1;
+  m.length_at_zero_angles_m = 0.25;
+  m.moment_arms_m = Eigen::VectorXd::Constant(joints, 0.01);
+  d.muscles.push_back(m);
+  return d;
+}
+
+// Simbody's inverse dynamics of the model at (q, qd, qdd): gravity only.
+Eigen::VectorXd simbody_inverse_dynamics(const fp::MusculoskeletalModel& model, const Eigen::VectorXd& q,
+                                         const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) {
+  SimTK::State s = model.defaultState();
+  model.setJointAngles(s, q);
+  model.setJointSpeeds(s, qd);
+  model.system().realize(s, SimTK::Stage::Dynamics);
+  // Gravity is the model's only body force (muscles and external torques act as mobility forces).
+  const SimTK::Vector_<SimTK::SpatialVec>& body_forces = model.system().getRigidBodyForces(s, SimTK::Stage::Dynamics);
+  SimTK::Vector udot(s.getNU(), 0.0), residual;
+  for (int i = 0; i < model.numJoints(); ++i) udot[model.joint(i).getFirstUIndex(s)] = qdd[i];
+  model.matter().calcResidualForceIgnoringConstraints(s, SimTK::Vector(), body_forces, udot, residual);
+  Eigen::VectorXd tau(model.numJoints());
+  for (int i = 0; i < model.numJoints(); ++i) tau[i] = residual[model.joint(i).getFirstUIndex(s)];
+  return tau;
+}
+
+TEST(PinTreeDynamics, AgreesWithSimbodyOnRandomTrees) {
+  std::mt19937 rng(20261123);
+  std::srand(7);  // Eigen's UnitRandom uses std::rand
+  double worst = 0.0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 1 + trial % 6;
+    const fp::MusculoskeletalModel model(random_tree(rng, n));
+    fp::ModelWorkspace ws = model.makeWorkspace();
+    for (int k = 0; k < 5; ++k) {
+      const Eigen::VectorXd q = Eigen::VectorXd::Random(n) * 3.0, qd = Eigen::VectorXd::Random(n) * 4.0,
+                            qdd = Eigen::VectorXd::Random(n) * 20.0;
+      const Eigen::VectorXd expected = simbody_inverse_dynamics(model, q, qd, qdd);
+      const Eigen::VectorXd tau = model.inverseDynamics(ws, q, qd, qdd);
+      const double error = (tau - expected).cwiseAbs().maxCoeff() / (1.0 + expected.cwiseAbs().maxCoeff());
+      worst = std::max(worst, error);
+      ASSERT_LT(error, 1e-12) << "trial " << trial << ", " << n << " joints: " << tau.transpose() << " vs Simbody "
+                              << expected.transpose();
+    }
+  }
+  RecordProperty("worst_relative_error", std::to_string(worst));
+}
+
+TEST(PinTreeDynamics, EachTermVanishesAlone) {
+  // Property: without gravity, at rest and with qdd = 0 nothing is needed; the torque is linear
+  // in qdd (the mass matrix) and the velocity terms are quadratic in qd.
+  std::mt19937 rng(3);
+  fp::ModelDescription d = random_tree(rng, 4);
+  d.gravity_m_per_s2.setZero();
+  const fp::MusculoskeletalModel model(d);
+  fp::ModelWorkspace ws = model.makeWorkspace();
+  const Eigen::VectorXd q = Eigen::VectorXd::Random(4), qd = Eigen::VectorXd::Random(4), qdd = Eigen::VectorXd::Random(4);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(4);
+  EXPECT_LT(model.inverseDynamics(ws, q, zero, zero).cwiseAbs().maxCoeff(), 1e-14);
+  const Eigen::VectorXd velocity = model.inverseDynamics(ws, q, qd, zero);
+  EXPECT_LT((model.inverseDynamics(ws, q, 2.0 * qd, zero) - 4.0 * velocity).cwiseAbs().maxCoeff(), 1e-12);
+  const Eigen::VectorXd M_qdd = model.inverseDynamics(ws, q, zero, qdd);
+  EXPECT_LT((M_qdd - model.massMatrix(ws, q) * qdd).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT(velocity.cwiseAbs().maxCoeff(), 1e-3);  // the terms are there at all
+}
+
+TEST(PinTreeDynamics, RejectsWrongSizesAndForeignWorkspaces) {
+  std::mt19937 rng(5);
+  const fp::MusculoskeletalModel a(random_tree(rng, 2)), b(random_tree(rng, 2));
+  fp::ModelWorkspace ws = a.makeWorkspace();
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(2);
+  Eigen::VectorXd tau(2), short_tau(1);
+  EXPECT_THROW(b.inverseDynamics(ws, v, v, v, tau), std::invalid_argument);
+  EXPECT_THROW(a.inverseDynamics(ws, v, v, v, short_tau), std::invalid_argument);
+  EXPECT_THROW(a.inverseDynamics(ws, Eigen::VectorXd::Zero(3), v, v, tau), std::invalid_argument);
+  EXPECT_THROW(a.inverseDynamics(ws, v, Eigen::VectorXd::Constant(2, std::nan("")), v, tau), std::invalid_argument);
+}
+
+}  // namespace
