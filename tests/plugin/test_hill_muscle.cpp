@@ -80,6 +80,50 @@ TEST(HillMuscle, ExcitationIsClampedAndSignalsOverrideHeldValues) {
   EXPECT_EQ(m.getExcitation(s), 0.4);
 }
 
+TEST(HillMuscle, APolynomialPieceIsHeldByValueInTheState) {
+  const auto arm = flatsos::test::load_arm();
+  SimTK::State s = arm->defaultState();
+  const auto& m = arm->muscle(0);
+  fp::ExcitationPolynomial piece;  // n = 0.2 + 0.4 s - 0.1 s^2 over [1, 1.5] s
+  piece.coefficients = {0.2, 0.4, -0.1};
+  piece.count = 3;
+  piece.start_time_s = 1.0;
+  piece.duration_s = 0.5;
+  m.setExcitationPolynomial(s, piece);
+  s.updTime() = 1.25;
+  EXPECT_NEAR(m.getExcitation(s), 0.2 + 0.4 * 0.5 - 0.1 * 0.25, 1e-15);
+  s.updTime() = 0.3;
+  EXPECT_NEAR(m.getExcitation(s), 0.2, 1e-15);  // held before the piece
+  s.updTime() = 9.0;
+  EXPECT_NEAR(m.getExcitation(s), 0.5, 1e-15);  // and after it
+  // Each State keeps its own piece: a copy is not changed by what is set on the original.
+  const SimTK::State copy = s;
+  m.setExcitationPolynomial(s, fp::ExcitationPolynomial::constant(0.9));
+  EXPECT_EQ(m.getExcitation(s), 0.9);
+  EXPECT_NEAR(m.getExcitation(copy), 0.5, 1e-15);
+  // A signal takes precedence while set; a piece replaces it.
+  m.setExcitationSignal(s, std::make_shared<ConstantSignal>(0.1));
+  EXPECT_EQ(m.getExcitation(s), 0.1);
+  m.setExcitationPolynomial(s, piece);
+  EXPECT_NEAR(m.getExcitation(s), 0.5, 1e-15);
+  // Bad pieces name the muscle and what is wrong.
+  auto bad = piece;
+  bad.count = 0;
+  EXPECT_THROW(m.setExcitationPolynomial(s, bad), std::invalid_argument);
+  bad = piece;
+  bad.coefficients[1] = std::nan("");
+  try {
+    m.setExcitationPolynomial(s, bad);
+    ADD_FAILURE() << "a NaN coefficient was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(m.getParameters().name), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("coefficient 1"), std::string::npos) << e.what();
+  }
+  bad = piece;
+  bad.duration_s = 0.0;
+  EXPECT_THROW(m.setExcitationPolynomial(s, bad), std::invalid_argument);
+}
+
 TEST(HillMuscleRobustness, ZeroExcitationForSecondsStaysFiniteAndBounded) {
   const auto arm = flatsos::test::load_arm();
   SimTK::State s = paper_state(*arm);

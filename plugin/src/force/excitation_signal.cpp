@@ -7,6 +7,31 @@
 
 namespace flatsos::plugin {
 
+ExcitationPolynomial ExcitationPolynomial::constant(double excitation) {
+  ExcitationPolynomial p;
+  p.coefficients[0] = excitation;
+  return p;
+}
+
+double ExcitationPolynomial::value(double time_s) const {
+  const double s = std::clamp((time_s - start_time_s) / duration_s, 0.0, 1.0);
+  double v = 0.0;
+  for (int k = count - 1; k >= 0; --k) v = v * s + coefficients[static_cast<std::size_t>(k)];
+  return v;
+}
+
+void ExcitationPolynomial::validate() const {
+  if (count < 1 || count > kMaxCoefficients)
+    throw std::invalid_argument("excitation polynomial: " + std::to_string(count) + " coefficients, need 1 to " +
+                                std::to_string(kMaxCoefficients));
+  for (int k = 0; k < count; ++k)
+    if (!std::isfinite(coefficients[static_cast<std::size_t>(k)]))
+      throw std::invalid_argument("excitation polynomial: coefficient " + std::to_string(k) + " is not finite");
+  if (!std::isfinite(start_time_s)) throw std::invalid_argument("excitation polynomial: start time is not finite");
+  if (!(duration_s > 0.0) || !std::isfinite(duration_s))
+    throw std::invalid_argument("excitation polynomial: duration must be a finite time > 0 s");
+}
+
 PiecewiseLinearSignal::PiecewiseLinearSignal(std::vector<double> times_s, std::vector<double> values)
     : times_s_(std::move(times_s)), values_(std::move(values)) {
   if (times_s_.empty() || times_s_.size() != values_.size())

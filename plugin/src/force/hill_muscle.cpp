@@ -29,8 +29,9 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
     z_init[0] = p_.tendon_slack_length_m;
     z_init[1] = kDefaultActivation;
     first_z_ = s.allocateZ(forces_, z_init);
-    held_excitation_ = s.allocateDiscreteVariable(forces_, SimTK::Stage::Dynamics,
-                                                  new SimTK::Value<double>(kDefaultActivation));
+    held_excitation_ = s.allocateDiscreteVariable(
+        forces_, SimTK::Stage::Dynamics,
+        new SimTK::Value<ExcitationPolynomial>(ExcitationPolynomial::constant(kDefaultActivation)));
     signal_ = s.allocateDiscreteVariable(forces_, SimTK::Stage::Dynamics,
                                          new SimTK::Value<SignalPtr>(SignalPtr()));
   }
@@ -40,8 +41,8 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   double activation(const SimTK::State& s) const { return s.getZ(forces_)[first_z_ + 1]; }
   void setZ(SimTK::State& s, int which, double v) const { s.updZ(forces_)[first_z_ + which] = v; }
 
-  void setHeldExcitation(SimTK::State& s, double n) const {
-    SimTK::Value<double>::updDowncast(s.updDiscreteVariable(forces_, held_excitation_)) = n;
+  void setHeldExcitation(SimTK::State& s, const ExcitationPolynomial& piece) const {
+    SimTK::Value<ExcitationPolynomial>::updDowncast(s.updDiscreteVariable(forces_, held_excitation_)) = piece;
     setSignal(s, SignalPtr());
   }
   void setSignal(SimTK::State& s, SignalPtr signal) const {
@@ -53,7 +54,9 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
     const SignalPtr& signal =
         static_cast<const SimTK::Value<SignalPtr>&>(s.getDiscreteVariable(forces_, signal_)).get();
     if (signal) return signal->value(s.getTime());
-    return static_cast<const SimTK::Value<double>&>(s.getDiscreteVariable(forces_, held_excitation_)).get();
+    return static_cast<const SimTK::Value<ExcitationPolynomial>&>(s.getDiscreteVariable(forces_, held_excitation_))
+        .get()
+        .value(s.getTime());
   }
   double excitation(const SimTK::State& s) const {
     const double n = unclampedExcitation(s);
@@ -164,7 +167,15 @@ void HillMuscle::setTendonLength(SimTK::State& s, double tendon_length_m) const 
 void HillMuscle::setExcitation(SimTK::State& s, double excitation) const {
   if (std::isnan(excitation))
     throw std::invalid_argument("muscle '" + getParameters().name + "': excitation is NaN");
-  impl().setHeldExcitation(s, excitation);
+  impl().setHeldExcitation(s, ExcitationPolynomial::constant(excitation));
+}
+void HillMuscle::setExcitationPolynomial(SimTK::State& s, const ExcitationPolynomial& piece) const {
+  try {
+    piece.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("muscle '" + getParameters().name + "': " + e.what());
+  }
+  impl().setHeldExcitation(s, piece);
 }
 void HillMuscle::setExcitationSignal(SimTK::State& s, std::shared_ptr<const ExcitationSignal> signal) const {
   impl().setSignal(s, std::move(signal));

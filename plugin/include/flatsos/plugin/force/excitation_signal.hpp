@@ -3,6 +3,7 @@
 // its excitation n(t) from it at every integrator stage, so open-loop schedules and the
 // receding-horizon controller's per-interval plans are applied exactly, not zero-order held.
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -14,6 +15,25 @@ class ExcitationSignal {
  public:
   virtual ~ExcitationSignal() = default;
   virtual double value(double time_s) const = 0;
+};
+
+/// A polynomial excitation over one interval, held by value in a muscle's State:
+///   n(t) = sum_k c_k s^k,  s = clamp((t - start_time_s) / duration_s, 0, 1),
+/// so it is held at its ends. Setting one allocates nothing (a controller's inner loop writes
+/// one per muscle per period) and every copy of the State keeps its own. A constant excitation
+/// is the piece with one coefficient.
+struct ExcitationPolynomial {
+  static constexpr int kMaxCoefficients = 8;
+  std::array<double, kMaxCoefficients> coefficients{};  ///< c_0 .. c_{count-1}, ascending powers of s
+  int count = 1;
+  double start_time_s = 0.0;
+  double duration_s = 1.0;
+
+  static ExcitationPolynomial constant(double excitation);
+  double value(double time_s) const;
+  /// Throws std::invalid_argument unless 1 <= count <= kMaxCoefficients, the used coefficients
+  /// and the start are finite and the duration is finite and > 0.
+  void validate() const;
 };
 
 /// Linear interpolation between samples; held constant before the first and after the last.

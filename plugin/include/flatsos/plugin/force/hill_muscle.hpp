@@ -2,8 +2,10 @@
 // A Hill-type muscle as a Simbody force element (docs/method/flatness.md, the model).
 //
 // States (continuous, Simbody z variables): tendon length L_S (m) and activation a (-).
-// Input: the neural excitation n, a discrete State variable a controller writes, either a held
-// value or an ExcitationSignal of time; it is clamped to [0, 1] when read.
+// Input: the neural excitation n, discrete State variables a controller writes: a polynomial
+// piece held by value (a constant, or a controller's plan for one period: no allocation) or an
+// ExcitationSignal of time (shared, any shape), which takes precedence while set; n is clamped
+// to [0, 1] when read.
 // Path: constant moment arms, L(q) = l0 - sum_i d_i q_i; the tendon force F = Phi_S(L_S) acts
 // as the mobility force d_i F on each crossed joint (positive d_i: the muscle drives q_i up).
 //
@@ -58,6 +60,9 @@ class HillMuscle : public SimTK::Force::Custom {
   // --- excitation input ---
   /// Hold a constant excitation (replaces any signal). Throws for NaN.
   void setExcitation(SimTK::State& s, double excitation) const;
+  /// Hold a polynomial excitation piece (replaces any signal; allocates nothing). Throws
+  /// std::invalid_argument naming the muscle for a piece that fails ExcitationPolynomial::validate.
+  void setExcitationPolynomial(SimTK::State& s, const ExcitationPolynomial& piece) const;
   /// Drive the excitation by a signal of time (nullptr: back to the held value).
   void setExcitationSignal(SimTK::State& s, std::shared_ptr<const ExcitationSignal> signal) const;
   /// Excitation in effect at the state's time, clamped to [0, 1].
