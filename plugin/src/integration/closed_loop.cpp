@@ -28,7 +28,9 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
   for (int k = 0; k < periods && out.finite; ++k) {
     // The controller changes the inputs of the integrator's own state (no copy); Simbody's
     // integrators then restart (CPodes BDF cold), the Rosenbrock method keeps its step size.
-    controller.control(stepper->updState());
+    SimTK::State& state = stepper->updState();
+    plant.system().realize(state, SimTK::Stage::Acceleration);  // the measurement of qdd
+    controller.control(state);
     stepper->inputsChanged();
     const double t_begin = stepper->state().getTime();
     const double t_end = initial.getTime() + std::min(o.duration_s, (k + 1) * o.control_period_s);

@@ -102,13 +102,21 @@ void MusculoskeletalModel::checkSize(const Eigen::Ref<const Eigen::VectorXd>& v,
 
 Eigen::VectorXd MusculoskeletalModel::jointAngles(const SimTK::State& s) const {
   Eigen::VectorXd q(numJoints());
-  for (int i = 0; i < numJoints(); ++i) q[i] = joints_[i].getOneQ(s, 0);
+  jointAngles(s, q);
   return q;
 }
 Eigen::VectorXd MusculoskeletalModel::jointSpeeds(const SimTK::State& s) const {
   Eigen::VectorXd qd(numJoints());
-  for (int i = 0; i < numJoints(); ++i) qd[i] = joints_[i].getOneU(s, 0);
+  jointSpeeds(s, qd);
   return qd;
+}
+void MusculoskeletalModel::jointAngles(const SimTK::State& s, Eigen::Ref<Eigen::VectorXd> q) const {
+  if (q.size() != numJoints()) throw std::invalid_argument("joint angles: the output needs one entry per joint");
+  for (int i = 0; i < numJoints(); ++i) q[i] = joints_[i].getOneQ(s, 0);
+}
+void MusculoskeletalModel::jointSpeeds(const SimTK::State& s, Eigen::Ref<Eigen::VectorXd> qd) const {
+  if (qd.size() != numJoints()) throw std::invalid_argument("joint speeds: the output needs one entry per joint");
+  for (int i = 0; i < numJoints(); ++i) qd[i] = joints_[i].getOneU(s, 0);
 }
 void MusculoskeletalModel::setJointAngles(SimTK::State& s, const Eigen::VectorXd& q) const {
   checkSize(q, numJoints(), "joint angles");
@@ -155,6 +163,16 @@ void MusculoskeletalModel::setExcitations(SimTK::State& s, const Eigen::VectorXd
 Eigen::VectorXd MusculoskeletalModel::musculotendonLengths(const Eigen::VectorXd& q) const {
   checkSize(q, numJoints(), "joint angles");
   return zero_angle_lengths_ - moment_arms_.transpose() * q;
+}
+
+double MusculoskeletalModel::musculotendonLength(int j, const Eigen::Ref<const Eigen::VectorXd>& q) const {
+  if (j < 0 || j >= numMuscles())
+    throw std::out_of_range("musculotendon length: no muscle " + std::to_string(j) + " (the model has " +
+                            std::to_string(numMuscles()) + ")");
+  if (q.size() != numJoints())
+    throw std::invalid_argument("joint angles: expected " + std::to_string(numJoints()) + " values, got " +
+                                std::to_string(q.size()));
+  return zero_angle_lengths_[j] - moment_arms_.col(j).dot(q);
 }
 
 Eigen::VectorXd MusculoskeletalModel::muscleTorques(const Eigen::VectorXd& f) const {

@@ -18,7 +18,9 @@ class Controller {
  public:
   virtual ~Controller() = default;
   /// Reads the state at its time and changes its inputs (excitations, discrete variables) for
-  /// the next period. `state` is the stepper's own state: change it, do not keep it.
+  /// the next period. `state` is the stepper's own state: change it, do not keep it. It arrives
+  /// realized through Stage::Acceleration, so its accelerations can be read as measurements
+  /// (the plant's forward dynamics is the simulation's work, not the controller's).
   virtual void control(SimTK::State& state) = 0;
 };
 

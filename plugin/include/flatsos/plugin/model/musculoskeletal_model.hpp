@@ -57,6 +57,9 @@ class MusculoskeletalModel {
   // --- state access in description order ---
   Eigen::VectorXd jointAngles(const SimTK::State& s) const;  ///< q, rad
   Eigen::VectorXd jointSpeeds(const SimTK::State& s) const;  ///< qd, rad/s
+  /// The same into `out` (N entries; allocates nothing). Throws std::invalid_argument for a wrong size.
+  void jointAngles(const SimTK::State& s, Eigen::Ref<Eigen::VectorXd> q_rad) const;
+  void jointSpeeds(const SimTK::State& s, Eigen::Ref<Eigen::VectorXd> qd_rad_per_s) const;
   void setJointAngles(SimTK::State& s, const Eigen::VectorXd& q_rad) const;
   void setJointSpeeds(SimTK::State& s, const Eigen::VectorXd& qd_rad_per_s) const;
   Eigen::VectorXd activations(const SimTK::State& s) const;
@@ -71,6 +74,9 @@ class MusculoskeletalModel {
   const Eigen::MatrixXd& momentArmMatrix() const { return moment_arms_; }  ///< A, N x m
   /// Musculotendon lengths L(q) = l0 - A^T q.
   Eigen::VectorXd musculotendonLengths(const Eigen::VectorXd& q_rad) const;
+  /// One muscle's L(q) (allocates nothing). Throws std::out_of_range for a muscle that does not
+  /// exist, std::invalid_argument for a q of the wrong size.
+  double musculotendonLength(int muscle, const Eigen::Ref<const Eigen::VectorXd>& q_rad) const;
   /// Joint torques tau = A F of the given tendon forces.
   Eigen::VectorXd muscleTorques(const Eigen::VectorXd& tendon_forces_N) const;
   /// Mass matrix M(q) from Simbody.
