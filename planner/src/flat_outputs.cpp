@@ -46,8 +46,25 @@ MuscleState muscle_state_of(const plugin::MusculoskeletalModel& model, const Sim
 
 bool MusclePoint::inDomain() const {
   for (const auto& v : domain_violation)
-    if (!v.empty()) return false;
+    if (v.violated()) return false;
   return true;
+}
+
+std::string DomainViolation::describe() const {
+  std::ostringstream why;
+  switch (kind) {
+    case Kind::None: return "";
+    case Kind::SlackTendon: why << "slack tendon (planned tendon force " << value << " N <= 0)"; break;
+    case Kind::NoForceCapacity: why << "shortening velocity " << value << " m/s >= Vmax (no force capacity)"; break;
+    case Kind::ForceRatioBeyondExactRange:
+      why << "force ratio z = " << value << " beyond the forward model's exact range (" << limit << ")";
+      break;
+    case Kind::ActivationOutsideUnitInterval: why << "activation " << value << " outside (0, 1]"; break;
+    case Kind::ActivationBelowFloor: why << "activation " << value << " below the forward model's floor " << limit; break;
+    case Kind::ExcitationUnattainable: why << "no excitation gives da/dt = " << value << " 1/s"; break;
+    case Kind::ExcitationOutsideUnitInterval: why << "excitation " << value << " outside [0, 1]"; break;
+  }
+  return why.str();
 }
 
 void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E) {
@@ -152,41 +169,52 @@ MusclePoint FlatOutputMap::inverse(const Jet& q_jet, const Jet& Y_jet) const {
 }
 
 MusclePoint FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, const Jet& Y_jet) const {
+  MusclePoint p;
+  inverseFromTorque(q_jet, tj, Y_jet, p);
+  return p;
+}
+
+void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, const Jet& Y_jet, MusclePoint& p) const {
+  using Kind = DomainViolation::Kind;
   const int m = numMuscles();
   if (Y_jet.rows() != numFlatOutputs() || Y_jet.cols() < 2)
     throw std::invalid_argument("flat-output jet must be p x (2..3): Y, dY[, ddY]");
-  auto col = [](const Jet& j, int k) { return k < j.cols() ? Eigen::VectorXd(j.col(k)) : Eigen::VectorXd::Zero(j.rows()); };
-  const Eigen::VectorXd F = Ctau_ * tj.tau.col(0) + CY_ * col(Y_jet, 0);
-  const Eigen::VectorXd dF = Ctau_ * tj.tau.col(1) + CY_ * col(Y_jet, 1);
-  const Eigen::VectorXd ddF = Ctau_ * tj.tau.col(2) + CY_ * col(Y_jet, 2);
-  const Eigen::VectorXd L = model_->musculotendonLengths(q_jet.col(0));
-  const Eigen::VectorXd dL = -A_.transpose() * col(q_jet, 1);
-  const Eigen::VectorXd ddL = -A_.transpose() * col(q_jet, 2);
-
-  MusclePoint p;
+  if (q_jet.rows() != numJoints() || q_jet.cols() < 1)
+    throw std::invalid_argument("joint jet must be N x (1..5): q[, qd, qdd, ...]");
+  if (tj.tau.rows() != numJoints() || tj.tau.cols() != 3)
+    throw std::invalid_argument("torque jet must be N x 3: tau, dtau, ddtau");
+  const bool has_ddY = Y_jet.cols() > 2, has_qd = q_jet.cols() > 1, has_qdd = q_jet.cols() > 2;
   for (auto* v : {&p.tendon_force_N, &p.tendon_force_rate_N_per_s, &p.tendon_length_m, &p.tendon_length_rate_m_per_s,
                   &p.fiber_length_m, &p.shortening_velocity_m_per_s, &p.force_ratio, &p.activation,
                   &p.activation_rate_per_s, &p.excitation})
-    *v = Eigen::VectorXd::Constant(m, std::nan(""));
-  p.domain_violation.assign(static_cast<std::size_t>(m), "");
-  p.tendon_force_N = F;
-  p.tendon_force_rate_N_per_s = dF;
+    v->setConstant(m, std::nan(""));  // reuses the storage when the size is unchanged
+  p.domain_violation.resize(static_cast<std::size_t>(m));
 
   for (int j = 0; j < m; ++j) {
     const fm::MuscleParameters& mp = model_->muscle(j).getParameters();
-    std::string& why = p.domain_violation[static_cast<std::size_t>(j)];
-    if (!(F[j] > 0.0)) {
-      why = "slack tendon (planned tendon force " + std::to_string(F[j]) + " N <= 0)";
+    DomainViolation& why = p.domain_violation[static_cast<std::size_t>(j)];
+    why = DomainViolation{};
+    // F = C_tau tau + C_Y Y and its two time derivatives; L(q) and its derivatives along the path.
+    const double F = Ctau_.row(j).dot(tj.tau.col(0)) + CY_.row(j).dot(Y_jet.col(0));
+    const double dF = Ctau_.row(j).dot(tj.tau.col(1)) + CY_.row(j).dot(Y_jet.col(1));
+    const double ddF = Ctau_.row(j).dot(tj.tau.col(2)) + (has_ddY ? CY_.row(j).dot(Y_jet.col(2)) : 0.0);
+    const double L = model_->musculotendonLength(j, q_jet.col(0));
+    const double dL = has_qd ? -A_.col(j).dot(q_jet.col(1)) : 0.0;
+    const double ddL = has_qdd ? -A_.col(j).dot(q_jet.col(2)) : 0.0;
+    p.tendon_force_N[j] = F;
+    p.tendon_force_rate_N_per_s[j] = dF;
+    if (!(F > 0.0)) {
+      why = {Kind::SlackTendon, F, 0.0};
       continue;
     }
-    const double ls = fm::tendon_length_from_force(mp, F[j]);
+    const double ls = fm::tendon_length_from_force(mp, F);
     const double d1 = fm::tendon_force_derivative(mp, ls);
     const double d2 = fm::tendon_force_second_derivative(mp, ls);
-    const double dls = dF[j] / d1;
-    const double ddls = (ddF[j] - d2 * dls * dls) / d1;
-    const double u = dls - dL[j];
-    const double du = ddls - ddL[j];
-    const double lc = L[j] - ls;
+    const double dls = dF / d1;
+    const double ddls = (ddF - d2 * dls * dls) / d1;
+    const double u = dls - dL;
+    const double du = ddls - ddL;
+    const double lc = L - ls;
     const double f = fm::force_length(mp, lc);
     const double df = fm::force_length_derivative(mp, lc) * (-u);  // dL_C/dt = -u
     const double g = fm::force_velocity(mp, u);
@@ -197,27 +225,26 @@ MusclePoint FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& 
     p.shortening_velocity_m_per_s[j] = u;
     p.force_ratio[j] = g;
     if (!(g > 0.0)) {
-      why = "shortening velocity " + std::to_string(u) + " m/s >= Vmax (no force capacity)";
+      why = {Kind::NoForceCapacity, u, mp.max_shortening_velocity_m_per_s()};
       continue;
     }
-    const double a = F[j] / (mp.max_isometric_force_N * f * g);
-    const double da = a * (dF[j] / F[j] - df / f - dg / g);
+    const double a = F / (mp.max_isometric_force_N * f * g);
+    const double da = a * (dF / F - df / f - dg / g);
     p.activation[j] = a;
     p.activation_rate_per_s[j] = da;
     const auto n = fm::excitation_from_activation(mp, a, da);
     p.excitation[j] = n.excitation;
     if (g > fm::force_ratio_exact_upper_bound(mp))
-      why = "force ratio z = " + std::to_string(g) + " beyond the forward model's exact range";
+      why = {Kind::ForceRatioBeyondExactRange, g, fm::force_ratio_exact_upper_bound(mp)};
     else if (!(a > 0.0 && a <= 1.0))
-      why = "activation " + std::to_string(a) + " outside (0, 1]";
+      why = {Kind::ActivationOutsideUnitInterval, a, 1.0};
     else if (a < mp.activation_floor)
-      why = "activation " + std::to_string(a) + " below the forward model's floor " + std::to_string(mp.activation_floor);
+      why = {Kind::ActivationBelowFloor, a, mp.activation_floor};
     else if (!n.real_root)
-      why = "no excitation gives da/dt = " + std::to_string(da) + " 1/s";
+      why = {Kind::ExcitationUnattainable, da, 0.0};
     else if (!n.in_unit_interval())
-      why = "excitation " + std::to_string(n.excitation) + " outside [0, 1]";
+      why = {Kind::ExcitationOutsideUnitInterval, n.excitation, 1.0};
   }
-  return p;
 }
 
 FlatState FlatOutputMap::forward(const MuscleState& s) const {

@@ -1,14 +1,24 @@
 #include "flatsos/planner/joint_paths.hpp"
 
+#include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace flatsos::planner {
 
 Jet JointPath::jet(double t, int orders) const {
   Jet out(static_cast<Eigen::Index>(q.size()), orders);
-  for (std::size_t i = 0; i < q.size(); ++i)
-    for (int k = 0; k < orders; ++k) out(static_cast<Eigen::Index>(i), k) = q[i].derivativeAt(t, k);
+  jetInto(t, out);
   return out;
+}
+
+void JointPath::jetInto(double t, Eigen::Ref<Jet> out) const {
+  if (out.rows() != static_cast<Eigen::Index>(q.size()))
+    throw std::invalid_argument("joint path jet: the output has " + std::to_string(out.rows()) + " rows, the path " +
+                                std::to_string(q.size()) + " joints");
+  for (std::size_t i = 0; i < q.size(); ++i)
+    for (Eigen::Index k = 0; k < out.cols(); ++k)
+      out(static_cast<Eigen::Index>(i), k) = q[i].derivativeAt(t, static_cast<int>(k));
 }
 
 JointPath fit_joint_path(double T, const Eigen::MatrixXd& initial, const Eigen::MatrixXd& terminal) {
@@ -20,6 +30,23 @@ JointPath fit_joint_path(double T, const Eigen::MatrixXd& initial, const Eigen::
   for (Eigen::Index i = 0; i < initial.rows(); ++i)
     path.q.push_back(hermite_interpolant(T, initial.row(i).transpose(), terminal.row(i).transpose()));
   return path;
+}
+
+void fit_rest_cubic(double T, const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& q_target,
+                    JointPath& out) {
+  if (!(T > 0.0) || !std::isfinite(T)) throw std::invalid_argument("joint path: horizon T must be > 0 s");
+  if (qd.size() != q.size() || q_target.size() != q.size())
+    throw std::invalid_argument("joint path: q, qd and the target need one entry per joint");
+  if (!q.allFinite() || !qd.allFinite() || !q_target.allFinite())
+    throw std::invalid_argument("joint path: boundary derivatives must be finite");
+  out.duration_s = T;
+  out.q.resize(static_cast<std::size_t>(q.size()));
+  for (Eigen::Index i = 0; i < q.size(); ++i) {
+    // q(t) = q0 + v0 t + c2 t^2 + c3 t^3 with q(T) = target, qd(T) = 0.
+    const double dq = q_target[i] - q[i], v0 = qd[i];
+    const Eigen::Vector4d c(q[i], v0, (3.0 * dq - 2.0 * v0 * T) / (T * T), (v0 * T - 2.0 * dq) / (T * T * T));
+    out.q[static_cast<std::size_t>(i)].setCoefficients(c);
+  }
 }
 
 }  // namespace flatsos::planner

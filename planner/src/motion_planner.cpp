@@ -10,9 +10,12 @@
 namespace flatsos::planner {
 
 namespace {
-void require(const Eigen::VectorXd& v, int size, const std::string& what) {
-  if (v.size() != size) throw std::invalid_argument(what + ": expected " + std::to_string(size) + " values, got " + std::to_string(v.size()));
-  if (!v.allFinite()) throw std::invalid_argument(what + ": values must be finite (NaN or Inf given)");
+// `what` is a C string: checks that pass build no message (the RH step runs them every period).
+void require(const Eigen::VectorXd& v, int size, const char* what) {
+  if (v.size() != size)
+    throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(size) + " values, got " +
+                                std::to_string(v.size()));
+  if (!v.allFinite()) throw std::invalid_argument(std::string(what) + ": values must be finite (NaN or Inf given)");
 }
 
 void require_reserves(const Eigen::VectorXd& r, int m) {
@@ -56,10 +59,10 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
       ++c.points_outside_domain;
       if (c.first_violation.empty())
         for (std::size_t j = 0; j < mp.domain_violation.size(); ++j)
-          if (!mp.domain_violation[j].empty()) {
+          if (mp.domain_violation[j].violated()) {
             std::ostringstream why;
             why << "t = " << t << " s, muscle '" << flat.model().description().muscles[j].parameters.name
-                << "': " << mp.domain_violation[j];
+                << "': " << mp.domain_violation[j].describe();
             c.first_violation = why.str();
             break;
           }
@@ -150,33 +153,41 @@ RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const 
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                                const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                                const RecedingHorizonOptions& o) {
+  RecedingHorizonStep step;
+  plan_receding_horizon_step(flat, workspace, q, qd, o, step);
+  return step;
+}
+
+void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q,
+                                const Eigen::VectorXd& qd, const RecedingHorizonOptions& o, RecedingHorizonStep& step) {
   const Stopwatch wall;
   const int n = flat.numJoints();
   validate(o, flat);
   require(q, n, "joint angles");
   require(qd, n, "joint speeds");
 
-  RecedingHorizonStep step;
-  Eigen::MatrixXd initial(n, 2), terminal = Eigen::MatrixXd::Zero(n, 2);
-  initial << q, qd;
-  terminal.col(0) = o.target_q_rad;
-  step.path = fit_joint_path(o.horizon_s, initial, terminal);
+  step.status = SolveStatus::Failed;
+  step.message.clear();
+  fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
   const bool offset = o.torque_offset_N_m.size() > 0;
-  step.tau_min = Eigen::VectorXd::Constant(n, 1e300);
-  step.tau_max = Eigen::VectorXd::Constant(n, -1e300);
+  step.buffers.joint_jet.resize(n, 3);
+  step.buffers.torque_N_m.resize(n);
+  step.tau_min.setConstant(n, 1e300);
+  step.tau_max.setConstant(n, -1e300);
   for (int i = 0; i < o.grid_points; ++i) {
-    const Jet j = step.path.jet(o.horizon_s * i / (o.grid_points - 1), 3);
-    Eigen::VectorXd tau = flat.torque(workspace, j.col(0), j.col(1), j.col(2));
+    Jet& j = step.buffers.joint_jet;
+    Eigen::VectorXd& tau = step.buffers.torque_N_m;
+    step.path.jetInto(o.horizon_s * i / (o.grid_points - 1), j);
+    flat.model().inverseDynamics(workspace, j.col(0), j.col(1), j.col(2), tau);
     if (offset) tau -= o.torque_offset_N_m;
     step.tau_min = step.tau_min.cwiseMin(tau);
     step.tau_max = step.tau_max.cwiseMax(tau);
   }
-  const Eigen::VectorXd B = slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N);
-  step.slp = solve_slp(flat.CY(), B, o.solver, o.warm_start);
+  slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N, step.bound_N);
+  solve_slp(flat.CY(), step.bound_N, o.solver, o.warm_start, step.buffers.slp, step.slp);
   step.status = step.slp.status;
   step.message = step.slp.message;
   step.wall_seconds = wall.seconds();
-  return step;
 }
 
 }  // namespace flatsos::planner

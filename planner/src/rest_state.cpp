@@ -19,7 +19,7 @@ void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& stat
   const MusclePoint mp = flat.inverse(workspace, rest.path.jet(0.0, 5), Y);
   if (!mp.inDomain())
     for (const auto& why : mp.domain_violation)
-      if (!why.empty()) throw std::runtime_error("rest state outside the model's valid domain: " + why);
+      if (why.violated()) throw std::runtime_error("rest state outside the model's valid domain: " + why.describe());
   const auto& model = flat.model();
   model.setJointAngles(state, q);
   model.setJointSpeeds(state, Eigen::VectorXd::Zero(q.size()));

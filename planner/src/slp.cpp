@@ -12,85 +12,137 @@
 namespace flatsos::planner {
 
 namespace {
-void check(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B) {
+// Validates sizes, finiteness and Assumption 1's row sums sigma = C_Y 1 > 0 (into `row_sums`).
+void check(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, Eigen::VectorXd& row_sums) {
   if (CY.rows() != B.size() || CY.cols() == 0) throw std::invalid_argument("SLP: C_Y must be m x p with m = size of B");
   if (!CY.allFinite() || !B.allFinite()) throw std::invalid_argument("SLP: NaN or Inf in C_Y or B");
-  const Eigen::VectorXd sigma = CY.rowwise().sum();
-  for (Eigen::Index j = 0; j < sigma.size(); ++j)
-    if (!(sigma[j] > 0.0))
-      throw std::invalid_argument("SLP: row " + std::to_string(j) + " of C_Y sums to " + std::to_string(sigma[j]) +
+  row_sums.resize(CY.rows());
+  row_sums.noalias() = CY.rowwise().sum();
+  for (Eigen::Index j = 0; j < row_sums.size(); ++j)
+    if (!(row_sums[j] > 0.0))
+      throw std::invalid_argument("SLP: row " + std::to_string(j) + " of C_Y sums to " + std::to_string(row_sums[j]) +
                                   " <= 0 (Assumption 1, condition 3)");
+}
+
+// The appendix construction gamma 1_p into `alpha` (after check).
+void appendix_solution(const Eigen::VectorXd& row_sums, const Eigen::VectorXd& B, Eigen::Index p, Eigen::VectorXd& alpha) {
+  const double gamma = std::max((B.array() / row_sums.array()).maxCoeff(), 0.0);
+  alpha.setConstant(p, gamma);
+}
+
+// Exact optimum by vertex enumeration into `alpha` (after check); false when no vertex is feasible.
+bool vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpWorkspace& w, Eigen::VectorXd& alpha) {
+  const Eigen::Index m = CY.rows(), p = CY.cols(), n = m + p;
+  // Constraint rows: C_Y alpha >= B, then alpha >= 0.
+  w.rows.resize(n, p);
+  w.rows.topRows(m) = CY;
+  w.rows.bottomRows(p).setIdentity();
+  w.rhs.resize(n);
+  w.rhs.head(m) = B;
+  w.rhs.tail(p).setZero();
+  w.active.resize(p, p);
+  w.active_rhs.resize(p);
+  w.vertex.resize(p);
+  w.permuted.resize(p);
+  w.slack.resize(n);
+  alpha.resize(p);
+  const double scale = 1.0 + B.cwiseAbs().maxCoeff();
+  double best = std::numeric_limits<double>::infinity();
+  // Every choice of p active rows, in lexicographic order (a closed-loop step enumerates
+  // C(m + p, p) vertices: 210 for the arm).
+  w.pick.resize(static_cast<std::size_t>(p));
+  for (Eigen::Index k = 0; k < p; ++k) w.pick[static_cast<std::size_t>(k)] = k;
+  while (true) {
+    for (Eigen::Index k = 0; k < p; ++k) {
+      const Eigen::Index r = w.pick[static_cast<std::size_t>(k)];
+      w.active.row(k) = w.rows.row(r);
+      w.active_rhs[k] = w.rhs[r];
+    }
+    w.lu.compute(w.active);
+    if (w.lu.isInvertible()) {
+      // P A Q = L U: x = Q U^-1 L^-1 P b, in the workspace's vectors (FullPivLU::solve
+      // allocates a temporary).
+      w.permuted.noalias() = w.lu.permutationP() * w.active_rhs;
+      w.lu.matrixLU().triangularView<Eigen::UnitLower>().solveInPlace(w.permuted);
+      w.lu.matrixLU().triangularView<Eigen::Upper>().solveInPlace(w.permuted);
+      w.vertex.noalias() = w.lu.permutationQ() * w.permuted;
+      w.slack.noalias() = w.rows * w.vertex;
+      w.slack -= w.rhs;
+      if (w.slack.minCoeff() >= -1e-10 * scale && w.vertex.sum() < best) {
+        best = w.vertex.sum();
+        alpha = w.vertex;
+      }
+    }
+    // Next combination: raise the last index that can still move, reset the ones after it.
+    Eigen::Index k = p - 1;
+    while (k >= 0 && w.pick[static_cast<std::size_t>(k)] == n - p + k) --k;
+    if (k < 0) break;
+    ++w.pick[static_cast<std::size_t>(k)];
+    for (Eigen::Index l = k + 1; l < p; ++l)
+      w.pick[static_cast<std::size_t>(l)] = w.pick[static_cast<std::size_t>(l - 1)] + 1;
+  }
+  return best < std::numeric_limits<double>::infinity();
 }
 }  // namespace
 
 Eigen::VectorXd slp_bound_vector(const Eigen::MatrixXd& Ctau, const Eigen::VectorXd& tau_min,
                                  const Eigen::VectorXd& tau_max, const Eigen::VectorXd& reserves) {
+  Eigen::VectorXd B;
+  slp_bound_vector(Ctau, tau_min, tau_max, reserves, B);
+  return B;
+}
+
+void slp_bound_vector(const Eigen::MatrixXd& Ctau, const Eigen::VectorXd& tau_min, const Eigen::VectorXd& tau_max,
+                      const Eigen::VectorXd& reserves, Eigen::VectorXd& B) {
   if (tau_min.size() != Ctau.cols() || tau_max.size() != Ctau.cols() || reserves.size() != Ctau.rows())
     throw std::invalid_argument("SLP: torque box or reserves of the wrong size");
   if ((tau_max - tau_min).minCoeff() < 0.0) throw std::invalid_argument("SLP: torque box with tau_max < tau_min");
-  const Eigen::VectorXd mid = 0.5 * (tau_min + tau_max), half = 0.5 * (tau_max - tau_min);
-  return reserves - (Ctau * mid - Ctau.cwiseAbs() * half);
+  // min over the box of C_tau,j tau = C_tau,j mid - |C_tau,j| half, per row.
+  B.resize(Ctau.rows());
+  for (Eigen::Index j = 0; j < Ctau.rows(); ++j) {
+    double lowest = 0.0;
+    for (Eigen::Index i = 0; i < Ctau.cols(); ++i) {
+      const double mid = 0.5 * (tau_min[i] + tau_max[i]), half = 0.5 * (tau_max[i] - tau_min[i]);
+      lowest += Ctau(j, i) * mid - std::abs(Ctau(j, i)) * half;
+    }
+    B[j] = reserves[j] - lowest;
+  }
 }
 
 Eigen::VectorXd slp_appendix_solution(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B) {
-  check(CY, B);
-  const Eigen::VectorXd sigma = CY.rowwise().sum();
-  const double gamma = std::max((B.array() / sigma.array()).maxCoeff(), 0.0);
-  return Eigen::VectorXd::Constant(CY.cols(), gamma);
+  Eigen::VectorXd row_sums, alpha;
+  check(CY, B, row_sums);
+  appendix_solution(row_sums, B, CY.cols(), alpha);
+  return alpha;
 }
 
 Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B) {
-  check(CY, B);
-  const Eigen::Index m = CY.rows(), p = CY.cols(), n = m + p;
-  // Constraint rows: C_Y alpha >= B, then alpha >= 0.
-  Eigen::MatrixXd rows(n, p);
-  rows << CY, Eigen::MatrixXd::Identity(p, p);
-  Eigen::VectorXd rhs(n);
-  rhs << B, Eigen::VectorXd::Zero(p);
-  const double scale = 1.0 + B.cwiseAbs().maxCoeff();
-  double best = std::numeric_limits<double>::infinity();
-  Eigen::VectorXd best_alpha;
-  // Every choice of p active rows, in lexicographic order, with the work matrices allocated once
-  // (a closed-loop step enumerates C(m + p, p) vertices: 210 for the arm).
-  std::vector<Eigen::Index> pick(static_cast<std::size_t>(p));
-  for (Eigen::Index k = 0; k < p; ++k) pick[static_cast<std::size_t>(k)] = k;
-  Eigen::MatrixXd M(p, p);
-  Eigen::VectorXd b(p), alpha(p), slack(n);
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(p, p);
-  while (true) {
-    for (Eigen::Index k = 0; k < p; ++k) {
-      const Eigen::Index r = pick[static_cast<std::size_t>(k)];
-      M.row(k) = rows.row(r);
-      b[k] = rhs[r];
-    }
-    lu.compute(M);
-    if (lu.isInvertible()) {
-      alpha.noalias() = lu.solve(b);
-      slack.noalias() = rows * alpha;
-      slack -= rhs;
-      if (slack.minCoeff() >= -1e-10 * scale && alpha.sum() < best) {
-        best = alpha.sum();
-        best_alpha = alpha;
-      }
-    }
-    // Next combination: raise the last index that can still move, reset the ones after it.
-    Eigen::Index k = p - 1;
-    while (k >= 0 && pick[static_cast<std::size_t>(k)] == n - p + k) --k;
-    if (k < 0) break;
-    ++pick[static_cast<std::size_t>(k)];
-    for (Eigen::Index l = k + 1; l < p; ++l) pick[static_cast<std::size_t>(l)] = pick[static_cast<std::size_t>(l - 1)] + 1;
-  }
-  if (best_alpha.size() == 0) throw std::runtime_error("SLP: no feasible vertex (violates Assumption 1?)");
-  return best_alpha;
+  SlpWorkspace w;
+  check(CY, B, w.row_sums);
+  Eigen::VectorXd alpha;
+  if (!vertex_enumeration(CY, B, w, alpha)) throw std::runtime_error("SLP: no feasible vertex (violates Assumption 1?)");
+  return alpha;
 }
 
 SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
                     const std::optional<Eigen::VectorXd>& warm_start) {
-  const Stopwatch wall;
-  const Eigen::VectorXd start = slp_appendix_solution(CY, B);  // also validates
+  SlpWorkspace w;
   SlpResult r;
+  solve_slp(CY, B, solver, warm_start, w, r);
+  return r;
+}
+
+void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
+               const std::optional<Eigen::VectorXd>& warm_start, SlpWorkspace& w, SlpResult& r) {
+  const Stopwatch wall;
+  check(CY, B, w.row_sums);
+  appendix_solution(w.row_sums, B, CY.cols(), w.start);
+  r.status = SolveStatus::Failed;
+  r.message.clear();
+  r.used_fallback = false;
+  r.iterations = 0;
   if (solver == SlpSolver::VertexEnumeration) {
-    r.alpha = slp_vertex_enumeration(CY, B);
+    if (!vertex_enumeration(CY, B, w, r.alpha)) throw std::runtime_error("SLP: no feasible vertex (violates Assumption 1?)");
     r.status = SolveStatus::Solved;
   } else {
     LinearProgram lp;
@@ -104,7 +156,7 @@ SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolv
     if (warm_start && (warm_start->size() != p || !warm_start->allFinite()))
       throw std::invalid_argument("SLP: warm start must have " + std::to_string(p) + " finite entries");
     LinearProgramOptions o;
-    o.start = warm_start ? *warm_start : start;
+    o.start = warm_start ? *warm_start : w.start;
     const LinearProgramResult lr = solve_linear_program(lp, o);
     r.iterations = lr.iterations;
     const double scale = 1.0 + B.cwiseAbs().maxCoeff();
@@ -114,7 +166,7 @@ SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolv
       r.alpha = lr.x.cwiseMax(0.0);
       r.status = SolveStatus::Solved;
     } else {
-      r.alpha = start;
+      r.alpha = w.start;
       r.status = SolveStatus::Solved;
       r.used_fallback = true;
       r.message = "Ipopt did not solve the SLP (" + lr.solver_status + "); using the always-feasible appendix construction";
@@ -122,7 +174,6 @@ SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolv
   }
   r.cost_N = r.alpha.sum();
   r.wall_seconds = wall.seconds();
-  return r;
 }
 
 }  // namespace flatsos::planner

@@ -7,6 +7,7 @@
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
+namespace fp = flatsos::plugin;
 
 TEST(Slp, IpoptMatchesVertexEnumerationAndAppendixIsFeasible) {
   flatsos::test::ArmPlanning arm;
@@ -62,4 +63,54 @@ TEST(RecedingHorizonStep, SolvesTheFirstStepOfThePaperScenario) {
   }
   EXPECT_THROW(fpl::plan_receding_horizon_step(arm.flat, q, Eigen::Vector2d::Zero(), [&] { auto b = o; b.horizon_s = -1; return b; }()),
                std::invalid_argument);
+}
+
+TEST(RecedingHorizonStep, TheClosedFormCubicIsTheHermiteFit) {
+  // Twin: fit_rest_cubic's closed form against the general Hermite solve of fit_joint_path.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  fpl::JointPath reused;
+  for (int trial = 0; trial < 20; ++trial) {
+    const double T = 0.1 + std::abs(u(rng));
+    const Eigen::Vector3d q(u(rng), u(rng), u(rng)), qd(u(rng), u(rng), u(rng)), target(u(rng), u(rng), u(rng));
+    Eigen::MatrixXd initial(3, 2), terminal = Eigen::MatrixXd::Zero(3, 2);
+    initial << q, qd;
+    terminal.col(0) = target;
+    const fpl::JointPath hermite = fpl::fit_joint_path(T, initial, terminal);
+    fpl::fit_rest_cubic(T, q, qd, target, reused);  // the same object every trial
+    ASSERT_EQ(reused.q.size(), 3u);
+    EXPECT_EQ(reused.duration_s, T);
+    for (int i = 0; i < 3; ++i)
+      EXPECT_LT((reused.q[static_cast<std::size_t>(i)].coefficients() - hermite.q[static_cast<std::size_t>(i)].coefficients())
+                    .cwiseAbs()
+                    .maxCoeff(),
+                1e-9 * (1.0 + hermite.q[static_cast<std::size_t>(i)].coefficients().cwiseAbs().maxCoeff()));
+  }
+  EXPECT_THROW(fpl::fit_rest_cubic(0.0, Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), reused),
+               std::invalid_argument);
+  EXPECT_THROW(fpl::fit_rest_cubic(1.0, Eigen::Vector2d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero(), reused),
+               std::invalid_argument);
+}
+
+TEST(RecedingHorizonStep, AReusedStepGivesWhatAFreshOneGives) {
+  // The in-place planner reuses the step's storage: a step that planned from another state
+  // before must give exactly the fresh result (nothing stale carried over).
+  flatsos::test::ArmPlanning arm;
+  fpl::RecedingHorizonOptions o;
+  o.target_q_rad = Eigen::Vector2d(flatsos::test::deg(80), flatsos::test::deg(80));
+  o.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
+  o.solver = fpl::SlpSolver::VertexEnumeration;
+  fp::ModelWorkspace ws = arm.flat.makeWorkspace();
+  fpl::RecedingHorizonStep reused;
+  fpl::plan_receding_horizon_step(arm.flat, ws, Eigen::Vector2d(0.1, 1.2), Eigen::Vector2d(2.0, -1.0), o, reused);
+  const Eigen::Vector2d q(flatsos::test::deg(20), flatsos::test::deg(30)), qd(0.3, -0.2);
+  fpl::plan_receding_horizon_step(arm.flat, ws, q, qd, o, reused);
+  const auto fresh = fpl::plan_receding_horizon_step(arm.flat, q, qd, o);
+  ASSERT_EQ(fresh.status, fpl::SolveStatus::Solved);
+  EXPECT_EQ(reused.status, fresh.status);
+  EXPECT_EQ(reused.alpha(), fresh.alpha());
+  EXPECT_EQ(reused.tau_min, fresh.tau_min);
+  EXPECT_EQ(reused.tau_max, fresh.tau_max);
+  EXPECT_EQ(reused.bound_N, fresh.bound_N);
+  for (std::size_t i = 0; i < 2; ++i) EXPECT_EQ(reused.path.q[i].coefficients(), fresh.path.q[i].coefficients());
 }

@@ -14,6 +14,14 @@ Polynomial::Polynomial(Eigen::VectorXd coefficients) : c_(std::move(coefficients
   if (c_.size() == 0) c_ = Eigen::VectorXd::Zero(1);
 }
 
+void Polynomial::setCoefficients(const Eigen::Ref<const Eigen::VectorXd>& c) {
+  if (c.size() == 0) {
+    c_.setZero(1);
+  } else {
+    c_ = c;
+  }
+}
+
 double Polynomial::operator()(double x) const {
   double v = 0.0;
   for (Eigen::Index k = c_.size() - 1; k >= 0; --k) v = v * x + c_[k];

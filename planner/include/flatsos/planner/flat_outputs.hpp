@@ -44,6 +44,27 @@ struct TorqueJet {
   Eigen::MatrixXd tau;  ///< columns tau, dtau/dt, d2tau/dt2 (N m, N m/s, N m/s^2)
 };
 
+/// Why an inverse-map point is outside a muscle's valid domain (kind None: inside). Kept as a
+/// value, not a text, so the map allocates nothing; describe() gives the words.
+struct DomainViolation {
+  enum class Kind {
+    None,
+    SlackTendon,                    ///< value: the planned tendon force, N (<= 0)
+    NoForceCapacity,                ///< value: the shortening velocity, m/s (>= Vmax)
+    ForceRatioBeyondExactRange,     ///< value: the force ratio z; limit: the exact range's end
+    ActivationOutsideUnitInterval,  ///< value: the activation
+    ActivationBelowFloor,           ///< value: the activation; limit: the forward model's floor
+    ExcitationUnattainable,         ///< value: da/dt, 1/s, that no excitation gives
+    ExcitationOutsideUnitInterval,  ///< value: the excitation
+  };
+  Kind kind = Kind::None;
+  double value = 0.0;
+  double limit = 0.0;
+  bool violated() const { return kind != Kind::None; }
+  /// E.g. "activation 1.7 outside (0, 1]"; empty for None.
+  std::string describe() const;
+};
+
 /// Muscle quantities from the inverse map at one time (one entry per muscle).
 struct MusclePoint {
   Eigen::VectorXd tendon_force_N, tendon_force_rate_N_per_s;
@@ -52,11 +73,19 @@ struct MusclePoint {
   Eigen::VectorXd force_ratio;  ///< z = g(u)
   Eigen::VectorXd activation, activation_rate_per_s;
   Eigen::VectorXd excitation;   ///< larger root of the inverse activation dynamics
-  /// Per muscle, empty when the point is inside the valid domain; otherwise why not (slack
-  /// tendon, u >= Vmax, z beyond the exact force-velocity range, a outside (0, 1], n outside
-  /// [0, 1] or unattainable).
-  std::vector<std::string> domain_violation;
+  /// Per muscle: inside the valid domain, or why not (slack tendon, u >= Vmax, z beyond the
+  /// exact force-velocity range, a outside (0, 1] or below the floor, n outside [0, 1] or
+  /// unattainable).
+  std::vector<DomainViolation> domain_violation;
   bool inDomain() const;
+};
+
+/// Reusable storage for FlatOutputMap::torqueJetsOnGrid (sized on first use; allocation-free
+/// afterwards for the same grid size).
+struct TorqueJetGrid {
+  std::vector<TorqueJet> jets;  ///< the result: one jet per grid time
+  Eigen::MatrixXd fine_torques_N_m;  ///< scratch: inverse dynamics on the refined grid (N x points)
+  Jet joint_jet;                     ///< scratch: q, qd, qdd at one time (N x 3)
 };
 
 /// The flat outputs and derivatives that a muscle state determines.
@@ -113,12 +142,19 @@ class FlatOutputMap {
   template <class JointJetAt>
   std::vector<TorqueJet> torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const JointJetAt& jet_at, double t0,
                                           double h, int count) const;
+  /// The same into reusable storage; `write_jet(t, jet)` writes q, qd, qdd at t into the given
+  /// N x 3 matrix. Allocates nothing once `grid` has been used for this count.
+  template <class WriteJointJet>
+  void torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const WriteJointJet& write_jet, double t0, double h,
+                        int count, TorqueJetGrid& grid) const;
 
   /// Inverse map at one time: q_jet N x 5 (q..q''''), Y_jet p x 3 (Y, dY, ddY).
   MusclePoint inverse(plugin::ModelWorkspace& workspace, const Jet& q_jet, const Jet& Y_jet) const;
   MusclePoint inverse(const Jet& q_jet, const Jet& Y_jet) const;
   /// Same with a precomputed torque jet (no inverse dynamics: no workspace).
   MusclePoint inverseFromTorque(const Jet& q_jet, const TorqueJet& tau, const Jet& Y_jet) const;
+  /// The same into `out`, reusing its storage (allocates nothing once `out` holds m muscles).
+  void inverseFromTorque(const Jet& q_jet, const TorqueJet& tau, const Jet& Y_jet, MusclePoint& out) const;
 
   /// Forward map of a muscle state. Throws std::invalid_argument for sizes or NaN.
   FlatState forward(plugin::ModelWorkspace& workspace, const MuscleState& s) const;
@@ -136,30 +172,40 @@ extern const double kSecondDerivativeWeights[9];
 constexpr double kMaxJetStep_s = 1e-2;
 }  // namespace detail
 
-template <class JointJetAt>
-std::vector<TorqueJet> FlatOutputMap::torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const JointJetAt& jet_at,
-                                                       double t0, double h, int count) const {
+template <class WriteJointJet>
+void FlatOutputMap::torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const WriteJointJet& write_jet, double t0,
+                                     double h, int count, TorqueJetGrid& grid) const {
   if (count < 1 || !(h > 0.0)) throw std::invalid_argument("torque jets on a grid: need count >= 1 and h > 0");
+  const int n = numJoints();
   const int sub = std::max(1, static_cast<int>(std::ceil(h / detail::kMaxJetStep_s - 1e-12)));
   const double hf = h / sub;
   const int fine = (count - 1) * sub + 9;  // fine points k = -4 .. (count - 1) sub + 4
-  std::vector<Eigen::VectorXd> tau(static_cast<std::size_t>(fine));
+  grid.fine_torques_N_m.resize(n, fine);    // no-ops when the sizes are unchanged
+  grid.joint_jet.resize(n, 3);
+  grid.jets.resize(static_cast<std::size_t>(count));
   for (int k = 0; k < fine; ++k) {
-    const Jet j = jet_at(t0 + (k - 4) * hf);
-    tau[static_cast<std::size_t>(k)] = torque(workspace, j.col(0), j.col(1), j.col(2));
+    write_jet(t0 + (k - 4) * hf, grid.joint_jet);
+    model_->inverseDynamics(workspace, grid.joint_jet.col(0), grid.joint_jet.col(1), grid.joint_jet.col(2),
+                            grid.fine_torques_N_m.col(k));
   }
-  std::vector<TorqueJet> out(static_cast<std::size_t>(count));
   for (int i = 0; i < count; ++i) {
-    TorqueJet& tj = out[static_cast<std::size_t>(i)];
-    tj.tau = Eigen::MatrixXd::Zero(numJoints(), 3);
+    Eigen::MatrixXd& tau = grid.jets[static_cast<std::size_t>(i)].tau;
+    tau.setZero(n, 3);
     const int c = i * sub + 4;
-    tj.tau.col(0) = tau[static_cast<std::size_t>(c)];
+    tau.col(0) = grid.fine_torques_N_m.col(c);
     for (int k = -4; k <= 4; ++k) {
-      tj.tau.col(1) += detail::kFirstDerivativeWeights[k + 4] / hf * tau[static_cast<std::size_t>(c + k)];
-      tj.tau.col(2) += detail::kSecondDerivativeWeights[k + 4] / (hf * hf) * tau[static_cast<std::size_t>(c + k)];
+      tau.col(1) += detail::kFirstDerivativeWeights[k + 4] / hf * grid.fine_torques_N_m.col(c + k);
+      tau.col(2) += detail::kSecondDerivativeWeights[k + 4] / (hf * hf) * grid.fine_torques_N_m.col(c + k);
     }
   }
-  return out;
+}
+
+template <class JointJetAt>
+std::vector<TorqueJet> FlatOutputMap::torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const JointJetAt& jet_at,
+                                                       double t0, double h, int count) const {
+  TorqueJetGrid grid;
+  torqueJetsOnGrid(workspace, [&](double t, Jet& out) { out = jet_at(t).leftCols(3); }, t0, h, count, grid);
+  return std::move(grid.jets);
 }
 
 }  // namespace flatsos::planner

@@ -17,10 +17,19 @@ struct JointPath {
   std::vector<Polynomial> q;  ///< per joint, ascending powers of t (s), radians
   /// N x orders jet (derivatives 0..orders-1) at time t.
   Jet jet(double t, int orders = 5) const;
+  /// The same into `out` (N x orders, orders = its column count; allocates nothing).
+  void jetInto(double t, Eigen::Ref<Jet> out) const;
 };
 
 /// initial: N x k0 (derivatives 0..k0-1 at 0), terminal: N x kT (derivatives 0..kT-1 at T).
 /// Degree k0 + kT - 1. Throws std::invalid_argument for T <= 0, mismatched rows or NaN.
 JointPath fit_joint_path(double duration_s, const Eigen::MatrixXd& initial, const Eigen::MatrixXd& terminal);
+
+/// The receding-horizon path: per joint the cubic from (q, qd) at 0 to (q_target, 0) at T, in
+/// closed form (fit_joint_path's result with initial [q qd], terminal [q_target 0]). Written
+/// into `out`, reusing its storage: no allocation when `out` already holds N cubics. Throws
+/// std::invalid_argument for T <= 0, mismatched sizes or NaN.
+void fit_rest_cubic(double duration_s, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                    const Eigen::VectorXd& q_target, JointPath& out);
 
 }  // namespace flatsos::planner

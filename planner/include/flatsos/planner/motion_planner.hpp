@@ -87,9 +87,16 @@ struct RecedingHorizonStep {
   std::string message;
   JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon
   Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
+  Eigen::VectorXd bound_N;            ///< the SLP's B (slp_bound_vector of the box and reserves)
   SlpResult slp;
   const Eigen::VectorXd& alpha() const { return slp.alpha; }  ///< constant Y, N
   double wall_seconds = 0.0;
+  /// Work storage the in-place plan_receding_horizon_step reuses (not part of the result).
+  struct Buffers {
+    Jet joint_jet;
+    Eigen::VectorXd torque_N_m;
+    SlpWorkspace slp;
+  } buffers;
 };
 
 /// Checks RH options against the model: horizon > 0 s, >= 2 grid points, target and reserves
@@ -104,6 +111,12 @@ void validate(const RecedingHorizonOptions& options, const FlatOutputMap& flat);
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                                const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                                const RecedingHorizonOptions& options);
+/// The same into `step`, reusing its storage: with SlpSolver::VertexEnumeration and a step that
+/// has planned for this model before, nothing is allocated (the receding-horizon controller's
+/// inner loop). Ipopt allocates inside.
+void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
+                                const RecedingHorizonOptions& options, RecedingHorizonStep& step);
 /// The same with a temporary workspace.
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad,
                                                const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions& options);

@@ -9,8 +9,10 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include "flatsos/planner/numerics/linear_program.hpp"
 
@@ -19,6 +21,9 @@ namespace flatsos::planner {
 /// B from a torque box [tau_min, tau_max] (per joint) and the reserves.
 Eigen::VectorXd slp_bound_vector(const Eigen::MatrixXd& Ctau, const Eigen::VectorXd& tau_min,
                                  const Eigen::VectorXd& tau_max, const Eigen::VectorXd& reserves_N);
+/// The same into `B` (allocates nothing when B already has m entries).
+void slp_bound_vector(const Eigen::MatrixXd& Ctau, const Eigen::VectorXd& tau_min, const Eigen::VectorXd& tau_max,
+                      const Eigen::VectorXd& reserves_N, Eigen::VectorXd& B);
 
 /// The appendix construction: always feasible, generally not optimal.
 Eigen::VectorXd slp_appendix_solution(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B);
@@ -40,6 +45,15 @@ struct SlpResult {
   double wall_seconds = 0.0;
 };
 
+/// Work storage of solve_slp, reusable across calls of the same size (m x p): with it the exact
+/// solver allocates nothing.
+struct SlpWorkspace {
+  Eigen::MatrixXd rows, active;       ///< [C_Y; I] and the p active rows of one vertex
+  Eigen::VectorXd rhs, active_rhs, permuted, vertex, slack, row_sums, start;
+  std::vector<Eigen::Index> pick;     ///< indices of the active rows
+  Eigen::FullPivLU<Eigen::MatrixXd> lu;
+};
+
 /// Solves the SLP. Ipopt starts from the appendix construction; if it fails, the result falls
 /// back to the appendix construction (feasible, status Solved, used_fallback = true, message says
 /// why). Throws std::invalid_argument for wrong sizes or NaN, FlatnessError-like
@@ -48,5 +62,9 @@ struct SlpResult {
 /// e.g. the previous RH step's alpha.
 SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::Ipopt,
                     const std::optional<Eigen::VectorXd>& warm_start = std::nullopt);
+/// The same into `result`, with reusable work storage (no allocation with VertexEnumeration once
+/// both have been used for this size; Ipopt allocates inside).
+void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
+               const std::optional<Eigen::VectorXd>& warm_start, SlpWorkspace& workspace, SlpResult& result);
 
 }  // namespace flatsos::planner

@@ -13,6 +13,9 @@ class Polynomial {
   explicit Polynomial(Eigen::VectorXd coefficients);
 
   const Eigen::VectorXd& coefficients() const { return c_; }
+  /// Replaces the coefficients (none: the zero polynomial); reuses the storage when the count
+  /// is unchanged, so refitting a path in a control loop allocates nothing.
+  void setCoefficients(const Eigen::Ref<const Eigen::VectorXd>& coefficients);
   int degree() const { return static_cast<int>(c_.size()) - 1; }  ///< of the storage (may have zero top)
 
   double operator()(double x) const;                 ///< Horner
