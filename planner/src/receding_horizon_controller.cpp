@@ -9,18 +9,11 @@
 namespace flatsos::planner {
 
 namespace {
-// The plan's joint jet at tau; from its end on the plan rests at its target (the cubic's
-// acceleration at T is not zero, a rest's is).
-Jet plan_jet(const JointPath& path, double tau, int orders) {
-  Jet j = path.jet(std::min(tau, path.duration_s), orders);
-  if (tau >= path.duration_s && orders > 1) j.rightCols(orders - 1).setZero();
-  return j;
-}
-
-Jet constant_jet(const Eigen::VectorXd& alpha) {
-  Jet j = Jet::Zero(alpha.size(), 3);
-  j.col(0) = alpha;
-  return j;
+// The plan's joint jet at tau into `out` (its column count: the orders); from its end on the plan
+// rests at its target (the cubic's acceleration at T is not zero, a rest's is).
+void plan_jet(const JointPath& path, double tau, Jet& out) {
+  path.jetInto(std::min(tau, path.duration_s), out);
+  if (tau >= path.duration_s && out.cols() > 1) out.rightCols(out.cols() - 1).setZero();
 }
 
 const RecedingHorizonControllerOptions& validated(const RecedingHorizonControllerOptions& o, const FlatOutputMap& flat) {
@@ -51,71 +44,93 @@ RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, Recedin
       options_(validated(o, flat_)),
       workspace_(flat_.makeWorkspace()),
       observer_(flat_.numJoints(), options_.disturbance_observer_gain_per_s),
-      fitter_(options_.excitation_samples_per_period, options_.control_period_s) {}
+      fitter_(options_.excitation_samples_per_period, options_.control_period_s),
+      plan_options_(options_.plan) {
+  const int n = flat_.numJoints(), m = flat_.numMuscles(), p = flat_.numFlatOutputs();
+  for (auto* v : {&q_, &qd_, &qdd_, &measured_torque_, &predicted_torque_}) v->setZero(n);
+  predicted_jet_.setZero(n, 3);
+  joint_jet_.setZero(n, 5);
+  flat_jet_.setZero(p, 3);
+  excitations_.setZero(fitter_.samples(), m);
+  if (observer_.enabled()) plan_options_.torque_offset_N_m.setZero(n);
+}
 
-void RecedingHorizonController::observe(const SimTK::State& state, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
-                                        double t) {
-  if (!observer_.enabled() || in_use_.empty() || history_.empty()) return;
+void RecedingHorizonController::observe(const SimTK::State& state, double t) {
+  if (!observer_.enabled() || in_use_.empty() || steps_ == 0) return;
   // Prediction error of the plan in use: the joint torque the measured motion needs minus the
   // one the plan predicted for now (what its muscles were asked for).
   plant_->system().realize(state, SimTK::Stage::Acceleration);
-  Eigen::VectorXd qdd(plant_->numJoints());
-  for (int i = 0; i < plant_->numJoints(); ++i) qdd[i] = plant_->joint(i).getOneUDot(state, 0);
-  if (!(q.allFinite() && qd.allFinite() && qdd.allFinite())) return;  // the planner reports the state
-  const Jet predicted = plan_jet(in_use_.path, t - in_use_.start_time_s, 3);  // q, qd, qdd
-  const Eigen::VectorXd error = flat_.torque(workspace_, q, qd, qdd) -
-                                flat_.torque(workspace_, predicted.col(0), predicted.col(1), predicted.col(2));
-  observer_.update(error, t - history_.back().time_s);
+  for (int i = 0; i < plant_->numJoints(); ++i) qdd_[i] = plant_->joint(i).getOneUDot(state, 0);
+  if (!(q_.allFinite() && qd_.allFinite() && qdd_.allFinite())) return;  // the planner reports the state
+  plan_jet(in_use_.path, t - in_use_.start_time_s, predicted_jet_);  // q, qd, qdd
+  const plugin::MusculoskeletalModel& model = flat_.model();
+  model.inverseDynamics(workspace_, q_, qd_, qdd_, measured_torque_);
+  model.inverseDynamics(workspace_, predicted_jet_.col(0), predicted_jet_.col(1), predicted_jet_.col(2),
+                        predicted_torque_);
+  measured_torque_ -= predicted_torque_;
+  observer_.update(measured_torque_, t - record_.time_s);
 }
 
-bool RecedingHorizonController::sampleExcitations(const PlanInUse& plan, double t, Eigen::MatrixXd& values) {
+bool RecedingHorizonController::sampleExcitations(const PlanInUse& plan, double t) {
   const int ns = fitter_.samples();
   const double h = fitter_.spacing_s();
   const double tau0 = t - plan.start_time_s;
-  values.resize(flat_.numMuscles(), ns);
-  const auto jets = flat_.torqueJetsOnGrid(
-      workspace_, [&](double tau) { return plan_jet(plan.path, tau, 3); }, tau0, h, ns);
-  const Jet Y = constant_jet(plan.alpha);
+  flat_.torqueJetsOnGrid(
+      workspace_, [&](double tau, Jet& out) { plan_jet(plan.path, tau, out); }, tau0, h, ns, torque_grid_);
+  flat_jet_.col(0) = plan.alpha;  // constant Y: its rates stay zero
   for (int i = 0; i < ns; ++i) {
-    TorqueJet tj = jets[static_cast<std::size_t>(i)];
+    TorqueJet& tj = torque_grid_.jets[static_cast<std::size_t>(i)];
     // The one place the observer's offset meets the muscles: the torque the plan was made for.
     if (plan.torque_offset_N_m.size()) tj.tau.col(0) -= plan.torque_offset_N_m;  // constant: rates unchanged
-    const MusclePoint mp = flat_.inverseFromTorque(plan_jet(plan.path, tau0 + h * i, 5), tj, Y);
-    if (!mp.excitation.allFinite()) return false;
-    values.col(i) = mp.excitation;
+    plan_jet(plan.path, tau0 + h * i, joint_jet_);
+    flat_.inverseFromTorque(joint_jet_, tj, flat_jet_, point_);
+    if (!point_.excitation.allFinite()) return false;
+    excitations_.row(i) = point_.excitation.transpose();
   }
   return true;
 }
 
 const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {
   const Stopwatch wall;
-  RecedingHorizonRecord rec;
-  rec.time_s = state.getTime();
-  const Eigen::VectorXd q = plant_->jointAngles(state), qd = plant_->jointSpeeds(state);
-  observe(state, q, qd, rec.time_s);
-  RecedingHorizonOptions plan_options = options_.plan;
-  if (observer_.enabled()) plan_options.torque_offset_N_m = rec.observer_offset_N_m = observer_.torqueOffset_N_m();
+  const double t = state.getTime();
+  plant_->jointAngles(state, q_);
+  plant_->jointSpeeds(state, qd_);
+  observe(state, t);  // before the record is overwritten: it holds the previous period's time
 
-  PlanInUse candidate;
+  RecedingHorizonRecord& rec = record_;
+  rec.time_s = t;
+  rec.status = SolveStatus::Failed;
+  rec.message.clear();
+  rec.used_previous_plan = false;
+  rec.clamped_samples = 0;
+  rec.plan_seconds = 0.0;
+  if (observer_.enabled()) plan_options_.torque_offset_N_m = observer_.torqueOffset_N_m();
+  rec.observer_offset_N_m = plan_options_.torque_offset_N_m;  // empty without an observer
+
+  bool have_candidate = false;
   try {
     const Stopwatch plan_time;
-    const RecedingHorizonStep plan = options_.planner(flat_, workspace_, q, qd, plan_options);
+    options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
     rec.plan_seconds = plan_time.seconds();
-    rec.status = plan.status;
-    rec.message = plan.message;
-    if (plan.status == SolveStatus::Solved)
-      candidate = PlanInUse{plan.alpha(), plan.path, rec.time_s, plan_options.torque_offset_N_m};
+    rec.status = step_.status;
+    rec.message = step_.message;
+    if (step_.status == SolveStatus::Solved) {
+      candidate_.alpha = step_.alpha();
+      candidate_.path = step_.path;
+      candidate_.start_time_s = t;
+      candidate_.torque_offset_N_m = plan_options_.torque_offset_N_m;
+      have_candidate = true;
+    }
   } catch (const std::exception& e) {
     rec.status = SolveStatus::Failed;
     rec.message = e.what();
   }
 
-  Eigen::MatrixXd values;
-  bool have_excitations = !candidate.empty() && sampleExcitations(candidate, rec.time_s, values);
+  bool have_excitations = have_candidate && sampleExcitations(candidate_, t);
   if (have_excitations) {
-    in_use_ = std::move(candidate);
+    in_use_ = candidate_;  // same sizes after the first period: copies into in_use_'s storage
   } else {
-    if (!candidate.empty()) {
+    if (have_candidate) {
       rec.status = SolveStatus::Failed;
       rec.message = "the plan's excitations are undefined on the first period (left the valid domain)";
     }
@@ -123,30 +138,23 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     // valid plan.
     if (!in_use_.empty()) {
       rec.used_previous_plan = true;
-      have_excitations = sampleExcitations(in_use_, rec.time_s, values);
+      have_excitations = sampleExcitations(in_use_, t);
     }
   }
   if (have_excitations) {
-    rec.clamped_samples = static_cast<int>(((values.array() < 0.0) || (values.array() > 1.0)).count());
+    rec.clamped_samples = static_cast<int>(((excitations_.array() < 0.0) || (excitations_.array() > 1.0)).count());
     for (int j = 0; j < plant_->numMuscles(); ++j)
-      plant_->muscle(j).setExcitationSignal(state, fitter_.signal(fitter_.fit(values.row(j).transpose()), rec.time_s));
-    rec.plan = in_use_;
+      plant_->muscle(j).setExcitationPolynomial(state, fitter_.fit(excitations_.col(j), t));
+    rec.plan = in_use_;  // same sizes every period: copies into the record's storage
+  } else {
+    rec.plan.alpha.resize(0);  // no plan in use: the muscles keep their current inputs
   }
-  // Otherwise no plan ever succeeded: the muscles keep their current inputs, no plan is in use.
+  if (rec.status != SolveStatus::Solved) ++plan_failures_;
+  clamped_samples_ += rec.clamped_samples;
+  ++steps_;
   rec.wall_seconds = wall.seconds();
-  history_.push_back(std::move(rec));
-  return history_.back();
-}
-
-int RecedingHorizonController::planFailures() const {
-  return static_cast<int>(
-      std::count_if(history_.begin(), history_.end(), [](const auto& r) { return r.status != SolveStatus::Solved; }));
-}
-
-int RecedingHorizonController::clampedSamples() const {
-  int n = 0;
-  for (const auto& r : history_) n += r.clamped_samples;
-  return n;
+  if (options_.keep_history) history_.push_back(rec);
+  return rec;
 }
 
 plugin::StoTable prediction_table(const RecedingHorizonController& controller) {

@@ -199,16 +199,15 @@ TEST(Reliability, RecedingHorizonRunsOnThePreviousPlanWhenStepsFailAndRecovers) 
   flatsos::test::RecedingHorizonScenario rh;
   int calls = 0;
   rh.options.planner = [&](const fpl::FlatOutputMap& f, fp::ModelWorkspace& ws, const Eigen::VectorXd& q,
-                           const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& ro) {
+                           const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& ro, fpl::RecedingHorizonStep& out) {
     const int k = calls++;
     if (k >= 5 && k < 9) {  // steps 5..8: the solver "fails" (and once throws)
       if (k == 7) throw std::runtime_error("injected solver crash");
-      fpl::RecedingHorizonStep failed;
-      failed.status = fpl::SolveStatus::Failed;
-      failed.message = "injected failure";
-      return failed;
+      out.status = fpl::SolveStatus::Failed;
+      out.message = "injected failure";
+      return;
     }
-    return fpl::plan_receding_horizon_step(f, ws, q, qd, ro);
+    fpl::plan_receding_horizon_step(f, ws, q, qd, ro, out);
   };
   const auto outcome = rh.run(rh.loop(2.0, fp::IntegratorKind::CPodesBdf));
   const auto& run = outcome.run;

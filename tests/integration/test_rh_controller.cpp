@@ -46,13 +46,13 @@ TEST(RecedingHorizonController, AFailedStepRunsThePreviousPlanWithTheOffsetItWas
   constexpr int kFailing = 6;
   int calls = 0;
   rh.options.planner = [&](const fpl::FlatOutputMap& f, fp::ModelWorkspace& ws, const Eigen::VectorXd& q,
-                           const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& o) {
+                           const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& o, fpl::RecedingHorizonStep& out) {
     if (calls++ == kFailing) {
-      fpl::RecedingHorizonStep failed;
-      failed.message = "injected failure";
-      return failed;
+      out.status = fpl::SolveStatus::Failed;
+      out.message = "injected failure";
+      return;
     }
-    return fpl::plan_receding_horizon_step(f, ws, q, qd, o);
+    fpl::plan_receding_horizon_step(f, ws, q, qd, o, out);
   };
   // A constant torque the planner's model does not have: the observer's estimate moves every step.
   const auto plant = std::make_shared<const fp::MusculoskeletalModel>(
@@ -111,8 +111,10 @@ TEST(RecedingHorizonController, TheExcitationFitReproducesSmoothSamples) {
   // Any polynomial of degree <= 6 in the period's scaled time is reproduced to round-off.
   const auto n = [](double s) { return 0.2 + 0.3 * s - 0.5 * std::pow(s, 3) + 0.4 * std::pow(s, 6); };
   for (int i = 0; i < 11; ++i) samples[i] = n(i / 10.0);
-  const auto signal = fitter.signal(fitter.fit(samples), 1.0);
-  for (double s : {0.0, 0.123, 0.5, 0.77, 1.0}) EXPECT_NEAR(signal->value(1.0 + 0.05 * s), n(s), 1e-12);
-  EXPECT_DOUBLE_EQ(signal->value(0.5), signal->value(1.0));  // held before the period
+  const auto piece = fitter.fit(samples, 1.0);
+  for (double s : {0.0, 0.123, 0.5, 0.77, 1.0}) EXPECT_NEAR(piece.value(1.0 + 0.05 * s), n(s), 1e-12);
+  EXPECT_DOUBLE_EQ(piece.value(0.5), piece.value(1.0));   // held before the period
+  EXPECT_DOUBLE_EQ(piece.value(2.0), piece.value(1.05));  // and after it
+  EXPECT_THROW(fitter.fit(Eigen::VectorXd::Zero(10), 1.0), std::invalid_argument);
   EXPECT_THROW(fpl::ExcitationFitter(1, 0.05), std::invalid_argument);
 }

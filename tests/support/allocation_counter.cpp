@@ -4,7 +4,15 @@
 #include <cstddef>
 #include <new>
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__)  // GCC
+#define FLATSOS_UNDER_ASAN 1
+#elif defined(__has_feature)      // Clang
+#if __has_feature(address_sanitizer)
+#define FLATSOS_UNDER_ASAN 1
+#endif
+#endif
+
+#if defined(FLATSOS_UNDER_ASAN)
 // AddressSanitizer owns malloc: nothing is replaced and nothing is counted.
 long heap_allocations() { return -1; }
 #else

@@ -8,8 +8,11 @@
 // the muscle) and counted here. A failed step never stops the loop: the previous plan's tail,
 // with the torque offset it was planned for, is used and the failure recorded.
 //
-// Prepared once in the constructor (validated options, the planner's and the plant's
-// workspaces, the excitation fit's factorization); per period only the feedback work remains.
+// Prepared once in the constructor (validated options, the planner's workspace, the excitation
+// fit's solution operator); per period only the feedback work remains, in storage the controller
+// owns: with the exact SLP solver (SlpSolver::VertexEnumeration) a control period allocates no
+// heap memory after the first one, unless keep_history records it (tested by counting
+// allocations, tests/realtime).
 
 #include <functional>
 #include <memory>
@@ -25,22 +28,26 @@
 
 namespace flatsos::planner {
 
-/// The planning step a controller calls; replaceable (another planner, or fault injection in
-/// tests). Default: plan_receding_horizon_step.
+/// The planning step a controller calls, writing into the step it is given (the controller's
+/// own, reused every period); replaceable (another planner, or fault injection in tests).
+/// Default: the in-place plan_receding_horizon_step.
 using RecedingHorizonPlanner =
-    std::function<RecedingHorizonStep(const FlatOutputMap&, plugin::ModelWorkspace&, const Eigen::VectorXd& q_rad,
-                                      const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions&)>;
+    std::function<void(const FlatOutputMap&, plugin::ModelWorkspace&, const Eigen::VectorXd& q_rad,
+                       const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions&, RecedingHorizonStep& out)>;
 
 struct RecedingHorizonControllerOptions {
   RecedingHorizonOptions plan;             ///< horizon, grid, target, reserves, SLP solver
   RecedingHorizonPlanner planner = [](const FlatOutputMap& f, plugin::ModelWorkspace& w, const Eigen::VectorXd& q,
-                                      const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
-    return plan_receding_horizon_step(f, w, q, qd, o);
-  };
+                                      const Eigen::VectorXd& qd, const RecedingHorizonOptions& o,
+                                      RecedingHorizonStep& out) { plan_receding_horizon_step(f, w, q, qd, o, out); };
   double control_period_s = 0.05;          ///< delta
   int excitation_samples_per_period = 11;  ///< inverse-map samples per period (fitted by a polynomial)
   /// Disturbance observer gain, 1/s (see disturbance_observer.hpp); 0: the paper's controller.
   double disturbance_observer_gain_per_s = 0.0;
+  /// Keep every period's record in history() (for analysis and prediction_table). Each record
+  /// copies its plan: a few heap allocations per period; off, only last() is kept and the loop
+  /// allocates nothing.
+  bool keep_history = true;
 };
 
 /// A plan the controller runs on: constant flat outputs, the predicted joint motion, when it
@@ -77,19 +84,24 @@ class RecedingHorizonController final : public plugin::Controller {
   const RecedingHorizonRecord& step(SimTK::State& state);
   void control(SimTK::State& state) override { step(state); }
 
+  /// Every period's record (empty unless options.keep_history).
   const std::vector<RecedingHorizonRecord>& history() const { return history_; }
-  int planFailures() const;
-  int clampedSamples() const;
+  /// The latest period's record (kept with or without history); before the first step, empty.
+  const RecedingHorizonRecord& last() const { return record_; }
+  int steps() const { return steps_; }
+  int planFailures() const { return plan_failures_; }
+  int clampedSamples() const { return clamped_samples_; }
   const RecedingHorizonControllerOptions& options() const { return options_; }
   const FlatOutputMap& flat() const { return flat_; }
   const plugin::MusculoskeletalModel& plant() const { return *plant_; }
   const DisturbanceObserver& observer() const { return observer_; }
 
  private:
-  void observe(const SimTK::State& state, const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double t);
-  // Inverse-map excitations of `plan` over the period from t (muscles x samples); false when
-  // they are not finite (the plan left the valid domain).
-  bool sampleExcitations(const PlanInUse& plan, double t, Eigen::MatrixXd& values);
+  // Updates the observer from the measured motion (q_, qd_ and the plant's qdd) at time t.
+  void observe(const SimTK::State& state, double t);
+  // Inverse-map excitations of `plan` over the period from t into excitations_ (samples x
+  // muscles); false when they are not finite (the plan left the valid domain).
+  bool sampleExcitations(const PlanInUse& plan, double t);
 
   FlatOutputMap flat_;
   std::shared_ptr<const plugin::MusculoskeletalModel> plant_;
@@ -97,8 +109,19 @@ class RecedingHorizonController final : public plugin::Controller {
   plugin::ModelWorkspace workspace_;  ///< the planner model's inverse dynamics
   DisturbanceObserver observer_;
   ExcitationFitter fitter_;
-  PlanInUse in_use_;
+  PlanInUse in_use_, candidate_;
+  RecedingHorizonRecord record_;
   std::vector<RecedingHorizonRecord> history_;
+  int steps_ = 0, plan_failures_ = 0, clamped_samples_ = 0;
+
+  // Storage reused every period (sized in the constructor or on the first period).
+  RecedingHorizonOptions plan_options_;  ///< options_.plan with the observer's current offset
+  RecedingHorizonStep step_;
+  Eigen::VectorXd q_, qd_, qdd_, measured_torque_, predicted_torque_;
+  Jet predicted_jet_, joint_jet_, flat_jet_;  ///< N x 3, N x 5, p x 3
+  TorqueJetGrid torque_grid_;
+  MusclePoint point_;
+  Eigen::MatrixXd excitations_;  ///< samples x muscles of the period being planned
 };
 
 /// A closed-loop run of the controller on its plant (plugin::simulate_closed_loop, control
