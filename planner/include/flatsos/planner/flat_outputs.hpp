@@ -9,7 +9,7 @@
 //
 // Inverse map (flat outputs -> muscle states and excitations) at one time, from the joint jet
 // (q and its first four time derivatives) and the flat-output jet (Y, dY, ddY):
-//   tau, dtau, ddtau from Simbody's inverse dynamics along the joint motion (eighth-order
+//   tau, dtau, ddtau from the model's inverse dynamics along the joint motion (eighth-order
 //   central differences in time of tau(t) = ID(q(t), qd(t), qdd(t)) on the jet's Taylor curve);
 //   F = C_tau tau + C_Y Y; L_S = Phi_S^-1(F); dL_S = dF / Phi_S'; u = dL_S + A^T qd;
 //   L_C = L(q) - L_S; a = F / (Fmax f(L_C) g(u)); da/dt by the analytic chain rule; n from the
