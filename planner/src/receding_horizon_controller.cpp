@@ -104,8 +104,12 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   rec.used_previous_plan = false;
   rec.clamped_samples = 0;
   rec.plan_seconds = 0.0;
-  if (observer_.enabled()) plan_options_.torque_offset_N_m = observer_.torqueOffset_N_m();
-  rec.observer_offset_N_m = plan_options_.torque_offset_N_m;  // empty without an observer
+  if (observer_.enabled()) {
+    plan_options_.torque_offset_N_m = observer_.torqueOffset_N_m();
+    rec.observer_offset_N_m = plan_options_.torque_offset_N_m;
+  } else {
+    rec.observer_offset_N_m.resize(0);  // no observer, no estimate (options.plan's offset, if any, stays)
+  }
 
   bool have_candidate = false;
   try {

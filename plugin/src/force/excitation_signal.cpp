@@ -14,6 +14,7 @@ ExcitationPolynomial ExcitationPolynomial::constant(double excitation) {
 }
 
 double ExcitationPolynomial::value(double time_s) const {
+  if (count == 1) return coefficients[0];  // a held constant: read at every integrator stage
   const double s = std::clamp((time_s - start_time_s) / duration_s, 0.0, 1.0);
   double v = 0.0;
   for (int k = count - 1; k >= 0; --k) v = v * s + coefficients[static_cast<std::size_t>(k)];
