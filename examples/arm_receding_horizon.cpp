@@ -5,9 +5,12 @@
 // OUT/summary.json.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "example_support.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
@@ -85,8 +88,25 @@ int main(int argc, char** argv) {
     const double settling = rh_run.settling_time_s;
     const Eigen::VectorXd target = options.plan.target_q_rad;
     const Eigen::VectorXd q_final = model->jointAngles(run.final_state) / ex::kRadPerDeg;
+    // The task: reach the target and stay within 1 deg of it, with every plan solved. A run that
+    // fails it still writes its (complete) files, says why in the summary and exits 1.
+    std::vector<std::string> failures;
+    if (!finite) failures.push_back("the simulation became non-finite");
+    if (finite && settling < 0.0)
+      failures.push_back("never settled within 1 deg of the target in " + ex::format(duration) + " s (final error " +
+                         ex::format((q_final - target / ex::kRadPerDeg).cwiseAbs().maxCoeff()) + " deg)");
+    const auto& history = controller.history();
+    const auto first_failed = std::find_if(history.begin(), history.end(),
+                                           [](const auto& r) { return r.status != fpl::SolveStatus::Solved; });
+    if (first_failed != history.end())
+      failures.push_back(std::to_string(controller.planFailures()) + " of " + std::to_string(steps) +
+                         " plans failed (the previous plan's tail ran instead), the first at t = " +
+                         ex::format(first_failed->time_s) + " s: " + first_failed->message);
+    std::string message;
+    for (const auto& f : failures) message += (message.empty() ? "" : "; ") + f;
     nlohmann::json summary;
-    summary["success"] = finite && controller.planFailures() == 0 && settling >= 0.0;
+    summary["success"] = failures.empty();
+    summary["message"] = message;
     summary["final_q_deg"] = std::vector<double>(q_final.data(), q_final.data() + n);
     summary["target_q_deg"] = target_deg;
     summary["settling_time_s"] = settling >= 0.0 ? nlohmann::json(settling) : nlohmann::json(nullptr);
@@ -119,7 +139,11 @@ int main(int argc, char** argv) {
               << controller.planFailures() << ", clamped samples " << controller.clampedSamples() << "\n  median step "
               << 1e3 * ex::median(step_times) << " ms, real-time factor " << run.real_time_factor << "\n  wrote " << out_dir
               << "/{simulation.sto, predictions.sto, summary.json}\n";
-    return finite ? 0 : 1;
+    if (!failures.empty()) {
+      std::cerr << "arm_receding_horizon: task failed: " << message << "\n";
+      return 1;
+    }
+    return 0;
   } catch (const CLI::ValidationError& e) {
     std::cerr << "arm_receding_horizon: " << e.what() << "\n";
     return 2;

@@ -17,9 +17,11 @@ void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& stat
   Jet Y = Jet::Zero(rest.alpha().size(), 3);
   Y.col(0) = rest.alpha();
   const MusclePoint mp = flat.inverse(workspace, rest.path.jet(0.0, 5), Y);
-  if (!mp.inDomain())
-    for (const auto& why : mp.domain_violation)
-      if (why.violated()) throw std::runtime_error("rest state outside the model's valid domain: " + why.describe());
+  for (std::size_t j = 0; j < mp.domain_violation.size(); ++j)
+    if (mp.domain_violation[j].violated())
+      throw std::runtime_error("rest state outside the model's valid domain: muscle '" +
+                               flat.model().description().muscles[j].parameters.name + "': " +
+                               mp.domain_violation[j].describe());
   const auto& model = flat.model();
   model.setJointAngles(state, q);
   model.setJointSpeeds(state, Eigen::VectorXd::Zero(q.size()));

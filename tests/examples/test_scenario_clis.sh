@@ -25,10 +25,23 @@ expect 2 "--slp-solver" -- "$rh" --slp-solver simplex --out "$tmp/o"
 expect 2 "--q0-deg" -- "$rh" --q0-deg 1,2,3 --out "$tmp/o"
 expect 2 "--integrator" -- "$rh" --integrator euler --out "$tmp/o"
 expect 2 "--observer-gain-per-s" -- "$rh" --observer-gain-per-s 50 --out "$tmp/o"
-expect 0 "settling" -- "$rh" --duration 0.2 --out "$tmp/rh"
+expect 0 "settling" -- "$rh" --duration 1.5 --out "$tmp/rh"
 grep -q '"integrator_accuracy": 1e-05' "$tmp/rh/summary.json" || { echo "FAILED: rosenbrock default accuracy not 1e-5"; fail=1; }
-expect 0 "settling" -- "$rh" --duration 0.1 --integrator bdf --observer-gain-per-s 20 --out "$tmp/rhb"
+grep -q '"success": true' "$tmp/rh/summary.json" || { echo "FAILED: a settled run is not a success"; fail=1; }
+# A run that never reaches its target fails its task: exit 1, the reason in the summary, the files complete.
+expect 1 "never settled within 1 deg of the target in 0.1 s" -- "$rh" --duration 0.1 --integrator bdf --observer-gain-per-s 20 --out "$tmp/rhb"
 grep -q '"integrator_accuracy": 1e-08' "$tmp/rhb/summary.json" || { echo "FAILED: bdf default accuracy not 1e-8"; fail=1; }
+grep -q '"success": false' "$tmp/rhb/summary.json" || { echo "FAILED: an unsettled run reported success"; fail=1; }
+grep -q '"message": "never settled' "$tmp/rhb/summary.json" || { echo "FAILED: the summary does not say why the run failed"; fail=1; }
+[[ -s "$tmp/rhb/simulation.sto" ]] || { echo "FAILED: a failed run's simulation is missing"; fail=1; }
+# A 10 kg forearm: held at the start, but the muscles cannot lift it to the target (clamped
+# excitations, the arm falls away); the run says so and exits 1.
+models=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../models" && pwd)
+sed 's/"mass_kg": 1.76/"mass_kg": 10/' "$models/arm_richter_warner.json" > "$tmp/heavy.json"
+expect 1 "never settled" -- "$rh" --model "$tmp/heavy.json" --out "$tmp/heavy"
+# A 60 kg forearm cannot even be held at the start: the error names the muscle and the quantity.
+sed 's/"mass_kg": 1.76/"mass_kg": 60/' "$models/arm_richter_warner.json" > "$tmp/heavier.json"
+expect 1 "rest state outside the model's valid domain: muscle 'anterior_deltoid': activation" -- "$rh" --model "$tmp/heavier.json" --out "$tmp/heavier"
 for f in simulation.sto predictions.sto summary.json; do
   [[ -s "$tmp/rh/$f" ]] || { echo "FAILED: $f missing"; fail=1; }
 done
