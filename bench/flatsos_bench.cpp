@@ -53,14 +53,15 @@ std::string cpu_model() {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// A function-try-block: a bad model or a stage that throws exits 1 with the message, not abort.
+int main(int argc, char** argv) try {
   CLI::App app{"Benchmarks of flatsos (prints JSON; timings are wall clock, medians over repetitions)."};
   std::string model_path = FLATSOS_DEFAULT_MODEL, out_path;
   int reps = 21;
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
   app.add_option("--repetitions", reps, "repetitions per timed stage")->capture_default_str()->check(CLI::Range(1, 10000));
   app.add_option("--out", out_path, "also write the JSON here");
-  CLI11_PARSE(app, argc, argv);
+  if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   const auto model = fp::MusculoskeletalModel::fromFile(model_path);
   const fpl::FlatOutputMap flat(model);
@@ -302,4 +303,7 @@ int main(int argc, char** argv) {
   std::cout << text << "\n";
   if (!out_path.empty()) fp::write_file_atomically(out_path, text + "\n");
   return 0;
+} catch (const std::exception& e) {
+  std::cerr << "flatsos_bench: error: " << e.what() << "\n";
+  return 1;
 }
