@@ -99,6 +99,20 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
   OpenLoopPlan plan;
+  // The reserves hold at t = 0 too, where the initial state fixes every tendon force: below a
+  // reserve there, no plan exists, whatever the torque model or the flat outputs' degree.
+  for (int j = 0; j < m; ++j) {
+    const auto& mp = flat.model().muscle(j).getParameters();
+    const double F0 = muscles::tendon_force(mp, initial.tendon_length_m[j]);
+    if (F0 < o.reserves_N[j]) {
+      std::ostringstream why;
+      why << "initial tendon force of '" << mp.name << "' is " << F0 << " N, below its reserve of " << o.reserves_N[j]
+          << " N: no plan from this state can meet it (lower the reserve or start from a state with more force)";
+      plan.status = SolveStatus::Infeasible;
+      plan.message = why.str();
+      return plan;
+    }
+  }
   Eigen::MatrixXd terminal = Eigen::MatrixXd::Zero(n, 5);
   terminal.col(0) = o.target_q_rad;
   plan.path = fit_joint_path(o.duration_s, y0.q, terminal);

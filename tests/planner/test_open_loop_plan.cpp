@@ -130,6 +130,23 @@ TEST_F(OpenLoopScenario, PapersSingleTorqueBoxIsReportedInfeasibleWithTheReason)
   EXPECT_TRUE(plan.Y.empty());  // nothing usable comes back with a failure
 }
 
+TEST_F(OpenLoopScenario, AnInitialTendonForceBelowItsReserveIsNamedAsTheCause) {
+  // The reserve of one muscle just above its tendon force in the initial state: infeasible at
+  // t = 0 whatever the formulation, and the message says so (not "more pieces or a higher degree").
+  const int j = 3;
+  const auto& mp = arm.model->muscle(j).getParameters();
+  const double F0 = flatsos::muscles::tendon_force(mp, s0.tendon_length_m[j]);
+  options.reserves_N[j] = F0 + 0.5;
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, options);
+  EXPECT_EQ(plan.status, fpl::SolveStatus::Infeasible);
+  EXPECT_NE(plan.message.find("initial tendon force of '" + mp.name + "'"), std::string::npos) << plan.message;
+  EXPECT_NE(plan.message.find("below its reserve"), std::string::npos) << plan.message;
+  EXPECT_TRUE(plan.Y.empty());
+  // Just below the force it is not the cause: the plan is solved.
+  options.reserves_N[j] = std::min(F0 - 0.5, 10.0);
+  EXPECT_EQ(fpl::plan_open_loop(arm.flat, s0, options).status, fpl::SolveStatus::Solved);
+}
+
 TEST_F(OpenLoopScenario, BadInputIsRejectedByName) {
   auto expect_message = [&](fpl::OpenLoopOptions o, fpl::MuscleState s, const std::string& text) {
     try {
