@@ -1,6 +1,7 @@
 #include "flatsos/planner/flat_outputs.hpp"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include <Eigen/Dense>
@@ -48,6 +49,21 @@ bool MusclePoint::inDomain() const {
   for (const auto& v : domain_violation)
     if (v.violated()) return false;
   return true;
+}
+
+double DomainViolation::excess() const {
+  if (!std::isfinite(value)) return std::numeric_limits<double>::infinity();
+  switch (kind) {
+    case Kind::None: return 0.0;
+    case Kind::SlackTendon: return -value;
+    case Kind::NoForceCapacity:
+    case Kind::ForceRatioBeyondExactRange: return value - limit;
+    case Kind::ActivationOutsideUnitInterval:
+    case Kind::ExcitationOutsideUnitInterval: return value > 1.0 ? value - 1.0 : -value;
+    case Kind::ActivationBelowFloor: return limit - value;
+    case Kind::ExcitationUnattainable: return std::abs(value);
+  }
+  return 0.0;
 }
 
 std::string DomainViolation::describe() const {

@@ -1,6 +1,8 @@
 #include "flatsos/planner/motion_planner.hpp"
 
 #include <cmath>
+#include <map>
+#include <utility>
 #include <sstream>
 #include <stdexcept>
 
@@ -42,6 +44,9 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   c.max_activation = c.max_excitation = -1e300;
   const double h = path.duration_s / (points - 1);
   const std::vector<TorqueJet> jets = flat.torqueJetsOnGrid(workspace, [&](double t) { return path.jet(t, 3); }, 0.0, h, points);
+  DomainViolation limiting;           // the most fundamental kind, then the largest excess
+  std::size_t limiting_muscle = 0;
+  std::map<std::pair<std::size_t, DomainViolation::Kind>, double> first_time;  // per muscle and kind
   for (int i = 0; i < points; ++i) {
     const double t = h * i;
     const MusclePoint mp = flat.inverseFromTorque(path.jet(t, 5), jets[static_cast<std::size_t>(i)], polynomial_jet(Y, t, 3));
@@ -57,16 +62,28 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
     }
     if (!mp.inDomain()) {
       ++c.points_outside_domain;
-      if (c.first_violation.empty())
-        for (std::size_t j = 0; j < mp.domain_violation.size(); ++j)
-          if (mp.domain_violation[j].violated()) {
-            std::ostringstream why;
-            why << "t = " << t << " s, muscle '" << flat.model().description().muscles[j].parameters.name
-                << "': " << mp.domain_violation[j].describe();
-            c.first_violation = why.str();
-            break;
-          }
+      for (std::size_t j = 0; j < mp.domain_violation.size(); ++j) {
+        const DomainViolation& v = mp.domain_violation[j];
+        if (!v.violated()) continue;
+        if (c.first_violation.empty()) {
+          std::ostringstream why;
+          why << "t = " << t << " s, muscle '" << flat.model().description().muscles[j].parameters.name
+              << "': " << v.describe();
+          c.first_violation = why.str();
+        }
+        first_time.try_emplace({j, v.kind}, t);
+        if (!limiting.violated() || v.kind < limiting.kind || (v.kind == limiting.kind && v.excess() > limiting.excess())) {
+          limiting = v;
+          limiting_muscle = j;
+        }
+      }
     }
+  }
+  if (limiting.violated()) {
+    std::ostringstream why;
+    why << "muscle '" << flat.model().description().muscles[limiting_muscle].parameters.name
+        << "': " << limiting.describe() << " (worst), from t = " << first_time.at({limiting_muscle, limiting.kind}) << " s";
+    c.limiting_violation = why.str();
   }
   return c;
 }
@@ -142,8 +159,9 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
     // The SOS program was solved, but the muscles cannot execute the plan (a > 1, n outside
     // [0, 1], u >= Vmax, ...): not a usable plan.
     plan.status = SolveStatus::Infeasible;
-    plan.message = "the plan leaves the model's valid domain at " + std::to_string(plan.check.points_outside_domain) +
-                   " of " + std::to_string(plan.check.points) + " check points, first at " + plan.check.first_violation;
+    plan.message = "the plan leaves the model's valid domain: " + plan.check.limiting_violation + "; at " +
+                   std::to_string(plan.check.points_outside_domain) + " of " + std::to_string(plan.check.points) +
+                   " check points, the first at " + plan.check.first_violation;
   }
   return plan;
 }

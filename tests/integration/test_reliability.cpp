@@ -193,6 +193,27 @@ TEST(Reliability, ImpossibleMotionIsReportedNotPassedOff) {
   EXPECT_EQ(plan.status, fpl::SolveStatus::Infeasible);
   EXPECT_NE(plan.message.find("leaves the model's valid domain"), std::string::npos) << plan.message;
   EXPECT_GT(plan.check.points_outside_domain, 0);
+  // The limiting muscle and quantity come first, from when, before the first grid point's verdict.
+  ASSERT_FALSE(plan.check.limiting_violation.empty());
+  const auto limiting_at = plan.message.find(plan.check.limiting_violation);
+  EXPECT_LT(limiting_at, plan.message.find(plan.check.first_violation)) << plan.message;
+  EXPECT_NE(plan.check.limiting_violation.find("(worst), from t = "), std::string::npos) << plan.check.limiting_violation;
+  EXPECT_EQ(plan.check.limiting_violation.find("excitation"), std::string::npos)  // not an excitation when a more
+      << plan.check.limiting_violation;                                           // fundamental quantity fails
+  RecordProperty("message", plan.message);
+}
+
+TEST(Reliability, DomainViolationsRankByKindThenExcess) {
+  using V = fpl::DomainViolation;
+  EXPECT_DOUBLE_EQ((V{V::Kind::ActivationOutsideUnitInterval, 1.7, 1.0}).excess(), 0.7);
+  EXPECT_DOUBLE_EQ((V{V::Kind::ActivationOutsideUnitInterval, -0.2, 1.0}).excess(), 0.2);
+  EXPECT_DOUBLE_EQ((V{V::Kind::ExcitationOutsideUnitInterval, -0.0009, 1.0}).excess(), 0.0009);
+  EXPECT_DOUBLE_EQ((V{V::Kind::SlackTendon, -3.0, 0.0}).excess(), 3.0);
+  EXPECT_EQ((V{V::Kind::ActivationOutsideUnitInterval, std::numeric_limits<double>::infinity(), 1.0}).excess(),
+            std::numeric_limits<double>::infinity());
+  EXPECT_LT(V::Kind::ActivationOutsideUnitInterval, V::Kind::ExcitationOutsideUnitInterval);  // a before n
+  EXPECT_EQ((V{}).describe(), "");
+  EXPECT_EQ((V{V::Kind::ActivationOutsideUnitInterval, 1.7, 1.0}).describe(), "activation 1.7 outside (0, 1]");
 }
 
 TEST(Reliability, RecedingHorizonRunsOnThePreviousPlanWhenStepsFailAndRecovers) {

@@ -63,6 +63,9 @@ struct DomainViolation {
   bool violated() const { return kind != Kind::None; }
   /// E.g. "activation 1.7 outside (0, 1]"; empty for None.
   std::string describe() const;
+  /// How far outside the domain (in the kind's own quantity; +inf for non-finite values), so
+  /// violations of one kind can be ranked; 0 for None.
+  double excess() const;
 };
 
 /// Muscle quantities from the inverse map at one time (one entry per muscle).

@@ -26,6 +26,11 @@ struct PlanCheck {
   double min_excitation = 0.0, max_excitation = 0.0;
   int points_outside_domain = 0;      ///< grid points where some muscle leaves the valid domain
   std::string first_violation;        ///< "t = ... s, muscle '...': why"
+  /// The limiting violation: the most fundamental kind found (a slack tendon before a too-fast
+  /// fibre, ..., activation before excitation), the muscle with the largest excess of that kind,
+  /// its worst value and from when: "muscle 'biceps': activation 1.7 outside (0, 1] (worst), from
+  /// t = 0.2 s". Empty when every point is inside the domain.
+  std::string limiting_violation;
 };
 
 struct OpenLoopOptions {
