@@ -131,3 +131,23 @@ TEST(PinTreeDynamics, RejectsWrongSizesAndForeignWorkspaces) {
 }
 
 }  // namespace
+
+namespace {
+TEST(PinTreeDynamics, AnUnphysicalInertiaIsRejectedNamingTheBodyNotBySimbody) {
+  // Built in code (not from a file): the description's validation names the field before
+  // Simbody's Inertia throws its own message.
+  std::mt19937 rng(9);
+  fp::ModelDescription d = random_tree(rng, 2);
+  d.bodies[1].principal_inertia_kg_m2 = Eigen::Vector3d(0.01, 0.01, 0.01);
+  d.bodies[1].product_inertia_kg_m2 = Eigen::Vector3d(0.0, 0.0, 0.008);  // |2 Iyz| > Ixx
+  try {
+    const fp::MusculoskeletalModel model(d);
+    ADD_FAILURE() << "an unphysical inertia was accepted";
+  } catch (const fp::ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("bodies[1].product_inertia_kg_m2"), std::string::npos) << e.what();
+  }
+  d.bodies[1].product_inertia_kg_m2.setZero();
+  d.bodies[1].principal_inertia_kg_m2 = Eigen::Vector3d(0.01, 0.01, 0.05);  // triangle inequality
+  EXPECT_THROW(fp::MusculoskeletalModel{d}, fp::ModelFileError);
+}
+}  // namespace

@@ -116,6 +116,10 @@ BodyDescription read_body(const json& j, const std::string& path, const std::str
   const double slack = 1e-12 * I.sum();
   if (I[0] + I[1] < I[2] - slack || I[0] + I[2] < I[1] - slack || I[1] + I[2] < I[0] - slack)
     r.fail(r.at(inertia_key), "moments of inertia violate the triangle inequality");
+  const Eigen::Vector3d& P = b.product_inertia_kg_m2;  // Ixy, Ixz, Iyz
+  if (2.0 * std::abs(P[0]) > I[2] + slack || 2.0 * std::abs(P[1]) > I[1] + slack || 2.0 * std::abs(P[2]) > I[0] + slack)
+    r.fail(r.at(inertia_key), "products of inertia too large for a physical body (need |2 Ixy| <= Izz, |2 Ixz| <= Iyy, "
+                              "|2 Iyz| <= Ixx)");
   if (const json* len = r.find("length_m")) {
     b.length_m = r.number(*len, r.at("length_m"));
     if (b.length_m < 0.0) r.fail(r.at("length_m"), "must be >= 0");

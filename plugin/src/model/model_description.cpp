@@ -26,6 +26,18 @@ void validate(const ModelDescription& model, const std::string& source) {
     if (!body_names.insert(b.name).second)
       fail(indexed("bodies", i) + ".name", "duplicate body name '" + b.name + "'");
     if (!(b.mass_kg > 0.0) || !std::isfinite(b.mass_kg)) fail(indexed("bodies", i) + ".mass_kg", "must be > 0");
+    // The conditions Simbody's Inertia demands (it throws its own message otherwise).
+    const Eigen::Vector3d& I = b.principal_inertia_kg_m2;
+    const Eigen::Vector3d& P = b.product_inertia_kg_m2;  // Ixy, Ixz, Iyz
+    if (!I.allFinite() || I.minCoeff() < 0.0)
+      fail(indexed("bodies", i) + ".principal_inertia_kg_m2", "moments of inertia must be finite and >= 0");
+    const double slack = 1e-12 * I.sum();
+    if (I[0] + I[1] < I[2] - slack || I[0] + I[2] < I[1] - slack || I[1] + I[2] < I[0] - slack)
+      fail(indexed("bodies", i) + ".principal_inertia_kg_m2", "moments of inertia violate the triangle inequality");
+    if (!P.allFinite() || 2.0 * std::abs(P[0]) > I[2] + slack || 2.0 * std::abs(P[1]) > I[1] + slack ||
+        2.0 * std::abs(P[2]) > I[0] + slack)
+      fail(indexed("bodies", i) + ".product_inertia_kg_m2",
+           "products of inertia too large for a physical body (need |2 Ixy| <= Izz, |2 Ixz| <= Iyy, |2 Iyz| <= Ixx)");
   }
   // Joints: parents first, every body attached exactly once (a tree rooted at ground).
   std::set<std::string> attached = {"ground"}, joint_names;
