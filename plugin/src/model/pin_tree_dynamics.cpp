@@ -49,7 +49,8 @@ void PinTreeDynamics::inverseDynamics(Scratch& scratch, const Eigen::Ref<const E
                                       const Eigen::Ref<const Eigen::VectorXd>& qdd,
                                       Eigen::Ref<Eigen::VectorXd> tau) const {
   const int n = numJoints();
-  // Outward: kinematics of each body from its parent's (parents come first).
+  // Outward: kinematics of each body from its parent's (parents come first), and the body's own
+  // inertial and gravity load.
   for (int i = 0; i < n; ++i) {
     const Joint& j = joints_[static_cast<std::size_t>(i)];
     Scratch::Body& b = scratch.bodies[static_cast<std::size_t>(i)];
@@ -72,21 +73,16 @@ void PinTreeDynamics::inverseDynamics(Scratch& scratch, const Eigen::Ref<const E
     b.angular_velocity = w + b.axis * qd[i];
     // The axis is fixed in the parent, so it turns with the parent's angular velocity.
     b.angular_acceleration = wd + b.axis * qdd[i] + w.cross(b.axis) * qd[i];
-  }
-  // Inward: each body's inertial and gravity load, plus what its children transmit.
-  for (int i = n - 1; i >= 0; --i) {
-    const Joint& j = joints_[static_cast<std::size_t>(i)];
-    Scratch::Body& b = scratch.bodies[static_cast<std::size_t>(i)];
-    const Eigen::Vector3d& w = b.angular_velocity;
+
+    const Eigen::Vector3d& wb = b.angular_velocity;
     const Eigen::Vector3d c = b.rotation * j.mass_center_m;  // origin -> mass center
     const Eigen::Vector3d com_acceleration =
-        b.origin_acceleration + b.angular_acceleration.cross(c) + w.cross(w.cross(c));
+        b.origin_acceleration + b.angular_acceleration.cross(c) + wb.cross(wb.cross(c));
     const Eigen::Matrix3d inertia = b.rotation * j.inertia_about_com_kg_m2 * b.rotation.transpose();
-    const Eigen::Vector3d force = j.mass_kg * (com_acceleration - gravity_m_per_s2_);
-    b.force_N = force;
-    b.moment_N_m = inertia * b.angular_acceleration + w.cross(inertia * w) + c.cross(force);
+    b.force_N = j.mass_kg * (com_acceleration - gravity_m_per_s2_);
+    b.moment_N_m = inertia * b.angular_acceleration + wb.cross(inertia * wb) + c.cross(b.force_N);
   }
-  // Children add their loads to their parents (children come after their parents).
+  // Inward: children add their loads to their parents (children come after their parents).
   for (int i = n - 1; i >= 0; --i) {
     const Joint& j = joints_[static_cast<std::size_t>(i)];
     const Scratch::Body& b = scratch.bodies[static_cast<std::size_t>(i)];
