@@ -7,6 +7,10 @@
 
 namespace flatsos::planner {
 
+double TorquePiece::remainderAt(int joint, double s) const {
+  return remainder_N_m[joint] * std::pow(s, remainder_order);
+}
+
 TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
                                const TorqueModelOptions& o) {
   if (o.pieces < 1) throw std::invalid_argument("torque model: pieces K must be >= 1");
@@ -20,6 +24,9 @@ TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace
     const Jet j = path.jet(t, 3);
     return flat.torque(workspace, j.col(0), j.col(1), j.col(2));
   };
+  // tau and dtau/dt at t = 0 (fixed by the initial state) for the first piece's Hermite model.
+  const bool hermite_start = o.degree >= 2;
+  const Eigen::MatrixXd tau_start = hermite_start ? flat.torqueJet(workspace, path.jet(0.0, 5)).tau : Eigen::MatrixXd();
 
   TorqueModel model;
   for (int k = 0; k < o.pieces; ++k) {
@@ -36,11 +43,37 @@ TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace
     }
     model.torque_evaluations += ns;
     piece.remainder_N_m.resize(n);
+    const bool hermite = hermite_start && k == 0;
     const Eigen::VectorXd nodes = chebyshev_nodes_unit_interval(o.degree + 1);
-    Eigen::MatrixXd node_torques(n, o.degree + 1);
+    Eigen::MatrixXd node_torques(n, nodes.size());
     if (o.degree > 0) {
-      for (int c = 0; c <= o.degree; ++c) node_torques.col(c) = tau_at(piece.t0_s + h * nodes[c]);
-      model.torque_evaluations += o.degree + 1;
+      for (int c = 0; c < nodes.size(); ++c) node_torques.col(c) = tau_at(piece.t0_s + h * nodes[c]);
+      model.torque_evaluations += static_cast<int>(nodes.size());
+    }
+    if (hermite) {
+      // p(s) = tau(0) + h tau'(0) s + s^2 g(s), g interpolating (tau - tau(0) - h tau'(0) s) / s^2
+      // at the nodes; the bound is on that quotient: |tau - p| / s^2 = |quotient - g|.
+      piece.remainder_order = 2;
+      auto quotient = [&](int joint, double s, double tau) {
+        return (tau - tau_start(joint, 0) - h * tau_start(joint, 1) * s) / (s * s);
+      };
+      for (int joint = 0; joint < n; ++joint) {
+        Eigen::VectorXd values(nodes.size());
+        for (int c = 0; c < nodes.size(); ++c) values[c] = quotient(joint, nodes[c], node_torques(joint, c));
+        const Polynomial g = interpolating_polynomial(nodes, values);
+        Eigen::VectorXd coefficients = Eigen::VectorXd::Zero(g.coefficients().size() + 2);
+        coefficients[0] = tau_start(joint, 0);
+        coefficients[1] = h * tau_start(joint, 1);
+        coefficients.tail(g.coefficients().size()) = g.coefficients();
+        // At s = 0 the quotient is its limit h^2 tau''(0) / 2 (the samples start there).
+        double dev = std::abs(0.5 * h * h * tau_start(joint, 2) - g(0.0));
+        for (int i = 0; i < ns; ++i)
+          if (s_samples[i] > 0.0) dev = std::max(dev, std::abs(quotient(joint, s_samples[i], tau_samples(joint, i)) - g(s_samples[i])));
+        piece.remainder_N_m[joint] = o.remainder_inflation * dev;
+        piece.torque.emplace_back(coefficients);
+      }
+      model.pieces.push_back(std::move(piece));
+      continue;
     }
     for (int joint = 0; joint < n; ++joint) {
       Polynomial p;

@@ -4,6 +4,7 @@
 // paper's single torque box reported infeasible with the reason; bad input rejected by name.
 #include <gtest/gtest.h>
 
+#include "flatsos/planner/rest_state.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -220,4 +221,27 @@ TEST_F(OpenLoopScenario, SosProgramRejectsBoundaryConditionsOfTheWrongSizeAndBad
   bc.terminal = Eigen::MatrixXd::Zero(4, 2);
   expect_message(bc, 0.0, "horizon T must be > 0");
   expect_message(bc, -1.0, "horizon T must be > 0");
+}
+
+TEST(OpenLoopFromRest, TheLibrarysOwnMinimumEffortRestStateIsAFeasibleStartWithTheSameReserves) {
+  // The rest state meets some reserves exactly (the SLP's active constraints); the plan from it
+  // with the same reserves must still be feasible, on the arm and on a 1-joint elbow.
+  for (const char* file : {"arm_richter_warner.json", "elbow_1dof.json"}) {
+    const auto model = flatsos::plugin::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/" + file);
+    const fpl::FlatOutputMap flat(model);
+    const int n = model->numJoints(), m = model->numMuscles();
+    for (double reserve : {1.0, 10.0, 30.0}) {
+      for (double q0_deg : {0.0, 20.0, 60.0}) {
+        SimTK::State s = model->defaultState();
+        const Eigen::VectorXd reserves = Eigen::VectorXd::Constant(m, reserve);
+        fpl::set_minimum_effort_rest_state(flat, s, Eigen::VectorXd::Constant(n, flatsos::test::deg(q0_deg)), reserves);
+        fpl::OpenLoopOptions o;
+        o.duration_s = 2.0;
+        o.target_q_rad = Eigen::VectorXd::Constant(n, flatsos::test::deg(q0_deg + 30.0));
+        o.reserves_N = reserves;
+        const auto plan = fpl::plan_open_loop(flat, fpl::muscle_state_of(*model, s), o);
+        EXPECT_EQ(plan.status, fpl::SolveStatus::Solved) << file << ", reserve " << reserve << " N, q0 " << q0_deg << " deg: " << plan.message;
+      }
+    }
+  }
 }

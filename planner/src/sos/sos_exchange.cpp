@@ -30,7 +30,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
       for (double s : c.points) {
         const Eigen::RowVectorXd v = monomials(s, c.base.size());
         lp.G.row(row) = v * c.G;
-        lp.row_lower[row] = o.feasibility_margin_N - v.dot(c.base);
+        lp.row_lower[row] = o.feasibility_margin_N * std::pow(s, c.margin_order) - v.dot(c.base);
         ++row;
       }
     result.lp_points = static_cast<int>(rows);

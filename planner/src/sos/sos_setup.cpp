@@ -119,11 +119,12 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
       for (int i = 0; i < n; ++i) {
         const Eigen::VectorXd& tc = piece.torque[static_cast<std::size_t>(i)].coefficients();
         c.base.head(tc.size()) += Ctau(j, i) * tc;
-        c.base[0] -= std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
+        c.base[piece.remainder_order] -= std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
       }
       c.base[0] -= reserves[j];
       c.name = "tendon force of muscle '" + flat.model().description().muscles[static_cast<std::size_t>(j)].parameters.name + "'";
       c.reserve_N = reserves[j];
+      c.margin_order = piece.remainder_order;
       for (int i = 0; i < n; ++i) c.remainder_cost_N += std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
       c.points = initial_points;
       c.sticky.assign(initial_points.size(), false);
@@ -180,7 +181,7 @@ std::string fixed_violation(const SosSetup& setup, double margin_N) {
         why << "infeasible: at t = " << t << " s the boundary conditions fix Y, and ";
         if (c.muscle >= 0)
           why << "the guaranteed " << c.name << " is " << -value << " N below its reserve of " << c.reserve_N
-              << " N (the torque model's remainder bound costs " << c.remainder_cost_N
+              << " N (the torque model's remainder bound costs " << c.remainder_cost_N * std::pow(s, piece.remainder_order)
               << " N there: use more pieces K or a higher degree r)";
         else
           why << c.name << " is violated by " << -value << " N";

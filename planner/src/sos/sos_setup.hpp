@@ -26,7 +26,10 @@ struct ConstraintPolynomial {
   int flat_output = -1;       ///< >= 0: Y_l >= 0
   std::string name;           ///< "tendon force of muscle 'biceps'" or "flat output 'co1' >= 0"
   double reserve_N = 0.0;     ///< the muscle's reserve (0 for Y_l >= 0)
-  double remainder_cost_N = 0.0;  ///< what the torque model's remainder bound costs here
+  double remainder_cost_N = 0.0;  ///< what the remainder bound costs at s = 1 (times s^order inside)
+  /// The LP imposes the constraint >= margin s^margin_order: where the initial state fixes the
+  /// value and slope (the first piece, order 2), a constant margin could not be met at s -> 0.
+  int margin_order = 0;
   std::vector<double> points;     ///< where the exchange LP imposes it
   std::vector<bool> sticky;       ///< added by the exchange: never pruned
   Polynomial at(const Eigen::VectorXd& theta) const { return Polynomial(base + G * theta); }

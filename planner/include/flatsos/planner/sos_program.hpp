@@ -1,5 +1,5 @@
 #pragma once
-// The secondary optimization problem (SOP; docs/method/sos_certificates.md for the certificates):
+// The secondary optimization problem (SOP; docs/method/sos_program.md, certificates in sos_certificates.md):
 //   minimize  integral_0^T sum_l Y_l(t) dt  over polynomial Y of degree d
 //   subject to  F_j(t) = C_tau,j tau(t) + C_Y,j Y(t) >= F_reserve,j  and  Y(t) >= 0 on [0, T],
 //               boundary equalities on Y and its derivatives at 0 and T.

@@ -7,6 +7,11 @@
 // largest deviation over `samples_per_piece` uniform samples (ends included), inflated by
 // `remainder_inflation`: a sampled estimate, made safe by the inflation and checked a
 // posteriori by the planner on a dense grid. The conservativeness vanishes as K and r grow.
+// The first piece (r >= 2) starts where the initial state fixes tau and dtau/dt exactly: there
+// p matches both and interpolates at r - 1 Chebyshev points, and the remainder bound is
+// e s^2, zero at t = 0. A constant bound there would demand slack at t = 0 that no plan can
+// create: from a rest state whose tendon force equals its reserve, no plan would be feasible.
+// docs/method/sos_program.md, "Torque model".
 
 #include <vector>
 
@@ -27,6 +32,11 @@ struct TorquePiece {
   double t0_s = 0.0, t1_s = 0.0;
   std::vector<Polynomial> torque;   ///< per joint, in the piece's scaled time s in [0, 1]
   Eigen::VectorXd remainder_N_m;    ///< e_ki per joint
+  /// The bound is |tau_i - p_ki| <= e_ki s^remainder_order: 0 (a constant bound) or 2 (the
+  /// first piece, which matches the initial tau and dtau/dt).
+  int remainder_order = 0;
+  /// e_ki s^order for joint i at scaled time s in [0, 1].
+  double remainderAt(int joint, double s) const;
 };
 
 struct TorqueModel {
