@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner {
@@ -11,10 +12,6 @@ namespace flatsos::planner {
 namespace {
 // The plan's joint jet at tau into `out` (its column count: the orders); from its end on the plan
 // rests at its target (the cubic's acceleration at T is not zero, a rest's is).
-void plan_jet(const JointPath& path, double tau, Jet& out) {
-  path.jetInto(std::min(tau, path.duration_s), out);
-  if (tau >= path.duration_s && out.cols() > 1) out.rightCols(out.cols() - 1).setZero();
-}
 
 const RecedingHorizonControllerOptions& validated(const RecedingHorizonControllerOptions& o, const FlatOutputMap& flat) {
   if (!(o.control_period_s > 0.0) || !std::isfinite(o.control_period_s))
@@ -37,6 +34,10 @@ std::shared_ptr<const plugin::MusculoskeletalModel> checked_plant(std::shared_pt
 }
 }  // namespace
 
+std::vector<std::string> RecedingHorizonController::warnings() const {
+  return plugin::joint_angle_warnings(flat_.model().description(), options_.plan.target_q_rad, "target joint angles");
+}
+
 RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, RecedingHorizonControllerOptions o,
                                                      std::shared_ptr<const plugin::MusculoskeletalModel> plant)
     : flat_(std::move(flat)),
@@ -46,11 +47,9 @@ RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, Recedin
       observer_(flat_.numJoints(), options_.disturbance_observer_gain_per_s),
       fitter_(options_.excitation_samples_per_period, options_.control_period_s),
       plan_options_(options_.plan) {
-  const int n = flat_.numJoints(), m = flat_.numMuscles(), p = flat_.numFlatOutputs();
+  const int n = flat_.numJoints(), m = flat_.numMuscles();
   for (auto* v : {&q_, &qd_, &qdd_, &measured_torque_, &predicted_torque_}) v->setZero(n);
   predicted_jet_.setZero(n, 3);
-  joint_jet_.setZero(n, 5);
-  flat_jet_.setZero(p, 3);
   excitations_.setZero(fitter_.samples(), m);
   if (observer_.enabled()) plan_options_.torque_offset_N_m.setZero(n);
 }
@@ -62,7 +61,7 @@ void RecedingHorizonController::observe(const SimTK::State& state, double t) {
   plant_->system().realize(state, SimTK::Stage::Acceleration);
   for (int i = 0; i < plant_->numJoints(); ++i) qdd_[i] = plant_->joint(i).getOneUDot(state, 0);
   if (!(q_.allFinite() && qd_.allFinite() && qdd_.allFinite())) return;  // the planner reports the state
-  plan_jet(in_use_.path, t - in_use_.start_time_s, predicted_jet_);  // q, qd, qdd
+  rest_held_jet(in_use_.path, t - in_use_.start_time_s, predicted_jet_);  // q, qd, qdd
   const plugin::MusculoskeletalModel& model = flat_.model();
   model.inverseDynamics(workspace_, q_, qd_, qdd_, measured_torque_);
   model.inverseDynamics(workspace_, predicted_jet_.col(0), predicted_jet_.col(1), predicted_jet_.col(2),
@@ -72,22 +71,8 @@ void RecedingHorizonController::observe(const SimTK::State& state, double t) {
 }
 
 bool RecedingHorizonController::sampleExcitations(const PlanInUse& plan, double t) {
-  const int ns = fitter_.samples();
-  const double h = fitter_.spacing_s();
-  const double tau0 = t - plan.start_time_s;
-  flat_.torqueJetsOnGrid(
-      workspace_, [&](double tau, Jet& out) { plan_jet(plan.path, tau, out); }, tau0, h, ns, torque_grid_);
-  flat_jet_.col(0) = plan.alpha;  // constant Y: its rates stay zero
-  for (int i = 0; i < ns; ++i) {
-    TorqueJet& tj = torque_grid_.jets[static_cast<std::size_t>(i)];
-    // The one place the observer's offset meets the muscles: the torque the plan was made for.
-    if (plan.torque_offset_N_m.size()) tj.tau.col(0) -= plan.torque_offset_N_m;  // constant: rates unchanged
-    plan_jet(plan.path, tau0 + h * i, joint_jet_);
-    flat_.inverseFromTorque(joint_jet_, tj, flat_jet_, point_);
-    if (!point_.excitation.allFinite()) return false;
-    excitations_.row(i) = point_.excitation.transpose();
-  }
-  return true;
+  return sample_plan_excitations(flat_, workspace_, plan.path, plan.alpha, plan.torque_offset_N_m, t - plan.start_time_s,
+                                 fitter_.spacing_s(), fitter_.samples(), excitation_scratch_, excitations_);
 }
 
 const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {

@@ -18,7 +18,7 @@ TEST(Slp, IpoptMatchesVertexEnumerationAndAppendixIsFeasible) {
     Eigen::VectorXd B(6);
     for (auto& b : B) b = u(rng);
     const Eigen::VectorXd exact = fpl::slp_vertex_enumeration(CY, B);
-    const auto ipopt = fpl::solve_slp(CY, B);
+    const auto ipopt = fpl::solve_slp(CY, B, fpl::SlpSolver::Ipopt);
     ASSERT_EQ(ipopt.status, fpl::SolveStatus::Solved);
     EXPECT_FALSE(ipopt.used_fallback) << ipopt.message;
     EXPECT_NEAR(ipopt.cost_N, exact.sum(), 1e-6 * (1 + exact.sum())) << "trial " << trial;
@@ -32,7 +32,34 @@ TEST(Slp, IpoptMatchesVertexEnumerationAndAppendixIsFeasible) {
     EXPECT_NEAR(enumerated.cost_N, exact.sum(), 1e-12 * (1 + exact.sum()));
   }
   // All bounds below zero: nothing to pull, alpha = 0.
-  EXPECT_NEAR(fpl::solve_slp(CY, Eigen::VectorXd::Constant(6, -5.0)).cost_N, 0.0, 1e-7);
+  EXPECT_NEAR(fpl::solve_slp(CY, Eigen::VectorXd::Constant(6, -5.0), fpl::SlpSolver::Ipopt).cost_N, 0.0, 1e-7);
+  EXPECT_NEAR(fpl::solve_slp(CY, Eigen::VectorXd::Constant(6, -5.0)).cost_N, 0.0, 1e-12);
+}
+
+TEST(Slp, TheApiDefaultIsTheProgramsExactSolver) {
+  EXPECT_EQ(fpl::RecedingHorizonOptions{}.solver, fpl::SlpSolver::VertexEnumeration);
+  flatsos::test::ArmPlanning arm;
+  const Eigen::VectorXd B = Eigen::VectorXd::LinSpaced(6, -50.0, 200.0);
+  const auto by_default = fpl::solve_slp(arm.flat.CY(), B);
+  EXPECT_TRUE(by_default.message.empty()) << by_default.message;
+  EXPECT_EQ(by_default.iterations, 0);  // no Ipopt iterations: enumerated
+  EXPECT_NEAR(by_default.cost_N, fpl::slp_vertex_enumeration(arm.flat.CY(), B).sum(), 1e-12);
+}
+
+TEST(Slp, TooManyVerticesToEnumerateAreSolvedByIpoptAndSaySo) {
+  // 24 muscles, 12 flat outputs: C(36, 12) = 1.25e9 vertices.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.1, 1.0);
+  Eigen::MatrixXd CY(24, 12);
+  for (auto& c : CY.reshaped()) c = u(rng);
+  Eigen::VectorXd B(24);
+  for (auto& b : B) b = 100.0 * u(rng);
+  const auto result = fpl::solve_slp(CY, B, fpl::SlpSolver::VertexEnumeration);
+  ASSERT_EQ(result.status, fpl::SolveStatus::Solved);
+  EXPECT_NE(result.message.find("solved by Ipopt: vertex enumeration would visit more than 20000 vertices"), std::string::npos);
+  EXPECT_GT(result.iterations, 0);
+  EXPECT_NEAR(result.cost_N, fpl::solve_slp(CY, B, fpl::SlpSolver::Ipopt).cost_N, 1e-9);
+  EXPECT_GE((CY * result.alpha - B).minCoeff(), -1e-6);
 }
 
 TEST(Slp, RejectsBadInput) {
@@ -63,6 +90,42 @@ TEST(RecedingHorizonStep, SolvesTheFirstStepOfThePaperScenario) {
   }
   EXPECT_THROW(fpl::plan_receding_horizon_step(arm.flat, q, Eigen::Vector2d::Zero(), [&] { auto b = o; b.horizon_s = -1; return b; }()),
                std::invalid_argument);
+}
+
+TEST(RecedingHorizonStep, ReturnsTheExcitationsOfItsPlanWithItsTorqueOffset) {
+  // Twin: the step's excitations (torque jets shared on a grid) against the pointwise inverse map
+  // along its plan, with and without a torque offset, also past the horizon (held at rest).
+  flatsos::test::ArmPlanning arm;
+  auto ws = arm.model->makeWorkspace();
+  fpl::RecedingHorizonOptions o;
+  o.target_q_rad = Eigen::Vector2d(flatsos::test::deg(80), flatsos::test::deg(80));
+  o.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
+  const Eigen::Vector2d q(flatsos::test::deg(20), flatsos::test::deg(20)), qd(0.3, -0.2);
+  for (const Eigen::VectorXd& offset : {Eigen::VectorXd(), Eigen::VectorXd(Eigen::Vector2d(1.5, -2.0))}) {
+    o.torque_offset_N_m = offset;
+    const auto step = fpl::plan_receding_horizon_step(arm.flat, ws, q, qd, o);
+    ASSERT_EQ(step.status, fpl::SolveStatus::Solved) << step.message;
+    fpl::Jet Y = fpl::Jet::Zero(4, 3);
+    Y.col(0) = step.alpha();
+    // Inside the horizon, and past its end (held at rest). Near the end itself the cubic's
+    // acceleration jumps to the rest's zero, so the torque rates there are not defined.
+    for (const auto& [tau0, h] : {std::pair{0.0, 0.04}, std::pair{0.6, 0.05}}) {
+      const Eigen::MatrixXd n = step.excitations(arm.flat, ws, tau0, h, 11);
+      ASSERT_EQ(n.rows(), 11);
+      ASSERT_EQ(n.cols(), 6);
+      for (int i = 0; i < 11; ++i) {
+        const double tau = tau0 + h * i;
+        fpl::Jet qj = step.path.jet(std::min(tau, 0.5), 5);
+        if (tau >= 0.5) qj.rightCols(4).setZero();
+        fpl::TorqueJet tj = arm.flat.torqueJet(ws, qj);
+        if (offset.size()) tj.tau.col(0) -= offset;
+        const auto expected = arm.flat.inverseFromTorque(qj, tj, Y);
+        EXPECT_LT((n.row(i).transpose() - expected.excitation).cwiseAbs().maxCoeff(), 1e-7) << "tau " << tau;
+      }
+    }
+  }
+  fpl::RecedingHorizonStep unsolved;
+  EXPECT_THROW(unsolved.excitations(arm.flat, ws, 0.0, 0.01, 3), std::logic_error);
 }
 
 TEST(RecedingHorizonStep, TheClosedFormCubicIsTheHermiteFit) {

@@ -24,6 +24,7 @@
 #include "flatsos/planner/disturbance_observer.hpp"
 #include "flatsos/planner/excitation_fitter.hpp"
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/plugin/integration/closed_loop.hpp"
 
 namespace flatsos::planner {
@@ -92,6 +93,8 @@ class RecedingHorizonController final : public plugin::Controller {
   int planFailures() const { return plan_failures_; }
   int clampedSamples() const { return clamped_samples_; }
   const RecedingHorizonControllerOptions& options() const { return options_; }
+  /// Implausible options that were accepted (a target beyond one turn: degrees as radians?).
+  std::vector<std::string> warnings() const;
   const FlatOutputMap& flat() const { return flat_; }
   const plugin::MusculoskeletalModel& plant() const { return *plant_; }
   const DisturbanceObserver& observer() const { return observer_; }
@@ -118,9 +121,8 @@ class RecedingHorizonController final : public plugin::Controller {
   RecedingHorizonOptions plan_options_;  ///< options_.plan with the observer's current offset
   RecedingHorizonStep step_;
   Eigen::VectorXd q_, qd_, qdd_, measured_torque_, predicted_torque_;
-  Jet predicted_jet_, joint_jet_, flat_jet_;  ///< N x 3, N x 5, p x 3
-  TorqueJetGrid torque_grid_;
-  MusclePoint point_;
+  Jet predicted_jet_;  ///< N x 3
+  PlanExcitationScratch excitation_scratch_;
   Eigen::MatrixXd excitations_;  ///< samples x muscles of the period being planned
 };
 

@@ -33,6 +33,9 @@ Eigen::VectorXd slp_appendix_solution(const Eigen::MatrixXd& CY, const Eigen::Ve
 /// tests and a fast exact path. Throws std::runtime_error if no vertex is feasible.
 Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B);
 
+/// VertexEnumeration: exact, every vertex of the feasible set (tested against Ipopt; 0.03 ms on
+/// the paper's arm, allocation-free), the default; Ipopt solves instead when there would be more
+/// than 20000 vertices (C(m + p, p)), and says so in the message. Ipopt: 3.5-6.8 ms per solve.
 enum class SlpSolver { Ipopt, VertexEnumeration };
 
 struct SlpResult {
@@ -60,7 +63,7 @@ struct SlpWorkspace {
 /// std::invalid_argument if some row sum of C_Y is not positive.
 /// `warm_start` (optional, p entries): Ipopt's initial point instead of the appendix construction,
 /// e.g. the previous RH step's alpha.
-SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::Ipopt,
+SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::VertexEnumeration,
                     const std::optional<Eigen::VectorXd>& warm_start = std::nullopt);
 /// The same into `result`, with reusable work storage (no allocation with VertexEnumeration once
 /// both have been used for this size; Ipopt allocates inside).
