@@ -1,5 +1,6 @@
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/model/plausibility.hpp"
 
 #include <map>
 #include <stdexcept>
@@ -46,6 +47,7 @@ ModelWorkspace::ModelWorkspace(const MusculoskeletalModel& model)
 
 MusculoskeletalModel::MusculoskeletalModel(ModelDescription description, std::vector<ExternalJointTorque> external)
     : description_((validate(description), std::move(description))),
+      warnings_(plausibility_warnings(description_)),
       matter_(system_),
       forces_(system_),
       tree_(description_) {

@@ -39,6 +39,9 @@ class MusculoskeletalModel {
   MusculoskeletalModel& operator=(const MusculoskeletalModel&) = delete;
 
   const ModelDescription& description() const { return description_; }
+  /// Implausible values of the description (plausibility_warnings: unit mix-ups); empty for a
+  /// model in SI units. Programs print them and store them in their summaries.
+  const std::vector<std::string>& warnings() const { return warnings_; }
   int numJoints() const { return description_.numJoints(); }
   int numMuscles() const { return description_.numMuscles(); }
 
@@ -103,6 +106,7 @@ class MusculoskeletalModel {
                                       const Eigen::VectorXd& qd) const;
 
   ModelDescription description_;
+  std::vector<std::string> warnings_;
   SimTK::MultibodySystem system_;
   SimTK::SimbodyMatterSubsystem matter_;
   SimTK::GeneralForceSubsystem forces_;

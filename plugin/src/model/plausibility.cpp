@@ -1,0 +1,73 @@
+#include "flatsos/plugin/model/plausibility.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace flatsos::plugin {
+
+namespace {
+
+// "<field>: <value> <unit> is above <limit> <unit> (<hint>)"
+std::string above(const std::string& field, double value, double limit, const char* unit, const char* hint) {
+  std::ostringstream out;
+  out << field << ": " << value << ' ' << unit << " is above " << limit << ' ' << unit << " (" << hint << ")";
+  return out.str();
+}
+
+std::string item(const char* list, std::size_t i, const std::string& name) {
+  return std::string(list) + "[" + std::to_string(i) + "] '" + name + "'";
+}
+
+}  // namespace
+
+std::vector<std::string> plausibility_warnings(const ModelDescription& model, const PlausibilityLimits& limits) {
+  std::vector<std::string> warnings;
+  const double g = model.gravity_m_per_s2.norm();
+  if (g > limits.gravity_m_per_s2)
+    warnings.push_back(above("gravity_m_per_s2", g, limits.gravity_m_per_s2, "m/s^2", "cm/s^2 given as m/s^2?"));
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const auto& b = model.bodies[i];
+    const std::string at = item("bodies", i, b.name);
+    if (b.mass_kg > limits.body_mass_kg)
+      warnings.push_back(above(at + ".mass_kg", b.mass_kg, limits.body_mass_kg, "kg", "grams given as kilograms?"));
+    if (b.length_m > limits.body_length_m)
+      warnings.push_back(above(at + ".length_m", b.length_m, limits.body_length_m, "m", "centimetres or millimetres given as metres?"));
+  }
+  for (std::size_t j = 0; j < model.muscles.size(); ++j) {
+    const auto& m = model.muscles[j];
+    const auto& p = m.parameters;
+    const std::string at = item("muscles", j, p.name);
+    for (int i = 0; i < m.moment_arms_m.size() && i < model.numJoints(); ++i)
+      if (std::abs(m.moment_arms_m[i]) > limits.moment_arm_m)
+        warnings.push_back(above(at + ".moment_arms_m." + model.joints[static_cast<std::size_t>(i)].name,
+                                 std::abs(m.moment_arms_m[i]), limits.moment_arm_m, "m", "centimetres given as metres?"));
+    if (p.optimal_fiber_length_m > limits.optimal_fiber_length_m)
+      warnings.push_back(above(at + ".optimal_fiber_length_m", p.optimal_fiber_length_m, limits.optimal_fiber_length_m,
+                               "m", "millimetres or centimetres given as metres?"));
+    if (p.tendon_slack_length_m > limits.tendon_slack_length_m)
+      warnings.push_back(above(at + ".tendon_slack_length_m", p.tendon_slack_length_m, limits.tendon_slack_length_m, "m",
+                               "millimetres or centimetres given as metres?"));
+    if (m.length_at_zero_angles_m > limits.musculotendon_length_m)
+      warnings.push_back(above(at + ".length_at_zero_angles_m", m.length_at_zero_angles_m, limits.musculotendon_length_m,
+                               "m", "millimetres or centimetres given as metres?"));
+    if (p.max_isometric_force_N > limits.max_isometric_force_N)
+      warnings.push_back(above(at + ".max_isometric_force_N", p.max_isometric_force_N, limits.max_isometric_force_N, "N",
+                               "stronger than any human muscle"));
+  }
+  return warnings;
+}
+
+std::vector<std::string> joint_angle_warnings(const ModelDescription& model, const Eigen::VectorXd& q_rad,
+                                              const std::string& what, const PlausibilityLimits& limits) {
+  std::vector<std::string> warnings;
+  for (int i = 0; i < q_rad.size() && i < model.numJoints(); ++i)
+    if (std::abs(q_rad[i]) > limits.joint_angle_rad) {
+      std::ostringstream out;
+      out << what << '.' << model.joints[static_cast<std::size_t>(i)].name << ": " << q_rad[i]
+          << " rad is beyond one turn (degrees given as radians?)";
+      warnings.push_back(out.str());
+    }
+  return warnings;
+}
+
+}  // namespace flatsos::plugin
