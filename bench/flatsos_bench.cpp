@@ -15,6 +15,7 @@
 
 #include "allocation_counter.hpp"
 #include "example_support.hpp"
+#include "scenario_inputs.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -70,17 +71,15 @@ int main(int argc, char** argv) try {
   j["machine"] = {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}};
   j["repetitions"] = reps;
 
-  // ---- open loop: the paper's scenario ----
-  SimTK::State s0 = model->defaultState();
-  model->setJointAngles(s0, Eigen::Vector2d(0.0, 10.0 * ex::kRadPerDeg));
-  model->setJointSpeeds(s0, Eigen::Vector2d(0.001, 0.002));
-  Eigen::VectorXd a0(6);
-  a0 << 0.135, 0.040, 0.404, 0.556, 0.414, 0.068;
-  fp::equilibrate_tendons(*model, s0, a0);
+  // ---- open loop: the model's scenario "open_loop" (the paper's on the arm) ----
+  const ex::ScenarioInputs ol_in = ex::resolve_scenario(*model, "open_loop", {}, 3.0, 10.0);
+  const SimTK::State s0 = ex::initial_state(flat, ol_in);
   const fpl::MuscleState ms0 = fpl::muscle_state_of(*model, s0);
+  const Eigen::VectorXd a0 = model->activations(s0);
   fpl::OpenLoopOptions ol;
-  ol.target_q_rad = Eigen::Vector2d(90.0 * ex::kRadPerDeg, 0.0);
-  ol.reserves_N = Eigen::VectorXd::Constant(6, 10.0);
+  ol.duration_s = ol_in.duration_s;
+  ol.target_q_rad = ol_in.target_q_rad;
+  ol.reserves_N = ol_in.reserves_N;
   ol.check_points = 2;  // the a-posteriori check is timed separately
   auto time_plan = [&](const fpl::OpenLoopOptions& o) {
     std::vector<double> setup, solve, certify, total;
@@ -116,6 +115,7 @@ int main(int argc, char** argv) try {
   j["open_loop_sop_paper_box"] = box_json;
   {
     const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, ms0, ol);
+    if (plan.status != fpl::SolveStatus::Solved) throw std::runtime_error("the open-loop scenario was not planned: " + plan.message);
     j["open_loop_check_301_points"] =
         stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, ws, plan.path, plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
     const fpl::Jet qj = plan.jointJet(1.3), yj = plan.flatOutputJet(1.3);
@@ -124,13 +124,16 @@ int main(int argc, char** argv) try {
   }
 
   // ---- SLP and one RH step, at the first step of the RH scenario ----
+  const ex::ScenarioInputs rh_in = ex::resolve_scenario(*model, "receding_horizon", {}, 2.0, 1.0);
   fpl::RecedingHorizonOptions rh;
-  rh.target_q_rad = Eigen::Vector2d(80.0 * ex::kRadPerDeg, 80.0 * ex::kRadPerDeg);
-  rh.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
-  const Eigen::Vector2d q_rh(20.0 * ex::kRadPerDeg, 20.0 * ex::kRadPerDeg);
-  const fpl::RecedingHorizonStep first = fpl::plan_receding_horizon_step(flat, ws, q_rh, Eigen::Vector2d::Zero(), rh);
+  rh.solver = fpl::SlpSolver::Ipopt;  // the cold/warm comparison below is Ipopt's
+  rh.target_q_rad = rh_in.target_q_rad;
+  rh.reserves_N = rh_in.reserves_N;
+  const Eigen::VectorXd q_rh = rh_in.q0_rad;
+  const fpl::RecedingHorizonStep first =
+      fpl::plan_receding_horizon_step(flat, ws, q_rh, Eigen::VectorXd::Zero(model->numJoints()), rh);
   const Eigen::VectorXd B = fpl::slp_bound_vector(flat.Ctau(), first.tau_min, first.tau_max, rh.reserves_N);
-  const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(flat.CY(), B); });
+  const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(flat.CY(), B, fpl::SlpSolver::Ipopt); });
   const auto slp_exact = repeat(reps * 20, [&] { fpl::solve_slp(flat.CY(), B, fpl::SlpSolver::VertexEnumeration); });
   const auto slp_appendix = repeat(reps * 20, [&] { fpl::slp_appendix_solution(flat.CY(), B); });
   const double appendix_cost = fpl::slp_appendix_solution(flat.CY(), B).sum();
@@ -165,6 +168,9 @@ int main(int argc, char** argv) try {
   // ---- the closed-loop scenario ----
   SimTK::State rest = model->defaultState();
   fpl::set_minimum_effort_rest_state(flat, rest, q_rh, rh.reserves_N);
+  // Joint-angle columns of a state table: time, then q and qd per joint.
+  std::vector<std::size_t> angle_columns;
+  for (int i = 0; i < model->numJoints(); ++i) angle_columns.push_back(1 + 2 * static_cast<std::size_t>(i));
   fpl::RecedingHorizonControllerOptions co;
   co.plan = exact;
   json closed = json::object();
@@ -193,7 +199,7 @@ int main(int argc, char** argv) try {
     const fp::ClosedLoopResult& reference = it->second;
     double worst = 0.0;
     for (std::size_t r = 0; r < std::min(run.states.rows.size(), reference.states.rows.size()); ++r)
-      for (std::size_t c : {std::size_t{1}, std::size_t{3}})
+      for (std::size_t c : angle_columns)
         worst = std::max(worst, std::abs(run.states.rows[r][c] - reference.states.rows[r][c]));
     return worst / ex::kRadPerDeg;
   };
@@ -278,7 +284,7 @@ int main(int argc, char** argv) try {
     const auto t = repeat(std::max(3, reps / 5), [&] { result = fp::simulate(*model, held, so); });
     double worst = 0.0;
     for (std::size_t r = 0; r < std::min(result.states.rows.size(), fwd_reference.states.rows.size()); ++r)
-      for (std::size_t c : {std::size_t{1}, std::size_t{3}})
+      for (std::size_t c : angle_columns)
         worst = std::max(worst, std::abs(result.states.rows[r][c] - fwd_reference.states.rows[r][c]));
     fwd[name] = {{"wall_per_simulated_second", stats(t, 1e3, "ms")},
                  {"integrator_steps", result.integrator_steps},

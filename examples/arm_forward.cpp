@@ -9,6 +9,7 @@
 #include "flatsos/plugin/io/excitation_file.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 
 #ifndef FLATSOS_DEFAULT_MODEL
@@ -27,24 +28,27 @@ void require_count_if_given(const std::vector<double>& v, int n, const std::stri
 
 int main(int argc, char** argv) {
   CLI::App app{"Forward simulation of a muscle-driven Simbody model with flatsos Hill muscles.\n"
+               "The tendons' initial state is required: give --ls0-m (one tendon length per muscle) or\n"
+               "--equilibrate-tendons (static equilibrium for a0 at q0).\n"
                "Writes OUT/states.sto (OpenSim storage: joint angles in rad, muscle states in SI)."};
   std::string model_path = FLATSOS_DEFAULT_MODEL, excitation_path, out_dir = "results/arm_forward";
-  std::vector<double> q0_deg, qd0, a0, ls0;
+  std::vector<double> q0_deg, qd0_deg_per_s, a0, ls0;
   bool equilibrate = false;
   double duration = 1.0, accuracy = 1e-8, report_interval = 0.01;
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
   app.add_option("--q0-deg", q0_deg, "initial joint angles, deg (default 0)")->delimiter(',');
-  app.add_option("--qd0", qd0, "initial joint speeds, rad/s (default 0)")->delimiter(',');
+  app.add_option("--qd0-deg-per-s", qd0_deg_per_s, "initial joint speeds, deg/s (default 0)")->delimiter(',');
   app.add_option("--a0", a0, "initial activations (default 0.05 each)")->delimiter(',');
-  auto* ls_opt = app.add_option("--ls0", ls0, "initial tendon lengths, m")->delimiter(',');
+  auto* ls_opt = app.add_option("--ls0-m", ls0, "initial tendon lengths, m, one per muscle (required unless --equilibrate-tendons)")
+                     ->delimiter(',');
   app.add_flag("--equilibrate-tendons", equilibrate,
-               "start tendons at static equilibrium for a0 at q0")->excludes(ls_opt);
+               "start tendons at static equilibrium for a0 at q0 (required unless --ls0-m)")->excludes(ls_opt);
   app.add_option("--excitations", excitation_path,
                  "CSV: time,<muscle>,... (linear interpolation, held after the last row); "
                  "default: excitation = initial activation");
-  app.add_option("--duration", duration, "simulated time, s")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--duration-s", duration, "simulated time, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-2));
-  app.add_option("--report-interval", report_interval, "time between rows of states.sto, s")
+  app.add_option("--report-interval-s", report_interval, "time between rows of states.sto, s")
       ->capture_default_str()->check(CLI::PositiveNumber);
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,
@@ -59,18 +63,21 @@ int main(int argc, char** argv) {
     const int n = model->numJoints(), m = model->numMuscles();
     try {
       require_count_if_given(q0_deg, n, "--q0-deg");
-      require_count_if_given(qd0, n, "--qd0");
+      require_count_if_given(qd0_deg_per_s, n, "--qd0-deg-per-s");
       require_count_if_given(a0, m, "--a0");
-      require_count_if_given(ls0, m, "--ls0");
+      require_count_if_given(ls0, m, "--ls0-m");
       if (ls0.empty() && !equilibrate)
-        throw CLI::ValidationError("--ls0", "give initial tendon lengths or --equilibrate-tendons");
+        throw CLI::ValidationError("--ls0-m", "give initial tendon lengths or --equilibrate-tendons");
     } catch (const CLI::Error& e) {
       std::cerr << "arm_forward: " << e.what() << "\n" << app.help();
       return 2;
     }
+    const Eigen::VectorXd q0 = q0_deg.empty() ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(ex::to_vector(q0_deg) * ex::kRadPerDeg);
+    ex::print_warnings("arm_forward", model->warnings(),
+                       fp::joint_angle_warnings(model->description(), q0, "initial joint angles"));
     SimTK::State s = model->defaultState();
-    model->setJointAngles(s, q0_deg.empty() ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(ex::to_vector(q0_deg) * ex::kRadPerDeg));
-    model->setJointSpeeds(s, qd0.empty() ? Eigen::VectorXd::Zero(n) : ex::to_vector(qd0));
+    model->setJointAngles(s, q0);
+    model->setJointSpeeds(s, qd0_deg_per_s.empty() ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(ex::to_vector(qd0_deg_per_s) * ex::kRadPerDeg));
     const Eigen::VectorXd a = a0.empty() ? Eigen::VectorXd::Constant(m, 0.05) : ex::to_vector(a0);
     if (equilibrate) {
       fp::equilibrate_tendons(*model, s, a);

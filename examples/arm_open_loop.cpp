@@ -1,7 +1,7 @@
-// arm_open_loop: the paper's open-loop scenario. Plans minimum-effort excitations that move the
-// arm from q = [0, 10] deg (paper activations, tendons in equilibrium) to straight up in 3 s,
-// applies them open loop to the Simbody arm from the same state, and writes
-// OUT/plan.sto, OUT/simulation.sto and OUT/summary.json.
+// arm_open_loop: an open-loop transfer of any model (default: the paper's scenario on the arm,
+// from q = [0, 10] deg with the paper's activations to straight up in 3 s, the model file's
+// scenario "open_loop"). Plans minimum-effort excitations, applies them open loop to the Simbody
+// model from the same state, and writes OUT/plan.sto, OUT/simulation.sto and OUT/summary.json.
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -15,6 +15,7 @@
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "example_support.hpp"
+#include "scenario_inputs.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
@@ -25,18 +26,11 @@ int main(int argc, char** argv) {
                "planned by flatness and SOS optimization, then simulated open loop in Simbody.\n"
                "Writes OUT/plan.sto, OUT/simulation.sto (OpenSim storage, SI, radians) and OUT/summary.json."};
   std::string model_path = FLATSOS_DEFAULT_MODEL, out_dir = "results/open_loop";
-  std::vector<double> q0_deg = {0.0, 10.0}, qd0 = {0.001, 0.002}, a0 = {0.135, 0.040, 0.404, 0.556, 0.414, 0.068};
-  std::vector<double> target_deg = {90.0, 0.0}, reserves = {10.0};
-  double duration = 3.0, accuracy = 1e-10;
+  ex::ScenarioOptions given;
+  double accuracy = 1e-10;
   fpl::OpenLoopOptions options;
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
-  app.add_option("--q0-deg", q0_deg, "initial joint angles, deg")->delimiter(',')->capture_default_str();
-  app.add_option("--qd0", qd0, "initial joint speeds, rad/s")->delimiter(',')->capture_default_str();
-  app.add_option("--a0", a0, "initial activations (tendons start in static equilibrium)")->delimiter(',')->capture_default_str();
-  app.add_option("--target-deg", target_deg, "target joint angles (rest), deg")->delimiter(',')->capture_default_str();
-  app.add_option("--duration", duration, "transfer time T, s")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--reserves", reserves, "minimum tendon forces, N (one value for all, or one per muscle)")
-      ->delimiter(',')->capture_default_str();
+  ex::add_scenario_options(app, given, "open_loop", true, 3.0, 10.0);
   app.add_option("--pieces", options.torque.pieces, "torque-model pieces K (1 with --degree 0: the paper's box)")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--degree", options.torque.degree, "torque-model polynomial degree r")->capture_default_str()->check(CLI::NonNegativeNumber);
@@ -53,25 +47,21 @@ int main(int argc, char** argv) {
   try {
     const auto model = fp::MusculoskeletalModel::fromFile(model_path);
     const fpl::FlatOutputMap flat(model);
-    const int n = model->numJoints(), m = model->numMuscles();
-    ex::require_count(q0_deg, n, "--q0-deg");
-    ex::require_count(qd0, n, "--qd0");
-    ex::require_count(a0, m, "--a0");
-    ex::require_count(target_deg, n, "--target-deg");
-    options.duration_s = duration;
-    options.target_q_rad = ex::to_vector(target_deg) * ex::kRadPerDeg;
-    options.reserves_N = ex::per_muscle(reserves, m, "--reserves");
+    const int m = model->numMuscles();
+    const ex::ScenarioInputs in = ex::resolve_scenario(*model, "open_loop", given, 3.0, 10.0);
+    options.duration_s = in.duration_s;
+    options.target_q_rad = in.target_q_rad;
+    options.reserves_N = in.reserves_N;
     options.torque.samples_per_piece = std::max(options.torque.samples_per_piece, options.torque.pieces == 1 ? 31 : 0);
 
-    SimTK::State s = model->defaultState();
-    model->setJointAngles(s, ex::to_vector(q0_deg) * ex::kRadPerDeg);
-    model->setJointSpeeds(s, ex::to_vector(qd0));
-    fp::equilibrate_tendons(*model, s, ex::to_vector(a0));
+    SimTK::State s = ex::initial_state(flat, in);
     const fpl::MuscleState s0 = fpl::muscle_state_of(*model, s);
 
     const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, s0, options);
     std::filesystem::create_directories(out_dir);
     nlohmann::json summary = ex::plan_summary(plan, *model);
+    summary["inputs"] = in.describe();
+    summary["warnings"] = ex::print_warnings("arm_open_loop", model->warnings(), plan.warnings);
     std::cout << "arm_open_loop: plan " << fpl::to_string(plan.status) << (plan.message.empty() ? "" : ": " + plan.message)
               << "\n  cost " << plan.sos.cost_N_s << " N s, " << plan.sos.ipopt_iterations << " Ipopt iterations in "
               << plan.sos.ipopt_calls << " calls, setup " << 1e3 * plan.setup_seconds << " ms, solve "
@@ -87,10 +77,10 @@ int main(int argc, char** argv) {
     const auto excitation = fpl::PlannedExcitation::create(flat, plan.path, plan.Y);
     for (int j = 0; j < m; ++j) model->muscle(j).setExcitationSignal(s, excitation->signal(j));
     fp::SimulationOptions so;
-    so.duration_s = duration;
+    so.duration_s = in.duration_s;
     so.accuracy = accuracy;
     so.integrator = fp::integrator_from_name(integrator);
-    so.report_interval_s = duration / 300.0;
+    so.report_interval_s = in.duration_s / 300.0;
     const flatsos::Stopwatch sim_wall;
     const fp::SimulationResult sim = fp::simulate(*model, s, so);
     const double sim_seconds = sim_wall.seconds();
@@ -113,7 +103,7 @@ int main(int argc, char** argv) {
     fp::write_sto(out_dir + "/plan.sto", planned);
     fp::write_sto(out_dir + "/simulation.sto", sim_table);
     ex::write_json(out_dir + "/summary.json", summary);
-    std::cout << "  simulated open loop " << duration << " s in " << sim_seconds << " s: max |q error| "
+    std::cout << "  simulated open loop " << in.duration_s << " s in " << sim_seconds << " s: max |q error| "
               << err.max_q_error_rad / ex::kRadPerDeg << " deg, max |a error| " << err.max_activation_error
               << ", max |L_S error| " << err.max_tendon_length_error_m << " m\n  wrote " << out_dir << "/{plan.sto, simulation.sto, summary.json}\n";
     return sim.finite ? 0 : 1;

@@ -1,6 +1,7 @@
-// arm_receding_horizon: the paper's closed-loop scenario. The arm rests at q = [20, 20] deg with
-// its muscles in the minimum-effort static equilibrium; a receding-horizon controller (horizon
-// 0.5 s, 11-point grid, replanned every 0.05 s by the SLP) moves it to [80, 80] deg.
+// arm_receding_horizon: closed-loop control of any model (default: the paper's scenario on the
+// arm, the model file's scenario "receding_horizon"). The model rests at q0 with its muscles in
+// the minimum-effort static equilibrium; a receding-horizon controller (horizon 0.5 s, 11-point
+// grid, replanned every 0.05 s by the SLP) moves it to the target ([20, 20] -> [80, 80] deg).
 // Writes OUT/simulation.sto, OUT/predictions.sto (the predicted joint path of every step) and
 // OUT/summary.json.
 #include <CLI/CLI.hpp>
@@ -13,8 +14,9 @@
 #include <vector>
 
 #include "example_support.hpp"
+#include "scenario_inputs.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
-#include "flatsos/planner/rest_state.hpp"
+#include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 
 namespace fp = flatsos::plugin;
@@ -26,18 +28,15 @@ int main(int argc, char** argv) {
                "flatness-based SLP planning every control period, Simbody plant.\n"
                "Writes OUT/simulation.sto, OUT/predictions.sto and OUT/summary.json."};
   std::string model_path = FLATSOS_DEFAULT_MODEL, out_dir = "results/receding_horizon", solver = "exact";
-  std::vector<double> q0_deg = {20.0, 20.0}, target_deg = {80.0, 80.0}, reserves = {1.0};
-  double duration = 2.0, accuracy = 0.0;  // 0: the integrator's default below
+  ex::ScenarioOptions given;
+  double accuracy = 0.0;  // 0: the integrator's default below
   fpl::RecedingHorizonControllerOptions options;
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
-  app.add_option("--q0-deg", q0_deg, "initial rest joint angles, deg")->delimiter(',')->capture_default_str();
-  app.add_option("--target-deg", target_deg, "target joint angles, deg")->delimiter(',')->capture_default_str();
-  app.add_option("--duration", duration, "simulated time, s")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--horizon", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(CLI::PositiveNumber);
+  ex::add_scenario_options(app, given, "receding_horizon", false, 2.0, 1.0);
+  app.add_option("--horizon-s", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--grid-points", options.plan.grid_points, "torque-box grid points over the horizon")
       ->capture_default_str()->check(CLI::Range(2, 10000));
-  app.add_option("--period", options.control_period_s, "control period delta, s")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--reserves", reserves, "minimum tendon forces, N (one for all or one per muscle)")->delimiter(',')->capture_default_str();
+  app.add_option("--period-s", options.control_period_s, "control period delta, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--slp-solver", solver, "exact (vertex enumeration, tested against Ipopt) or ipopt")
       ->capture_default_str()->check(CLI::IsMember({"exact", "ipopt"}));
   app.add_option("--observer-gain-per-s", options.disturbance_observer_gain_per_s,
@@ -61,20 +60,23 @@ int main(int argc, char** argv) {
   try {
     const auto model = fp::MusculoskeletalModel::fromFile(model_path);
     const fpl::FlatOutputMap flat(model);
-    const int n = model->numJoints(), m = model->numMuscles();
-    ex::require_count(q0_deg, n, "--q0-deg");
-    ex::require_count(target_deg, n, "--target-deg");
-    options.plan.target_q_rad = ex::to_vector(target_deg) * ex::kRadPerDeg;
-    options.plan.reserves_N = ex::per_muscle(reserves, m, "--reserves");
+    const int n = model->numJoints();
+    const ex::ScenarioInputs in = ex::resolve_scenario(*model, "receding_horizon", given, 2.0, 1.0);
+    const double duration = in.duration_s;
+    options.plan.target_q_rad = in.target_q_rad;
+    options.plan.reserves_N = in.reserves_N;
     options.plan.solver = solver == "ipopt" ? fpl::SlpSolver::Ipopt : fpl::SlpSolver::VertexEnumeration;
     if (options.control_period_s > options.plan.horizon_s)
-      throw CLI::ValidationError("--period", "must not exceed --horizon");
+      throw CLI::ValidationError("--period-s", "must not exceed --horizon-s");
     const fp::IntegratorKind kind = fp::integrator_from_name(integrator);
     if (accuracy == 0.0) accuracy = kind == fp::IntegratorKind::MuscleRosenbrock ? 1e-5 : 1e-8;
 
-    SimTK::State s = model->defaultState();
-    fpl::set_minimum_effort_rest_state(flat, s, ex::to_vector(q0_deg) * ex::kRadPerDeg, options.plan.reserves_N);
+    // The paper's loop starts at rest (no initial speeds or activations to give).
+    SimTK::State s = ex::initial_state(flat, in);
     fpl::RecedingHorizonController controller(flat, options);
+    std::vector<std::string> found = fp::joint_angle_warnings(model->description(), in.q0_rad, "initial joint angles");
+    for (auto& w : controller.warnings()) found.push_back(std::move(w));
+    const std::vector<std::string> warnings = ex::print_warnings("arm_receding_horizon", model->warnings(), found);
     fp::ClosedLoopOptions loop_options;
     loop_options.duration_s = duration;
     loop_options.integrator = kind;
@@ -108,7 +110,10 @@ int main(int argc, char** argv) {
     summary["success"] = failures.empty();
     summary["message"] = message;
     summary["final_q_deg"] = std::vector<double>(q_final.data(), q_final.data() + n);
-    summary["target_q_deg"] = target_deg;
+    summary["target_q_deg"] = std::vector<double>(n);
+    for (int i = 0; i < n; ++i) summary["target_q_deg"][i] = target[i] / ex::kRadPerDeg;
+    summary["inputs"] = in.describe();
+    summary["warnings"] = warnings;
     summary["settling_time_s"] = settling >= 0.0 ? nlohmann::json(settling) : nlohmann::json(nullptr);
     summary["steps"] = steps;
     summary["plan_seconds"] = {{"median", ex::median(plan_times)}, {"max", *std::max_element(plan_times.begin(), plan_times.end())}};
@@ -126,7 +131,6 @@ int main(int argc, char** argv) {
     summary["observer_gain_per_s"] = options.disturbance_observer_gain_per_s;
     summary["horizon_s"] = options.plan.horizon_s;
     summary["control_period_s"] = options.control_period_s;
-    summary["reserves_N"] = reserves;
 
     std::filesystem::create_directories(out_dir);
     fp::StoTable sim = run.states;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <sstream>
 
 namespace flatsos::examples {
@@ -128,6 +129,14 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::Mus
     j["points_outside_domain"] = plan.check.points_outside_domain;
   }
   return j;
+}
+
+std::vector<std::string> print_warnings(const char* program, const std::vector<std::string>& first,
+                                        const std::vector<std::string>& second) {
+  std::vector<std::string> all = first;
+  all.insert(all.end(), second.begin(), second.end());
+  for (const auto& w : all) std::cerr << program << ": warning: " << w << "\n";
+  return all;
 }
 
 void write_json(const std::string& path, const nlohmann::json& j) { plugin::write_file_atomically(path, j.dump(2) + "\n"); }

@@ -43,6 +43,11 @@ Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTab
 /// status, cost, timings, iterations, coefficients and the a-posteriori check of a plan.
 nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::MusculoskeletalModel& model);
 
+/// Prints every warning as "<program>: warning: <text>" on stderr and returns them all, for the
+/// summary's "warnings".
+std::vector<std::string> print_warnings(const char* program, const std::vector<std::string>& first,
+                                        const std::vector<std::string>& second = {});
+
 /// Writes pretty JSON atomically.
 void write_json(const std::string& path, const nlohmann::json& j);
 

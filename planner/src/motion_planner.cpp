@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/planner/plan_excitations.hpp"
+#include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner {
@@ -18,6 +20,23 @@ void require(const Eigen::VectorXd& v, int size, const char* what) {
     throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(size) + " values, got " +
                                 std::to_string(v.size()));
   if (!v.allFinite()) throw std::invalid_argument(std::string(what) + ": values must be finite (NaN or Inf given)");
+}
+
+// A posture where some path is not longer than its tendon's slack length cannot be held with
+// taut tendons, which flatness needs (typically: degrees given as radians). Allocates nothing
+// when it passes.
+void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, const Eigen::VectorXd& q, const char* what) {
+  for (int j = 0; j < model.numMuscles(); ++j) {
+    const double L = model.musculotendonLength(j, q);
+    const auto& mp = model.muscle(j).getParameters();
+    if (!(L > mp.tendon_slack_length_m)) {
+      std::ostringstream why;
+      why << what << ": the musculotendon path of '" << mp.name << "' would be " << L
+          << " m long there, not longer than its tendon slack length " << mp.tendon_slack_length_m
+          << " m, so its tendon cannot be taut (are the angles in radians?)";
+      throw std::invalid_argument(why.str());
+    }
+  }
 }
 
 void require_reserves(const Eigen::VectorXd& r, int m) {
@@ -34,6 +53,17 @@ Jet polynomial_jet(const std::vector<Polynomial>& polys, double t, int orders) {
 }  // namespace
 
 Jet OpenLoopPlan::flatOutputJet(double t) const { return polynomial_jet(Y, t, 3); }
+
+Eigen::MatrixXd RecedingHorizonStep::excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                                 double tau0_s, double h_s, int count) const {
+  if (status != SolveStatus::Solved) throw std::logic_error("RH step: no excitations: the step was not solved (" + message + ")");
+  if (count < 1 || !(h_s > 0.0) || !(tau0_s >= 0.0)) throw std::invalid_argument("RH step excitations: need count >= 1, h > 0 s, tau0 >= 0 s");
+  PlanExcitationScratch scratch;
+  Eigen::MatrixXd out;
+  if (!sample_plan_excitations(flat, workspace, path, alpha(), torque_offset_N_m, tau0_s, h_s, count, scratch, out))
+    throw std::runtime_error("RH step excitations: not finite (the plan leaves the model's valid domain)");
+  return out;
+}
 
 PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
                      const std::vector<Polynomial>& Y, const Eigen::VectorXd& reserves, int points) {
@@ -99,6 +129,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   const int n = flat.numJoints(), m = flat.numMuscles(), p = flat.numFlatOutputs();
   if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s)) throw std::invalid_argument("open-loop plan: duration T must be > 0 s");
   require(o.target_q_rad, n, "target joint angles");
+  require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   require_reserves(o.reserves_N, m);
   if (o.check_points < 2) throw std::invalid_argument("open-loop plan: check_points must be >= 2");
   require(initial.activation, m, "initial activations");
@@ -116,12 +147,16 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
   OpenLoopPlan plan;
+  plan.warnings = plugin::joint_angle_warnings(flat.model().description(), initial.q_rad, "initial joint angles");
+  for (auto& w : plugin::joint_angle_warnings(flat.model().description(), o.target_q_rad, "target joint angles"))
+    plan.warnings.push_back(std::move(w));
   // The reserves hold at t = 0 too, where the initial state fixes every tendon force: below a
   // reserve there, no plan exists, whatever the torque model or the flat outputs' degree.
   for (int j = 0; j < m; ++j) {
     const auto& mp = flat.model().muscle(j).getParameters();
     const double F0 = muscles::tendon_force(mp, initial.tendon_length_m[j]);
-    if (F0 < o.reserves_N[j]) {
+    // To the SOS program's feasibility margin: a rest state on a vertex meets reserves to rounding.
+    if (F0 < o.reserves_N[j] - o.sos.feasibility_margin_N) {
       std::ostringstream why;
       why << "initial tendon force of '" << mp.name << "' is " << F0 << " N, below its reserve of " << o.reserves_N[j]
           << " N: no plan from this state can meet it (lower the reserve or start from a state with more force)";
@@ -171,6 +206,7 @@ void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
   if (!(o.horizon_s > 0.0) || !std::isfinite(o.horizon_s)) throw std::invalid_argument("RH step: horizon must be > 0 s");
   if (o.grid_points < 2) throw std::invalid_argument("RH step: need at least 2 grid points");
   require(o.target_q_rad, n, "target joint angles");
+  require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   require_reserves(o.reserves_N, flat.numMuscles());
   if (o.torque_offset_N_m.size() > 0) require(o.torque_offset_N_m, n, "torque offset");
   if (o.warm_start) require(*o.warm_start, flat.numFlatOutputs(), "SLP warm start");
@@ -201,6 +237,7 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.status = SolveStatus::Failed;
   step.message.clear();
   fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
+  step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation
   const bool offset = o.torque_offset_N_m.size() > 0;
   step.buffers.joint_jet.resize(n, 3);
   step.buffers.torque_N_m.resize(n);

@@ -4,11 +4,12 @@
 set -u
 ol=$1 rh=$2
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
+models=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../models" && pwd)
 expect 0 "--pieces" -- "$ol" --help
 expect 2 "--target-deg" -- "$ol" --target-deg 90 --out "$tmp/o"
-expect 2 "--reserves" -- "$ol" --reserves 1,2,3 --out "$tmp/o"
+expect 2 "--reserves-N" -- "$ol" --reserves-N 1,2,3 --out "$tmp/o"
 expect 2 "--pieces" -- "$ol" --pieces 0 --out "$tmp/o"
-expect 2 "--duration" -- "$ol" --duration -3 --out "$tmp/o"
+expect 2 "--duration-s" -- "$ol" --duration-s -3 --out "$tmp/o"
 printf '{"bodies": []}' > "$tmp/bad.json"
 expect 1 "bodies: must not be empty" -- "$ol" --model "$tmp/bad.json" --out "$tmp/o"
 # The paper's single box: infeasible, exit 1, a summary that says why, no simulation.
@@ -19,24 +20,23 @@ grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box 
 expect 2 "--integrator" -- "$ol" --integrator euler --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
 grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
-expect 0 "--horizon" -- "$rh" --help
-expect 2 "--period" -- "$rh" --period 1.0 --horizon 0.5 --out "$tmp/o"
+expect 0 "--horizon-s" -- "$rh" --help
+expect 2 "--period-s" -- "$rh" --period-s 1.0 --horizon-s 0.5 --out "$tmp/o"
 expect 2 "--slp-solver" -- "$rh" --slp-solver simplex --out "$tmp/o"
 expect 2 "--q0-deg" -- "$rh" --q0-deg 1,2,3 --out "$tmp/o"
 expect 2 "--integrator" -- "$rh" --integrator euler --out "$tmp/o"
 expect 2 "--observer-gain-per-s" -- "$rh" --observer-gain-per-s 50 --out "$tmp/o"
-expect 0 "settling" -- "$rh" --duration 1.5 --out "$tmp/rh"
+expect 0 "settling" -- "$rh" --duration-s 1.5 --out "$tmp/rh"
 grep -q '"integrator_accuracy": 1e-05' "$tmp/rh/summary.json" || { echo "FAILED: rosenbrock default accuracy not 1e-5"; fail=1; }
 grep -q '"success": true' "$tmp/rh/summary.json" || { echo "FAILED: a settled run is not a success"; fail=1; }
 # A run that never reaches its target fails its task: exit 1, the reason in the summary, the files complete.
-expect 1 "never settled within 1 deg of the target in 0.1 s" -- "$rh" --duration 0.1 --integrator bdf --observer-gain-per-s 20 --out "$tmp/rhb"
+expect 1 "never settled within 1 deg of the target in 0.1 s" -- "$rh" --duration-s 0.1 --integrator bdf --observer-gain-per-s 20 --out "$tmp/rhb"
 grep -q '"integrator_accuracy": 1e-08' "$tmp/rhb/summary.json" || { echo "FAILED: bdf default accuracy not 1e-8"; fail=1; }
 grep -q '"success": false' "$tmp/rhb/summary.json" || { echo "FAILED: an unsettled run reported success"; fail=1; }
 grep -q '"message": "never settled' "$tmp/rhb/summary.json" || { echo "FAILED: the summary does not say why the run failed"; fail=1; }
 [[ -s "$tmp/rhb/simulation.sto" ]] || { echo "FAILED: a failed run's simulation is missing"; fail=1; }
 # A 10 kg forearm: held at the start, but the muscles cannot lift it to the target (clamped
 # excitations, the arm falls away); the run says so and exits 1.
-models=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../models" && pwd)
 sed 's/"mass_kg": 1.76/"mass_kg": 10/' "$models/arm_richter_warner.json" > "$tmp/heavy.json"
 expect 1 "never settled" -- "$rh" --model "$tmp/heavy.json" --out "$tmp/heavy"
 # A 60 kg forearm cannot even be held at the start: the error names the muscle and the quantity.
@@ -46,4 +46,22 @@ for f in simulation.sto predictions.sto summary.json; do
   [[ -s "$tmp/rh/$f" ]] || { echo "FAILED: $f missing"; fail=1; }
 done
 grep -q '"real_time_factor"' "$tmp/rh/summary.json" || { echo "FAILED: RH summary lacks real_time_factor"; fail=1; }
+# Any model: a 1-joint elbow plans and controls with the defaults of its own scenarios, and with
+# none (a copy without "scenarios": start at 0 deg at rest, target 30 deg).
+expect 0 "simulated open loop 1.5 s" -- "$ol" --model "$models/elbow_1dof.json" --out "$tmp/elbow_ol"
+expect 0 "settling" -- "$rh" --model "$models/elbow_1dof.json" --out "$tmp/elbow_rh"
+grep -q '"target_deg": \[' "$tmp/elbow_rh/summary.json" || { echo "FAILED: the summary lacks the inputs"; fail=1; }
+python3 -c 'import json, sys; m = json.load(open(sys.argv[1])); del m["scenarios"]; json.dump(m, open(sys.argv[2], "w"))' \
+  "$models/elbow_1dof.json" "$tmp/bare.json"
+expect 0 "simulated open loop 3 s" -- "$ol" --model "$tmp/bare.json" --out "$tmp/bare_ol"
+grep -q '"a0": "minimum-effort rest state"' "$tmp/bare_ol/summary.json" || { echo "FAILED: bare model did not start at rest"; fail=1; }
+expect 0 "settling" -- "$rh" --model "$tmp/bare.json" --out "$tmp/bare_rh"
+expect 2 "--q0-deg: expects 1 comma-separated values" -- "$ol" --model "$tmp/bare.json" --q0-deg 0,10 --out "$tmp/o"
+# Units: an implausible value is planned with a warning naming the field, kept in the summary; an
+# impossible target (no tendon can be taut there) is an error naming the muscle.
+sed 's/"length_m": 0.32/"length_m": 32/' "$models/elbow_1dof.json" > "$tmp/long.json"
+expect 0 "arm_open_loop: warning: bodies[0] 'forearm'.length_m: 32 m is above 3 m" -- "$ol" --model "$tmp/long.json" --out "$tmp/long"
+grep -q "bodies\[0\] 'forearm'.length_m" "$tmp/long/summary.json" || { echo "FAILED: the warning is not in the summary"; fail=1; }
+expect 1 "target joint angles: the musculotendon path of 'anterior_deltoid' would be" -- "$ol" --target-deg 400,0 --out "$tmp/o"
+expect 1 "target joint angles: the musculotendon path of 'anterior_deltoid' would be" -- "$rh" --target-deg 400,0 --out "$tmp/o"
 exit $fail

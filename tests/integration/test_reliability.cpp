@@ -147,6 +147,7 @@ TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
          fp::ModelDescription d = fp::load_model_file(flatsos::test::arm_model_path());
          d.muscles.pop_back();
          d.flat_outputs.clear();
+         d.scenarios.clear();  // sized for six muscles
          fpl::RecedingHorizonControllerOptions o; o.plan = rh;
          fpl::RecedingHorizonController c(arm.flat, o, std::make_shared<const fp::MusculoskeletalModel>(d)); }, "other joints or muscles"},
       {"flat-output map without a model", [&] { fpl::FlatOutputMap f(nullptr); }, "no model"},

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "flatsos/planner/rest_state.hpp"
+#include "flatsos/plugin/io/model_file.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -244,4 +245,31 @@ TEST(OpenLoopFromRest, TheLibrarysOwnMinimumEffortRestStateIsAFeasibleStartWithT
       }
     }
   }
+}
+
+TEST_F(OpenLoopScenario, ATargetInDegreesGivenAsRadiansIsRejectedWhereNoTendonCanBeTaut) {
+  options.target_q_rad = Eigen::Vector2d(90.0, 0.0);  // "90" meant as degrees
+  try {
+    fpl::plan_open_loop(arm.flat, s0, options);
+    ADD_FAILURE() << "a target of 90 rad was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("target joint angles: the musculotendon path of 'anterior_deltoid' would be -4.316 m long"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(OpenLoopWarnings, ATargetBeyondOneTurnThatIsPossibleIsPlannedWithAWarning) {
+  // Moment arms a tenth of the arm's: 7 rad at the shoulder keeps every tendon taut.
+  auto d = flatsos::plugin::load_model_file(flatsos::test::arm_model_path());
+  for (auto& muscle : d.muscles) muscle.moment_arms_m *= 0.1;
+  const auto model = std::make_shared<const flatsos::plugin::MusculoskeletalModel>(d);
+  const fpl::FlatOutputMap flat(model);
+  auto o = flatsos::test::open_loop_options();
+  o.target_q_rad = Eigen::Vector2d(7.0, 0.0);
+  const auto plan = fpl::plan_open_loop(flat, flatsos::test::open_loop_initial_state(*model), o);
+  ASSERT_EQ(plan.warnings.size(), 1u);
+  EXPECT_EQ(plan.warnings[0], "target joint angles.shoulder: 7 rad is beyond one turn (degrees given as radians?)");
+  o.target_q_rad = Eigen::Vector2d(1.0, 0.0);
+  EXPECT_TRUE(fpl::plan_open_loop(flat, flatsos::test::open_loop_initial_state(*model), o).warnings.empty());
 }

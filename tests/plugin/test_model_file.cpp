@@ -49,6 +49,22 @@ TEST(ModelFile, ArmLoadsWithItsMomentArmsAndFlatOutputs) {
   EXPECT_EQ(m.muscleIndex("nope"), -1);
 }
 
+TEST(ModelFile, ScenariosAreReadInDegreesAndKeptInRadians) {
+  const auto d = fp::load_model_file(flatsos::test::arm_model_path());
+  const fp::ScenarioDescription* ol = d.scenario("open_loop");
+  ASSERT_NE(ol, nullptr);
+  EXPECT_NEAR(ol->q0_rad[1], flatsos::test::deg(10), 1e-15);
+  EXPECT_NEAR(ol->qd0_rad_per_s[0], 0.001, 1e-15);  // the paper's 0.001 rad/s, written in deg/s
+  EXPECT_NEAR(ol->target_q_rad[0], flatsos::test::deg(90), 1e-15);
+  EXPECT_EQ(ol->activations, flatsos::test::paper_a0());
+  EXPECT_EQ(ol->duration_s, 3.0);
+  EXPECT_EQ(ol->reserves_N.size(), 1);
+  const fp::ScenarioDescription* rh = d.scenario("receding_horizon");
+  ASSERT_NE(rh, nullptr);
+  EXPECT_EQ(rh->activations.size(), 0);  // not given: starts at rest
+  EXPECT_EQ(d.scenario("walking"), nullptr);
+}
+
 TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
   const std::vector<BadModel> cases = {
       {"missing bodies", [](json& j) { j.erase("bodies"); }, {"bodies", "missing"}},
@@ -91,6 +107,20 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
        {"muscles[0].moment_arms_m.wrist", "unknown joint"}},
       {"moment-arm row not N", [](json& j) { j["muscles"][0]["moment_arms_m"] = {0.05, 0.0, 0.01}; },
        {"muscles[0].moment_arms_m", "N x m"}},
+      {"scenario angles per joint", [](json& j) { j["scenarios"]["open_loop"]["q0_deg"] = {0.0}; },
+       {"scenarios.open_loop.q0_deg", "one value per joint (2), got 1"}},
+      {"scenario activation 0", [](json& j) { j["scenarios"]["open_loop"]["activations"][2] = 0.0; },
+       {"scenarios.open_loop.activations", "(0, 1]"}},
+      {"scenario reserves per muscle", [](json& j) { j["scenarios"]["receding_horizon"]["reserves_N"] = {1.0, 2.0}; },
+       {"scenarios.receding_horizon.reserves_N", "one value per muscle"}},
+      {"scenario negative reserve", [](json& j) { j["scenarios"]["receding_horizon"]["reserves_N"] = -1.0; },
+       {"scenarios.receding_horizon.reserves_N", ">= 0"}},
+      {"scenario duration", [](json& j) { j["scenarios"]["open_loop"]["duration_s"] = 0.0; },
+       {"scenarios.open_loop.duration_s", "> 0"}},
+      {"scenario target as text", [](json& j) { j["scenarios"]["open_loop"]["target_deg"] = "90,0"; },
+       {"scenarios.open_loop.target_deg", "array of numbers"}},
+      {"scenario unknown key", [](json& j) { j["scenarios"]["open_loop"]["q0_rad"] = {0.0, 0.1}; },
+       {"scenarios.open_loop.q0_rad", "unknown key"}},
       {"crosses no joint", [](json& j) { j["muscles"][4]["moment_arms_m"] = {{"elbow", 0.0}}; },
        {"muscles[4].moment_arms_m", "crosses no joint"}},
       {"duplicate muscle", [](json& j) { j["muscles"][1]["name"] = "anterior_deltoid"; }, {"duplicate muscle"}},
@@ -148,7 +178,8 @@ TEST(ModelFile, ThreeLinkChainFromAFileBuildsAndHasTheRightMassMatrixSize) {
   j["muscles"].push_back({{"name", "flexor"}, {"max_isometric_force_N", 200}, {"optimal_fiber_length_m", 0.06},
                           {"tendon_slack_length_m", 0.2}, {"length_at_zero_angles_m", 0.26},
                           {"moment_arms_m", {{"wrist", 0.01}}}});
-  // m - N = 7 - 3 = 4: the arm's four flat outputs still have the right shape.
+  // m - N = 7 - 3 = 4: the arm's four flat outputs still have the right shape; its scenarios do not.
+  j.erase("scenarios");
   fp::MusculoskeletalModel model(fp::parse_model_json(j.dump(), "three_link.json"));
   EXPECT_EQ(model.numJoints(), 3);
   EXPECT_EQ(model.massMatrix(Eigen::Vector3d(0.1, 0.2, 0.3)).rows(), 3);

@@ -104,7 +104,9 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
     }
     // Piece ends only: the exchange adds interior minima where they are violated.
     std::vector<double> initial_points = {1.0};
-    if (k == 0) initial_points.insert(initial_points.begin(), 0.0);
+    // At t = 0 the initial state fixes the value; with a constant remainder bound the LP row
+    // there carries it, with the vanishing bound (order 2) it is data, checked by fixed_violation.
+    if (k == 0 && piece.remainder_order == 0) initial_points.insert(initial_points.begin(), 0.0);
     for (int j = 0; j < m; ++j) {
       ConstraintPolynomial c;
       c.piece = static_cast<int>(k);
@@ -165,8 +167,10 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
 }
 
 std::string fixed_violation(const SosSetup& setup, double margin_N) {
-  for (const auto& c : setup.constraints)
-    for (double s : c.points) {
+  for (const auto& c : setup.constraints) {
+    std::vector<double> where = c.points;
+    if (c.piece == 0) where.push_back(0.0);  // t = 0, even where it is no LP point
+    for (double s : where) {
       const Eigen::RowVectorXd v = monomials(s, c.base.size());
       const Eigen::RowVectorXd row = v * c.G;
       const double value = v.dot(c.base);
@@ -188,6 +192,7 @@ std::string fixed_violation(const SosSetup& setup, double margin_N) {
         return why.str();
       }
     }
+  }
   return "";
 }
 

@@ -15,6 +15,10 @@ using nlohmann::json;
 
 namespace {
 
+std::string indexed(const std::string& list, std::size_t i) {
+  return list + "[" + std::to_string(i) + "]";
+}
+
 // Reads fields of one JSON object, naming each by its path ("muscles[2].mass_kg") in errors,
 // and rejects keys nobody read (a typo must not silently fall back to a default).
 class ObjectReader {
@@ -64,6 +68,15 @@ class ObjectReader {
     return {number(v[0], where + "[0]"), number(v[1], where + "[1]"), number(v[2], where + "[2]")};
   }
   Eigen::Vector3d vec3(const std::string& key) { return vec3(get(key), at(key)); }
+  /// An array of numbers, or (with allow_number) one number as a 1-vector.
+  Eigen::VectorXd numbers(const std::string& key, bool allow_number = false) {
+    const json& v = get(key);
+    if (allow_number && v.is_number()) return Eigen::VectorXd::Constant(1, number(v, at(key)));
+    if (!v.is_array()) fail(at(key), allow_number ? "must be a number or an array of numbers" : "must be an array of numbers");
+    Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
+    for (std::size_t i = 0; i < v.size(); ++i) out[static_cast<Eigen::Index>(i)] = number(v[i], indexed(at(key), i));
+    return out;
+  }
 
   void reject_unknown_keys() const {
     for (const auto& item : j_.items())
@@ -76,10 +89,6 @@ class ObjectReader {
   const std::string& source_;
   std::set<std::string> read_;
 };
-
-std::string indexed(const std::string& list, std::size_t i) {
-  return list + "[" + std::to_string(i) + "]";
-}
 
 const json& array_of_objects(ObjectReader& top, const std::string& key, bool required) {
   static const json empty = json::array();
@@ -237,6 +246,21 @@ FlatOutputDescription read_flat_output(const json& j, const std::string& path,
 
 }  // namespace
 
+// Angles in the file are in degrees (people write postures that way); radians inside.
+ScenarioDescription read_scenario(const json& j, const std::string& path, const std::string& source) {
+  constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+  ObjectReader r(j, path, source);
+  ScenarioDescription sc;
+  if (r.has("q0_deg")) sc.q0_rad = r.numbers("q0_deg") * kRadPerDeg;
+  if (r.has("qd0_deg_per_s")) sc.qd0_rad_per_s = r.numbers("qd0_deg_per_s") * kRadPerDeg;
+  if (r.has("activations")) sc.activations = r.numbers("activations");
+  if (r.has("target_deg")) sc.target_q_rad = r.numbers("target_deg") * kRadPerDeg;
+  if (r.has("duration_s")) sc.duration_s = r.positive("duration_s");
+  if (r.has("reserves_N")) sc.reserves_N = r.numbers("reserves_N", true);
+  r.reject_unknown_keys();
+  return sc;
+}
+
 ModelDescription parse_model_json(const std::string& json_text, const std::string& source) {
   json root;
   try {
@@ -277,6 +301,11 @@ ModelDescription parse_model_json(const std::string& json_text, const std::strin
   const json& flat = array_of_objects(top, "flat_outputs", false);
   for (std::size_t i = 0; i < flat.size(); ++i)
     model.flat_outputs.push_back(read_flat_output(flat[i], indexed("flat_outputs", i), source, model.muscles));
+  if (const json* scenarios = top.find("scenarios")) {
+    if (!scenarios->is_object()) top.fail("scenarios", "must be an object of named scenarios");
+    for (const auto& item : scenarios->items())
+      model.scenarios[item.key()] = read_scenario(item.value(), "scenarios." + item.key(), source);
+  }
   top.reject_unknown_keys();
 
   validate(model, source);

@@ -73,6 +73,25 @@ void validate(const ModelDescription& model, const std::string& source) {
     if (!(m.length_at_zero_angles_m > 0.0) || !std::isfinite(m.length_at_zero_angles_m))
       fail(at + ".length_at_zero_angles_m", "must be > 0");
   }
+  for (const auto& [name, sc] : model.scenarios) {
+    const std::string at = "scenarios." + name;
+    auto sized = [&](const Eigen::VectorXd& v, int size, const char* field, const char* per) {
+      if (v.size() != 0 && v.size() != size)
+        fail(at + "." + field, "must have one value per " + std::string(per) + " (" + std::to_string(size) + "), got " +
+                                   std::to_string(v.size()));
+      if (!v.allFinite()) fail(at + "." + field, "must be finite");
+    };
+    sized(sc.q0_rad, model.numJoints(), "q0_deg", "joint");
+    sized(sc.qd0_rad_per_s, model.numJoints(), "qd0_deg_per_s", "joint");
+    sized(sc.target_q_rad, model.numJoints(), "target_deg", "joint");
+    sized(sc.activations, model.numMuscles(), "activations", "muscle");
+    if (sc.activations.size() && !(sc.activations.minCoeff() > 0.0 && sc.activations.maxCoeff() <= 1.0))
+      fail(at + ".activations", "must lie in (0, 1]");
+    if (sc.reserves_N.size() != 1) sized(sc.reserves_N, model.numMuscles(), "reserves_N", "muscle (or one for all)");
+    if (!sc.reserves_N.allFinite() || (sc.reserves_N.size() && sc.reserves_N.minCoeff() < 0.0))
+      fail(at + ".reserves_N", "must be finite and >= 0");
+    if (!(sc.duration_s >= 0.0) || !std::isfinite(sc.duration_s)) fail(at + ".duration_s", "must be > 0");
+  }
   if (!model.flat_outputs.empty()) {
     const int expected = model.numMuscles() - model.numJoints();
     if (static_cast<int>(model.flat_outputs.size()) != expected)
@@ -108,6 +127,11 @@ int ModelDescription::muscleIndex(const std::string& n) const {
   for (int j = 0; j < numMuscles(); ++j)
     if (muscles[j].parameters.name == n) return j;
   return -1;
+}
+
+const ScenarioDescription* ModelDescription::scenario(const std::string& scenario_name) const {
+  const auto it = scenarios.find(scenario_name);
+  return it == scenarios.end() ? nullptr : &it->second;
 }
 
 int ModelDescription::jointIndex(const std::string& n) const {

@@ -45,6 +45,8 @@ struct OpenLoopOptions {
 struct OpenLoopPlan {
   SolveStatus status = SolveStatus::Failed;
   std::string message;
+  /// Implausible inputs that were accepted (joint angles beyond one turn: degrees as radians?).
+  std::vector<std::string> warnings;
   JointPath path;                     ///< degree-8 joint polynomials
   std::vector<Polynomial> Y;          ///< flat outputs (N), ascending powers of t
   SosProgramResult sos;
@@ -80,7 +82,7 @@ struct RecedingHorizonOptions {
   int grid_points = 11;               ///< torque box sampled here (the paper's grid)
   Eigen::VectorXd target_q_rad;
   Eigen::VectorXd reserves_N;
-  SlpSolver solver = SlpSolver::Ipopt;
+  SlpSolver solver = SlpSolver::VertexEnumeration;  ///< the programs' default too
   std::optional<Eigen::VectorXd> warm_start;  ///< Ipopt's start for the SLP (e.g. the last alpha), p entries
   /// Joint torque the muscles need not produce (N m per joint; empty: none): the planned
   /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
@@ -94,7 +96,15 @@ struct RecedingHorizonStep {
   Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
   Eigen::VectorXd bound_N;            ///< the SLP's B (slp_bound_vector of the box and reserves)
   SlpResult slp;
+  Eigen::VectorXd torque_offset_N_m;  ///< the options' offset the step was planned with (may be empty)
   const Eigen::VectorXd& alpha() const { return slp.alpha; }  ///< constant Y, N
+  /// The excitations the plan asks for at `count` times tau0 + i h (s from the step's start;
+  /// after the horizon the target is held at rest): count x m, what the RH controller applies
+  /// (the inverse map with Y = alpha and the torque offset). Throws std::logic_error for a step
+  /// that was not solved, std::runtime_error where they are not finite, std::invalid_argument
+  /// for count < 1, h <= 0 or tau0 < 0.
+  Eigen::MatrixXd excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, double tau0_s, double h_s,
+                              int count) const;
   double wall_seconds = 0.0;
   /// Work storage the in-place plan_receding_horizon_step reuses (not part of the result).
   struct Buffers {

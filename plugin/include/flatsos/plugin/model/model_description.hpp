@@ -18,9 +18,14 @@
 //                "moment_arms_m": {"<joint>": d, ...} | [d per joint, in joint order],
 //                ...optional overrides of muscle_defaults}],
 //   "flat_outputs": [{"name", "weights": {"<muscle>": w, ...}}]   (optional; m - N rows)
+//   "scenarios": {"<name>": {"q0_deg": [per joint], "qd0_deg_per_s": [per joint],
+//                            "activations": [per muscle], "target_deg": [per joint],
+//                            "duration_s", "reserves_N": one | [per muscle]}}  (optional; every
+//                 field optional: defaults for the programs, e.g. "open_loop", "receding_horizon")
 // }
 // Joints are listed parents first; joint order is generalized-coordinate order.
 
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -64,6 +69,16 @@ struct FlatOutputDescription {
   Eigen::VectorXd weights;  ///< one per muscle (muscle order)
 };
 
+/// Where an example motion of the model starts and ends: the programs' defaults for this model
+/// (a command-line option overrides each). Empty vectors and 0 mean "not given".
+struct ScenarioDescription {
+  Eigen::VectorXd q0_rad, qd0_rad_per_s;  ///< N entries
+  Eigen::VectorXd activations;             ///< m entries in (0, 1]
+  Eigen::VectorXd target_q_rad;            ///< N entries
+  double duration_s = 0.0;
+  Eigen::VectorXd reserves_N;              ///< 1 (all muscles) or m entries, >= 0
+};
+
 struct ModelDescription {
   std::string name;
   Eigen::Vector3d gravity_m_per_s2 = Eigen::Vector3d(0.0, -9.81, 0.0);
@@ -71,6 +86,7 @@ struct ModelDescription {
   std::vector<JointDescription> joints;
   std::vector<MuscleDescription> muscles;
   std::vector<FlatOutputDescription> flat_outputs;  ///< empty when the file has none
+  std::map<std::string, ScenarioDescription> scenarios;  ///< by name; empty when the file has none
 
   int numJoints() const { return static_cast<int>(joints.size()); }
   int numMuscles() const { return static_cast<int>(muscles.size()); }
@@ -80,6 +96,8 @@ struct ModelDescription {
   Eigen::MatrixXd flatOutputMatrix() const;
   int muscleIndex(const std::string& name) const;  ///< -1 when absent
   int jointIndex(const std::string& name) const;   ///< -1 when absent
+  /// The named scenario, or nullptr when the model has none of that name.
+  const ScenarioDescription* scenario(const std::string& scenario_name) const;
 };
 
 /// Validate a description built in code (the loader calls this too).
