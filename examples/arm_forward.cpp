@@ -1,5 +1,6 @@
 // arm_forward: forward simulation of a muscle-driven model (default: the arm of Richter &
-// Warner) from a given state under an excitation schedule; writes OUT/states.sto.
+// Warner) from a given state under an excitation schedule; writes OUT/states.sto and
+// OUT/controls.sto.
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
@@ -30,7 +31,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Forward simulation of a muscle-driven Simbody model with flatsos Hill muscles.\n"
                "The tendons' initial state is required: give --ls0-m (one tendon length per muscle) or\n"
                "--equilibrate-tendons (static equilibrium for a0 at q0).\n"
-               "Writes OUT/states.sto (OpenSim storage: joint angles in rad, muscle states in SI)."};
+               "Writes OUT/states.sto (OpenSim storage: joint angles in rad, muscle states in SI) and\n"
+               "OUT/controls.sto (the excitations applied)."};
   std::string model_path = FLATSOS_DEFAULT_MODEL, excitation_path, out_dir = "results/arm_forward";
   std::vector<double> q0_deg, qd0_deg_per_s, a0, ls0;
   bool equilibrate = false;
@@ -44,8 +46,9 @@ int main(int argc, char** argv) {
   app.add_flag("--equilibrate-tendons", equilibrate,
                "start tendons at static equilibrium for a0 at q0 (required unless --ls0-m)")->excludes(ls_opt);
   app.add_option("--excitations", excitation_path,
-                 "CSV: time,<muscle>,... (linear interpolation, held after the last row); "
-                 "default: excitation = initial activation");
+                 "excitations over time: a controls .sto (OpenSim/Moco: time, /forceset/<muscle>, ...) or a CSV "
+                 "(time,<muscle>,...); linear interpolation, held after the last row; default: excitation = "
+                 "initial activation");
   app.add_option("--duration-s", duration, "simulated time, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-2));
   app.add_option("--report-interval-s", report_interval, "time between rows of states.sto, s")
@@ -90,7 +93,7 @@ int main(int argc, char** argv) {
     } else {
       std::vector<std::string> names;
       for (const auto& md : model->description().muscles) names.push_back(md.parameters.name);
-      const auto signals = fp::read_excitation_csv(excitation_path, names);
+      const auto signals = fp::read_excitation_file(excitation_path, names);
       for (int j = 0; j < m; ++j) model->muscle(j).setExcitationSignal(s, signals[j]);
     }
 
@@ -111,12 +114,13 @@ int main(int argc, char** argv) {
     if (!result.finite) table.metadata.emplace_back("status", result.message);
     const std::string out_file = (std::filesystem::path(out_dir) / "states.sto").string();
     fp::write_sto(out_file, table);
+    fp::write_sto((std::filesystem::path(out_dir) / "controls.sto").string(), result.controls);
 
     const Eigen::VectorXd q = model->jointAngles(result.final_state) / ex::kRadPerDeg;
     std::cout << "arm_forward: " << model->description().name << ", " << duration << " s, "
               << result.integrator_steps << " integrator steps\n  final joint angles (deg):";
     for (int i = 0; i < n; ++i) std::cout << ' ' << model->description().joints[i].name << '=' << q[i];
-    std::cout << "\n  wrote " << out_file << "\n";
+    std::cout << "\n  wrote " << out_file << " and controls.sto\n";
     if (!result.finite) {
       std::cerr << "arm_forward: simulation failed: " << result.message << "\n";
       return 1;

@@ -1,7 +1,8 @@
 // arm_open_loop: an open-loop transfer of any model (default: the paper's scenario on the arm,
 // from q = [0, 10] deg with the paper's activations to straight up in 3 s, the model file's
 // scenario "open_loop"). Plans minimum-effort excitations, applies them open loop to the Simbody
-// model from the same state, and writes OUT/plan.sto, OUT/simulation.sto and OUT/summary.json.
+// model from the same state, and writes the plan's and the simulation's states and controls
+// (OUT/plan.sto, plan_controls.sto, simulation.sto, simulation_controls.sto) and OUT/summary.json.
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -24,7 +25,8 @@ namespace ex = flatsos::examples;
 int main(int argc, char** argv) {
   CLI::App app{"Open-loop minimum-effort transfer of a muscle-driven model (default: the arm of Richter & Warner)\n"
                "planned by flatness and SOS optimization, then simulated open loop in Simbody.\n"
-               "Writes OUT/plan.sto, OUT/simulation.sto (OpenSim storage, SI, radians) and OUT/summary.json."};
+               "Writes OUT/plan.sto, OUT/simulation.sto (states), OUT/plan_controls.sto, OUT/simulation_controls.sto\n"
+               "(excitations) as OpenSim storage (SI, radians), and OUT/summary.json."};
   std::string model_path = FLATSOS_DEFAULT_MODEL, out_dir = "results/open_loop";
   ex::ScenarioOptions given;
   double accuracy = 1e-10;
@@ -85,8 +87,8 @@ int main(int argc, char** argv) {
     const fp::SimulationResult sim = fp::simulate(*model, s, so);
     const double sim_seconds = sim_wall.seconds();
 
-    const fp::StoTable planned = ex::plan_table(flat, plan, sim.states);
-    const ex::Tracking err = ex::compare(*model, planned, sim.states);
+    const ex::PlanTables planned = ex::plan_tables(flat, plan, sim.states);
+    const ex::Tracking err = ex::compare(*model, planned.states, sim.states);
     summary["simulation"] = {{"success", sim.finite},
                              {"message", sim.message},
                              {"integrator", integrator},
@@ -100,12 +102,16 @@ int main(int argc, char** argv) {
     auto sim_table = sim.states;
     sim_table.name = "simulation";
     sim_table.metadata = {{"success", sim.finite ? "true" : "false"}, {"integrator_accuracy", ex::format(accuracy)}};
-    fp::write_sto(out_dir + "/plan.sto", planned);
+    auto sim_controls = sim.controls;
+    sim_controls.name = "simulation_controls";
+    fp::write_sto(out_dir + "/plan.sto", planned.states);
+    fp::write_sto(out_dir + "/plan_controls.sto", planned.controls);
     fp::write_sto(out_dir + "/simulation.sto", sim_table);
+    fp::write_sto(out_dir + "/simulation_controls.sto", sim_controls);
     ex::write_json(out_dir + "/summary.json", summary);
     std::cout << "  simulated open loop " << in.duration_s << " s in " << sim_seconds << " s: max |q error| "
               << err.max_q_error_rad / ex::kRadPerDeg << " deg, max |a error| " << err.max_activation_error
-              << ", max |L_S error| " << err.max_tendon_length_error_m << " m\n  wrote " << out_dir << "/{plan.sto, simulation.sto, summary.json}\n";
+              << ", max |L_S error| " << err.max_tendon_length_error_m << " m\n  wrote " << out_dir << "/{plan.sto, plan_controls.sto, simulation.sto, simulation_controls.sto, summary.json}\n";
     return sim.finite ? 0 : 1;
   } catch (const CLI::ValidationError& e) {
     std::cerr << "arm_open_loop: " << e.what() << "\n";

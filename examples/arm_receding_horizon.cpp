@@ -2,12 +2,13 @@
 // arm, the model file's scenario "receding_horizon"). The model rests at q0 with its muscles in
 // the minimum-effort static equilibrium; a receding-horizon controller (horizon 0.5 s, 11-point
 // grid, replanned every 0.05 s by the SLP) moves it to the target ([20, 20] -> [80, 80] deg).
-// Writes OUT/simulation.sto, OUT/predictions.sto (the predicted joint path of every step) and
-// OUT/summary.json.
+// Writes OUT/simulation.sto, OUT/simulation_controls.sto, OUT/predictions/step_NNNN.sto (the
+// predicted joint path of every step) and OUT/summary.json.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -26,7 +27,8 @@ namespace ex = flatsos::examples;
 int main(int argc, char** argv) {
   CLI::App app{"Receding-horizon control of a muscle-driven model (default: the arm of Richter & Warner):\n"
                "flatness-based SLP planning every control period, Simbody plant.\n"
-               "Writes OUT/simulation.sto, OUT/predictions.sto and OUT/summary.json."};
+               "Writes OUT/simulation.sto (states), OUT/simulation_controls.sto (excitations), OUT/predictions/\n"
+               "step_NNNN.sto (each step's predicted joint path) and OUT/summary.json."};
   std::string model_path = FLATSOS_DEFAULT_MODEL, out_dir = "results/receding_horizon", solver = "exact";
   ex::ScenarioOptions given;
   double accuracy = 0.0;  // 0: the integrator's default below
@@ -136,13 +138,23 @@ int main(int argc, char** argv) {
     fp::StoTable sim = run.states;
     sim.metadata = {{"success", finite ? "true" : "false"}, {"integrator_accuracy", ex::format(accuracy)}};
     fp::write_sto(out_dir + "/simulation.sto", sim);
-    fp::write_sto(out_dir + "/predictions.sto", rh_run.predictions);
+    fp::write_sto(out_dir + "/simulation_controls.sto", run.controls);
+    // One file per step (OpenSim tables need strictly increasing time); none left from a longer run.
+    const std::filesystem::path predictions = std::filesystem::path(out_dir) / "predictions";
+    std::filesystem::remove_all(predictions);
+    std::filesystem::create_directories(predictions);
+    for (const auto& table : rh_run.predictions) {
+      char file[32];
+      std::snprintf(file, sizeof file, "step_%04d.sto", std::stoi(table.metadataValue("step")));
+      fp::write_sto((predictions / file).string(), table);
+    }
+    summary["prediction_files"] = rh_run.predictions.size();
     ex::write_json(out_dir + "/summary.json", summary);
     std::cout << "arm_receding_horizon: " << steps << " steps, final q = [" << q_final.transpose() << "] deg, settling "
               << (settling >= 0 ? ex::format(settling) + " s" : std::string("never")) << ", plan failures "
               << controller.planFailures() << ", clamped samples " << controller.clampedSamples() << "\n  median step "
               << 1e3 * ex::median(step_times) << " ms, real-time factor " << run.real_time_factor << "\n  wrote " << out_dir
-              << "/{simulation.sto, predictions.sto, summary.json}\n";
+              << "/{simulation.sto, simulation_controls.sto, predictions/step_*.sto, summary.json}\n";
     if (!failures.empty()) {
       std::cerr << "arm_receding_horizon: task failed: " << message << "\n";
       return 1;

@@ -46,29 +46,32 @@ std::string format(double x) {
   return out.str();
 }
 
-plugin::StoTable plan_table(const planner::FlatOutputMap& flat, const planner::OpenLoopPlan& plan,
-                            const plugin::StoTable& times_from) {
+PlanTables plan_tables(const planner::FlatOutputMap& flat, const planner::OpenLoopPlan& plan,
+                       const plugin::StoTable& times_from) {
   const auto& model = flat.model();
-  plugin::StoTable t = plugin::make_state_table(model, "plan");
-  t.metadata = {{"status", planner::to_string(plan.status)}, {"success", plan.status == planner::SolveStatus::Solved ? "true" : "false"},
-                {"objective", format(plan.sos.cost_N_s)}, {"solver_duration", format(plan.setup_seconds + plan.solve_seconds)}};
+  PlanTables out{plugin::make_state_table(model, "plan"), plugin::make_controls_table(model, "plan_controls")};
+  out.states.metadata = {{"status", planner::to_string(plan.status)},
+                         {"success", plan.status == planner::SolveStatus::Solved ? "true" : "false"},
+                         {"objective", format(plan.sos.cost_N_s)},
+                         {"solver_duration", format(plan.setup_seconds + plan.solve_seconds)}};
   for (const auto& src : times_from.rows) {
     const double time = std::min(src[0], plan.path.duration_s);
     const planner::Jet qj = plan.jointJet(time);
     const planner::MusclePoint mp = flat.inverse(qj, plan.flatOutputJet(time));
-    std::vector<double> row = {src[0]};
+    std::vector<double> row = {src[0]}, controls = {src[0]};
     for (int i = 0; i < model.numJoints(); ++i) row.push_back(qj(i, 0)), row.push_back(qj(i, 1));
     for (int j = 0; j < model.numMuscles(); ++j) {
-      row.push_back(mp.excitation[j]);
       row.push_back(mp.activation[j]);
       row.push_back(mp.tendon_length_m[j]);
       row.push_back(mp.tendon_force_N[j]);
       row.push_back(mp.fiber_length_m[j]);
       row.push_back(-mp.shortening_velocity_m_per_s[j]);
+      controls.push_back(mp.excitation[j]);
     }
-    t.rows.push_back(std::move(row));
+    out.states.rows.push_back(std::move(row));
+    out.controls.rows.push_back(std::move(controls));
   }
-  return t;
+  return out;
 }
 
 Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTable& a, const plugin::StoTable& b) {
@@ -79,7 +82,8 @@ Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTab
     for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) d = std::max(d, std::abs(x[i] - y[i]));
     return d;
   };
-  for (const auto& j : model.description().joints) e.max_q_error_rad = std::max(e.max_q_error_rad, max_diff("/jointset/" + j.name + "/q"));
+  for (int i = 0; i < model.numJoints(); ++i)
+    e.max_q_error_rad = std::max(e.max_q_error_rad, max_diff(plugin::coordinate_value_column(model, i)));
   for (const auto& m : model.description().muscles) {
     const std::string base = "/forceset/" + m.parameters.name + "/";
     e.max_activation_error = std::max(e.max_activation_error, max_diff(base + "activation"));

@@ -29,10 +29,14 @@ CLI::Option* add_integrator_option(CLI::App& app, std::string& name, const std::
 Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option);
 std::string format(double x);
 
-/// The plan evaluated at the times of `times_from` (its first column), with the same columns as
-/// plugin::make_state_table (planned q, qd and muscle states, excitations from the inverse map).
-plugin::StoTable plan_table(const planner::FlatOutputMap& flat, const planner::OpenLoopPlan& plan,
-                            const plugin::StoTable& times_from);
+/// The plan evaluated at the times of `times_from` (its first column): its states with the
+/// columns of plugin::make_state_table (planned q, qd and muscle states) and its controls with
+/// those of plugin::make_controls_table (excitations from the inverse map, before clamping).
+struct PlanTables {
+  plugin::StoTable states, controls;
+};
+PlanTables plan_tables(const planner::FlatOutputMap& flat, const planner::OpenLoopPlan& plan,
+                       const plugin::StoTable& times_from);
 
 struct Tracking {
   double max_q_error_rad = 0.0, max_activation_error = 0.0, max_tendon_length_error_m = 0.0;

@@ -146,22 +146,29 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   return rec;
 }
 
-plugin::StoTable prediction_table(const RecedingHorizonController& controller) {
+std::vector<plugin::StoTable> prediction_tables(const RecedingHorizonController& controller) {
   const plugin::MusculoskeletalModel& model = controller.plant();
-  plugin::StoTable out;
-  out.name = "predictions";
-  out.columns = {"time", "/controller/step"};
-  for (const auto& j : model.description().joints) out.columns.push_back("/jointset/" + j.name + "/q_predicted");
+  std::vector<plugin::StoTable> out;
   const auto& history = controller.history();
   for (std::size_t k = 0; k < history.size(); ++k) {
     const PlanInUse& plan = history[k].plan;
-    for (int i = 0; i <= 10 && !plan.empty(); ++i) {
-      const double tau = plan.path.duration_s * i / 10.0;
-      const Jet jq = plan.path.jet(tau, 1);
-      std::vector<double> row = {plan.start_time_s + tau, static_cast<double>(k)};
-      for (int j = 0; j < model.numJoints(); ++j) row.push_back(jq(j, 0));
-      out.rows.push_back(std::move(row));
+    if (plan.empty()) continue;
+    plugin::StoTable t;
+    t.name = "prediction";
+    t.metadata = {{"step", std::to_string(k)}, {"planned_at_s", std::to_string(history[k].time_s)}};
+    t.columns = {"time"};
+    for (int j = 0; j < model.numJoints(); ++j) {
+      t.columns.push_back(plugin::coordinate_value_column(model, j));
+      t.columns.push_back(plugin::coordinate_speed_column(model, j));
     }
+    for (int i = 0; i <= 10; ++i) {
+      const double tau = plan.path.duration_s * i / 10.0;
+      const Jet jq = plan.path.jet(tau, 2);
+      std::vector<double> row = {plan.start_time_s + tau};
+      for (int j = 0; j < model.numJoints(); ++j) row.push_back(jq(j, 0)), row.push_back(jq(j, 1));
+      t.rows.push_back(std::move(row));
+    }
+    out.push_back(std::move(t));
   }
   return out;
 }
@@ -172,7 +179,7 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
   o.control_period_s = controller.options().control_period_s;
   RecedingHorizonRun run;
   run.loop = plugin::simulate_closed_loop(controller.plant(), controller, initial, o);
-  run.predictions = prediction_table(controller);
+  run.predictions = prediction_tables(controller);
   if (run.loop.finite)
     run.settling_time_s = plugin::settling_time(controller.plant(), run.loop.states, controller.options().plan.target_q_rad,
                                                 settle_tolerance_rad);

@@ -21,6 +21,14 @@ expect 0 "wrote" -- "$bin" --q0-deg 0,10 --a0 $a0 --equilibrate-tendons --durati
 if ! grep -q "^endheader$" "$tmp/good/states.sto" || ! grep -q "/forceset/biceps/activation" "$tmp/good/states.sto"; then
   echo "FAILED: states.sto lacks the OpenSim header or columns"; fail=1
 fi
+# OpenSim's files: coordinates by path, controls apart; a Moco-style controls file drives a run.
+grep -q "/jointset/shoulder/shoulder/value" "$tmp/good/states.sto" || { echo "FAILED: states.sto lacks coordinate paths"; fail=1; }
+grep -q "excitation" "$tmp/good/states.sto" && { echo "FAILED: excitations in the states file"; fail=1; }
+head -8 "$tmp/good/controls.sto" | grep -q "/forceset/biceps" || { echo "FAILED: controls.sto lacks /forceset/<muscle>"; fail=1; }
+expect 0 "wrote" -- "$bin" --q0-deg 0,10 --a0 $a0 --equilibrate-tendons --duration-s 0.05 --excitations "$tmp/good/controls.sto" --out "$tmp/replay"
+cmp -s <(tail -n +8 "$tmp/good/states.sto") <(tail -n +8 "$tmp/replay/states.sto") || { echo "FAILED: replaying controls.sto changed the motion"; fail=1; }
+printf 'moco\nversion=1\nendheader\ntime\t/forceset/biceps\n0\t0.5\n' > "$tmp/short.sto"
+expect 1 "no column for muscle 'anterior_deltoid'" -- "$bin" --excitations "$tmp/short.sto" --equilibrate-tendons --out "$tmp/o"
 # Any model: a 1-joint elbow with the defaults sized from it.
 models=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../models" && pwd)
 expect 0 "final joint angles (deg): elbow=" -- "$bin" --model "$models/elbow_1dof.json" --equilibrate-tendons --duration-s 0.05 --out "$tmp/elbow"

@@ -42,13 +42,26 @@ expect 1 "never settled" -- "$rh" --model "$tmp/heavy.json" --out "$tmp/heavy"
 # A 60 kg forearm cannot even be held at the start: the error names the muscle and the quantity.
 sed 's/"mass_kg": 1.76/"mass_kg": 60/' "$models/arm_richter_warner.json" > "$tmp/heavier.json"
 expect 1 "rest state outside the model's valid domain: muscle 'anterior_deltoid': activation" -- "$rh" --model "$tmp/heavier.json" --out "$tmp/heavier"
-for f in simulation.sto predictions.sto summary.json; do
+for f in simulation.sto simulation_controls.sto predictions/step_0000.sto predictions/step_0029.sto summary.json; do
   [[ -s "$tmp/rh/$f" ]] || { echo "FAILED: $f missing"; fail=1; }
+done
+# OpenSim's TimeSeriesTable needs strictly increasing time in every file.
+increasing() {  # rows after the labels line: time strictly above the previous row's
+  awk -F'\t' 'body && NR > start + 2 && $1 + 0 <= last { bad = 1 } body && NR > start + 1 { last = $1 + 0 }
+              /^endheader$/ { body = 1; start = NR } END { exit bad }' "$1"
+}
+for f in "$tmp"/rh/predictions/*.sto "$tmp/rh/simulation.sto" "$tmp/rh/simulation_controls.sto"; do
+  increasing "$f" || { echo "FAILED: time does not increase strictly in $f"; fail=1; }
+done
+[[ $(ls "$tmp/rh/predictions" | wc -l) == 30 ]] || { echo "FAILED: not one prediction per step"; fail=1; }
+for f in plan.sto plan_controls.sto simulation.sto simulation_controls.sto; do
+  [[ -s "$tmp/olr/$f" ]] || { echo "FAILED: open loop $f missing"; fail=1; }
 done
 grep -q '"real_time_factor"' "$tmp/rh/summary.json" || { echo "FAILED: RH summary lacks real_time_factor"; fail=1; }
 # Any model: a 1-joint elbow plans and controls with the defaults of its own scenarios, and with
 # none (a copy without "scenarios": start at 0 deg at rest, target 30 deg).
 expect 0 "simulated open loop 1.5 s" -- "$ol" --model "$models/elbow_1dof.json" --out "$tmp/elbow_ol"
+grep -q "/jointset/elbow/elbow_flexion/value" "$tmp/elbow_ol/plan.sto" || { echo "FAILED: the coordinate's own name is not used"; fail=1; }
 expect 0 "settling" -- "$rh" --model "$models/elbow_1dof.json" --out "$tmp/elbow_rh"
 grep -q '"target_deg": \[' "$tmp/elbow_rh/summary.json" || { echo "FAILED: the summary lacks the inputs"; fail=1; }
 python3 -c 'import json, sys; m = json.load(open(sys.argv[1])); del m["scenarios"]; json.dump(m, open(sys.argv[2], "w"))' \

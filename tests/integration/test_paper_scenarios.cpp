@@ -47,9 +47,9 @@ TEST(PaperScenarios, OpenLoopPlanIsReproducedBySimbody) {
     const fpl::MusclePoint& mp = excitation->at(t);
     q_err = std::max({q_err, std::abs(row[1] - qj(0, 0)), std::abs(row[3] - qj(1, 0))});
     for (int j = 0; j < 6; ++j) {
-      a_err = std::max(a_err, std::abs(row[static_cast<std::size_t>(5 + 6 * j + 1)] - mp.activation[j]));
-      ls_err = std::max(ls_err, std::abs(row[static_cast<std::size_t>(5 + 6 * j + 2)] - mp.tendon_length_m[j]));
-      min_force = std::min(min_force, row[static_cast<std::size_t>(5 + 6 * j + 3)]);
+      a_err = std::max(a_err, std::abs(row[static_cast<std::size_t>(5 + 5 * j)] - mp.activation[j]));
+      ls_err = std::max(ls_err, std::abs(row[static_cast<std::size_t>(5 + 5 * j + 1)] - mp.tendon_length_m[j]));
+      min_force = std::min(min_force, row[static_cast<std::size_t>(5 + 5 * j + 2)]);
     }
   }
   EXPECT_LT(q_err, deg(1e-6));
@@ -87,8 +87,13 @@ TEST(PaperScenarios, RecedingHorizonSettlesAtTheTarget) {
     EXPECT_NEAR(rec.plan.path.jet(rec.plan.path.duration_s, 1)(0, 0), deg(80), 1e-12);
     EXPECT_GE(rec.plan.alpha.minCoeff(), 0.0);
   }
-  // The predictions table: 11 points of each step's plan.
-  EXPECT_EQ(outcome.run.predictions.rows.size(), 40u * 11u);
+  // One prediction per step, 11 points of its plan at strictly increasing times (OpenSim's
+  // TimeSeriesTable rejects anything else).
+  ASSERT_EQ(outcome.run.predictions.size(), 40u);
+  for (const auto& prediction : outcome.run.predictions) {
+    ASSERT_EQ(prediction.rows.size(), 11u);
+    for (std::size_t r = 1; r < prediction.rows.size(); ++r) EXPECT_GT(prediction.rows[r][0], prediction.rows[r - 1][0]);
+  }
 }
 
 TEST(PaperScenarios, RecedingHorizonIsTheSameWithEveryIntegrator) {

@@ -69,7 +69,7 @@ TEST(FlatOutputs, ForwardThenInverseClosesAlongASimbodySimulation) {
   o.report_interval_s = 0.1;
   const auto sim = fp::simulate(model, s, o);
   ASSERT_TRUE(sim.finite);
-  const auto q0 = sim.states.column("/jointset/shoulder/q");
+  const auto q0 = sim.states.column("/jointset/shoulder/shoulder/value");
   EXPECT_GT(std::abs(q0.back() - q0.front()), 0.05);  // the arm really moves
   for (const auto& row : sim.states.rows) {
     fpl::MuscleState ms;
@@ -78,8 +78,8 @@ TEST(FlatOutputs, ForwardThenInverseClosesAlongASimbodySimulation) {
     ms.activation.resize(6);
     ms.tendon_length_m.resize(6);
     for (int j = 0; j < 6; ++j) {
-      ms.activation[j] = row[static_cast<std::size_t>(5 + 6 * j + 1)];
-      ms.tendon_length_m[j] = row[static_cast<std::size_t>(5 + 6 * j + 2)];
+      ms.activation[j] = row[static_cast<std::size_t>(5 + 5 * j)];
+      ms.tendon_length_m[j] = row[static_cast<std::size_t>(5 + 5 * j + 1)];
     }
     const fpl::FlatState y = arm.flat.forward(ms);
     const fpl::MusclePoint back = arm.flat.inverse(y.q, y.Y);

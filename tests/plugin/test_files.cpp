@@ -27,7 +27,7 @@ TEST(StoFile, RoundTripIsExactAndHeaderIsOpenSimStyle) {
   fp::StoTable t;
   t.name = "states";
   t.metadata = {{"status", "solved"}, {"objective", "1.5"}};
-  t.columns = {"time", "/jointset/shoulder/q", "/forceset/biceps/activation"};
+  t.columns = {"time", "/jointset/shoulder/shoulder/value", "/forceset/biceps/activation"};
   t.rows = {{0.0, 0.1, 1.0 / 3.0}, {0.01, -2.5e-17, 0.404}};
   const auto path = (dir / "s.sto").string();
   fp::write_sto(path, t);
@@ -100,6 +100,40 @@ TEST(ExcitationCsv, BadFilesNameTheProblem) {
     }
   }
   EXPECT_THROW(fp::read_excitation_csv((dir / "missing.csv").string(), kMuscles), std::runtime_error);
+}
+
+TEST(ExcitationSto, ReadsMocoControlsByActuatorPathInAnyColumnOrder) {
+  const auto dir = temp_dir("sto");
+  fp::StoTable controls;
+  controls.name = "controls";
+  controls.columns = {"time", "/forceset/b", "a"};  // Moco's path, or the bare name
+  controls.rows = {{0.0, 0.1, 0.2}, {1.0, 0.3, 0.6}};
+  fp::write_sto((dir / "c.sto").string(), controls);
+  const auto sig = fp::read_excitation_file((dir / "c.sto").string(), kMuscles);
+  ASSERT_EQ(sig.size(), 2u);
+  EXPECT_NEAR(sig[0]->value(0.5), 0.4, 1e-15);
+  EXPECT_NEAR(sig[1]->value(0.25), 0.15, 1e-15);
+  const std::vector<std::pair<std::vector<std::vector<double>>, std::string>> bad_rows = {
+      {{{0.0, 0.1, 1.5}}, "data row 1: excitation 1.5"},
+      {{{0.0, 0.1, 0.1}, {0.0, 0.2, 0.2}}, "data row 2: times must increase strictly"},
+      {{}, "no data rows"},
+  };
+  for (const auto& [rows, expected] : bad_rows) {
+    controls.rows = rows;
+    fp::write_sto((dir / "bad.sto").string(), controls);
+    try {
+      fp::read_excitation_sto((dir / "bad.sto").string(), kMuscles);
+      ADD_FAILURE() << "accepted: " << expected;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.sto"), std::string::npos) << e.what();
+    }
+  }
+  controls.columns = {"time", "/forceset/b", "/forceset/c"};
+  controls.rows = {{0.0, 0.1, 0.2}};
+  fp::write_sto((dir / "unknown.sto").string(), controls);
+  EXPECT_THROW(fp::read_excitation_sto((dir / "unknown.sto").string(), kMuscles), std::runtime_error);
+  EXPECT_THROW(fp::read_excitation_sto((dir / "missing.sto").string(), kMuscles), std::runtime_error);
 }
 
 TEST(PiecewiseLinearSignal, RejectsBadSamples) {

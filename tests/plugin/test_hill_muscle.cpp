@@ -35,7 +35,7 @@ void expect_bounded(const fp::MusculoskeletalModel& arm, const fp::SimulationRes
     for (double ls : r.states.column("/forceset/" + name + "/tendon_length")) EXPECT_GT(ls, 0.5 * slack);
   }
   for (const auto& joint : arm.description().joints)
-    for (double qd : r.states.column("/jointset/" + joint.name + "/qdot")) EXPECT_LT(std::abs(qd), 100.0);
+    for (double qd : r.states.column("/jointset/" + joint.name + "/" + joint.coordinateName() + "/speed")) EXPECT_LT(std::abs(qd), 100.0);
 }
 
 
@@ -142,7 +142,7 @@ TEST(HillMuscleRobustness, ZeroExcitationForSecondsStaysFiniteAndBounded) {
   // Deactivation decays with T_deact = 0.04 s: after 3 s every activation is ~0.
   EXPECT_LT(arm->activations(r.final_state).maxCoeff(), 1e-6);
   // With no muscle force the arm falls and hangs down: the shoulder angle goes below 0.
-  EXPECT_LT(r.states.column("/jointset/shoulder/q").back(), -0.5);
+  EXPECT_LT(r.states.column("/jointset/shoulder/shoulder/value").back(), -0.5);
 }
 
 TEST(HillMuscleRobustness, SlackTendonsAndActivationAtZeroStayFinite) {
@@ -187,8 +187,8 @@ TEST(HillMuscleRobustness, LoadedTendonAtTheActivationFloorStaysFinite) {
   o.integrator = fp::IntegratorKind::RungeKuttaMerson;
   const auto rkm = fp::simulate(*arm, s, o);
   expect_bounded(*arm, rkm);
-  const auto q_rkm = rkm.states.column("/jointset/shoulder/q");
-  const auto q_bdf = bdf.states.column("/jointset/shoulder/q");
+  const auto q_rkm = rkm.states.column("/jointset/shoulder/shoulder/value");
+  const auto q_bdf = bdf.states.column("/jointset/shoulder/shoulder/value");
   const auto ls_rkm = rkm.states.column("/forceset/brachialis/tendon_length");
   const auto ls_bdf = bdf.states.column("/forceset/brachialis/tendon_length");
   for (std::size_t k = 0; k < q_rkm.size(); ++k) {

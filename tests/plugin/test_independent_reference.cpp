@@ -347,8 +347,8 @@ TEST(IndependentReference, ForwardSimulationWithVaryingExcitationsMatchesHandWri
   std::vector<std::string> names;
   for (const auto& m : model->description().muscles) names.push_back(m.parameters.name);
   const auto t_col = column(sim.states, "time");
-  const auto q1_col = column(sim.states, "/jointset/shoulder/q");
-  const auto q2_col = column(sim.states, "/jointset/elbow/q");
+  const auto q1_col = column(sim.states, "/jointset/shoulder/shoulder/value");
+  const auto q2_col = column(sim.states, "/jointset/elbow/elbow/value");
   std::vector<std::vector<double>> a_col, ls_col;
   for (const auto& name : names) {
     a_col.push_back(column(sim.states, "/forceset/" + name + "/activation"));
@@ -493,10 +493,10 @@ TEST(IndependentReference, PassiveSwingConservesEnergyAndMatchesHandWrittenModel
   ASSERT_TRUE(sim.finite) << sim.message;
   ASSERT_EQ(sim.states.rows.size(), 101u);
 
-  const auto q1 = column(sim.states, "/jointset/shoulder/q");
-  const auto q2 = column(sim.states, "/jointset/elbow/q");
-  const auto u1 = column(sim.states, "/jointset/shoulder/qdot");
-  const auto u2 = column(sim.states, "/jointset/elbow/qdot");
+  const auto q1 = column(sim.states, "/jointset/shoulder/shoulder/value");
+  const auto q2 = column(sim.states, "/jointset/elbow/elbow/value");
+  const auto u1 = column(sim.states, "/jointset/shoulder/shoulder/speed");
+  const auto u2 = column(sim.states, "/jointset/elbow/elbow/speed");
   std::vector<std::vector<double>> forces, tendon_lengths;
   for (const auto& m : model.description().muscles) {
     forces.push_back(column(sim.states, "/forceset/" + m.parameters.name + "/tendon_force"));

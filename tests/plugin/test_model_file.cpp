@@ -121,6 +121,8 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
        {"scenarios.open_loop.target_deg", "array of numbers"}},
       {"scenario unknown key", [](json& j) { j["scenarios"]["open_loop"]["q0_rad"] = {0.0, 0.1}; },
        {"scenarios.open_loop.q0_rad", "unknown key"}},
+      {"coordinate path", [](json& j) { j["joints"][1]["coordinate"] = "elbow/flexion"; },
+       {"joints[1].coordinate", "without '/'"}},
       {"crosses no joint", [](json& j) { j["muscles"][4]["moment_arms_m"] = {{"elbow", 0.0}}; },
        {"muscles[4].moment_arms_m", "crosses no joint"}},
       {"duplicate muscle", [](json& j) { j["muscles"][1]["name"] = "anterior_deltoid"; }, {"duplicate muscle"}},

@@ -17,12 +17,16 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
   if (o.reports_per_period < 1) throw std::invalid_argument("closed loop: need at least one report per period");
   ClosedLoopResult out;
   out.states = make_state_table(plant, "simulation");
+  out.controls = make_controls_table(plant, "simulation_controls");
 
   const Stopwatch wall;
   const auto stepper = make_stepper(plant, o.integrator, o.accuracy);
   stepper->initialize(initial);
-  append_state_row(plant, stepper->state(), out.states);
-  const auto append_row = [&](const SimTK::State& st) { append_state_row(plant, st, out.states); };
+  const auto append_row = [&](const SimTK::State& st) {
+    append_state_row(plant, st, out.states);
+    append_controls_row(plant, st, out.controls);
+  };
+  append_row(stepper->state());
   std::vector<double> report_times(static_cast<std::size_t>(o.reports_per_period));
   const int periods = static_cast<int>(std::ceil(o.duration_s / o.control_period_s - 1e-9));
   for (int k = 0; k < periods && out.finite; ++k) {

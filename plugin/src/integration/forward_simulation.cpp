@@ -26,16 +26,20 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
 
   SimulationResult result;
   result.states = make_state_table(model);
+  result.controls = make_controls_table(model);
   const auto stepper = make_stepper(model, o.integrator, o.accuracy);
   stepper->initialize(initial);
-  append_state_row(model, stepper->state(), result.states);
+  const auto append_rows = [&](const SimTK::State& s) {
+    append_state_row(model, s, result.states);
+    append_controls_row(model, s, result.controls);
+  };
+  append_rows(stepper->state());
 
   const double t0 = initial.getTime();
   const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
   std::vector<double> times;
   for (long k = 1; k <= reports; ++k) times.push_back(t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s));
-  if (!stepper->advanceTo(t0 + o.duration_s, times,
-                          [&](const SimTK::State& s) { append_state_row(model, s, result.states); })) {
+  if (!stepper->advanceTo(t0 + o.duration_s, times, append_rows)) {
     result.finite = false;
     result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
                      " s: a state became non-finite or the step size collapsed";

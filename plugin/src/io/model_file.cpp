@@ -151,6 +151,7 @@ JointDescription read_joint(const json& j, const std::string& path, const std::s
     if (d.axis.norm() < 1e-12) r.fail(r.at("axis"), "must not be the zero vector");
     d.axis.normalize();
   }
+  if (r.has("coordinate")) d.coordinate = r.string("coordinate");
   r.reject_unknown_keys();
   return d;
 }

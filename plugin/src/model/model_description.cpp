@@ -45,6 +45,7 @@ void validate(const ModelDescription& model, const std::string& source) {
     const auto& jd = model.joints[i];
     const std::string at = indexed("joints", i);
     if (!joint_names.insert(jd.name).second) fail(at + ".name", "duplicate joint name '" + jd.name + "'");
+    if (jd.coordinate.find('/') != std::string::npos) fail(at + ".coordinate", "must be a name without '/'");
     if (!body_names.count(jd.child)) fail(at + ".child", "unknown body '" + jd.child + "'");
     if (jd.parent != "ground" && !body_names.count(jd.parent))
       fail(at + ".parent", "unknown body '" + jd.parent + "'");

@@ -26,6 +26,7 @@
 #include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/plugin/integration/closed_loop.hpp"
+#include "flatsos/plugin/io/state_table.hpp"
 
 namespace flatsos::planner {
 
@@ -130,8 +131,9 @@ class RecedingHorizonController final : public plugin::Controller {
 /// period from the controller), with the settling time and the predicted joint paths.
 struct RecedingHorizonRun {
   plugin::ClosedLoopResult loop;
-  /// time, /controller/step, /jointset/<joint>/q_predicted: 11 points along each step's plan.
-  plugin::StoTable predictions;
+  /// One table per step that ran a plan: 11 points along it, at strictly increasing times
+  /// (the step's time + tau), each joint's coordinate value and speed (state-table columns).
+  std::vector<plugin::StoTable> predictions;
   double settling_time_s = -1.0;  ///< every joint within the tolerance of the target from then on; -1: never
 };
 RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, const SimTK::State& initial,
@@ -139,6 +141,6 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
                                         double settle_tolerance_rad = 3.14159265358979323846 / 180.0);
 
 /// The predicted joint paths of the controller's history (see RecedingHorizonRun::predictions).
-plugin::StoTable prediction_table(const RecedingHorizonController& controller);
+std::vector<plugin::StoTable> prediction_tables(const RecedingHorizonController& controller);
 
 }  // namespace flatsos::planner

@@ -34,6 +34,7 @@ struct ClosedLoopOptions {
 
 struct ClosedLoopResult {
   StoTable states;                ///< make_state_table columns, one row at the start and reports_per_period per period
+  StoTable controls;              ///< make_controls_table columns, the same times (the excitation in effect there)
   SimTK::State final_state;
   bool finite = true;             ///< false: a state became NaN/Inf or the integrator could not continue; the run stopped there
   double wall_seconds = 0.0;      ///< controller and integration

@@ -21,7 +21,8 @@ struct SimulationOptions {
 };
 
 struct SimulationResult {
-  StoTable states;
+  StoTable states;    ///< make_state_table columns, one row at the start and one per report
+  StoTable controls;  ///< make_controls_table columns, the same times
   SimTK::State final_state;
   long integrator_steps = 0;
   bool finite = true;    ///< false: a state became NaN/Inf, integration stopped there

@@ -11,7 +11,8 @@
 //               "inertia_about_mass_center_kg_m2": Izz | [Ixx,Iyy,Izz] | [Ixx,Iyy,Izz,Ixy,Ixz,Iyz],
 //               "length_m" (optional, for drawing and chains)}],
 //   "joints": [{"name", "type": "pin", "parent": "ground" | body, "child": body,
-//               "location_in_parent_m": [x,y,z], "axis": [0,0,1] (optional)}],
+//               "location_in_parent_m": [x,y,z], "axis": [0,0,1] (optional),
+//               "coordinate": "elbow_flexion" (optional; default: the joint's name)}],
 //   "muscle_defaults": {any MuscleParameters field except the three below} (optional),
 //   "muscles": [{"name", "max_isometric_force_N", "optimal_fiber_length_m",
 //                "tendon_slack_length_m", "length_at_zero_angles_m",
@@ -56,6 +57,8 @@ struct JointDescription {
   std::string child;
   Eigen::Vector3d location_in_parent_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit vector, parent frame
+  std::string coordinate;  ///< its coordinate's name (OpenSim's /jointset/<joint>/<coordinate>); empty: `name`
+  const std::string& coordinateName() const { return coordinate.empty() ? name : coordinate; }
 };
 
 struct MuscleDescription {
