@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Installs flatsos from the build tree into a temporary prefix, then configures, builds and runs
-# a separate project that uses find_package(flatsos). Usage: BUILD_DIR SOURCE_DIR
+# a separate project that uses find_package(flatsos) in a plain Release build (CMake's -DNDEBUG
+# included) with `using namespace SimTK;` in its files. Then checks that the two ways client code
+# breaks stop at flatsos' guards with their explanation: `using namespace SimTK;` before a header
+# that includes Eigen, and NDEBUG without the package's -UNDEBUG. Usage: BUILD_DIR SOURCE_DIR
 set -euo pipefail
 build=$1 src=$2
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
@@ -9,3 +12,21 @@ cmake -S "$src/tests/package/consumer" -B "$tmp/consumer" -DCMAKE_PREFIX_PATH="$
   -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$tmp/consumer" >/dev/null
 "$tmp/consumer/consumer"
+
+fail=0
+# The wrong include order fails, and the first error is the guard's.
+if out=$(cmake --build "$tmp/consumer" --target wrong_order 2>&1); then
+  echo "FAILED: 'using namespace SimTK;' before an Eigen header compiled"; fail=1
+elif [[ $(grep -m1 "error" <<<"$out") != *simtk_namespace_guard.hpp* ]]; then
+  echo "FAILED: the first error is not flatsos' guard:"; grep -m3 "error" <<<"$out"; fail=1
+fi
+# A build outside CMake that keeps NDEBUG stops at the guard (it would crash at run time).
+printf '#include "flatsos/plugin/force/hill_muscle.hpp"\nint main() { return 0; }\n' > "$tmp/ndebug.cpp"
+if out=$(c++ -std=c++17 -DNDEBUG -I"$tmp/prefix/include" -I/usr/include/simbody -fsyntax-only "$tmp/ndebug.cpp" 2>&1); then
+  echo "FAILED: code with NDEBUG compiled against flatsos' Simbody headers"; fail=1
+elif ! grep -q "ndebug_guard.hpp" <<<"$out"; then
+  echo "FAILED: the NDEBUG error does not point to flatsos' guard:"; grep -m3 "error" <<<"$out"; fail=1
+fi
+c++ -std=c++17 -DNDEBUG -UNDEBUG -I"$tmp/prefix/include" -I/usr/include/simbody -fsyntax-only "$tmp/ndebug.cpp" ||
+  { echo "FAILED: -UNDEBUG after -DNDEBUG does not compile"; fail=1; }
+exit $fail

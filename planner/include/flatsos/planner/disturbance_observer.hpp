@@ -11,6 +11,9 @@
 // any control period: the former per-step gain g at period delta is g / delta (the paper's arm
 // at 0.05 s: gain 20 1/s = 1 per step). Measured stable on the arm for 10-40 1/s; 0 disables it.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Eigen/Core>
 
 namespace flatsos::planner {

@@ -6,6 +6,9 @@
 // preparation and feedback); per period a fit is one small matrix-vector product into a
 // plugin::ExcitationPolynomial, which the muscle keeps by value: nothing is allocated.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Eigen/Core>
 
 #include "flatsos/plugin/force/excitation_signal.hpp"

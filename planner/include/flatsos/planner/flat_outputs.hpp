@@ -17,6 +17,9 @@
 // Forward map (state -> flat outputs and the derivatives the state determines): q, qd, qdd,
 //   q''' , Y, dY from (q, qd, L_S, a) with the same laws the Simbody force element uses.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <algorithm>
 #include <cmath>
 #include <memory>

@@ -3,6 +3,9 @@
 // Open loop: degree 8 from (q, qd, qdd, q''') at 0 to (q_T, 0, 0, 0, 0) at T; receding horizon:
 // a cubic from (q, qd) to (q_T, 0).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <vector>
 
 #include <Eigen/Core>

@@ -3,6 +3,9 @@
 // muscle state and a rest target (PMPP + torque model + SOS program + dense a-posteriori check),
 // or one receding-horizon step (cubic path + torque box + SLP).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <optional>
 #include <string>
 #include <vector>

@@ -4,6 +4,9 @@
 // offset the plan was made for. The controller applies exactly these; a single planning step
 // returns them too (RecedingHorizonStep::excitations).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Eigen/Core>
 
 #include "flatsos/planner/flat_outputs.hpp"

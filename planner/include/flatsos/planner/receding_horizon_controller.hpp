@@ -14,6 +14,8 @@
 // heap memory after the first one, unless keep_history records it (tested by counting
 // allocations, tests/realtime).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+
 #include <functional>
 #include <memory>
 #include <string>

@@ -1,6 +1,9 @@
 #pragma once
 // Rest states the planner can start from.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Eigen/Core>
 #include <Simbody.h>
 

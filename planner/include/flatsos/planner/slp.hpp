@@ -7,6 +7,9 @@
 // gamma = max(max_j B_j / sigma_j, 0) is always feasible. (The paper writes alpha = gamma sigma,
 // which has the wrong size: sigma has m entries, alpha p.)
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <optional>
 #include <string>
 #include <vector>

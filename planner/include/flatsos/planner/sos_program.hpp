@@ -14,6 +14,9 @@
 // pieces that come near zero get Markov-Lukacs SOS certificates. The constraints Y >= 0 are
 // imposed only when E has a negative entry (otherwise Y = E F >= 0 follows from the reserves).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <string>
 #include <vector>
 

@@ -3,6 +3,9 @@
 // Hessian):  minimize c^T x  subject to  row_lower <= G x <= row_upper,  x_lower <= x <= x_upper.
 // Infinite bounds are +-1e19 (Ipopt's convention for "none").
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <optional>
 #include <string>
 

@@ -3,6 +3,9 @@
 // Used for joint paths q(t), flat outputs Y(t), torque models and the constraint polynomials
 // of the SOS program (those in scaled time s in [0, 1] on each piece).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Eigen/Core>
 
 namespace flatsos::planner {

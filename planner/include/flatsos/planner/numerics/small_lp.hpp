@@ -7,6 +7,9 @@
 // milliseconds; the SOS program uses it inside the exchange loop and lets Ipopt solve the final
 // LP, so every reported optimum is Ipopt's (tests compare the two).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Eigen/Core>
 
 #include "flatsos/planner/numerics/linear_program.hpp"

@@ -36,6 +36,9 @@
 // is slightly negative (-tolerance * scale <= m < 0) is certified through p + delta, delta = -m +
 // 0.01 * tolerance * scale, which shows in its residual.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Eigen/Core>
 #include <limits>
 #include <string>

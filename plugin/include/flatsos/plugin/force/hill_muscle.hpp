@@ -14,6 +14,8 @@
 //   ... system.realizeTopology(); State s = system.getDefaultState();
 //   biceps.setActivation(s, 0.4); biceps.setTendonLength(s, 0.2347); biceps.setExcitation(s, 0.4);
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+
 #include <memory>
 #include <vector>
 

@@ -3,6 +3,9 @@
 // every control period, one of the steppers of stepper.hpp integrates in between. It knows
 // nothing of how the controller decides (the planner's receding-horizon controller is one).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <Simbody.h>
 
 #include <Eigen/Core>

@@ -3,6 +3,8 @@
 // (error-controlled; tendon lengths are centimetres, so keep accuracy <= 1e-6), and the
 // OpenSim-style state table it reports.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+
 #include <string>
 
 #include <Simbody.h>

@@ -6,6 +6,8 @@
 //  - MuscleRosenbrockIntegrator (linearly implicit in each muscle's own states, explicit in the
 //    multibody; keeps its step size across input changes). See muscle_rosenbrock_integrator.hpp.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+
 #include <functional>
 #include <memory>
 #include <string>

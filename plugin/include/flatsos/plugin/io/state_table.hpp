@@ -3,6 +3,8 @@
 // states files name them (/jointset/<joint>/<coordinate>/value and /speed, radians), and the
 // controls apart, as Moco's controls files do (/forceset/<muscle>: the excitation).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+
 #include <string>
 
 #include <Simbody.h>

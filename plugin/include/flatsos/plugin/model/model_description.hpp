@@ -26,6 +26,9 @@
 // }
 // Joints are listed parents first; joint order is generalized-coordinate order.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <map>
 #include <stdexcept>
 #include <string>

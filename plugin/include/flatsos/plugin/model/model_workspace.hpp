@@ -3,6 +3,8 @@
 // matrix, per-body kinematics for inverse dynamics): the model stays immutable and shareable, and
 // each thread (or controller, or plan) owns its workspace, as Pinocchio splits Model and Data.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+
 #include <Simbody.h>
 
 #include "flatsos/plugin/model/pin_tree_dynamics.hpp"

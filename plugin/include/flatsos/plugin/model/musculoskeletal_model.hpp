@@ -8,6 +8,9 @@
 // scratch (the mass matrix through a Simbody State, inverse dynamics) take a ModelWorkspace that
 // the caller owns (one per thread); the overloads without one make a temporary workspace per call.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <memory>
 #include <string>
 #include <vector>

@@ -8,6 +8,9 @@
 // controller needs (Simbody's calcResidualForceIgnoringConstraints allocates ~11 temporaries per
 // call internally, and the controller calls it ~20 times per control period).
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <vector>
 
 #include <Eigen/Core>

@@ -4,6 +4,9 @@
 // warnings, as data (one message per value, naming the field), for programs to print and store;
 // what is physically impossible is rejected where it is used, as an error.
 
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
 #include <string>
 #include <vector>
 
