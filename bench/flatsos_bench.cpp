@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "allocation_counter.hpp"
+#include "default_model.hpp"
 #include "example_support.hpp"
 #include "scenario_inputs.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
@@ -57,7 +58,7 @@ std::string cpu_model() {
 // A function-try-block: a bad model or a stage that throws exits 1 with the message, not abort.
 int main(int argc, char** argv) try {
   CLI::App app{"Benchmarks of flatsos (prints JSON; timings are wall clock, medians over repetitions)."};
-  std::string model_path = FLATSOS_DEFAULT_MODEL, out_path;
+  std::string model_path = ex::default_model_path(), out_path;
   int reps = 21;
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
   app.add_option("--repetitions", reps, "repetitions per timed stage")->capture_default_str()->check(CLI::Range(1, 10000));

@@ -6,16 +6,13 @@
 #include <filesystem>
 #include <iostream>
 
+#include "default_model.hpp"
 #include "example_support.hpp"
 #include "flatsos/plugin/io/excitation_file.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
-
-#ifndef FLATSOS_DEFAULT_MODEL
-#define FLATSOS_DEFAULT_MODEL "models/arm_richter_warner.json"
-#endif
 
 namespace fp = flatsos::plugin;
 namespace ex = flatsos::examples;
@@ -33,7 +30,7 @@ int main(int argc, char** argv) {
                "--equilibrate-tendons (static equilibrium for a0 at q0).\n"
                "Writes OUT/states.sto (OpenSim storage: joint angles in rad, muscle states in SI) and\n"
                "OUT/controls.sto (the excitations applied)."};
-  std::string model_path = FLATSOS_DEFAULT_MODEL, excitation_path, out_dir = "results/arm_forward";
+  std::string model_path = ex::default_model_path(), excitation_path, out_dir = "results/arm_forward";
   std::vector<double> q0_deg, qd0_deg_per_s, a0, ls0;
   bool equilibrate = false;
   double duration = 1.0, accuracy = 1e-8, report_interval = 0.01;

@@ -15,6 +15,7 @@
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
+#include "default_model.hpp"
 #include "example_support.hpp"
 #include "scenario_inputs.hpp"
 
@@ -27,7 +28,7 @@ int main(int argc, char** argv) {
                "planned by flatness and SOS optimization, then simulated open loop in Simbody.\n"
                "Writes OUT/plan.sto, OUT/simulation.sto (states), OUT/plan_controls.sto, OUT/simulation_controls.sto\n"
                "(excitations) as OpenSim storage (SI, radians), and OUT/summary.json."};
-  std::string model_path = FLATSOS_DEFAULT_MODEL, out_dir = "results/open_loop";
+  std::string model_path = ex::default_model_path(), out_dir = "results/open_loop";
   ex::ScenarioOptions given;
   double accuracy = 1e-10;
   fpl::OpenLoopOptions options;
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
     const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, s0, options);
     std::filesystem::create_directories(out_dir);
     nlohmann::json summary = ex::plan_summary(plan, *model);
+    summary["model_file"] = model_path;
     summary["inputs"] = in.describe();
     summary["warnings"] = ex::print_warnings("arm_open_loop", model->warnings(), plan.warnings);
     std::cout << "arm_open_loop: plan " << fpl::to_string(plan.status) << (plan.message.empty() ? "" : ": " + plan.message)

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "default_model.hpp"
 #include "example_support.hpp"
 #include "scenario_inputs.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
                "flatness-based SLP planning every control period, Simbody plant.\n"
                "Writes OUT/simulation.sto (states), OUT/simulation_controls.sto (excitations), OUT/predictions/\n"
                "step_NNNN.sto (each step's predicted joint path) and OUT/summary.json."};
-  std::string model_path = FLATSOS_DEFAULT_MODEL, out_dir = "results/receding_horizon", solver = "exact";
+  std::string model_path = ex::default_model_path(), out_dir = "results/receding_horizon", solver = "exact";
   ex::ScenarioOptions given;
   double accuracy = 0.0;  // 0: the integrator's default below
   fpl::RecedingHorizonControllerOptions options;
@@ -114,6 +115,7 @@ int main(int argc, char** argv) {
     summary["final_q_deg"] = std::vector<double>(q_final.data(), q_final.data() + n);
     summary["target_q_deg"] = std::vector<double>(n);
     for (int i = 0; i < n; ++i) summary["target_q_deg"][i] = target[i] / ex::kRadPerDeg;
+    summary["model_file"] = model_path;
     summary["inputs"] = in.describe();
     summary["warnings"] = warnings;
     summary["settling_time_s"] = settling >= 0.0 ? nlohmann::json(settling) : nlohmann::json(nullptr);

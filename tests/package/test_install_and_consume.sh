@@ -3,7 +3,9 @@
 # a separate project that uses find_package(flatsos) in a plain Release build (CMake's -DNDEBUG
 # included) with `using namespace SimTK;` in its files. Then checks that the two ways client code
 # breaks stop at flatsos' guards with their explanation: `using namespace SimTK;` before a header
-# that includes Eigen, and NDEBUG without the package's -UNDEBUG. Usage: BUILD_DIR SOURCE_DIR
+# that includes Eigen, and NDEBUG without the package's -UNDEBUG. Finally runs the installed
+# programs from a moved copy of the prefix, elsewhere: they find their models there.
+# Usage: BUILD_DIR SOURCE_DIR
 set -euo pipefail
 build=$1 src=$2
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
@@ -29,4 +31,21 @@ elif ! grep -q "ndebug_guard.hpp" <<<"$out"; then
 fi
 c++ -std=c++17 -DNDEBUG -UNDEBUG -I"$tmp/prefix/include" -I/usr/include/simbody -fsyntax-only "$tmp/ndebug.cpp" ||
   { echo "FAILED: -UNDEBUG after -DNDEBUG does not compile"; fail=1; }
+
+# The installed programs and models, relocated: libraries, headers, package, programs, models.
+for f in bin/arm_forward bin/arm_open_loop bin/arm_receding_horizon bin/flatsos_bench \
+         share/flatsos/models/arm_richter_warner.json share/flatsos/models/elbow_1dof.json \
+         include/flatsos/plugin/force/hill_muscle.hpp; do
+  [[ -e "$tmp/prefix/$f" ]] || { echo "FAILED: $f not installed"; fail=1; }
+done
+ls "$tmp"/prefix/lib*/cmake/flatsos/flatsosConfig.cmake >/dev/null || { echo "FAILED: no CMake package"; fail=1; }
+mv "$tmp/prefix" "$tmp/moved"
+mkdir "$tmp/work" && cd "$tmp/work"
+if ! "$tmp/moved/bin/arm_open_loop" --out ol >/dev/null 2>&1; then
+  echo "FAILED: the installed arm_open_loop does not run from a moved prefix"; fail=1
+elif ! grep -q "\"model_file\": \"$tmp/moved/share/flatsos/models/arm_richter_warner.json\"" ol/summary.json; then
+  echo "FAILED: the installed program did not use the installed model:"; grep model_file ol/summary.json; fail=1
+fi
+"$tmp/moved/bin/arm_receding_horizon" --model "$tmp/moved/share/flatsos/models/elbow_1dof.json" --out rh >/dev/null 2>&1 ||
+  { echo "FAILED: the installed arm_receding_horizon does not run"; fail=1; }
 exit $fail
