@@ -242,6 +242,8 @@ TEST(OpenLoopFromRest, TheLibrarysOwnMinimumEffortRestStateIsAFeasibleStartWithT
         o.reserves_N = reserves;
         const auto plan = fpl::plan_open_loop(flat, fpl::muscle_state_of(*model, s), o);
         EXPECT_EQ(plan.status, fpl::SolveStatus::Solved) << file << ", reserve " << reserve << " N, q0 " << q0_deg << " deg: " << plan.message;
+        EXPECT_TRUE(plan.sos.certified) << file << ", reserve " << reserve << " N, q0 " << q0_deg << " deg";
+        EXPECT_GE(plan.check.min_reserve_margin_N, -1e-6);
       }
     }
   }

@@ -12,7 +12,11 @@ void certify_near_active_pieces(const SosSetup& setup, const Eigen::VectorXd& th
   std::vector<Polynomial> near_active;
   for (const auto& c : setup.constraints) {
     const Polynomial g = c.at(theta);
-    if (minimum_on_interval(g, 0.0, 1.0).value < o.near_active_N) near_active.push_back(g);
+    if (minimum_on_interval(g, 0.0, 1.0).value < o.near_active_N) {
+      Eigen::VectorXd shifted = g.coefficients();
+      shifted[0] += kConstraintTolerance_N;  // certified: constraint >= -1e-9 N
+      near_active.emplace_back(shifted);
+    }
   }
   result.near_active_pieces = static_cast<int>(near_active.size());
   if (near_active.empty()) {

@@ -11,10 +11,6 @@ namespace flatsos::planner::detail {
 
 namespace {
 constexpr double kNoBound = 1e19;
-// A constraint minimum below -this is a violation to add. Not 0: where the initial state meets
-// a reserve exactly (a minimum-effort rest), rounding leaves minima of -1e-14 next to s = 0 that
-// no LP point can lift, and chasing them stalls the exchange.
-constexpr double kViolation_N = 1e-9;
 }  // namespace
 
 bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::VectorXd& theta, SosProgramResult& result) {
@@ -104,7 +100,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
       for (auto& c : constraints) {
         const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
         result.min_constraint_value_N = std::min(result.min_constraint_value_N, mn.value);
-        if (mn.value < -kViolation_N) {
+        if (mn.value < -kConstraintTolerance_N) {
           const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
           if (!known) {
             c.points.push_back(mn.at);

@@ -16,6 +16,12 @@
 
 namespace flatsos::planner::detail {
 
+/// A constraint is met when its value is >= -this (N). Not 0: where the initial state meets a
+/// reserve exactly (a minimum-effort rest on an SLP vertex), rounding leaves values of -1e-14
+/// and slopes of -1e-10 next to s = 0 that no plan can lift; the exchange stops chasing them
+/// and the certificates prove the constraint + this >= 0.
+constexpr double kConstraintTolerance_N = 1e-9;
+
 /// One constraint polynomial on one piece, in the piece's scaled time s in [0, 1], affine in
 /// theta: coefficients = base + G theta. It keeps what it constrains, for messages.
 struct ConstraintPolynomial {
