@@ -1,0 +1,101 @@
+// Clamped B-splines, by their laws: nonnegative partition of unity, clamped ends, derivatives
+// against finite differences, exact reproduction of polynomials of their degree, and
+// continuity of exactly the orders below the degree at interior knots.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include <Eigen/Dense>
+
+#include "flatsos/planner/numerics/bspline.hpp"
+#include "flatsos/planner/numerics/polynomial.hpp"
+
+namespace fpl = flatsos::planner;
+
+namespace {
+// The k-th derivative (1/h^k scaled) of the span polynomial at s, from the power matrix.
+double span_derivative(const fpl::BSplineBasis& b, int span, double s, int order, const Eigen::VectorXd& c) {
+  return fpl::Polynomial(b.spanPowerMatrix(span) * c).derivativeAt(s, order) / std::pow(b.spanLength(), order);
+}
+}  // namespace
+
+TEST(BSplineBasis, NonnegativePartitionOfUnityWithClampedEnds) {
+  for (int k : {1, 3, 5})
+    for (int spans : {1, 4, 13}) {
+      const fpl::BSplineBasis b(k, spans, 2.5);
+      ASSERT_EQ(b.size(), spans + k);
+      for (int i = 0; i <= 300; ++i) {
+        const double t = 2.5 * i / 300.0;
+        const Eigen::RowVectorXd v = b.derivativeRow(t, 0);
+        EXPECT_NEAR(v.sum(), 1.0, 1e-12) << "k " << k << " spans " << spans << " t " << t;
+        EXPECT_GE(v.minCoeff(), -1e-12);
+        EXPECT_LE((v.array().abs() > 1e-14).count(), k + 1);  // local support
+        EXPECT_NEAR(b.derivativeRow(t, 1).sum(), 0.0, 1e-9);
+      }
+      EXPECT_NEAR(b.derivativeRow(0.0, 0)[0], 1.0, 1e-12);
+      EXPECT_NEAR(b.derivativeRow(2.5, 0)[b.size() - 1], 1.0, 1e-12);
+    }
+}
+
+TEST(BSplineBasis, DerivativesAgreeWithFiniteDifferences) {
+  const fpl::BSplineBasis b(5, 7, 3.0);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(0.05, 2.95);
+  Eigen::VectorXd c = Eigen::VectorXd::Random(b.size());
+  const double e = 1e-4;
+  for (int trial = 0; trial < 40; ++trial) {
+    const double t = u(rng);
+    if (std::abs(t / b.spanLength() - std::round(t / b.spanLength())) < 1e-2) continue;  // away from knots
+    for (int order = 1; order <= 3; ++order) {
+      const double fd = (-b.derivativeRow(t + 2 * e, order - 1).dot(c) + 8 * b.derivativeRow(t + e, order - 1).dot(c) -
+                         8 * b.derivativeRow(t - e, order - 1).dot(c) + b.derivativeRow(t - 2 * e, order - 1).dot(c)) /
+                        (12 * e);
+      EXPECT_NEAR(b.derivativeRow(t, order).dot(c), fd, 1e-6 * (1 + std::abs(fd))) << "t " << t << " order " << order;
+    }
+  }
+}
+
+TEST(BSplineBasis, ReproducesEveryPolynomialOfItsDegreeExactly) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int k : {3, 4}) {
+    const fpl::BSplineBasis b(k, 9, 3.0);
+    Eigen::VectorXd pc(k + 1);
+    for (auto& x : pc) x = n(rng);
+    const fpl::Polynomial p(pc);
+    // Interpolate at size() distinct points (Schoenberg-Whitney holds for uniform points here).
+    Eigen::MatrixXd A(b.size(), b.size());
+    Eigen::VectorXd rhs(b.size());
+    for (int i = 0; i < b.size(); ++i) {
+      const double t = 3.0 * i / (b.size() - 1);
+      A.row(i) = b.derivativeRow(t, 0);
+      rhs[i] = p(t);
+    }
+    const Eigen::VectorXd c = A.fullPivLu().solve(rhs);
+    for (int i = 0; i <= 200; ++i) {
+      const double t = 3.0 * i / 200.0;
+      EXPECT_NEAR(b.derivativeRow(t, 0).dot(c), p(t), 1e-10) << "k " << k;
+      EXPECT_NEAR(b.derivativeRow(t, 2).dot(c), p.derivativeAt(t, 2), 1e-8) << "k " << k;
+    }
+  }
+}
+
+TEST(BSplineBasis, ContinuousBelowItsDegreeAndNoMoreAtInteriorKnots) {
+  const fpl::BSplineBasis b(3, 6, 3.0);
+  const Eigen::VectorXd c = Eigen::VectorXd::Random(b.size());
+  double jump_in_third = 0.0;
+  for (int knot = 1; knot < b.spans(); ++knot) {
+    for (int order = 0; order < 3; ++order)
+      EXPECT_NEAR(span_derivative(b, knot - 1, 1.0, order, c), span_derivative(b, knot, 0.0, order, c), 1e-9)
+          << "knot " << knot << " order " << order;
+    jump_in_third = std::max(jump_in_third, std::abs(span_derivative(b, knot - 1, 1.0, 3, c) - span_derivative(b, knot, 0.0, 3, c)));
+  }
+  EXPECT_GT(jump_in_third, 1e-3);  // C2, not C3: the basis really has local freedom
+}
+
+TEST(BSplineBasis, RejectsBadInput) {
+  EXPECT_THROW(fpl::BSplineBasis(0, 3, 1.0), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(3, 0, 1.0), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(3, 3, 0.0), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(3, 3, std::nan("")), std::invalid_argument);
+}
