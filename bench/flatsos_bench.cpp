@@ -118,7 +118,7 @@ int main(int argc, char** argv) try {
     const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, ms0, ol);
     if (plan.status != fpl::SolveStatus::Solved) throw std::runtime_error("the open-loop scenario was not planned: " + plan.message);
     j["open_loop_check_301_points"] =
-        stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, ws, plan.path, plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
+        stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, ws, plan.path, *plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
     const fpl::Jet qj = plan.jointJet(1.3), yj = plan.flatOutputJet(1.3);
     j["inverse_map_one_time"] = stats(repeat(reps * 20, [&] { flat.inverse(ws, qj, yj); }), 1e6, "us");
     j["inverse_dynamics_one_call"] = stats(repeat(reps * 50, [&] { flat.torque(ws, qj.col(0), qj.col(1), qj.col(2)); }), 1e6, "us");

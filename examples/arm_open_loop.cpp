@@ -37,8 +37,11 @@ int main(int argc, char** argv) {
   app.add_option("--pieces", options.torque.pieces, "torque-model pieces K (1 with --degree 0: the paper's box)")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--degree", options.torque.degree, "torque-model polynomial degree r")->capture_default_str()->check(CLI::NonNegativeNumber);
-  app.add_option("--flat-output-degree", options.sos.flat_output_degree, "degree of the flat-output polynomials Y")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--flat-output-degree", options.sos.flat_output_degree,
+                 "degree of the flat outputs' B-splines Y (4 with 1 span: the paper's quartic)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--flat-output-spans", options.sos.flat_output_spans, "uniform knot spans of the flat outputs' B-splines")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,
@@ -78,7 +81,7 @@ int main(int argc, char** argv) {
     }
 
     // Open loop: the planned n(t) drives the Simbody muscles from the same state.
-    const auto excitation = fpl::PlannedExcitation::create(flat, plan.path, plan.Y);
+    const auto excitation = fpl::PlannedExcitation::create(flat, plan.path, *plan.Y);
     for (int j = 0; j < m; ++j) model->muscle(j).setExcitationSignal(s, excitation->signal(j));
     fp::SimulationOptions so;
     so.duration_s = in.duration_s;

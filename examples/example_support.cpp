@@ -112,18 +112,26 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::Mus
   j["torque_model"] = {{"pieces", plan.torque.pieces.size()},
                        {"degree", plan.torque.pieces.empty() || plan.torque.pieces[0].torque.empty() ? 0 : plan.torque.pieces[0].torque[0].degree()}};
   j["certificates"] = {{"near_active_pieces", s.near_active_pieces}, {"certified_pieces", s.certified_pieces}, {"all_certified", s.certified}};
-  nlohmann::json qc = nlohmann::json::object(), yc = nlohmann::json::object();
+  nlohmann::json qc = nlohmann::json::object();
   for (std::size_t i = 0; i < plan.path.q.size(); ++i) {
     const auto& c = plan.path.q[i].coefficients();
     qc[model.description().joints[i].name] = std::vector<double>(c.data(), c.data() + c.size());
   }
-  for (std::size_t l = 0; l < plan.Y.size(); ++l) {
-    const auto& c = plan.Y[l].coefficients();
-    yc[model.description().flat_outputs[l].name] = std::vector<double>(c.data(), c.data() + c.size());
-  }
   j["q_coeffs"] = qc;
-  j["Y_coeffs"] = yc;
-  j["coefficient_convention"] = "ascending powers of t in seconds; q in rad, Y in N";
+  j["q_coefficient_convention"] = "ascending powers of t in seconds, rad";
+  if (plan.Y) {
+    const planner::BSplineBasis& basis = plan.Y->basis();
+    nlohmann::json yc = nlohmann::json::object();
+    for (int l = 0; l < plan.Y->signals(); ++l) {
+      const Eigen::VectorXd c = plan.Y->coefficients().row(l).transpose();
+      yc[model.description().flat_outputs[static_cast<std::size_t>(l)].name] = std::vector<double>(c.data(), c.data() + c.size());
+    }
+    j["flat_outputs"] = {{"basis", "clamped B-spline, uniform knots on [0, T]"},
+                         {"degree", basis.degree()},
+                         {"spans", basis.spans()},
+                         {"duration_s", basis.duration()},
+                         {"coefficients_N", yc}};
+  }
   if (plan.status == planner::SolveStatus::Solved) {
     j["check_points"] = plan.check.points;
     j["min_tendon_force_N"] = plan.check.min_tendon_force_N;

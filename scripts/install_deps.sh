@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
-  libsimbody-dev libeigen3-dev coinor-libipopt-dev
+  libsimbody-dev libeigen3-dev coinor-libipopt-dev coinor-libclp-dev
   nlohmann-json3-dev libcli11-dev
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy

@@ -44,15 +44,12 @@ void require_reserves(const Eigen::VectorXd& r, int m) {
   if (r.minCoeff() < 0.0) throw std::invalid_argument("reserves: tendon-force reserves must be >= 0 N");
 }
 
-Jet polynomial_jet(const std::vector<Polynomial>& polys, double t, int orders) {
-  Jet j(static_cast<Eigen::Index>(polys.size()), orders);
-  for (std::size_t i = 0; i < polys.size(); ++i)
-    for (int k = 0; k < orders; ++k) j(static_cast<Eigen::Index>(i), k) = polys[i].derivativeAt(t, k);
-  return j;
-}
 }  // namespace
 
-Jet OpenLoopPlan::flatOutputJet(double t) const { return polynomial_jet(Y, t, 3); }
+Jet OpenLoopPlan::flatOutputJet(double t) const {
+  if (!Y) throw std::logic_error("open-loop plan: no flat outputs (" + message + ")");
+  return Y->jet(t, 3);
+}
 
 Eigen::MatrixXd RecedingHorizonStep::excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                                  double tau0_s, double h_s, int count) const {
@@ -66,7 +63,7 @@ Eigen::MatrixXd RecedingHorizonStep::excitations(const FlatOutputMap& flat, plug
 }
 
 PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                     const std::vector<Polynomial>& Y, const Eigen::VectorXd& reserves, int points) {
+                     const SplineTrajectory& Y, const Eigen::VectorXd& reserves, int points) {
   if (points < 2) throw std::invalid_argument("plan check: need at least 2 points");
   PlanCheck c;
   c.points = points;
@@ -79,7 +76,7 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   std::map<std::pair<std::size_t, DomainViolation::Kind>, double> first_time;  // per muscle and kind
   for (int i = 0; i < points; ++i) {
     const double t = h * i;
-    const MusclePoint mp = flat.inverseFromTorque(path.jet(t, 5), jets[static_cast<std::size_t>(i)], polynomial_jet(Y, t, 3));
+    const MusclePoint mp = flat.inverseFromTorque(path.jet(t, 5), jets[static_cast<std::size_t>(i)], Y.jet(t, 3));
     c.min_tendon_force_N = std::min(c.min_tendon_force_N, mp.tendon_force_N.minCoeff());
     c.min_reserve_margin_N = std::min(c.min_reserve_margin_N, (mp.tendon_force_N - reserves).minCoeff());
     if (mp.activation.allFinite()) {
@@ -184,7 +181,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   plan.Y = plan.sos.Y;
 
   const Stopwatch check;
-  plan.check = check_plan(flat, workspace, plan.path, plan.Y, o.reserves_N, o.check_points);
+  plan.check = check_plan(flat, workspace, plan.path, *plan.Y, o.reserves_N, o.check_points);
   plan.check_seconds = check.seconds();
   if (plan.check.min_reserve_margin_N < -1e-6) {
     plan.status = SolveStatus::Failed;

@@ -19,10 +19,13 @@ class MuscleOfPlan final : public plugin::ExcitationSignal {
 }  // namespace
 
 std::shared_ptr<const PlannedExcitation> PlannedExcitation::create(FlatOutputMap flat, JointPath path,
-                                                                   std::vector<Polynomial> Y, double start_time_s) {
-  if (static_cast<int>(Y.size()) != flat.numFlatOutputs())
-    throw std::invalid_argument("planned excitation: " + std::to_string(Y.size()) + " flat-output polynomials for " +
+                                                                   SplineTrajectory Y, double start_time_s) {
+  if (Y.signals() != flat.numFlatOutputs())
+    throw std::invalid_argument("planned excitation: " + std::to_string(Y.signals()) + " flat-output signals for " +
                                 std::to_string(flat.numFlatOutputs()) + " flat outputs");
+  if (std::abs(Y.duration() - path.duration_s) > 1e-12 * path.duration_s)
+    throw std::invalid_argument("planned excitation: the flat outputs last " + std::to_string(Y.duration()) +
+                                " s, the joint path " + std::to_string(path.duration_s) + " s");
   if (static_cast<int>(path.q.size()) != flat.numJoints())
     throw std::invalid_argument("planned excitation: the joint path has " + std::to_string(path.q.size()) +
                                 " joints, the model " + std::to_string(flat.numJoints()));
@@ -30,7 +33,7 @@ std::shared_ptr<const PlannedExcitation> PlannedExcitation::create(FlatOutputMap
       new PlannedExcitation(std::move(flat), std::move(path), std::move(Y), start_time_s));
 }
 
-PlannedExcitation::PlannedExcitation(FlatOutputMap flat, JointPath path, std::vector<Polynomial> Y, double start_time_s)
+PlannedExcitation::PlannedExcitation(FlatOutputMap flat, JointPath path, SplineTrajectory Y, double start_time_s)
     : flat_(std::move(flat)),
       path_(std::move(path)),
       Y_(std::move(Y)),
@@ -40,10 +43,7 @@ PlannedExcitation::PlannedExcitation(FlatOutputMap flat, JointPath path, std::ve
 const MusclePoint& PlannedExcitation::evaluateLocked(double time_s) const {
   if (time_s != cached_time_) {
     const double t = std::clamp(time_s - start_time_s_, 0.0, path_.duration_s);
-    Jet yj(static_cast<Eigen::Index>(Y_.size()), 3);
-    for (std::size_t l = 0; l < Y_.size(); ++l)
-      for (int k = 0; k < 3; ++k) yj(static_cast<Eigen::Index>(l), k) = Y_[l].derivativeAt(t, k);
-    cached_ = flat_.inverse(workspace_, path_.jet(t, 5), yj);
+    cached_ = flat_.inverse(workspace_, path_.jet(t, 5), Y_.jet(t, 3));
     cached_time_ = time_s;
     ++evaluations_;
   }

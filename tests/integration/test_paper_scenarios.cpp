@@ -31,7 +31,7 @@ TEST(PaperScenarios, OpenLoopPlanIsReproducedBySimbody) {
   model.setJointSpeeds(s, s0.qd_rad_per_s);
   model.setTendonLengths(s, s0.tendon_length_m);
   model.setActivations(s, s0.activation);
-  const auto excitation = fpl::PlannedExcitation::create(arm.flat, plan.path, plan.Y);
+  const auto excitation = fpl::PlannedExcitation::create(arm.flat, plan.path, *plan.Y);
   for (int j = 0; j < 6; ++j) model.muscle(j).setExcitationSignal(s, excitation->signal(j));
   fp::SimulationOptions o;
   o.duration_s = 3.0;

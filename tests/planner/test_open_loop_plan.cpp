@@ -129,7 +129,7 @@ TEST_F(OpenLoopScenario, PapersSingleTorqueBoxIsReportedInfeasibleWithTheReason)
   EXPECT_NE(plan.message.find("t = 0 s"), std::string::npos) << plan.message;
   EXPECT_NE(plan.message.find("reserve of 10 N"), std::string::npos) << plan.message;
   EXPECT_NE(plan.message.find("remainder"), std::string::npos) << plan.message;
-  EXPECT_TRUE(plan.Y.empty());  // nothing usable comes back with a failure
+  EXPECT_FALSE(plan.Y);  // nothing usable comes back with a failure
 }
 
 TEST_F(OpenLoopScenario, AnInitialTendonForceBelowItsReserveIsNamedAsTheCause) {
@@ -143,7 +143,7 @@ TEST_F(OpenLoopScenario, AnInitialTendonForceBelowItsReserveIsNamedAsTheCause) {
   EXPECT_EQ(plan.status, fpl::SolveStatus::Infeasible);
   EXPECT_NE(plan.message.find("initial tendon force of '" + mp.name + "'"), std::string::npos) << plan.message;
   EXPECT_NE(plan.message.find("below its reserve"), std::string::npos) << plan.message;
-  EXPECT_TRUE(plan.Y.empty());
+  EXPECT_FALSE(plan.Y);
   // Just below the force it is not the cause: the plan is solved.
   options.reserves_N[j] = std::min(F0 - 0.5, 10.0);
   EXPECT_EQ(fpl::plan_open_loop(arm.flat, s0, options).status, fpl::SolveStatus::Solved);
@@ -173,7 +173,10 @@ TEST_F(OpenLoopScenario, BadInputIsRejectedByName) {
   expect_message(o, s0, "target joint angles: values must be finite");
   o = options;
   o.sos.flat_output_degree = 2;
-  expect_message(o, s0, "degree 2 is too low for 4 boundary equalities");
+  expect_message(o, s0, "degree 2 with 1 span(s) is too low for 4 boundary equalities");
+  o.sos.flat_output_degree = 3;
+  o.sos.flat_output_spans = 0;
+  expect_message(o, s0, "flat outputs need at least 1 span");
   auto s = s0;
   s.activation[2] = 0.0;
   expect_message(options, s, "activation of 'biceps' is 0");
@@ -185,19 +188,21 @@ TEST_F(OpenLoopScenario, BadInputIsRejectedByName) {
   expect_message(options, s, "qd must have 2 finite values");
 }
 
-TEST_F(OpenLoopScenario, ExactExchangeRoundsGiveIpoptsOptimumWithFewerIpoptCalls) {
+TEST_F(OpenLoopScenario, SimplexExchangeReachesIpoptsOptimum) {
   const auto fast = fpl::plan_open_loop(arm.flat, s0, options);
   auto ipopt_only = options;
-  ipopt_only.sos.study.exact_exchange = false;
+  ipopt_only.sos.study.lp_solver = fpl::ExchangeLpSolver::Ipopt;
   const auto slow = fpl::plan_open_loop(arm.flat, s0, ipopt_only);
   ASSERT_EQ(fast.status, fpl::SolveStatus::Solved) << fast.message;
   ASSERT_EQ(slow.status, fpl::SolveStatus::Solved) << slow.message;
   EXPECT_NEAR(fast.sos.cost_N_s, slow.sos.cost_N_s, 1e-6 * slow.sos.cost_N_s);
-  EXPECT_GT(fast.sos.exact_lp_pivots, 0);
-  EXPECT_EQ(slow.sos.exact_lp_pivots, 0);
-  EXPECT_LT(fast.sos.ipopt_calls, slow.sos.ipopt_calls);
-  for (std::size_t l = 0; l < fast.Y.size(); ++l)
-    for (double t : {0.0, 1.0, 2.0, 3.0}) EXPECT_NEAR(fast.Y[l](t), slow.Y[l](t), 1e-4 * (1 + std::abs(slow.Y[l](t))));
+  EXPECT_GT(fast.sos.simplex_pivots, 0);
+  EXPECT_EQ(slow.sos.simplex_pivots, 0);
+  EXPECT_LT(fast.sos.ipopt_calls, slow.sos.ipopt_calls);  // only the certificates
+  ASSERT_TRUE(fast.Y && slow.Y);
+  for (int l = 0; l < fast.Y->signals(); ++l)
+    for (double t : {0.0, 1.0, 2.0, 3.0})
+      EXPECT_NEAR(fast.Y->derivativeAt(l, t), slow.Y->derivativeAt(l, t), 1e-4 * (1 + std::abs(slow.Y->derivativeAt(l, t))));
 }
 
 TEST_F(OpenLoopScenario, SosProgramRejectsBoundaryConditionsOfTheWrongSizeAndBadHorizons) {

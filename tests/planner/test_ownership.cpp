@@ -33,7 +33,7 @@ TEST(Ownership, PlanSignalsOutliveEverythingTheyWereMadeFrom) {
     const auto plan = fpl::plan_open_loop(fpl::FlatOutputMap(model), flatsos::test::open_loop_initial_state(*model),
                                           flatsos::test::open_loop_options());
     ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
-    const auto excitation = fpl::PlannedExcitation::create(fpl::FlatOutputMap(model), plan.path, plan.Y);  // a temporary map
+    const auto excitation = fpl::PlannedExcitation::create(fpl::FlatOutputMap(model), plan.path, *plan.Y);  // a temporary map
     expected = excitation->at(1.3).excitation[2];
     signal = excitation->signal(2);
     state = model->defaultState();
@@ -89,8 +89,8 @@ TEST(Ownership, TwoThreadsPlanOnTheSameModelAtOnce) {
   for (int i = 0; i < 2; ++i) {
     ASSERT_EQ(plans[i].status, fpl::SolveStatus::Solved) << plans[i].message;
     EXPECT_EQ(plans[i].sos.cost_N_s, reference.sos.cost_N_s);
-    for (std::size_t l = 0; l < reference.Y.size(); ++l)
-      EXPECT_EQ(plans[i].Y[l].coefficients(), reference.Y[l].coefficients());
+    ASSERT_TRUE(plans[i].Y && reference.Y);
+    EXPECT_EQ(plans[i].Y->coefficients(), reference.Y->coefficients());
     for (const auto& step : steps[i]) {
       EXPECT_EQ(step.alpha(), rh_reference.alpha());
       EXPECT_EQ(step.tau_min, rh_reference.tau_min);

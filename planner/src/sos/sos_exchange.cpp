@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "flatsos/planner/numerics/small_lp.hpp"
+#include "flatsos/planner/numerics/simplex_lp.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner::detail {
@@ -44,46 +44,39 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
   }
   theta = Eigen::VectorXd::Zero(n_theta);
   bool converged = false;
-  // Ipopt solves an exchange LP when the exact solver cannot, and always the final one: the
-  // reported optimum is Ipopt's.
-  auto ipopt_round = [&](int round) -> bool {
-    LinearProgramOptions lpo;
-    if (round > 0 || o.study.exact_exchange) lpo.start = theta;
-    const LinearProgramResult lr = solve_linear_program(lp, lpo);
-    result.ipopt_iterations += lr.iterations;
-    ++result.ipopt_calls;
+  auto solve_round = [&](int round) -> bool {
+    LinearProgramResult lr;
+    if (o.study.lp_solver == ExchangeLpSolver::Simplex) {
+      lr = solve_linear_program_simplex(lp);
+      result.simplex_pivots += lr.iterations;
+    } else {
+      LinearProgramOptions lpo;
+      if (round > 0) lpo.start = theta;
+      lr = solve_linear_program(lp, lpo);
+      result.ipopt_iterations += lr.iterations;
+      ++result.ipopt_calls;
+    }
     if (lr.status != SolveStatus::Solved) {
       const std::string reason = fixed_violation(setup, o.feasibility_margin_N);
       result.status = lr.status == SolveStatus::Infeasible || !reason.empty() ? SolveStatus::Infeasible : SolveStatus::Failed;
       result.message = !reason.empty() ? reason
-                                       : "the exchange LP of round " + std::to_string(round + 1) +
-                                             " was not solved (Ipopt: " + lr.solver_status + ")";
+                                       : "the exchange LP of round " + std::to_string(round + 1) + " was not solved (" +
+                                             (o.study.lp_solver == ExchangeLpSolver::Simplex ? "Clp: " : "Ipopt: ") +
+                                             lr.solver_status + ")";
       result.solve_seconds = solve.seconds();
       return false;
     }
     theta = lr.x;
     return true;
   };
-  bool last_by_ipopt = false;
   for (int round = 0; round < o.max_exchange_rounds; ++round) {
     result.exchange_rounds = round + 1;
     if (n_theta > 0) {
       build_rows();
-      SmallLpResult exact;
-      if (o.study.exact_exchange) {
-        exact = solve_small_lp(lp);
-        result.exact_lp_pivots += exact.pivots;
-      }
-      if (exact.status == SolveStatus::Solved) {
-        theta = exact.x;
-        last_by_ipopt = false;
-      } else {
-        if (!ipopt_round(round)) return false;
-        last_by_ipopt = true;
-      }
-      // Keep the LPs small: initial points far from active leave the next LP (Ipopt's cost per
-      // iteration grows with the rows). A pruned constraint that becomes violated is caught by
-      // the exact minimum below and comes back as a sticky point.
+      if (!solve_round(round)) return false;
+      // Keep the LPs small: initial points far from active leave the next LP. A pruned
+      // constraint that becomes violated is caught by the exact minimum below and comes back
+      // as a sticky point.
       for (auto& c : constraints) {
         const Polynomial g = c.at(theta);
         for (std::size_t i = c.points.size(); i-- > 0;)
@@ -94,31 +87,21 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
       }
     }
     // Exact minimum of every constraint polynomial; add the violated points.
-    auto add_violated = [&]() {
-      bool added = false;
-      result.min_constraint_value_N = kNoBound;
-      for (auto& c : constraints) {
-        const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
-        result.min_constraint_value_N = std::min(result.min_constraint_value_N, mn.value);
-        if (mn.value < -kConstraintTolerance_N) {
-          const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
-          if (!known) {
-            c.points.push_back(mn.at);
-            c.sticky.push_back(true);
-            added = true;
-          }
+    bool added = false;
+    result.min_constraint_value_N = kNoBound;
+    for (auto& c : constraints) {
+      const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
+      result.min_constraint_value_N = std::min(result.min_constraint_value_N, mn.value);
+      if (mn.value < -kConstraintTolerance_N) {
+        const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
+        if (!known) {
+          c.points.push_back(mn.at);
+          c.sticky.push_back(true);
+          added = true;
         }
       }
-      return added;
-    };
-    if (add_violated()) continue;
-    if (n_theta > 0 && !last_by_ipopt) {
-      // The exact solver converged: Ipopt solves the final LP (on the final points, started there).
-      build_rows();
-      if (!ipopt_round(round)) return false;
-      last_by_ipopt = true;
-      if (add_violated()) continue;
     }
+    if (added) continue;
     converged = true;
     break;
   }

@@ -8,8 +8,8 @@
 
 namespace flatsos::planner::detail {
 
-/// Solves the semi-infinite LP by exchange: LPs on finitely many points (the exact small simplex
-/// for the rounds, Ipopt for the final LP), the exact minimum of every constraint polynomial
+/// Solves the semi-infinite LP by exchange: LPs on finitely many points (Clp's dual simplex, or
+/// Ipopt when the options say so), the exact minimum of every constraint polynomial
 /// adding violated points, until none is violated. Fills theta and the result's status, message,
 /// counts and solve_seconds; returns whether a feasible optimum was found.
 bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& options, Eigen::VectorXd& theta,

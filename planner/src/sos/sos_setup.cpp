@@ -11,19 +11,111 @@ namespace flatsos::planner::detail {
 
 namespace {
 
-
-// Rows of the equality "derivative k of Y at sigma0 equals value" in sigma-coefficients.
-void add_derivative_rows(Eigen::MatrixXd& A, Eigen::VectorXd& b, Eigen::Index& row, int degree, double sigma0,
-                         int first_order, const Eigen::RowVectorXd& values, double T) {
-  for (Eigen::Index k = 0; k < values.size(); ++k, ++row) {
-    const int order = first_order + static_cast<int>(k);
-    for (int j = order; j <= degree; ++j) {
-      double falling = 1.0;
-      for (int i = 0; i < order; ++i) falling *= j - i;
-      A(row, j) = falling * std::pow(sigma0, j - order);
-    }
-    b[row] = values[k] * std::pow(T, order);  // d^k/dsigma^k = T^k d^k/dt^k
+// Column j: the coefficients of (a + b s)^j in powers of s (size x size).
+Eigen::MatrixXd affine_composition(int size, double a, double b) {
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(size, size);
+  for (int j = 0; j < size; ++j) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(j + 1);
+    e[j] = 1.0;
+    P.col(j).head(j + 1) = Polynomial(e).composeAffine(a, b).coefficients();
   }
+  return P;
+}
+
+// Breakpoints of the common refinement of the torque pieces and the spline spans.
+std::vector<double> segment_breaks(const TorqueModel& torque, const BSplineBasis& basis) {
+  std::vector<double> breaks;
+  for (const auto& piece : torque.pieces) breaks.push_back(piece.t0_s);
+  for (int i = 0; i < basis.spans(); ++i) breaks.push_back(i * basis.spanLength());
+  breaks.push_back(basis.duration());
+  std::sort(breaks.begin(), breaks.end());
+  const double tolerance = 1e-12 * basis.duration();
+  breaks.erase(std::unique(breaks.begin(), breaks.end(), [&](double x, double y) { return y - x <= tolerance; }),
+               breaks.end());
+  return breaks;
+}
+
+int piece_at(const TorqueModel& torque, double t) {
+  for (std::size_t k = 0; k < torque.pieces.size(); ++k)
+    if (t < torque.pieces[k].t1_s) return static_cast<int>(k);
+  return static_cast<int>(torque.pieces.size()) - 1;
+}
+
+// s^order of the piece's scaled time, as a polynomial of the segment's: (a + b s)^order.
+Polynomial power_of_affine(int order, double a, double b) {
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(order + 1);
+  e[order] = 1.0;
+  return Polynomial(e).composeAffine(a, b);
+}
+
+void require_valid_inputs(const FlatOutputMap& flat, const TorqueModel& torque, double T, const FlatOutputBoundary& bc,
+                          const Eigen::VectorXd& reserves, const SosProgramOptions& o) {
+  const int m = flat.numMuscles(), p = flat.numFlatOutputs();
+  if (!(T > 0.0) || !std::isfinite(T)) throw std::invalid_argument("SOS program: horizon T must be > 0 s");
+  if (o.flat_output_degree < 1) throw std::invalid_argument("SOS program: flat-output degree must be >= 1");
+  if (o.flat_output_spans < 1) throw std::invalid_argument("SOS program: flat outputs need at least 1 span");
+  if (reserves.size() != m || !reserves.allFinite() || reserves.minCoeff() < 0.0)
+    throw std::invalid_argument("SOS program: reserves must be " + std::to_string(m) + " finite forces >= 0 N");
+  if ((bc.initial.size() && bc.initial.rows() != p) || (bc.terminal.size() && bc.terminal.rows() != p))
+    throw std::invalid_argument("SOS program: boundary conditions must have one row per flat output (" +
+                                std::to_string(p) + ")");
+  if (!bc.initial.allFinite() || !bc.terminal.allFinite())
+    throw std::invalid_argument("SOS program: boundary conditions must be finite");
+  if (torque.pieces.empty()) throw std::invalid_argument("SOS program: empty torque model");
+  const int n_eq = static_cast<int>(bc.initial.cols() + bc.terminal.cols());
+  const int size = o.flat_output_degree + o.flat_output_spans;
+  if (n_eq > size)
+    throw std::invalid_argument("SOS program: flat-output degree " + std::to_string(o.flat_output_degree) + " with " +
+                                std::to_string(o.flat_output_spans) + " span(s) is too low for " + std::to_string(n_eq) +
+                                " boundary equalities (needs degree + spans >= " + std::to_string(n_eq) + ")");
+}
+
+// Y_l's B-spline coefficients = particular + nullspace theta_l under the boundary equalities.
+// The equalities touch only the first and last few coefficients (local support), so the free
+// coefficients theta_l are the other B-spline coefficients themselves and the solved-for ones
+// depend only on their neighbours: the constraint rows stay sparse and local, and theta is as
+// well scaled as the coefficients (newtons). The solved-for columns are chosen by full pivoting.
+OutputParameterization eliminate_equalities(const BSplineBasis& basis, const FlatOutputBoundary& bc, int l) {
+  const int n_eq = static_cast<int>(bc.initial.cols() + bc.terminal.cols());
+  const int size = basis.size();
+  Eigen::MatrixXd Aeq(n_eq, size);
+  Eigen::VectorXd beq(n_eq);
+  int row = 0;
+  for (int k = 0; k < bc.initial.cols(); ++k, ++row) {
+    Aeq.row(row) = basis.derivativeRow(0.0, k);
+    beq[row] = bc.initial(l, k);
+  }
+  for (int k = 0; k < bc.terminal.cols(); ++k, ++row) {
+    Aeq.row(row) = basis.derivativeRow(basis.duration(), bc.terminal_first_order + k);
+    beq[row] = bc.terminal(l, k);
+  }
+  OutputParameterization out;
+  out.particular = Eigen::VectorXd::Zero(size);
+  if (n_eq == 0) {
+    out.nullspace = Eigen::MatrixXd::Identity(size, size);
+    return out;
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(Aeq);
+  lu.setThreshold(1e-10);
+  if (lu.rank() < n_eq)
+    throw std::invalid_argument("SOS program: the boundary equalities on Y are dependent for this basis");
+  std::vector<bool> solved_for(static_cast<std::size_t>(size), false);
+  Eigen::MatrixXd A_dep(n_eq, n_eq), A_free(n_eq, size - n_eq);
+  std::vector<int> dependent, free;
+  for (int i = 0; i < n_eq; ++i) solved_for[static_cast<std::size_t>(lu.permutationQ().indices()[i])] = true;
+  for (int j = 0; j < size; ++j) (solved_for[static_cast<std::size_t>(j)] ? dependent : free).push_back(j);
+  for (int i = 0; i < n_eq; ++i) A_dep.col(i) = Aeq.col(dependent[static_cast<std::size_t>(i)]);
+  for (int i = 0; i < size - n_eq; ++i) A_free.col(i) = Aeq.col(free[static_cast<std::size_t>(i)]);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> dep(A_dep);
+  const Eigen::VectorXd c_dep = dep.solve(beq);
+  const Eigen::MatrixXd coupling = -dep.solve(A_free);
+  out.nullspace = Eigen::MatrixXd::Zero(size, size - n_eq);
+  for (int i = 0; i < n_eq; ++i) {
+    out.particular[dependent[static_cast<std::size_t>(i)]] = c_dep[i];
+    out.nullspace.row(dependent[static_cast<std::size_t>(i)]) = coupling.row(i);
+  }
+  for (int i = 0; i < size - n_eq; ++i) out.nullspace(free[static_cast<std::size_t>(i)], i) = 1.0;
+  return out;
 }
 
 }  // namespace
@@ -37,55 +129,24 @@ Eigen::RowVectorXd monomials(double s, Eigen::Index size) {
 
 SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double T, const FlatOutputBoundary& bc,
                             const Eigen::VectorXd& reserves, const SosProgramOptions& o) {
+  require_valid_inputs(flat, torque, T, bc, reserves, o);
   const int m = flat.numMuscles(), n = flat.numJoints(), p = flat.numFlatOutputs();
   const int d = o.flat_output_degree;
-  SosSetup setup;
-  setup.duration_s = T;
-  setup.degree = d;
+  SosSetup setup(T, BSplineBasis(d, o.flat_output_spans, T));
+  const BSplineBasis& basis = setup.basis;
   setup.torque = &torque;
-  if (!(T > 0.0) || !std::isfinite(T)) throw std::invalid_argument("SOS program: horizon T must be > 0 s");
-  if (d < 0) throw std::invalid_argument("SOS program: flat-output degree must be >= 0");
-  if (reserves.size() != m || !reserves.allFinite() || reserves.minCoeff() < 0.0)
-    throw std::invalid_argument("SOS program: reserves must be " + std::to_string(m) + " finite forces >= 0 N");
-  if ((bc.initial.size() && bc.initial.rows() != p) || (bc.terminal.size() && bc.terminal.rows() != p))
-    throw std::invalid_argument("SOS program: boundary conditions must have one row per flat output (" +
-                                std::to_string(p) + ")");
-  if (!bc.initial.allFinite() || !bc.terminal.allFinite())
-    throw std::invalid_argument("SOS program: boundary conditions must be finite");
-  if (torque.pieces.empty()) throw std::invalid_argument("SOS program: empty torque model");
-  const int n_eq = static_cast<int>(bc.initial.cols() + bc.terminal.cols());
-  if (n_eq > d + 1)
-    throw std::invalid_argument("SOS program: flat-output degree " + std::to_string(d) + " is too low for " +
-                                std::to_string(n_eq) + " boundary equalities (needs >= " + std::to_string(n_eq - 1) + ")");
 
-  // --- eliminate the boundary equalities: Y_l = c_p + N theta_l ---
+  // --- eliminate the boundary equalities ---
   auto& outputs = setup.outputs;
-  outputs.resize(static_cast<std::size_t>(p));
   int n_theta = 0;
   for (int l = 0; l < p; ++l) {
-    Eigen::MatrixXd Aeq = Eigen::MatrixXd::Zero(n_eq, d + 1);
-    Eigen::VectorXd beq(n_eq);
-    Eigen::Index row = 0;
-    if (bc.initial.cols()) add_derivative_rows(Aeq, beq, row, d, 0.0, 0, bc.initial.row(l), T);
-    if (bc.terminal.cols()) add_derivative_rows(Aeq, beq, row, d, 1.0, bc.terminal_first_order, bc.terminal.row(l), T);
-    auto& out = outputs[static_cast<std::size_t>(l)];
-    if (n_eq == 0) {
-      out.particular = Eigen::VectorXd::Zero(d + 1);
-      out.nullspace = Eigen::MatrixXd::Identity(d + 1, d + 1);
-    } else {
-      Eigen::FullPivLU<Eigen::MatrixXd> lu(Aeq);
-      if (lu.rank() < n_eq)
-        throw std::invalid_argument("SOS program: the boundary equalities on Y are dependent for this degree");
-      out.particular = lu.solve(beq);
-      out.nullspace = lu.kernel();
-      if (out.nullspace.cols() == 1 && out.nullspace.isZero()) out.nullspace.resize(d + 1, 0);
-    }
-    out.offset = n_theta;
-    n_theta += static_cast<int>(out.nullspace.cols());
+    outputs.push_back(eliminate_equalities(basis, bc, l));
+    outputs.back().offset = n_theta;
+    n_theta += static_cast<int>(outputs.back().nullspace.cols());
   }
 
-  // --- constraint polynomials per piece, in the piece's scaled time ---
-  int r = 0;
+  // --- constraint polynomials per segment, in the segment's scaled time ---
+  int r = 2;  // the first piece's remainder bound is quadratic
   for (const auto& piece : torque.pieces)
     for (const auto& poly : piece.torque) r = std::max(r, poly.degree());
   const int D = std::max(d, r);
@@ -93,23 +154,42 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
   const bool y_implied = flat.E().minCoeff() >= 0.0;
   const Eigen::MatrixXd& Ctau = flat.Ctau();
   const Eigen::MatrixXd& CY = flat.CY();
-  for (std::size_t k = 0; k < torque.pieces.size(); ++k) {
-    const TorquePiece& piece = torque.pieces[k];
-    const double a = piece.t0_s / T, b = (piece.t1_s - piece.t0_s) / T;
-    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(D + 1, d + 1);  // sigma-coefficients -> s-coefficients
-    for (int j = 0; j <= d; ++j) {
-      Eigen::VectorXd e = Eigen::VectorXd::Zero(j + 1);
-      e[j] = 1.0;
-      P.col(j).head(j + 1) = Polynomial(e).composeAffine(a, b).coefficients();
-    }
-    // Piece ends only: the exchange adds interior minima where they are violated.
-    std::vector<double> initial_points = {1.0};
+  const std::vector<double> breaks = segment_breaks(torque, basis);
+  Eigen::VectorXd mean_weights(D + 1);  // integral over [0, 1] of s^j
+  for (int j = 0; j <= D; ++j) mean_weights[j] = 1.0 / (j + 1);
+  LinearProgram& lp = setup.lp;
+  lp.cost = Eigen::VectorXd::Zero(n_theta);
+  for (std::size_t seg = 0; seg + 1 < breaks.size(); ++seg) {
+    const double t0 = breaks[seg], t1 = breaks[seg + 1], mid = 0.5 * (t0 + t1);
+    const int k = piece_at(torque, mid);
+    const TorquePiece& piece = torque.pieces[static_cast<std::size_t>(k)];
+    const int span = basis.spanAt(mid);
+    // Both scaled times as affine functions of the segment's s: s_piece = a + b s, s_span = as + bs s.
+    const double b = (t1 - t0) / (piece.t1_s - piece.t0_s), a = (t0 - piece.t0_s) / (piece.t1_s - piece.t0_s);
+    const double bs = (t1 - t0) / basis.spanLength(), as = (t0 - span * basis.spanLength()) / basis.spanLength();
+    // Y's coefficients -> powers of s on this segment.
+    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(D + 1, basis.size());
+    P.topRows(d + 1) = affine_composition(d + 1, as, bs) * basis.spanPowerMatrix(span);
+    const Polynomial remainder_shape = power_of_affine(piece.remainder_order, a, b);
+    const bool starts_at_zero = seg == 0;
+    const int margin_order = starts_at_zero ? piece.remainder_order : 0;
     // At t = 0 the initial state fixes the value; with a constant remainder bound the LP row
     // there carries it, with the vanishing bound (order 2) it is data, checked by fixed_violation.
-    if (k == 0 && piece.remainder_order == 0) initial_points.insert(initial_points.begin(), 0.0);
+    std::vector<double> initial_points;  // the exchange adds interior minima where violated
+    for (int i = 1; i <= o.study.initial_interior_points; ++i) initial_points.push_back(i / (o.study.initial_interior_points + 1.0));
+    initial_points.push_back(1.0);
+    if (starts_at_zero && margin_order == 0) initial_points.insert(initial_points.begin(), 0.0);
+    auto add = [&](ConstraintPolynomial c) {
+      c.t0_s = t0;
+      c.t1_s = t1;
+      c.piece = k;
+      c.margin_order = margin_order;
+      c.points = initial_points;
+      c.sticky.assign(initial_points.size(), false);
+      constraints.push_back(std::move(c));
+    };
     for (int j = 0; j < m; ++j) {
       ConstraintPolynomial c;
-      c.piece = static_cast<int>(k);
       c.muscle = j;
       c.base = Eigen::VectorXd::Zero(D + 1);
       c.G = Eigen::MatrixXd::Zero(D + 1, n_theta);
@@ -118,50 +198,40 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
         c.base += CY(j, l) * P * out.particular;
         c.G.middleCols(out.offset, out.nullspace.cols()) += CY(j, l) * P * out.nullspace;
       }
+      double remainder_weight = 0.0;
       for (int i = 0; i < n; ++i) {
-        const Eigen::VectorXd& tc = piece.torque[static_cast<std::size_t>(i)].coefficients();
+        const Eigen::VectorXd tc = piece.torque[static_cast<std::size_t>(i)].composeAffine(a, b).coefficients();
         c.base.head(tc.size()) += Ctau(j, i) * tc;
-        c.base[piece.remainder_order] -= std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
+        remainder_weight += std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
       }
+      c.remainder_cost_N = Polynomial(remainder_weight * remainder_shape.coefficients());
+      c.base.head(remainder_shape.coefficients().size()) -= c.remainder_cost_N.coefficients();
       c.base[0] -= reserves[j];
       c.name = "tendon force of muscle '" + flat.model().description().muscles[static_cast<std::size_t>(j)].parameters.name + "'";
       c.reserve_N = reserves[j];
-      c.margin_order = piece.remainder_order;
-      for (int i = 0; i < n; ++i) c.remainder_cost_N += std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
-      c.points = initial_points;
-      c.sticky.assign(initial_points.size(), false);
-      constraints.push_back(std::move(c));
+      add(std::move(c));
     }
     // Y = E F exactly (E C_tau = 0, E C_Y = I), so with E >= 0 entrywise and F >= reserve >= 0
     // the constraints Y >= 0 are implied and left out.
     for (int l = 0; l < p && !y_implied; ++l) {
       const auto& out = outputs[static_cast<std::size_t>(l)];
       ConstraintPolynomial c;
-      c.piece = static_cast<int>(k);
       c.flat_output = l;
       c.name = "flat output '" + flat.model().description().flat_outputs[static_cast<std::size_t>(l)].name + "' >= 0";
       c.base = P * out.particular;
       c.G = Eigen::MatrixXd::Zero(D + 1, n_theta);
       c.G.middleCols(out.offset, out.nullspace.cols()) = P * out.nullspace;
-      c.points = initial_points;
-      c.sticky.assign(initial_points.size(), false);
-      constraints.push_back(std::move(c));
+      add(std::move(c));
     }
-  }
-
-  // --- cost: T * integral_0^1 sum_l Y_l(sigma) dsigma ---
-  Eigen::VectorXd mean_weights(d + 1);
-  for (int j = 0; j <= d; ++j) mean_weights[j] = 1.0 / (j + 1);
-  LinearProgram& lp = setup.lp;
-  lp.cost = Eigen::VectorXd::Zero(n_theta);
-  double& cost_constant = setup.cost_constant;
-  for (const auto& out : outputs) {
-    cost_constant += T * out.particular.dot(mean_weights);
-    if (out.nullspace.cols()) lp.cost.segment(out.offset, out.nullspace.cols()) = T * out.nullspace.transpose() * mean_weights;
+    // --- cost: integral of sum_l Y_l over the segment ---
+    const Eigen::RowVectorXd weights = (t1 - t0) * mean_weights.transpose() * P;
+    for (const auto& out : outputs) {
+      setup.cost_constant += weights.dot(out.particular);
+      if (out.nullspace.cols()) lp.cost.segment(out.offset, out.nullspace.cols()) += (weights * out.nullspace).transpose();
+    }
   }
   lp.x_lower = Eigen::VectorXd::Constant(n_theta, -o.study.coefficient_bound_N);
   lp.x_upper = Eigen::VectorXd::Constant(n_theta, o.study.coefficient_bound_N);
-
   setup.free_coefficients = n_theta;
   return setup;
 }
@@ -169,7 +239,7 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
 std::string fixed_violation(const SosSetup& setup, double margin_N) {
   for (const auto& c : setup.constraints) {
     std::vector<double> where = c.points;
-    if (c.piece == 0) where.push_back(0.0);  // t = 0, even where it is no LP point
+    if (c.t0_s == 0.0) where.push_back(0.0);  // t = 0, even where it is no LP point
     for (double s : where) {
       const Eigen::RowVectorXd v = monomials(s, c.base.size());
       const Eigen::RowVectorXd row = v * c.G;
@@ -179,13 +249,12 @@ std::string fixed_violation(const SosSetup& setup, double margin_N) {
       const double row_size = row.size() ? row.cwiseAbs().maxCoeff() : 0.0;
       const double g_size = c.G.size() ? c.G.cwiseAbs().maxCoeff() : 0.0;
       if (row_size <= 1e-12 * (1.0 + g_size) && value < -margin_N) {
-        const auto& piece = setup.torque->pieces[static_cast<std::size_t>(c.piece)];
-        const double t = piece.t0_s + s * (piece.t1_s - piece.t0_s);
+        const double t = c.t0_s + s * (c.t1_s - c.t0_s);
         std::ostringstream why;
         why << "infeasible: at t = " << t << " s the boundary conditions fix Y, and ";
         if (c.muscle >= 0)
           why << "the guaranteed " << c.name << " is " << -value << " N below its reserve of " << c.reserve_N
-              << " N (the torque model's remainder bound costs " << c.remainder_cost_N * std::pow(s, piece.remainder_order)
+              << " N (the torque model's remainder bound costs " << c.remainder_cost_N(s)
               << " N there: use more pieces K or a higher degree r)";
         else
           why << c.name << " is violated by " << -value << " N";
@@ -196,15 +265,15 @@ std::string fixed_violation(const SosSetup& setup, double margin_N) {
   return "";
 }
 
-std::vector<Polynomial> flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta) {
-  std::vector<Polynomial> Y;
-  for (const auto& out : setup.outputs) {
-    Eigen::VectorXd c_sigma = out.particular;
-    if (out.nullspace.cols()) c_sigma += out.nullspace * theta.segment(out.offset, out.nullspace.cols());
-    for (int j = 0; j <= setup.degree; ++j) c_sigma[j] /= std::pow(setup.duration_s, j);
-    Y.emplace_back(c_sigma);
+SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta) {
+  Eigen::MatrixXd coefficients(static_cast<Eigen::Index>(setup.outputs.size()), setup.basis.size());
+  for (std::size_t l = 0; l < setup.outputs.size(); ++l) {
+    const auto& out = setup.outputs[l];
+    Eigen::VectorXd c = out.particular;
+    if (out.nullspace.cols()) c += out.nullspace * theta.segment(out.offset, out.nullspace.cols());
+    coefficients.row(static_cast<Eigen::Index>(l)) = c.transpose();
   }
-  return Y;
+  return SplineTrajectory(setup.basis, std::move(coefficients));
 }
 
 }  // namespace flatsos::planner::detail

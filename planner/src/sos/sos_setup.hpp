@@ -1,16 +1,21 @@
 #pragma once
-// The SOS program's setup: the boundary equalities on Y eliminated (Y_l = particular + N theta_l
-// in global scaled time), one constraint polynomial per piece and muscle (tendon force >= its
-// reserve) or flat output (Y_l >= 0), affine in the free coefficients theta, and the LP's cost.
+// The SOS program's setup: Y as clamped B-splines, the boundary equalities on Y eliminated
+// (B-spline coefficients of Y_l = particular + N theta_l), one constraint polynomial per segment
+// and muscle (tendon force >= its reserve) or flat output (Y_l >= 0), affine in the free
+// coefficients theta, and the LP's cost. Segments: the common refinement of the torque model's
+// pieces and the spline's spans, on each of which both are polynomials.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/numerics/linear_program.hpp"
+#include "flatsos/planner/numerics/bspline.hpp"
 #include "flatsos/planner/numerics/polynomial.hpp"
+#include "flatsos/planner/numerics/spline_trajectory.hpp"
 #include "flatsos/planner/sos_program.hpp"
 #include "flatsos/planner/torque_model.hpp"
 
@@ -22,26 +27,27 @@ namespace flatsos::planner::detail {
 /// and the certificates prove the constraint + this >= 0.
 constexpr double kConstraintTolerance_N = 1e-9;
 
-/// One constraint polynomial on one piece, in the piece's scaled time s in [0, 1], affine in
-/// theta: coefficients = base + G theta. It keeps what it constrains, for messages.
+/// One constraint polynomial on one segment [t0, t1], in the segment's scaled time s in [0, 1],
+/// affine in theta: coefficients = base + G theta. It keeps what it constrains, for messages.
 struct ConstraintPolynomial {
   Eigen::VectorXd base;
   Eigen::MatrixXd G;
-  int piece = 0;
+  double t0_s = 0.0, t1_s = 0.0;  ///< the segment
+  int piece = 0;              ///< the torque piece holding the segment
   int muscle = -1;            ///< >= 0: tendon-force constraint of this muscle
   int flat_output = -1;       ///< >= 0: Y_l >= 0
   std::string name;           ///< "tendon force of muscle 'biceps'" or "flat output 'co1' >= 0"
   double reserve_N = 0.0;     ///< the muscle's reserve (0 for Y_l >= 0)
-  double remainder_cost_N = 0.0;  ///< what the remainder bound costs at s = 1 (times s^order inside)
+  Polynomial remainder_cost_N;  ///< what the torque model's remainder bound costs, in s
   /// The LP imposes the constraint >= margin s^margin_order: where the initial state fixes the
-  /// value and slope (the first piece, order 2), a constant margin could not be met at s -> 0.
+  /// value and slope (the first segment, order 2), a constant margin could not be met at s -> 0.
   int margin_order = 0;
   std::vector<double> points;     ///< where the exchange LP imposes it
   std::vector<bool> sticky;       ///< added by the exchange: never pruned
   Polynomial at(const Eigen::VectorXd& theta) const { return Polynomial(base + G * theta); }
 };
 
-/// Y_l = particular + nullspace theta_l in the global scaled time sigma = t / T.
+/// B-spline coefficients of Y_l = particular + nullspace theta_l (N).
 struct OutputParameterization {
   Eigen::VectorXd particular;
   Eigen::MatrixXd nullspace;
@@ -49,8 +55,9 @@ struct OutputParameterization {
 };
 
 struct SosSetup {
+  SosSetup(double duration, BSplineBasis flat_output_basis) : duration_s(duration), basis(std::move(flat_output_basis)) {}
   double duration_s = 0.0;
-  int degree = 0;
+  BSplineBasis basis;         ///< of every Y_l
   int free_coefficients = 0;  ///< size of theta
   std::vector<OutputParameterization> outputs;
   std::vector<ConstraintPolynomial> constraints;
@@ -72,7 +79,7 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
 /// Empty when there is none.
 std::string fixed_violation(const SosSetup& setup, double margin_N);
 
-/// The flat outputs of theta in seconds (ascending powers of t).
-std::vector<Polynomial> flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta);
+/// The flat outputs of theta.
+SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta);
 
 }  // namespace flatsos::planner::detail

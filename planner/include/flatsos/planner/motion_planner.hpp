@@ -51,7 +51,7 @@ struct OpenLoopPlan {
   /// Implausible inputs that were accepted (joint angles beyond one turn: degrees as radians?).
   std::vector<std::string> warnings;
   JointPath path;                     ///< degree-8 joint polynomials
-  std::vector<Polynomial> Y;          ///< flat outputs (N), ascending powers of t
+  std::optional<SplineTrajectory> Y;  ///< flat outputs (N); none unless the SOS program was solved
   SosProgramResult sos;
   TorqueModel torque;
   PlanCheck check;
@@ -61,7 +61,8 @@ struct OpenLoopPlan {
   double check_seconds = 0.0;
 
   Jet jointJet(double t) const { return path.jet(t, 5); }
-  Jet flatOutputJet(double t) const;  ///< p x 3: Y, dY, ddY
+  /// p x 3: Y, dY, ddY. Throws std::logic_error when the plan has no flat outputs.
+  Jet flatOutputJet(double t) const;
 };
 
 /// Open-loop plan from `initial` to rest at options.target_q_rad in options.duration_s.
@@ -78,7 +79,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
 
 /// The a-posteriori check of any flat trajectory on `points` uniform times in [0, T].
 PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                     const std::vector<Polynomial>& Y, const Eigen::VectorXd& reserves_N, int points);
+                     const SplineTrajectory& Y, const Eigen::VectorXd& reserves_N, int points);
 
 struct RecedingHorizonOptions {
   double horizon_s = 0.5;

@@ -15,6 +15,7 @@
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/numerics/spline_trajectory.hpp"
 #include "flatsos/plugin/force/excitation_signal.hpp"
 
 namespace flatsos::planner {
@@ -22,8 +23,9 @@ namespace flatsos::planner {
 class PlannedExcitation : public std::enable_shared_from_this<PlannedExcitation> {
  public:
   /// The plan's time 0 is simulation time `start_time_s`; after the plan's end the excitation of
-  /// its end is held.
-  static std::shared_ptr<const PlannedExcitation> create(FlatOutputMap flat, JointPath path, std::vector<Polynomial> Y,
+  /// its end is held. Throws std::invalid_argument when the sizes or durations of the map, the
+  /// joint path and the flat outputs disagree.
+  static std::shared_ptr<const PlannedExcitation> create(FlatOutputMap flat, JointPath path, SplineTrajectory Y,
                                                          double start_time_s = 0.0);
   /// Muscle quantities of the plan at simulation time t.
   MusclePoint at(double time_s) const;
@@ -36,13 +38,13 @@ class PlannedExcitation : public std::enable_shared_from_this<PlannedExcitation>
   int evaluations() const;
 
  private:
-  PlannedExcitation(FlatOutputMap flat, JointPath path, std::vector<Polynomial> Y, double start_time_s);
+  PlannedExcitation(FlatOutputMap flat, JointPath path, SplineTrajectory Y, double start_time_s);
   // Evaluates (or reuses) the point at time_s; the caller holds mutex_.
   const MusclePoint& evaluateLocked(double time_s) const;
 
   const FlatOutputMap flat_;
   const JointPath path_;
-  const std::vector<Polynomial> Y_;
+  const SplineTrajectory Y_;
   const double start_time_s_;
   // Scratch and cache: not part of the plan's value, hence mutable, guarded by mutex_.
   mutable std::mutex mutex_;

@@ -1,12 +1,14 @@
 #pragma once
 // The secondary optimization problem (SOP; docs/method/sos_program.md, certificates in sos_certificates.md):
-//   minimize  integral_0^T sum_l Y_l(t) dt  over polynomial Y of degree d
+//   minimize  integral_0^T sum_l Y_l(t) dt  over Y in clamped B-splines of degree d with S spans
+//             (S = 1: polynomials of degree d; the paper's quartic is d = 4, S = 1)
 //   subject to  F_j(t) = C_tau,j tau(t) + C_Y,j Y(t) >= F_reserve,j  and  Y(t) >= 0 on [0, T],
 //               boundary equalities on Y and its derivatives at 0 and T.
-// tau(t) comes from a TorqueModel (K pieces, degree r, remainder bounds), so on piece k each
-// constraint is a polynomial in scaled time s in [0, 1] that is affine in the free
-// coefficients theta of Y (the boundary equalities are eliminated first):
-//   g_jk(s) = C_Y,j Y(s) + C_tau,j p_k(s) - |C_tau,j| e_k - F_reserve,j >= 0.
+// tau(t) comes from a TorqueModel (K pieces, degree r, remainder bounds), so on every segment k
+// of the common refinement of pieces and spans each constraint is a polynomial in the
+// segment's scaled time s in [0, 1] that is affine in the free coefficients theta of Y (the
+// boundary equalities are eliminated first):
+//   g_jk(s) = C_Y,j Y(s) + C_tau,j p_k(s) - |C_tau,j| e_k(s) - F_reserve,j >= 0.
 // Solved by an exchange (cutting-plane) method: an LP in theta imposes the constraints
 // at finitely many points; the exact minimum of every g_jk on [0, 1] (roots of g') adds the
 // violated points; repeat (the rounds' LPs by an exact simplex, the final one by Ipopt). The
@@ -17,6 +19,7 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +28,7 @@
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/numerics/linear_program.hpp"
 #include "flatsos/planner/numerics/polynomial.hpp"
+#include "flatsos/planner/numerics/spline_trajectory.hpp"
 #include "flatsos/planner/torque_model.hpp"
 
 namespace flatsos::planner {
@@ -36,18 +40,24 @@ struct FlatOutputBoundary {
   int terminal_first_order = 1;       ///< 1: Y(T) free, rates fixed (terminal equilibrium)
 };
 
+/// The solver of the exchange LPs.
+enum class ExchangeLpSolver {
+  Simplex,  ///< Clp's dual simplex: a vertex to machine precision, fast and robust (the default)
+  Ipopt,    ///< the interior-point method, kept as an independent second opinion
+};
+
 /// Settings of the exchange method that were compared while building it (tests and
 /// measurements); the defaults are the measured choices.
 struct SosExchangeStudyOptions {
-  /// Exchange rounds by the exact small-LP simplex, then Ipopt on the final points (one Ipopt
-  /// call instead of one per round; the reported optimum is still Ipopt's). false: Ipopt always.
-  bool exact_exchange = true;
+  ExchangeLpSolver lp_solver = ExchangeLpSolver::Simplex;
   double coefficient_bound_N = 1e7;    ///< |theta| box keeping early LPs bounded
   double prune_slack_N = 20.0;         ///< after an LP, initial points with more slack are dropped
+  int initial_interior_points = 0;     ///< uniform points per segment imposed from the start, besides its end
 };
 
 struct SosProgramOptions {
-  int flat_output_degree = 4;          ///< d
+  int flat_output_degree = 4;          ///< d (>= 3 keeps the excitations continuous)
+  int flat_output_spans = 1;           ///< S uniform knot spans of the B-splines
   double feasibility_margin_N = 1e-6;  ///< constraints are imposed >= this at the LP points
   int max_exchange_rounds = 40;
   bool certify = true;                 ///< Lukacs certificates for the near-active pieces
@@ -59,21 +69,21 @@ struct SosProgramResult {
   SolveStatus status = SolveStatus::Failed;
   std::string message;                 ///< why, when not solved
   double cost_N_s = 0.0;               ///< integral of sum Y
-  std::vector<Polynomial> Y;           ///< per flat output, ascending powers of t (s), N
+  std::optional<SplineTrajectory> Y;   ///< the flat outputs (N); none unless solved
   double min_constraint_value_N = 0.0; ///< exact minimum of every g_jk and Y_l over [0, T]
   int exchange_rounds = 0;
   int lp_points = 0;
-  int ipopt_iterations = 0;            ///< summed over all Ipopt calls
+  int ipopt_iterations = 0;            ///< summed over all Ipopt calls (exchange LPs and certificates)
   int ipopt_calls = 0;
-  int exact_lp_pivots = 0;             ///< simplex pivots of the exact exchange LPs
+  int simplex_pivots = 0;              ///< Clp's pivots over the exchange LPs
   int near_active_pieces = 0;
   int certified_pieces = 0;            ///< of the near-active ones
   bool certified = false;              ///< every near-active piece has a certificate
   double setup_seconds = 0.0, solve_seconds = 0.0, certify_seconds = 0.0;
 };
 
-/// Throws std::invalid_argument for bad sizes, NaN, T <= 0, a negative reserve or a degree too
-/// low for the equalities.
+/// Throws std::invalid_argument for bad sizes, NaN, T <= 0, a negative reserve or a basis too
+/// small for the equalities.
 SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                    const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
                                    const SosProgramOptions& options = {});

@@ -1,0 +1,18 @@
+#pragma once
+// Linear programs by the dual simplex method of COIN-OR Clp (Debian's coinor-libclp-dev), for
+// the exchange method's LPs: few variables, many inequality rows, a vertex solution to machine
+// precision in a fraction of an interior-point solve, and robust where rows are nearly
+// parallel (the points of a rich flat-output basis crowd where constraints are active).
+// Same problem and result types as the Ipopt solver in linear_program.hpp.
+
+#include "flatsos/planner/numerics/linear_program.hpp"
+
+namespace flatsos::planner {
+
+/// Throws std::invalid_argument for inconsistent sizes or NaN data. Status Solved (optimal),
+/// Infeasible (primal infeasible) or Failed (dual infeasible: unbounded, or stopped);
+/// solver_status names Clp's outcome; iterations counts simplex pivots; row_multipliers are
+/// Clp's row duals (>= 0 on active lower bounds of a minimization).
+LinearProgramResult solve_linear_program_simplex(const LinearProgram& lp);
+
+}  // namespace flatsos::planner

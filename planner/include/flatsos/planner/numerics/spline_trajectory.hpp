@@ -1,0 +1,39 @@
+#pragma once
+// A vector signal as clamped B-splines sharing one basis: rows of `coefficients` are the
+// signals (for flat outputs, N), columns the basis functions. The paper's quartic is the
+// one-span, degree-4 case (then the basis is Bernstein's).
+
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/numerics/bspline.hpp"
+#include "flatsos/planner/numerics/polynomial.hpp"
+
+namespace flatsos::planner {
+
+class SplineTrajectory {
+ public:
+  /// Throws std::invalid_argument when the coefficients do not have basis.size() columns or
+  /// are not finite.
+  SplineTrajectory(BSplineBasis basis, Eigen::MatrixXd coefficients);
+
+  const BSplineBasis& basis() const { return basis_; }
+  const Eigen::MatrixXd& coefficients() const { return coefficients_; }
+  int signals() const { return static_cast<int>(coefficients_.rows()); }
+  double duration() const { return basis_.duration(); }
+
+  /// Derivatives 0 .. orders - 1 at t (signals x orders); t is clamped to [0, T].
+  Eigen::MatrixXd jet(double t, int orders) const;
+  /// Derivative `order` of signal `row` at t.
+  double derivativeAt(int row, double t, int order = 0) const;
+  /// Signal `row` on span `span` in powers of the span's scaled time s in [0, 1].
+  Polynomial spanPolynomial(int row, int span) const;
+
+ private:
+  BSplineBasis basis_;
+  Eigen::MatrixXd coefficients_;
+};
+
+}  // namespace flatsos::planner

@@ -1,0 +1,102 @@
+// The Clp wrapper: agrees with Ipopt on random LPs of the exchange's shape (few variables, many
+// rows), maps infeasible and unbounded problems to their statuses, reaches degenerate vertices
+// exactly, honours both row bounds and "no bound" (1e19), and rejects bad data by name.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "flatsos/planner/numerics/simplex_lp.hpp"
+
+namespace fpl = flatsos::planner;
+
+namespace {
+fpl::LinearProgram random_lp(std::mt19937& rng, int n, int rows) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  fpl::LinearProgram lp;
+  lp.cost.resize(n);
+  for (auto& c : lp.cost) c = g(rng);
+  lp.G.resize(rows, n);
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < n; ++j) lp.G(i, j) = g(rng);
+  // Feasible by construction: x0 satisfies every row with slack.
+  Eigen::VectorXd x0(n);
+  for (auto& v : x0) v = g(rng);
+  lp.row_lower = lp.G * x0 - Eigen::VectorXd::Constant(rows, 0.5);
+  for (int i = 0; i < rows; ++i) lp.row_lower[i] -= std::abs(g(rng));
+  lp.row_upper = Eigen::VectorXd::Constant(rows, 1e19);
+  lp.x_lower = Eigen::VectorXd::Constant(n, -100.0);
+  lp.x_upper = Eigen::VectorXd::Constant(n, 100.0);
+  return lp;
+}
+
+fpl::LinearProgram two_variables(const Eigen::MatrixXd& G, const Eigen::VectorXd& lower) {
+  fpl::LinearProgram lp;
+  lp.cost = Eigen::Vector2d(1.0, 1.0);
+  lp.G = G;
+  lp.row_lower = lower;
+  lp.row_upper = Eigen::VectorXd::Constant(G.rows(), 1e19);
+  lp.x_lower = Eigen::Vector2d::Constant(-10.0);
+  lp.x_upper = Eigen::Vector2d::Constant(10.0);
+  return lp;
+}
+}  // namespace
+
+TEST(SimplexLp, AgreesWithIpoptOnRandomLps) {
+  std::mt19937 rng(42);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 1 + trial % 12 * 4, rows = 5 + 37 * (trial % 9);
+    const auto lp = random_lp(rng, n, rows);
+    const auto simplex = fpl::solve_linear_program_simplex(lp);
+    const auto ipopt = fpl::solve_linear_program(lp);
+    ASSERT_EQ(simplex.status, fpl::SolveStatus::Solved) << "trial " << trial << ": " << simplex.solver_status;
+    ASSERT_EQ(ipopt.status, fpl::SolveStatus::Solved) << "trial " << trial;
+    EXPECT_NEAR(simplex.objective, ipopt.objective, 1e-6 * (1 + std::abs(ipopt.objective))) << "trial " << trial;
+    EXPECT_GE((lp.G * simplex.x - lp.row_lower).minCoeff(), -1e-9);
+    EXPECT_LE((simplex.x - lp.x_upper).maxCoeff(), 1e-9);
+    EXPECT_GE((simplex.x - lp.x_lower).minCoeff(), -1e-9);
+  }
+}
+
+TEST(SimplexLp, InfeasibleAndUnboundedAreReportedAsSuch) {
+  // x0 >= 2 and -x0 >= -1.
+  auto lp = two_variables((Eigen::MatrixXd(2, 2) << 1, 0, -1, 0).finished(), Eigen::Vector2d(2.0, -1.0));
+  const auto infeasible = fpl::solve_linear_program_simplex(lp);
+  EXPECT_EQ(infeasible.status, fpl::SolveStatus::Infeasible) << infeasible.solver_status;
+  // min x0 + x1 with x1 free below and no row holding it: unbounded.
+  lp = two_variables((Eigen::MatrixXd(1, 2) << 1, 0).finished(), Eigen::VectorXd::Constant(1, 1.0));
+  lp.x_lower[1] = -1e19;
+  const auto unbounded = fpl::solve_linear_program_simplex(lp);
+  EXPECT_EQ(unbounded.status, fpl::SolveStatus::Failed);
+  EXPECT_NE(unbounded.solver_status.find("unbounded"), std::string::npos) << unbounded.solver_status;
+}
+
+TEST(SimplexLp, DegenerateVertexBoxOptimumAndRowUpperBounds) {
+  // Three rows through the optimum (1, 1) of min x + y: degenerate in 2-D.
+  auto lp = two_variables((Eigen::MatrixXd(3, 2) << 1, 0, 0, 1, 1, 1).finished(), Eigen::Vector3d(1.0, 1.0, 2.0));
+  const auto r = fpl::solve_linear_program_simplex(lp);
+  ASSERT_EQ(r.status, fpl::SolveStatus::Solved);
+  EXPECT_NEAR(r.x[0], 1.0, 1e-12);
+  EXPECT_NEAR(r.x[1], 1.0, 1e-12);
+  EXPECT_NEAR(r.objective, 2.0, 1e-12);
+  // Unconstrained direction: the box bound is the optimum.
+  lp.cost = Eigen::Vector2d(1.0, -1.0);
+  const auto box = fpl::solve_linear_program_simplex(lp);
+  ASSERT_EQ(box.status, fpl::SolveStatus::Solved);
+  EXPECT_NEAR(box.x[1], 10.0, 1e-12);
+  // An upper row bound x0 + x1 <= 5 binds the same direction.
+  lp.row_upper[2] = 5.0;
+  const auto capped = fpl::solve_linear_program_simplex(lp);
+  ASSERT_EQ(capped.status, fpl::SolveStatus::Solved);
+  EXPECT_NEAR(capped.x[0] + capped.x[1], 5.0, 1e-12);
+  EXPECT_NEAR(capped.x[0], 1.0, 1e-12);
+}
+
+TEST(SimplexLp, BadDataIsRejected) {
+  auto lp = two_variables((Eigen::MatrixXd(1, 2) << 1, 0).finished(), Eigen::VectorXd::Constant(1, 1.0));
+  auto bad = lp;
+  bad.G(0, 1) = std::nan("");
+  EXPECT_THROW(fpl::solve_linear_program_simplex(bad), std::invalid_argument);
+  bad = lp;
+  bad.row_lower.resize(2);
+  EXPECT_THROW(fpl::solve_linear_program_simplex(bad), std::invalid_argument);
+}
