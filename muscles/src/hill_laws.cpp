@@ -81,6 +81,12 @@ double force_length_derivative(const MuscleParameters& p, double fiber_length_m)
   return -2.0 * x / width * std::exp(-x * x);
 }
 
+double force_length_second_derivative(const MuscleParameters& p, double fiber_length_m) {
+  const double width = p.force_length_width * p.optimal_fiber_length_m;
+  const double x = (fiber_length_m - p.optimal_fiber_length_m) / width;
+  return (4.0 * x * x - 2.0) / (width * width) * std::exp(-x * x);
+}
+
 // ---------------------------------------------------------------- force-velocity
 double force_velocity(const MuscleParameters& p, double u) {
   const double vmax = p.max_shortening_velocity_m_per_s();
@@ -102,6 +108,19 @@ double force_velocity_derivative(const MuscleParameters& p, double u) {
   const double c0 = ah * vmax * (1.0 - gmax);
   const double den = c0 + u * (1.0 + ah);
   return c0 * (1.0 + ah) * (gmax - 1.0) / (den * den);
+}
+
+double force_velocity_second_derivative(const MuscleParameters& p, double u) {
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  const double ah = p.hill_constant;
+  const double gmax = p.max_eccentric_force_ratio;
+  if (u >= 0.0) {
+    const double den = ah * vmax + u;
+    return 2.0 * ah * vmax * (1.0 + ah) / (den * den * den);
+  }
+  const double c0 = ah * vmax * (1.0 - gmax);
+  const double den = c0 + u * (1.0 + ah);
+  return -2.0 * c0 * (1.0 + ah) * (1.0 + ah) * (gmax - 1.0) / (den * den * den);
 }
 
 double force_velocity_inverse(const MuscleParameters& p, double z) {

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/muscles/muscle_inverse.hpp"
 
 namespace flatsos::planner {
 
@@ -219,47 +220,34 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
     const double ddL = has_qdd ? -A_.col(j).dot(q_jet.col(2)) : 0.0;
     p.tendon_force_N[j] = F;
     p.tendon_force_rate_N_per_s[j] = dF;
-    if (!(F > 0.0)) {
+    const fm::MuscleInverse inv = fm::invert_muscle(mp, {F, dF, ddF}, {L, dL, ddL}, false);
+    if (inv.stage == fm::MuscleInverse::Stage::SlackTendon) {
       why = {Kind::SlackTendon, F, 0.0};
       continue;
     }
-    const double ls = fm::tendon_length_from_force(mp, F);
-    const double d1 = fm::tendon_force_derivative(mp, ls);
-    const double d2 = fm::tendon_force_second_derivative(mp, ls);
-    const double dls = dF / d1;
-    const double ddls = (ddF - d2 * dls * dls) / d1;
-    const double u = dls - dL;
-    const double du = ddls - ddL;
-    const double lc = L - ls;
-    const double f = fm::force_length(mp, lc);
-    const double df = fm::force_length_derivative(mp, lc) * (-u);  // dL_C/dt = -u
-    const double g = fm::force_velocity(mp, u);
-    const double dg = fm::force_velocity_derivative(mp, u) * du;
-    p.tendon_length_m[j] = ls;
-    p.tendon_length_rate_m_per_s[j] = dls;
-    p.fiber_length_m[j] = lc;
-    p.shortening_velocity_m_per_s[j] = u;
-    p.force_ratio[j] = g;
-    if (!(g > 0.0)) {
-      why = {Kind::NoForceCapacity, u, mp.max_shortening_velocity_m_per_s()};
+    p.tendon_length_m[j] = inv.tendon_length_m;
+    p.tendon_length_rate_m_per_s[j] = inv.tendon_length_rate_m_per_s;
+    p.fiber_length_m[j] = inv.fiber_length_m;
+    p.shortening_velocity_m_per_s[j] = inv.shortening_velocity_m_per_s;
+    p.force_ratio[j] = inv.force_ratio;
+    if (inv.stage == fm::MuscleInverse::Stage::NoForceCapacity) {
+      why = {Kind::NoForceCapacity, inv.shortening_velocity_m_per_s, mp.max_shortening_velocity_m_per_s()};
       continue;
     }
-    const double a = F / (mp.max_isometric_force_N * f * g);
-    const double da = a * (dF / F - df / f - dg / g);
+    const double g = inv.force_ratio, a = inv.activation, da = inv.activation_rate_per_s;
     p.activation[j] = a;
     p.activation_rate_per_s[j] = da;
-    const auto n = fm::excitation_from_activation(mp, a, da);
-    p.excitation[j] = n.excitation;
+    p.excitation[j] = inv.excitation;
     if (g > fm::force_ratio_exact_upper_bound(mp))
       why = {Kind::ForceRatioBeyondExactRange, g, fm::force_ratio_exact_upper_bound(mp)};
     else if (!(a > 0.0 && a <= 1.0))
       why = {Kind::ActivationOutsideUnitInterval, a, 1.0};
     else if (a < mp.activation_floor)
       why = {Kind::ActivationBelowFloor, a, mp.activation_floor};
-    else if (!n.real_root)
+    else if (!inv.excitation_real)
       why = {Kind::ExcitationUnattainable, da, 0.0};
-    else if (!n.in_unit_interval())
-      why = {Kind::ExcitationOutsideUnitInterval, n.excitation, 1.0};
+    else if (!(inv.excitation >= 0.0 && inv.excitation <= 1.0))
+      why = {Kind::ExcitationOutsideUnitInterval, inv.excitation, 1.0};
   }
 }
 

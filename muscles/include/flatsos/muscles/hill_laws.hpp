@@ -21,10 +21,13 @@ double tendon_length_from_force(const MuscleParameters& p, double tendon_force_N
 // ---- Force-length: f(L_C) = exp(-((L_C - Lopt) / (W Lopt))^2), in (0, 1]. ----
 double force_length(const MuscleParameters& p, double fiber_length_m);
 double force_length_derivative(const MuscleParameters& p, double fiber_length_m);  ///< 1/m
+double force_length_second_derivative(const MuscleParameters& p, double fiber_length_m);  ///< 1/m^2
 
 // ---- Force-velocity g(u): g(0) = 1, g(Vmax) = 0, g -> gmax for u -> -inf. ----
 double force_velocity(const MuscleParameters& p, double shortening_velocity_m_per_s);
 double force_velocity_derivative(const MuscleParameters& p, double shortening_velocity_m_per_s);
+/// Each branch's own second derivative (g'' jumps at u = 0, where g is C1).
+double force_velocity_second_derivative(const MuscleParameters& p, double shortening_velocity_m_per_s);
 
 /// Exact inverse of g on its range: valid for force ratios z in (0, gmax) (also for z in
 /// (-Ah, 0], where it returns u > Vmax). Throws std::domain_error outside (-Ah, gmax).

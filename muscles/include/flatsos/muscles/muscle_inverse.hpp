@@ -1,0 +1,49 @@
+#pragma once
+// The inverse of one muscle (docs/method/flatness.md): from its tendon force and the path's
+// length, each with two time derivatives, to the fibre state, the activation and the excitation
+// that produce them, and (on request) the exact gradients of activation and excitation with
+// respect to (F, dF/dt, d2F/dt2). The flatness planner's inverse map and its bounded
+// optimization (0 <= n <= 1, floor <= a <= 1 as constraints on the tendon-force jet) share it.
+//
+//   L_S = Phi_S^-1(F), dL_S = dF / Phi_S', ddL_S = (ddF - Phi_S'' dL_S^2) / Phi_S'
+//   u = dL_S - dL (shortening), L_C = L - L_S, f = f(L_C), g = g(u)
+//   a = F / (Fmax f g), da/dt = a (dF / F - df/dt / f - dg/dt / g)
+//   n: the larger root of sigma(n) (n - a) = da/dt.
+// The tendon law is quadratic above slack, so Phi_S''' = 0 (used by the gradients).
+
+#include <array>
+
+#include "flatsos/muscles/muscle_parameters.hpp"
+
+namespace flatsos::muscles {
+
+/// A scalar signal and its first two time derivatives (SI units of the signal per s, s^2).
+struct SecondOrderJet {
+  double value = 0.0, rate = 0.0, acceleration = 0.0;
+};
+
+/// d(quantity)/d(F, dF/dt, d2F/dt2).
+using TendonForceJetGradient = std::array<double, 3>;
+
+struct MuscleInverse {
+  enum class Stage {
+    Complete,         ///< every field below is set
+    SlackTendon,      ///< F <= 0: nothing past the tendon force is defined
+    NoForceCapacity,  ///< g(u) <= 0 (u >= Vmax): the fibre state is set, a and n are not
+  };
+  Stage stage = Stage::Complete;
+  double tendon_length_m = 0.0, tendon_length_rate_m_per_s = 0.0;
+  double fiber_length_m = 0.0, shortening_velocity_m_per_s = 0.0;
+  double force_ratio = 0.0;  ///< g(u)
+  double activation = 0.0, activation_rate_per_s = 0.0;
+  double excitation = 0.0;
+  bool excitation_real = true;  ///< false: no excitation gives da/dt (excitation is then the closest)
+  /// Set when asked for and stage is Complete (and, for the excitation, excitation_real).
+  TendonForceJetGradient activation_gradient{}, excitation_gradient{};
+};
+
+/// `path` is the musculotendon length L and its rates (m, m/s, m/s^2).
+MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& tendon_force_N,
+                            const SecondOrderJet& path_length_m, bool with_gradients);
+
+}  // namespace flatsos::muscles

@@ -1,0 +1,120 @@
+// The inverse of one muscle: second derivatives of the force-length and force-velocity laws
+// against finite differences; the inverse's gradients (activation and excitation with respect to
+// the tendon-force jet) against finite differences; the forward laws reproduce what the inverse
+// says (round trip); and the stages where nothing further is defined.
+#include <gtest/gtest.h>
+
+#include "finite_difference.hpp"
+
+#include <cmath>
+#include <random>
+
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/muscles/muscle_inverse.hpp"
+
+namespace fm = flatsos::muscles;
+using flatsos::test::central_difference;
+using flatsos::test::default_step;
+
+namespace {
+
+fm::MuscleParameters triceps() {
+  fm::MuscleParameters p;
+  p.name = "triceps";
+  p.max_isometric_force_N = 800.0;
+  p.optimal_fiber_length_m = 0.0877;
+  p.tendon_slack_length_m = 0.19;
+  return p;
+}
+
+struct Sample {
+  fm::SecondOrderJet force, path;
+};
+
+// States with activations in (0.005, 1) and real excitations, spread over the fibre's range.
+std::vector<Sample> samples(const fm::MuscleParameters& p, int count) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Sample> out;
+  while (static_cast<int>(out.size()) < count) {
+    Sample s;
+    s.force = {5.0 + 600.0 * unit(rng), -800.0 + 1600.0 * unit(rng), -2e4 + 4e4 * unit(rng)};
+    const double ls = fm::tendon_length_from_force(p, s.force.value);
+    s.path = {ls + p.optimal_fiber_length_m * (0.6 + 0.8 * unit(rng)), -0.3 + 0.6 * unit(rng), -3.0 + 6.0 * unit(rng)};
+    const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, false);
+    if (inv.stage == fm::MuscleInverse::Stage::Complete && inv.excitation_real && inv.activation > 0.005 &&
+        inv.activation < 1.0 && std::abs(inv.shortening_velocity_m_per_s) > 1e-3)
+      out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(MuscleLawSecondDerivatives, MatchFiniteDifferences) {
+  const auto p = triceps();
+  for (int i = 0; i <= 40; ++i) {
+    const double lc = p.optimal_fiber_length_m * (0.3 + 1.5 * i / 40.0);
+    EXPECT_MATCHES_FINITE_DIFFERENCE(
+        fm::force_length_second_derivative(p, lc),
+        central_difference([&](double x) { return fm::force_length_derivative(p, x); }, lc, default_step(lc, p.optimal_fiber_length_m)));
+  }
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  for (int i = 0; i <= 40; ++i) {
+    const double u = vmax * (-3.0 + 3.95 * i / 40.0);
+    if (std::abs(u) < 0.02 * vmax) continue;  // g'' jumps at u = 0 (g is C1 there)
+    EXPECT_MATCHES_FINITE_DIFFERENCE(
+        fm::force_velocity_second_derivative(p, u),
+        central_difference([&](double x) { return fm::force_velocity_derivative(p, x); }, u, default_step(0.0, 1e-3 * vmax)))
+        << u;
+  }
+}
+
+TEST(MuscleInverse, GradientsMatchFiniteDifferences) {
+  const auto p = triceps();
+  for (const Sample& s : samples(p, 60)) {
+    const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, true);
+    const double scales[3] = {1.0, 10.0, 100.0};
+    for (int k = 0; k < 3; ++k) {
+      auto vary = [&](double x, bool excitation) {
+        fm::SecondOrderJet f = s.force;
+        (k == 0 ? f.value : k == 1 ? f.rate : f.acceleration) = x;
+        const fm::MuscleInverse v = fm::invert_muscle(p, f, s.path, false);
+        return excitation ? v.excitation : v.activation;
+      };
+      const double x0 = k == 0 ? s.force.value : k == 1 ? s.force.rate : s.force.acceleration;
+      const double h = default_step(x0, scales[k]);
+      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_gradient[k], central_difference([&](double x) { return vary(x, false); }, x0, h))
+          << "d a / d x" << k;
+      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.excitation_gradient[k], central_difference([&](double x) { return vary(x, true); }, x0, h))
+          << "d n / d x" << k;
+    }
+  }
+}
+
+TEST(MuscleInverse, ForwardLawsReproduceTheInverse) {
+  const auto p = triceps();
+  for (const Sample& s : samples(p, 60)) {
+    const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, false);
+    EXPECT_NEAR(fm::tendon_force(p, inv.tendon_length_m), s.force.value, 1e-10 * s.force.value);
+    // The contraction dynamics with this activation give the tendon's planned rate ...
+    const double dls = fm::tendon_length_derivative(p, inv.tendon_length_m, inv.activation, s.path.value, s.path.rate);
+    EXPECT_NEAR(dls, inv.tendon_length_rate_m_per_s, 1e-9 * (1.0 + std::abs(dls)));
+    EXPECT_NEAR(fm::tendon_force_derivative(p, inv.tendon_length_m) * dls, s.force.rate, 1e-7 * (1.0 + std::abs(s.force.rate)));
+    // ... and the activation dynamics with this excitation the planned activation rate.
+    EXPECT_NEAR(fm::activation_derivative(p, inv.excitation, inv.activation), inv.activation_rate_per_s,
+                1e-9 * (1.0 + std::abs(inv.activation_rate_per_s)));
+  }
+}
+
+TEST(MuscleInverse, SlackTendonAndNoForceCapacityStopTheChain) {
+  const auto p = triceps();
+  const fm::SecondOrderJet path{0.3, 0.0, 0.0};
+  EXPECT_EQ(fm::invert_muscle(p, {0.0, 1.0, 0.0}, path, true).stage, fm::MuscleInverse::Stage::SlackTendon);
+  EXPECT_EQ(fm::invert_muscle(p, {-3.0, 1.0, 0.0}, path, true).stage, fm::MuscleInverse::Stage::SlackTendon);
+  // Shortening at Vmax (the path shortens that fast while the tendon holds its length).
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  const fm::MuscleInverse fast = fm::invert_muscle(p, {100.0, 0.0, 0.0}, {0.3, -1.2 * vmax, 0.0}, true);
+  EXPECT_EQ(fast.stage, fm::MuscleInverse::Stage::NoForceCapacity);
+  EXPECT_NEAR(fast.shortening_velocity_m_per_s, 1.2 * vmax, 1e-12);
+}
