@@ -235,4 +235,23 @@ ExcitationFromActivation excitation_from_activation(const MuscleParameters& p, d
   return out;
 }
 
+ExcitationBoundMargins excitation_bound_margins(const MuscleParameters& p, double a, double adot) {
+  const double T = p.activation_time_constant_s, beta = p.activation_beta();
+  ExcitationBoundMargins m;
+  // -T_act times the fastest deactivation rate any n in [0, 1] gives, and its slope in a.
+  double fastest = beta * a, fastest_d_a = beta;
+  if (a > beta / (1.0 - beta)) {
+    const double s = beta + (1.0 - beta) * a;
+    fastest = s * s / (4.0 * (1.0 - beta));
+    fastest_d_a = 0.5 * s;
+  }
+  m.lower = T * adot + fastest;
+  m.lower_d_activation = fastest_d_a;
+  m.lower_d_rate_s = T;
+  m.upper = 1.0 - a - T * adot;
+  m.upper_d_activation = -1.0;
+  m.upper_d_rate_s = -T;
+  return m;
+}
+
 }  // namespace flatsos::muscles

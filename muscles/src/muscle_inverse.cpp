@@ -73,6 +73,7 @@ MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& for
                    (dg / (g * g)) * g_x;
   const Grad da_x = r * a_x + a * r_x;
   out.activation_gradient = a_x;
+  out.activation_rate_gradient = da_x;
   if (n.real_root) {
     // Q(n, a, da) = (1 - beta) n^2 + (beta - (1 - beta) a) n - beta a - T_act da = 0.
     const double beta = p.activation_beta();

@@ -200,7 +200,7 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
     throw std::invalid_argument("joint jet must be N x (1..5): q[, qd, qdd, ...]");
   if (tj.tau.rows() != numJoints() || tj.tau.cols() != 3)
     throw std::invalid_argument("torque jet must be N x 3: tau, dtau, ddtau");
-  const bool has_ddY = Y_jet.cols() > 2, has_qd = q_jet.cols() > 1, has_qdd = q_jet.cols() > 2;
+  const bool has_ddY = Y_jet.cols() > 2;
   for (auto* v : {&p.tendon_force_N, &p.tendon_force_rate_N_per_s, &p.tendon_length_m, &p.tendon_length_rate_m_per_s,
                   &p.fiber_length_m, &p.shortening_velocity_m_per_s, &p.force_ratio, &p.activation,
                   &p.activation_rate_per_s, &p.excitation})
@@ -215,12 +215,10 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
     const double F = Ctau_.row(j).dot(tj.tau.col(0)) + CY_.row(j).dot(Y_jet.col(0));
     const double dF = Ctau_.row(j).dot(tj.tau.col(1)) + CY_.row(j).dot(Y_jet.col(1));
     const double ddF = Ctau_.row(j).dot(tj.tau.col(2)) + (has_ddY ? CY_.row(j).dot(Y_jet.col(2)) : 0.0);
-    const double L = model_->musculotendonLength(j, q_jet.col(0));
-    const double dL = has_qd ? -A_.col(j).dot(q_jet.col(1)) : 0.0;
-    const double ddL = has_qdd ? -A_.col(j).dot(q_jet.col(2)) : 0.0;
+    const fm::SecondOrderJet path = pathLengthJet(j, q_jet);
     p.tendon_force_N[j] = F;
     p.tendon_force_rate_N_per_s[j] = dF;
-    const fm::MuscleInverse inv = fm::invert_muscle(mp, {F, dF, ddF}, {L, dL, ddL}, false);
+    const fm::MuscleInverse inv = fm::invert_muscle(mp, {F, dF, ddF}, path, false);
     if (inv.stage == fm::MuscleInverse::Stage::SlackTendon) {
       why = {Kind::SlackTendon, F, 0.0};
       continue;
@@ -249,6 +247,12 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
     else if (!(inv.excitation >= 0.0 && inv.excitation <= 1.0))
       why = {Kind::ExcitationOutsideUnitInterval, inv.excitation, 1.0};
   }
+}
+
+muscles::SecondOrderJet FlatOutputMap::pathLengthJet(int j, const Jet& q_jet) const {
+  // Constant moment arms: dL/dt = -A^T qd, d2L/dt2 = -A^T qdd.
+  return {model_->musculotendonLength(j, q_jet.col(0)), q_jet.cols() > 1 ? -A_.col(j).dot(q_jet.col(1)) : 0.0,
+          q_jet.cols() > 2 ? -A_.col(j).dot(q_jet.col(2)) : 0.0};
 }
 
 FlatState FlatOutputMap::forward(const MuscleState& s) const {

@@ -63,7 +63,7 @@ Eigen::MatrixXd RecedingHorizonStep::excitations(const FlatOutputMap& flat, plug
 }
 
 PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                     const SplineTrajectory& Y, const Eigen::VectorXd& reserves, int points) {
+                     const SplineTrajectory& Y, const Eigen::VectorXd& reserves, int points, double bound_tolerance) {
   if (points < 2) throw std::invalid_argument("plan check: need at least 2 points");
   PlanCheck c;
   c.points = points;
@@ -87,11 +87,16 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
       c.min_excitation = std::min(c.min_excitation, mp.excitation.minCoeff());
       c.max_excitation = std::max(c.max_excitation, mp.excitation.maxCoeff());
     }
-    if (!mp.inDomain()) {
-      ++c.points_outside_domain;
+    bool outside = false;
+    {
       for (std::size_t j = 0; j < mp.domain_violation.size(); ++j) {
         const DomainViolation& v = mp.domain_violation[j];
         if (!v.violated()) continue;
+        const bool bound_kind = v.kind == DomainViolation::Kind::ActivationOutsideUnitInterval ||
+                                v.kind == DomainViolation::Kind::ActivationBelowFloor ||
+                                v.kind == DomainViolation::Kind::ExcitationOutsideUnitInterval;
+        if (bound_kind && v.excess() <= bound_tolerance) continue;
+        outside = true;
         if (c.first_violation.empty()) {
           std::ostringstream why;
           why << "t = " << t << " s, muscle '" << flat.model().description().muscles[j].parameters.name
@@ -105,6 +110,7 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
         }
       }
     }
+    if (outside) ++c.points_outside_domain;
   }
   if (limiting.violated()) {
     std::ostringstream why;
@@ -171,17 +177,27 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   bc.terminal = Eigen::MatrixXd::Zero(p, 2);  // dY(T) = ddY(T) = 0
   bc.terminal_first_order = 1;
   const double before_sos = setup.seconds();
-  plan.sos = solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos);
+  const MusclesAlongPath muscles{flat, plan.path, workspace};
+  plan.sos = solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
   plan.setup_seconds = before_sos + plan.sos.setup_seconds;
   plan.solve_seconds = plan.sos.solve_seconds;
   plan.certify_seconds = plan.sos.certify_seconds;
   plan.status = plan.sos.status;
   plan.message = plan.sos.message;
+  if (plan.status == SolveStatus::Infeasible && plan.sos.bounds_imposed && plan.sos.Y) {
+    // The bounds cannot be met: say where the closest plan leaves the muscles' domain.
+    auto closest = check_plan(flat, workspace, plan.path, *plan.sos.Y, o.reserves_N, o.check_points, o.sos.bounds.tolerance);
+    if (!closest.limiting_violation.empty())
+      plan.message += "; the closest plan leaves the model's valid domain: " + closest.limiting_violation;
+    plan.check = std::move(closest);
+    return plan;
+  }
   if (plan.status != SolveStatus::Solved) return plan;
   plan.Y = plan.sos.Y;
 
   const Stopwatch check;
-  plan.check = check_plan(flat, workspace, plan.path, *plan.Y, o.reserves_N, o.check_points);
+  plan.check = check_plan(flat, workspace, plan.path, *plan.Y, o.reserves_N, o.check_points,
+                          o.sos.bounds.enforce ? o.sos.bounds.tolerance : 0.0);
   plan.check_seconds = check.seconds();
   if (plan.check.min_reserve_margin_N < -1e-6) {
     plan.status = SolveStatus::Failed;

@@ -1,6 +1,7 @@
 #include "flatsos/planner/sos_program.hpp"
 
 #include "flatsos/plugin/stopwatch.hpp"
+#include "sos/sos_bounds.hpp"
 #include "sos/sos_exchange.hpp"
 #include "sos/sos_setup.hpp"
 
@@ -8,7 +9,7 @@ namespace flatsos::planner {
 
 SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                    const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
-                                   const SosProgramOptions& options) {
+                                   const SosProgramOptions& options, const MusclesAlongPath* muscles) {
   const Stopwatch setup_time;
   detail::SosSetup setup = detail::set_up_sos_program(flat, torque, duration_s, boundary, reserves_N, options);
   SosProgramResult result;
@@ -16,6 +17,11 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
 
   Eigen::VectorXd theta;
   if (!detail::solve_by_exchange(setup, options, theta, result)) return result;
+  if (muscles && options.bounds.enforce) {
+    const bool bounded = detail::impose_excitation_bounds(setup, *muscles, options, theta, result);
+    result.solve_seconds += result.bounds_seconds;
+    if (!bounded) return result;
+  }
   result.cost_N_s = setup.cost_constant + setup.lp.cost.dot(theta);
   result.Y = detail::flat_outputs_of(setup, theta);
   result.status = SolveStatus::Solved;

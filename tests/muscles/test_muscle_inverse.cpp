@@ -76,17 +76,19 @@ TEST(MuscleInverse, GradientsMatchFiniteDifferences) {
     const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, true);
     const double scales[3] = {1.0, 10.0, 100.0};
     for (int k = 0; k < 3; ++k) {
-      auto vary = [&](double x, bool excitation) {
+      auto vary = [&](double x, int which) {
         fm::SecondOrderJet f = s.force;
         (k == 0 ? f.value : k == 1 ? f.rate : f.acceleration) = x;
         const fm::MuscleInverse v = fm::invert_muscle(p, f, s.path, false);
-        return excitation ? v.excitation : v.activation;
+        return which == 0 ? v.activation : which == 1 ? v.activation_rate_per_s : v.excitation;
       };
       const double x0 = k == 0 ? s.force.value : k == 1 ? s.force.rate : s.force.acceleration;
       const double h = default_step(x0, scales[k]);
-      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_gradient[k], central_difference([&](double x) { return vary(x, false); }, x0, h))
+      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_gradient[k], central_difference([&](double x) { return vary(x, 0); }, x0, h))
           << "d a / d x" << k;
-      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.excitation_gradient[k], central_difference([&](double x) { return vary(x, true); }, x0, h))
+      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_rate_gradient[k], central_difference([&](double x) { return vary(x, 1); }, x0, h))
+          << "d da/dt / d x" << k;
+      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.excitation_gradient[k], central_difference([&](double x) { return vary(x, 2); }, x0, h))
           << "d n / d x" << k;
     }
   }
@@ -105,6 +107,40 @@ TEST(MuscleInverse, ForwardLawsReproduceTheInverse) {
     EXPECT_NEAR(fm::activation_derivative(p, inv.excitation, inv.activation), inv.activation_rate_per_s,
                 1e-9 * (1.0 + std::abs(inv.activation_rate_per_s)));
   }
+}
+
+TEST(ExcitationBoundMargins, AreNonnegativeExactlyWhenTheExcitationIsInTheUnitInterval) {
+  const auto p = triceps();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int inside = 0, outside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double a = 1e-3 + (1.0 - 1e-3) * unit(rng);
+    const double adot = (-40.0 + 140.0 * unit(rng)) * (0.05 + a);
+    const fm::ExcitationBoundMargins m = fm::excitation_bound_margins(p, a, adot);
+    const fm::ExcitationFromActivation n = fm::excitation_from_activation(p, a, adot);
+    // Away from the boundary (where rounding decides), the two tests agree.
+    if (std::min(std::abs(m.lower), std::abs(m.upper)) < 1e-9) continue;
+    const bool margins_ok = m.lower >= 0.0 && m.upper >= 0.0;
+    EXPECT_EQ(margins_ok, n.in_unit_interval()) << "a " << a << " da/dt " << adot << " n " << n.excitation;
+    (margins_ok ? inside : outside)++;
+  }
+  EXPECT_GT(inside, 1000);
+  EXPECT_GT(outside, 1000);
+  // Their partial derivatives (away from the kink of the lower margin's curvature).
+  for (double a : {0.05, 0.2, 0.5, 0.9})
+    for (double adot : {-20.0, 0.0, 15.0}) {
+      const auto m = fm::excitation_bound_margins(p, a, adot);
+      auto at = [&](double x, double y, bool lower) {
+        const auto v = fm::excitation_bound_margins(p, x, y);
+        return lower ? v.lower : v.upper;
+      };
+      const double ha = default_step(a, 1.0), hr = default_step(adot, 1.0);
+      EXPECT_MATCHES_FINITE_DIFFERENCE(m.lower_d_activation, central_difference([&](double x) { return at(x, adot, true); }, a, ha));
+      EXPECT_MATCHES_FINITE_DIFFERENCE(m.upper_d_activation, central_difference([&](double x) { return at(x, adot, false); }, a, ha));
+      EXPECT_MATCHES_FINITE_DIFFERENCE(m.lower_d_rate_s, central_difference([&](double y) { return at(a, y, true); }, adot, hr));
+      EXPECT_MATCHES_FINITE_DIFFERENCE(m.upper_d_rate_s, central_difference([&](double y) { return at(a, y, false); }, adot, hr));
+    }
 }
 
 TEST(MuscleInverse, SlackTendonAndNoForceCapacityStopTheChain) {

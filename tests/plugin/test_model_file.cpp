@@ -78,6 +78,8 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
        {"bodies[0].mass_center_m", "dimension"}},
       {"inertia wrong dimension", [](json& j) { j["bodies"][0]["inertia_about_mass_center_kg_m2"] = {1, 2}; },
        {"inertia_about_mass_center_kg_m2", "dimension"}},
+      {"mass centre far out", [](json& j) { j["bodies"][0]["mass_center_m"] = {0.1, -1e38, 0.0}; },
+       {"bodies[0].mass_center_m", "within 100 m"}},
       {"inertia triangle", [](json& j) { j["bodies"][0]["inertia_about_mass_center_kg_m2"] = {0.01, 0.01, 0.05}; },
        {"inertia_about_mass_center_kg_m2", "triangle"}},
       {"typo key in body", [](json& j) { j["bodies"][0]["mass"] = 2.0; }, {"bodies[0].mass", "unknown key"}},

@@ -9,32 +9,13 @@
 
 namespace flatsos::planner::detail {
 
-namespace {
-constexpr double kNoBound = 1e19;
-}  // namespace
-
 bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::VectorXd& theta, SosProgramResult& result) {
   const Stopwatch solve;
   auto& constraints = setup.constraints;
-  LinearProgram& lp = setup.lp;
+  const LinearProgram& lp = setup.lp;
   const int n_theta = setup.free_coefficients;
 
-  auto build_rows = [&]() {
-    std::size_t rows = 0;
-    for (const auto& c : constraints) rows += c.points.size();
-    lp.G.resize(static_cast<Eigen::Index>(rows), n_theta);
-    lp.row_lower.resize(static_cast<Eigen::Index>(rows));
-    lp.row_upper = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(rows), kNoBound);
-    Eigen::Index row = 0;
-    for (const auto& c : constraints)
-      for (double s : c.points) {
-        const Eigen::RowVectorXd v = monomials(s, c.base.size());
-        lp.G.row(row) = v * c.G;
-        lp.row_lower[row] = o.feasibility_margin_N * std::pow(s, c.margin_order) - v.dot(c.base);
-        ++row;
-      }
-    result.lp_points = static_cast<int>(rows);
-  };
+  auto build_rows = [&]() { result.lp_points = build_exchange_rows(setup, o.feasibility_margin_N); };
 
   if (const std::string reason = fixed_violation(setup, o.feasibility_margin_N); !reason.empty()) {
     result.status = SolveStatus::Infeasible;
@@ -86,22 +67,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
           }
       }
     }
-    // Exact minimum of every constraint polynomial; add the violated points.
-    bool added = false;
-    result.min_constraint_value_N = kNoBound;
-    for (auto& c : constraints) {
-      const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
-      result.min_constraint_value_N = std::min(result.min_constraint_value_N, mn.value);
-      if (mn.value < -kConstraintTolerance_N) {
-        const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
-        if (!known) {
-          c.points.push_back(mn.at);
-          c.sticky.push_back(true);
-          added = true;
-        }
-      }
-    }
-    if (added) continue;
+    if (add_violated_points(setup, theta, result.min_constraint_value_N)) continue;
     converged = true;
     break;
   }

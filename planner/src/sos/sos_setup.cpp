@@ -265,6 +265,42 @@ std::string fixed_violation(const SosSetup& setup, double margin_N) {
   return "";
 }
 
+int build_exchange_rows(SosSetup& setup, double margin_N) {
+  std::size_t rows = 0;
+  for (const auto& c : setup.constraints) rows += c.points.size();
+  LinearProgram& lp = setup.lp;
+  lp.G.resize(static_cast<Eigen::Index>(rows), setup.free_coefficients);
+  lp.row_lower.resize(static_cast<Eigen::Index>(rows));
+  lp.row_upper = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(rows), 1e19);
+  Eigen::Index row = 0;
+  for (const auto& c : setup.constraints)
+    for (double s : c.points) {
+      const Eigen::RowVectorXd v = monomials(s, c.base.size());
+      lp.G.row(row) = v * c.G;
+      lp.row_lower[row] = margin_N * std::pow(s, c.margin_order) - v.dot(c.base);
+      ++row;
+    }
+  return static_cast<int>(rows);
+}
+
+bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& min_value_N) {
+  bool added = false;
+  min_value_N = 1e300;
+  for (auto& c : setup.constraints) {
+    const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
+    min_value_N = std::min(min_value_N, mn.value);
+    if (mn.value < -kConstraintTolerance_N) {
+      const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
+      if (!known) {
+        c.points.push_back(mn.at);
+        c.sticky.push_back(true);
+        added = true;
+      }
+    }
+  }
+  return added;
+}
+
 SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta) {
   Eigen::MatrixXd coefficients(static_cast<Eigen::Index>(setup.outputs.size()), setup.basis.size());
   for (std::size_t l = 0; l < setup.outputs.size(); ++l) {

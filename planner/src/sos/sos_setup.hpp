@@ -79,6 +79,15 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
 /// Empty when there is none.
 std::string fixed_violation(const SosSetup& setup, double margin_N);
 
+/// The exchange LP's rows (setup.lp.G, row_lower, row_upper): every constraint polynomial at its
+/// points, >= margin s^margin_order. Returns the number of rows.
+int build_exchange_rows(SosSetup& setup, double margin_N);
+
+/// The exact minimum of every constraint polynomial at theta; the violated minima (below
+/// -kConstraintTolerance_N) not yet among a constraint's points join them as sticky points.
+/// Sets min_value_N to the least minimum; returns whether a point was added.
+bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& min_value_N);
+
 /// The flat outputs of theta.
 SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta);
 

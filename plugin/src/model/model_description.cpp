@@ -26,6 +26,10 @@ void validate(const ModelDescription& model, const std::string& source) {
     if (!body_names.insert(b.name).second)
       fail(indexed("bodies", i) + ".name", "duplicate body name '" + b.name + "'");
     if (!(b.mass_kg > 0.0) || !std::isfinite(b.mass_kg)) fail(indexed("bodies", i) + ".mass_kg", "must be > 0");
+    // Simbody stores the inertia about the body origin: a mass centre far out (found by the fuzzer:
+    // 1e38 m) swamps the central inertia in rounding and Simbody aborts on the result.
+    if (!b.mass_center_m.allFinite() || b.mass_center_m.norm() > 100.0)
+      fail(indexed("bodies", i) + ".mass_center_m", "must be finite and within 100 m of the body frame");
     // The conditions Simbody's Inertia demands (it throws its own message otherwise).
     const Eigen::Vector3d& I = b.principal_inertia_kg_m2;
     const Eigen::Vector3d& P = b.product_inertia_kg_m2;  // Ixy, Ixz, Iyz

@@ -102,4 +102,22 @@ struct ExcitationFromActivation {
 ExcitationFromActivation excitation_from_activation(const MuscleParameters& p, double activation,
                                                     double activation_rate_per_s);
 
+/// The excitation bounds as smooth (C1) conditions on (a, da/dt): for a in (0, 1], the larger
+/// root n of the inverse activation dynamics is real and in [0, 1] exactly when both margins
+/// are >= 0:
+///   lower = T_act (da/dt - min_{n in [0, 1]} sigma(n) (n - a))
+///         = T_act da/dt + beta a                          for a <= beta / (1 - beta),
+///           T_act da/dt + (beta + (1 - beta) a)^2 / (4 (1 - beta))  above (there the fastest
+///           deactivation is not at n = 0: sigma(n) (n - a) has its minimum at n > 0);
+///   upper = 1 - a - T_act da/dt  (no faster activation than n = 1 gives).
+/// Unlike n itself they are defined for every da/dt (no root to lose), so an optimizer can
+/// impose them from any start. With their partial derivatives.
+struct ExcitationBoundMargins {
+  double lower = 0.0, upper = 0.0;
+  double lower_d_activation = 0.0, lower_d_rate_s = 0.0;
+  double upper_d_activation = 0.0, upper_d_rate_s = 0.0;
+};
+ExcitationBoundMargins excitation_bound_margins(const MuscleParameters& p, double activation,
+                                                double activation_rate_per_s);
+
 }  // namespace flatsos::muscles

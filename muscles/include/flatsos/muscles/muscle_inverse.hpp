@@ -39,7 +39,7 @@ struct MuscleInverse {
   double excitation = 0.0;
   bool excitation_real = true;  ///< false: no excitation gives da/dt (excitation is then the closest)
   /// Set when asked for and stage is Complete (and, for the excitation, excitation_real).
-  TendonForceJetGradient activation_gradient{}, excitation_gradient{};
+  TendonForceJetGradient activation_gradient{}, activation_rate_gradient{}, excitation_gradient{};
 };
 
 /// `path` is the musculotendon length L and its rates (m, m/s, m/s^2).

@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "flatsos/plugin/model/model_workspace.hpp"
+#include "flatsos/muscles/muscle_inverse.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::planner {
@@ -161,6 +162,10 @@ class FlatOutputMap {
   MusclePoint inverseFromTorque(const Jet& q_jet, const TorqueJet& tau, const Jet& Y_jet) const;
   /// The same into `out`, reusing its storage (allocates nothing once `out` holds m muscles).
   void inverseFromTorque(const Jet& q_jet, const TorqueJet& tau, const Jet& Y_jet, MusclePoint& out) const;
+
+  /// Musculotendon length of muscle j and its first two time derivatives along a joint motion
+  /// (q_jet N x 1..5; missing rates are 0).
+  muscles::SecondOrderJet pathLengthJet(int muscle, const Jet& q_jet) const;
 
   /// Forward map of a muscle state. Throws std::invalid_argument for sizes or NaN.
   FlatState forward(plugin::ModelWorkspace& workspace, const MuscleState& s) const;

@@ -77,9 +77,12 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
 /// The same with a temporary workspace (a State copy, tens of microseconds).
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& options);
 
-/// The a-posteriori check of any flat trajectory on `points` uniform times in [0, T].
+/// The a-posteriori check of any flat trajectory on `points` uniform times in [0, T]. Activations
+/// and excitations outside their bounds by at most `bound_tolerance` do not count as leaving the
+/// domain (the bounded plans' tolerance; 0: exact).
 PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                     const SplineTrajectory& Y, const Eigen::VectorXd& reserves_N, int points);
+                     const SplineTrajectory& Y, const Eigen::VectorXd& reserves_N, int points,
+                     double bound_tolerance = 0.0);
 
 struct RecedingHorizonOptions {
   double horizon_s = 0.5;

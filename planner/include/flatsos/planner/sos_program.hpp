@@ -26,6 +26,7 @@
 #include <Eigen/Core>
 
 #include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/joint_paths.hpp"
 #include "flatsos/planner/numerics/linear_program.hpp"
 #include "flatsos/planner/numerics/polynomial.hpp"
 #include "flatsos/planner/numerics/spline_trajectory.hpp"
@@ -55,6 +56,35 @@ struct SosExchangeStudyOptions {
   int initial_interior_points = 0;     ///< uniform points per segment imposed from the start, besides its end
 };
 
+/// Bounds on what the muscles can execute: 0 <= n(t) <= 1 and a_min <= a(t) <= 1 on [0, T].
+/// They are nonlinear in Y. When the reserves-only optimum violates them on the check grid, an
+/// NLP (Ipopt; exact first derivatives through each muscle's inverse, muscles/muscle_inverse.hpp;
+/// limited-memory Hessian) imposes them at time points found by exchange on that grid, started
+/// from the reserves-only optimum; the reserves stay the exact, certified constraints.
+enum class BoundsSolver {
+  SequentialLp,  ///< linearized bounds in a trust region, LPs by Clp (the default: measured faster)
+  Ipopt,         ///< Ipopt, limited-memory Hessian (a second opinion)
+};
+
+struct ExcitationBoundsOptions {
+  bool enforce = true;
+  BoundsSolver solver = BoundsSolver::SequentialLp;
+  double min_activation = 0.0;       ///< a >= this; 0: each muscle's own activation floor
+  int check_points = 3001;           ///< the uniform grid on which the bounds hold
+  double tolerance = 1e-6;           ///< allowed excess of a and n on that grid
+  int initial_points_per_span = 4;   ///< uniform points imposed from the start (besides violators)
+  int max_rounds = 20;               ///< NLP solves (each adds violated grid points)
+  int max_slp_iterations = 200;       ///< per round
+  int max_ipopt_iterations = 1000;
+};
+
+/// The muscles along the plan's fixed joint path: what the bounds need besides the torque model.
+struct MusclesAlongPath {
+  const FlatOutputMap& flat;
+  const JointPath& path;
+  plugin::ModelWorkspace& workspace;
+};
+
 struct SosProgramOptions {
   int flat_output_degree = 4;          ///< d (>= 3 keeps the excitations continuous)
   int flat_output_spans = 1;           ///< S uniform knot spans of the B-splines
@@ -62,6 +92,7 @@ struct SosProgramOptions {
   int max_exchange_rounds = 40;
   bool certify = true;                 ///< Lukacs certificates for the near-active pieces
   double near_active_N = 1.0;          ///< pieces whose minimum is below this get certified
+  ExcitationBoundsOptions bounds;      ///< used when the muscles along the path are given
   SosExchangeStudyOptions study;
 };
 
@@ -69,7 +100,9 @@ struct SosProgramResult {
   SolveStatus status = SolveStatus::Failed;
   std::string message;                 ///< why, when not solved
   double cost_N_s = 0.0;               ///< integral of sum Y
-  std::optional<SplineTrajectory> Y;   ///< the flat outputs (N); none unless solved
+  /// The flat outputs (N): the optimum when solved; when the bounds are infeasible, the closest
+  /// plan found (for diagnosis: it violates them); otherwise none.
+  std::optional<SplineTrajectory> Y;
   double min_constraint_value_N = 0.0; ///< exact minimum of every g_jk and Y_l over [0, T]
   int exchange_rounds = 0;
   int lp_points = 0;
@@ -79,13 +112,23 @@ struct SosProgramResult {
   int near_active_pieces = 0;
   int certified_pieces = 0;            ///< of the near-active ones
   bool certified = false;              ///< every near-active piece has a certificate
+  bool bounds_imposed = false;         ///< the reserves-only optimum violated a bound: the NLP ran
+  int bound_rounds = 0;                ///< NLP solves
+  int bound_points = 0;                ///< times at which the NLP imposed the bounds
+  int bound_slp_iterations = 0;        ///< LP steps of the sequential LP, over all rounds
+  /// Largest excess of a or n over its bounds on the check grid (<= tolerance when solved; 0
+  /// without bounds).
+  double max_bound_excess = 0.0;
   double setup_seconds = 0.0, solve_seconds = 0.0, certify_seconds = 0.0;
+  double bounds_seconds = 0.0;         ///< checks and NLP solves of the bounds (part of solve_seconds)
 };
 
 /// Throws std::invalid_argument for bad sizes, NaN, T <= 0, a negative reserve or a basis too
 /// small for the equalities.
+/// With `muscles` (and options.bounds.enforce) the excitation and activation bounds are part of
+/// the program.
 SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                    const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
-                                   const SosProgramOptions& options = {});
+                                   const SosProgramOptions& options = {}, const MusclesAlongPath* muscles = nullptr);
 
 }  // namespace flatsos::planner

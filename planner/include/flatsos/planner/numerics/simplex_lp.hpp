@@ -5,6 +5,8 @@
 // parallel (the points of a rich flat-output basis crowd where constraints are active).
 // Same problem and result types as the Ipopt solver in linear_program.hpp.
 
+#include <Eigen/SparseCore>
+
 #include "flatsos/planner/numerics/linear_program.hpp"
 
 namespace flatsos::planner {
@@ -14,5 +16,14 @@ namespace flatsos::planner {
 /// solver_status names Clp's outcome; iterations counts simplex pivots; row_multipliers are
 /// Clp's row duals (>= 0 on active lower bounds of a minimization).
 LinearProgramResult solve_linear_program_simplex(const LinearProgram& lp);
+
+/// The same LP with a sparse constraint matrix (large LPs whose rows touch few variables).
+struct SparseLinearProgram {
+  Eigen::VectorXd cost;
+  Eigen::SparseMatrix<double> G;  ///< column-major, as Clp stores it
+  Eigen::VectorXd row_lower, row_upper;
+  Eigen::VectorXd x_lower, x_upper;
+};
+LinearProgramResult solve_linear_program_simplex(const SparseLinearProgram& lp);
 
 }  // namespace flatsos::planner

@@ -1,0 +1,20 @@
+#pragma once
+// The excitation and activation bounds of the SOS program (sos_program.hpp,
+// ExcitationBoundsOptions): checked on a dense grid, and when violated imposed by an NLP at
+// exchange points, with the reserves' exchange rows as its linear constraints.
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/sos_program.hpp"
+#include "sos/sos_setup.hpp"
+
+namespace flatsos::planner::detail {
+
+/// Starts from theta (the reserves-only optimum). When a bound is violated on the check grid,
+/// solves the bounded NLP (and re-runs the reserves' exchange inside it) until the grid and the
+/// constraint polynomials hold. Fills the bound fields of `result` and, when it fails, status and
+/// message; returns whether theta is a bounded, reserve-feasible optimum.
+bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& muscles, const SosProgramOptions& options,
+                              Eigen::VectorXd& theta, SosProgramResult& result);
+
+}  // namespace flatsos::planner::detail

@@ -1,0 +1,134 @@
+// Excitation and activation bounds in the open-loop planner (0 <= n <= 1, floor <= a <= 1).
+// At T = 3 s the paper's quartic needs no bound: same plan, same cost. At T = 1.5 s its
+// reserves-only optimum asks for excitations above 1; the bounded plan keeps every excitation
+// and activation inside on a 3001-point grid, costs more, is certified, agrees with Ipopt's
+// independent solution of the same NLP, and Simbody executes it. A rich basis whose
+// reserves-only optimum deactivates faster than the muscles can is bounded too.
+#include <gtest/gtest.h>
+
+#include "../planner/scenario_fixture.hpp"
+#include "flatsos/planner/planned_excitation.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+
+namespace fp = flatsos::plugin;
+namespace fpl = flatsos::planner;
+using flatsos::test::deg;
+
+namespace {
+
+class BoundedPlans : public ::testing::Test {
+ protected:
+  flatsos::test::ArmPlanning arm;
+  fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
+
+  fpl::OpenLoopOptions options(double T, int degree = 4, int spans = 1) const {
+    auto o = flatsos::test::open_loop_options();
+    o.duration_s = T;
+    o.sos.flat_output_degree = degree;
+    o.sos.flat_output_spans = spans;
+    o.torque.pieces = std::max(12, spans);
+    return o;
+  }
+
+  // Every bound on a 3001-point grid, to 1e-6, and every reserve.
+  void expect_executable(const fpl::OpenLoopPlan& plan, const fpl::OpenLoopOptions& o) const {
+    auto ws = arm.flat.makeWorkspace();
+    const fpl::PlanCheck dense = fpl::check_plan(arm.flat, ws, plan.path, *plan.Y, o.reserves_N, 3001, 1e-6);
+    EXPECT_EQ(dense.points_outside_domain, 0) << dense.limiting_violation;
+    EXPECT_GE(dense.min_excitation, -1e-6);
+    EXPECT_LE(dense.max_excitation, 1.0 + 1e-6);
+    EXPECT_GT(dense.min_activation, 0.0);
+    EXPECT_LE(dense.max_activation, 1.0 + 1e-6);
+    EXPECT_GE(dense.min_reserve_margin_N, -1e-6);
+    EXPECT_TRUE(plan.sos.certified) << plan.sos.certified_pieces << " of " << plan.sos.near_active_pieces;
+  }
+};
+
+}  // namespace
+
+TEST_F(BoundedPlans, ThePapersQuarticAtThreeSecondsNeedsNoBound) {
+  const auto o = options(3.0);
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_FALSE(plan.sos.bounds_imposed);
+  EXPECT_NEAR(plan.sos.cost_N_s, 958.32, 0.01);
+  EXPECT_EQ(plan.sos.max_bound_excess, 0.0);
+}
+
+TEST_F(BoundedPlans, TheQuarticAtOneAndAHalfSecondsIsBoundedAtAHigherCost) {
+  auto unbounded = options(1.5);
+  unbounded.sos.bounds.enforce = false;
+  const auto free = fpl::plan_open_loop(arm.flat, s0, unbounded);
+  ASSERT_EQ(free.status, fpl::SolveStatus::Infeasible);
+  EXPECT_NE(free.message.find("excitation"), std::string::npos) << free.message;
+  EXPECT_GT(free.check.max_excitation, 1.2);
+
+  const auto o = options(1.5);
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_TRUE(plan.sos.bounds_imposed);
+  EXPECT_GT(plan.sos.cost_N_s, free.sos.cost_N_s * 1.05);
+  EXPECT_LE(plan.sos.max_bound_excess, 1e-6);
+  expect_executable(plan, o);
+  EXPECT_GT(plan.check.max_excitation, 0.999);  // the bound is what limits it
+}
+
+TEST_F(BoundedPlans, SequentialLpAndIpoptReachTheSameBoundedOptimum) {
+  const auto o = options(1.5);
+  auto by_ipopt = o;
+  by_ipopt.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
+  const auto slp = fpl::plan_open_loop(arm.flat, s0, o);
+  const auto ipopt = fpl::plan_open_loop(arm.flat, s0, by_ipopt);
+  ASSERT_EQ(slp.status, fpl::SolveStatus::Solved) << slp.message;
+  ASSERT_EQ(ipopt.status, fpl::SolveStatus::Solved) << ipopt.message;
+  EXPECT_GT(slp.sos.bound_slp_iterations, 0);
+  EXPECT_EQ(ipopt.sos.bound_slp_iterations, 0);
+  EXPECT_NEAR(slp.sos.cost_N_s, ipopt.sos.cost_N_s, 1e-6 * ipopt.sos.cost_N_s);
+}
+
+TEST_F(BoundedPlans, SimbodyExecutesTheBoundedPlan) {
+  const auto o = options(1.5);
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  const auto& model = *arm.model;
+  SimTK::State s = model.defaultState();
+  model.setJointAngles(s, s0.q_rad);
+  model.setJointSpeeds(s, s0.qd_rad_per_s);
+  model.setTendonLengths(s, s0.tendon_length_m);
+  model.setActivations(s, s0.activation);
+  const auto excitation = fpl::PlannedExcitation::create(arm.flat, plan.path, *plan.Y);
+  for (int j = 0; j < 6; ++j) model.muscle(j).setExcitationSignal(s, excitation->signal(j));
+  fp::SimulationOptions so;
+  so.duration_s = 1.5;
+  so.accuracy = 1e-10;
+  so.report_interval_s = 0.01;
+  const auto sim = fp::simulate(model, s, so);
+  ASSERT_TRUE(sim.finite) << sim.message;
+  double q_err = 0, a_err = 0;
+  for (const auto& row : sim.states.rows) {
+    const fpl::Jet qj = plan.jointJet(row[0]);
+    const fpl::MusclePoint& mp = excitation->at(row[0]);
+    q_err = std::max({q_err, std::abs(row[1] - qj(0, 0)), std::abs(row[3] - qj(1, 0))});
+    for (int j = 0; j < 6; ++j) a_err = std::max(a_err, std::abs(row[static_cast<std::size_t>(5 + 5 * j)] - mp.activation[j]));
+  }
+  EXPECT_LT(q_err, deg(1e-4));
+  EXPECT_LT(a_err, 1e-6);
+}
+
+TEST_F(BoundedPlans, ARichBasisThatDeactivatesTooFastIsBounded) {
+  // Cubic splines on 24 spans at T = 1.5 s: the reserves-only optimum drives an excitation below 0.
+  auto unbounded = options(1.5, 3, 24);
+  unbounded.sos.bounds.enforce = false;
+  const auto free = fpl::plan_open_loop(arm.flat, s0, unbounded);
+  ASSERT_EQ(free.status, fpl::SolveStatus::Infeasible) << free.message;
+  EXPECT_LT(free.check.min_excitation, 0.0);
+
+  const auto o = options(1.5, 3, 24);
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_TRUE(plan.sos.bounds_imposed);
+  EXPECT_GE(plan.sos.cost_N_s, free.sos.cost_N_s);
+  expect_executable(plan, o);
+  const auto quartic = fpl::plan_open_loop(arm.flat, s0, options(1.5));
+  EXPECT_LT(plan.sos.cost_N_s, 0.25 * quartic.sos.cost_N_s);
+}
