@@ -82,11 +82,12 @@ int main(int argc, char** argv) try {
   ol.target_q_rad = ol_in.target_q_rad;
   ol.reserves_N = ol_in.reserves_N;
   ol.check_points = 2;  // the a-posteriori check is timed separately
-  auto time_plan = [&](const fpl::OpenLoopOptions& o) {
-    std::vector<double> setup, solve, certify, total;
+  auto time_plan = [&](const fpl::OpenLoopOptions& o, int repetitions) {
+    std::vector<double> setup, solve, certify, total, bounds;
     fpl::OpenLoopPlan last;
-    for (int i = 0; i < reps; ++i) {
+    for (int i = 0; i < repetitions; ++i) {
       last = fpl::plan_open_loop(flat, ws, ms0, o);
+      bounds.push_back(last.sos.bounds_seconds);
       setup.push_back(last.setup_seconds);
       solve.push_back(last.solve_seconds);
       certify.push_back(last.certify_seconds);
@@ -102,18 +103,38 @@ int main(int argc, char** argv) try {
               {"setup_plus_solve", stats(total, 1e3, "ms")},
               {"ipopt_iterations", last.sos.ipopt_iterations},
               {"ipopt_calls", last.sos.ipopt_calls},
-              {"exchange_rounds", last.sos.exchange_rounds}};
+              {"exchange_rounds", last.sos.exchange_rounds},
+              {"flat_output_basis", {{"degree", o.sos.flat_output_degree}, {"spans", o.sos.flat_output_spans}}},
+              {"duration_s", o.duration_s},
+              {"bounds_imposed", last.sos.bounds_imposed},
+              {"bounds_check_and_solve", stats(bounds, 1e3, "ms")},
+              {"sequential_lp_iterations", last.sos.bound_slp_iterations}};
     if (last.status == fpl::SolveStatus::Solved) r["cost_Ns"] = last.sos.cost_N_s;
     return std::make_pair(r, ex::median(total));
   };
-  const auto [sop, sop_median] = time_plan(ol);
+  const auto [sop, sop_median] = time_plan(ol, reps);
   j["open_loop_sop"] = sop;
   fpl::OpenLoopOptions box = ol;
   box.torque.pieces = 1;
   box.torque.degree = 0;
   box.torque.samples_per_piece = 31;
-  const auto [box_json, box_median] = time_plan(box);
+  const auto [box_json, box_median] = time_plan(box, reps);
   j["open_loop_sop_paper_box"] = box_json;
+  // Rich flat-output bases (cubic B-splines) and the excitation bounds: the scenario itself with
+  // 12 spans, and the same transfer in half the time (quartic and 24 spans), where the bounds act.
+  const int rich_reps = std::max(3, reps / 10);
+  fpl::OpenLoopOptions rich = ol;
+  rich.sos.flat_output_degree = 3;
+  rich.sos.flat_output_spans = 12;
+  rich.torque.pieces = 12;
+  j["open_loop_cubic_12_spans"] = time_plan(rich, rich_reps).first;
+  fpl::OpenLoopOptions fast = ol;
+  fast.duration_s = 0.5 * ol.duration_s;
+  j["open_loop_quartic_half_duration_bounded"] = time_plan(fast, rich_reps).first;
+  fast.sos.flat_output_degree = 3;
+  fast.sos.flat_output_spans = 24;
+  fast.torque.pieces = 24;
+  j["open_loop_cubic_24_spans_half_duration_bounded"] = time_plan(fast, rich_reps).first;
   {
     const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, ms0, ol);
     if (plan.status != fpl::SolveStatus::Solved) throw std::runtime_error("the open-loop scenario was not planned: " + plan.message);

@@ -42,6 +42,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--flat-output-spans", options.sos.flat_output_spans, "uniform knot spans of the flat outputs' B-splines")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  bool no_bounds = false;
+  app.add_flag("--no-bounds", no_bounds,
+               "plan with the reserves only: excitations outside [0, 1] or activations above 1 then make the plan "
+               "infeasible instead of being constrained");
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,
@@ -55,6 +59,7 @@ int main(int argc, char** argv) {
     const fpl::FlatOutputMap flat(model);
     const int m = model->numMuscles();
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "open_loop", given, 3.0, 10.0);
+    options.sos.bounds.enforce = !no_bounds;
     options.duration_s = in.duration_s;
     options.target_q_rad = in.target_q_rad;
     options.reserves_N = in.reserves_N;

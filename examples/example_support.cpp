@@ -112,6 +112,12 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::Mus
   j["torque_model"] = {{"pieces", plan.torque.pieces.size()},
                        {"degree", plan.torque.pieces.empty() || plan.torque.pieces[0].torque.empty() ? 0 : plan.torque.pieces[0].torque[0].degree()}};
   j["certificates"] = {{"near_active_pieces", s.near_active_pieces}, {"certified_pieces", s.certified_pieces}, {"all_certified", s.certified}};
+  j["excitation_bounds"] = {{"imposed", s.bounds_imposed},
+                            {"rounds", s.bound_rounds},
+                            {"points", s.bound_points},
+                            {"sequential_lp_iterations", s.bound_slp_iterations},
+                            {"max_excess_on_check_grid", s.max_bound_excess},
+                            {"seconds", s.bounds_seconds}};
   nlohmann::json qc = nlohmann::json::object();
   for (std::size_t i = 0; i < plan.path.q.size(); ++i) {
     const auto& c = plan.path.q[i].coefficients();

@@ -7,10 +7,8 @@
 #include <gtest/gtest.h>
 
 #include "../planner/scenario_fixture.hpp"
-#include "flatsos/planner/planned_excitation.hpp"
-#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "open_loop_replay.hpp"
 
-namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 using flatsos::test::deg;
 
@@ -90,27 +88,9 @@ TEST_F(BoundedPlans, SimbodyExecutesTheBoundedPlan) {
   const auto o = options(1.5);
   const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
-  const auto& model = *arm.model;
-  SimTK::State s = model.defaultState();
-  model.setJointAngles(s, s0.q_rad);
-  model.setJointSpeeds(s, s0.qd_rad_per_s);
-  model.setTendonLengths(s, s0.tendon_length_m);
-  model.setActivations(s, s0.activation);
-  const auto excitation = fpl::PlannedExcitation::create(arm.flat, plan.path, *plan.Y);
-  for (int j = 0; j < 6; ++j) model.muscle(j).setExcitationSignal(s, excitation->signal(j));
-  fp::SimulationOptions so;
-  so.duration_s = 1.5;
-  so.accuracy = 1e-10;
-  so.report_interval_s = 0.01;
-  const auto sim = fp::simulate(model, s, so);
-  ASSERT_TRUE(sim.finite) << sim.message;
-  double q_err = 0, a_err = 0;
-  for (const auto& row : sim.states.rows) {
-    const fpl::Jet qj = plan.jointJet(row[0]);
-    const fpl::MusclePoint& mp = excitation->at(row[0]);
-    q_err = std::max({q_err, std::abs(row[1] - qj(0, 0)), std::abs(row[3] - qj(1, 0))});
-    for (int j = 0; j < 6; ++j) a_err = std::max(a_err, std::abs(row[static_cast<std::size_t>(5 + 5 * j)] - mp.activation[j]));
-  }
+  const flatsos::test::OpenLoopReplay replay = flatsos::test::replay_open_loop(arm.flat, s0, plan, 1e-10, 0.01);
+  ASSERT_TRUE(replay.sim.finite) << replay.sim.message;
+  const double q_err = replay.max_q_error_rad, a_err = replay.max_activation_error;
   EXPECT_LT(q_err, deg(1e-4));
   EXPECT_LT(a_err, 1e-6);
 }

@@ -11,6 +11,7 @@
 
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
+#include "open_loop_replay.hpp"
 #include "rh_scenario.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 
@@ -20,42 +21,19 @@ using flatsos::test::deg;
 
 TEST(PaperScenarios, OpenLoopPlanIsReproducedBySimbody) {
   flatsos::test::ArmPlanning arm;
-  const auto& model = *arm.model;
-  const fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(model);
+  const fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
   const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, flatsos::test::open_loop_options());
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   ASSERT_GE(plan.check.min_tendon_force_N, 10.0);
 
-  SimTK::State s = model.defaultState();
-  model.setJointAngles(s, s0.q_rad);
-  model.setJointSpeeds(s, s0.qd_rad_per_s);
-  model.setTendonLengths(s, s0.tendon_length_m);
-  model.setActivations(s, s0.activation);
-  const auto excitation = fpl::PlannedExcitation::create(arm.flat, plan.path, *plan.Y);
-  for (int j = 0; j < 6; ++j) model.muscle(j).setExcitationSignal(s, excitation->signal(j));
-  fp::SimulationOptions o;
-  o.duration_s = 3.0;
-  o.accuracy = 1e-10;
-  o.report_interval_s = 0.01;
-  const auto sim = fp::simulate(model, s, o);
+  const flatsos::test::OpenLoopReplay replay = flatsos::test::replay_open_loop(arm.flat, s0, plan, 1e-10, 0.01);
+  const auto& sim = replay.sim;
   ASSERT_TRUE(sim.finite) << sim.message;
   ASSERT_EQ(sim.states.rows.size(), 301u);
-  double q_err = 0, a_err = 0, ls_err = 0, min_force = 1e300;
-  for (const auto& row : sim.states.rows) {
-    const double t = row[0];
-    const fpl::Jet qj = plan.jointJet(t);
-    const fpl::MusclePoint& mp = excitation->at(t);
-    q_err = std::max({q_err, std::abs(row[1] - qj(0, 0)), std::abs(row[3] - qj(1, 0))});
-    for (int j = 0; j < 6; ++j) {
-      a_err = std::max(a_err, std::abs(row[static_cast<std::size_t>(5 + 5 * j)] - mp.activation[j]));
-      ls_err = std::max(ls_err, std::abs(row[static_cast<std::size_t>(5 + 5 * j + 1)] - mp.tendon_length_m[j]));
-      min_force = std::min(min_force, row[static_cast<std::size_t>(5 + 5 * j + 2)]);
-    }
-  }
-  EXPECT_LT(q_err, deg(1e-6));
-  EXPECT_LT(a_err, 1e-8);
-  EXPECT_LT(ls_err, 1e-9);
-  EXPECT_GE(min_force, 10.0 - 1e-6);  // the simulated tendons keep the reserve too
+  EXPECT_LT(replay.max_q_error_rad, deg(1e-6));
+  EXPECT_LT(replay.max_activation_error, 1e-8);
+  EXPECT_LT(replay.max_tendon_length_error_m, 1e-9);
+  EXPECT_GE(replay.min_tendon_force_N, 10.0 - 1e-6);  // the simulated tendons keep the reserve too
   // The arm arrives straight up.
   EXPECT_NEAR(sim.states.rows.back()[1], deg(90), deg(1e-6));
   EXPECT_NEAR(sim.states.rows.back()[3], 0.0, deg(1e-6));

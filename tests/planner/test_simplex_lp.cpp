@@ -100,3 +100,20 @@ TEST(SimplexLp, BadDataIsRejected) {
   bad.row_lower.resize(2);
   EXPECT_THROW(fpl::solve_linear_program_simplex(bad), std::invalid_argument);
 }
+
+TEST(SimplexLp, SparseAndDenseFormsGiveTheSameOptimum) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 10; ++trial) {
+    auto lp = random_lp(rng, 3 + trial, 20 + 10 * trial);
+    // Thin the rows out: the sparse form must keep exactly the nonzeros.
+    for (Eigen::Index i = 0; i < lp.G.rows(); ++i)
+      for (Eigen::Index j = 0; j < lp.G.cols(); ++j)
+        if ((i + j) % 3 == 0) lp.G(i, j) = 0.0;
+    fpl::SparseLinearProgram sparse{lp.cost, lp.G.sparseView(), lp.row_lower, lp.row_upper, lp.x_lower, lp.x_upper};
+    const auto a = fpl::solve_linear_program_simplex(lp);
+    const auto b = fpl::solve_linear_program_simplex(sparse);
+    ASSERT_EQ(a.status, fpl::SolveStatus::Solved);
+    ASSERT_EQ(b.status, fpl::SolveStatus::Solved);
+    EXPECT_NEAR(a.objective, b.objective, 1e-9 * (1 + std::abs(a.objective))) << trial;
+  }
+}
