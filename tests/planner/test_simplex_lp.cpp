@@ -109,6 +109,7 @@ TEST(SimplexLp, SparseAndDenseFormsGiveTheSameOptimum) {
     for (Eigen::Index i = 0; i < lp.G.rows(); ++i)
       for (Eigen::Index j = 0; j < lp.G.cols(); ++j)
         if ((i + j) % 3 == 0) lp.G(i, j) = 0.0;
+    lp.row_lower = -1.0 - lp.row_lower.cwiseAbs().array();  // x = 0 stays feasible after the thinning
     fpl::SparseLinearProgram sparse{lp.cost, lp.G.sparseView(), lp.row_lower, lp.row_upper, lp.x_lower, lp.x_upper};
     const auto a = fpl::solve_linear_program_simplex(lp);
     const auto b = fpl::solve_linear_program_simplex(sparse);
