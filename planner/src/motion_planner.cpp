@@ -74,9 +74,13 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   DomainViolation limiting;           // the most fundamental kind, then the largest excess
   std::size_t limiting_muscle = 0;
   std::map<std::pair<std::size_t, DomainViolation::Kind>, double> first_time;  // per muscle and kind
+  Jet q_jet(flat.numJoints(), 5), y_jet(flat.numFlatOutputs(), 3);
+  MusclePoint mp;
   for (int i = 0; i < points; ++i) {
     const double t = h * i;
-    const MusclePoint mp = flat.inverseFromTorque(path.jet(t, 5), jets[static_cast<std::size_t>(i)], Y.jet(t, 3));
+    path.jetInto(t, q_jet);
+    Y.jetInto(t, y_jet);
+    flat.inverseFromTorque(q_jet, jets[static_cast<std::size_t>(i)], y_jet, mp);
     c.min_tendon_force_N = std::min(c.min_tendon_force_N, mp.tendon_force_N.minCoeff());
     c.min_reserve_margin_N = std::min(c.min_reserve_margin_N, (mp.tendon_force_N - reserves).minCoeff());
     if (mp.activation.allFinite()) {

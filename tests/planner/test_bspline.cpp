@@ -9,6 +9,7 @@
 
 #include "flatsos/planner/numerics/bspline.hpp"
 #include "flatsos/planner/numerics/polynomial.hpp"
+#include "flatsos/planner/numerics/spline_trajectory.hpp"
 
 namespace fpl = flatsos::planner;
 
@@ -98,4 +99,26 @@ TEST(BSplineBasis, RejectsBadInput) {
   EXPECT_THROW(fpl::BSplineBasis(3, 0, 1.0), std::invalid_argument);
   EXPECT_THROW(fpl::BSplineBasis(3, 3, 0.0), std::invalid_argument);
   EXPECT_THROW(fpl::BSplineBasis(3, 3, std::nan("")), std::invalid_argument);
+}
+
+TEST(SplineTrajectory, JetAgreesWithTheBasisRowsEverywhere) {
+  // Two evaluation routes: per-span power coefficients by Horner (the trajectory) and the basis
+  // functions' derivative rows (Cox-de Boor) times the coefficients.
+  const fpl::BSplineBasis basis(3, 7, 2.5);
+  Eigen::MatrixXd c = Eigen::MatrixXd::Random(3, basis.size()) * 100.0;
+  const fpl::SplineTrajectory y(basis, c);
+  for (int i = 0; i <= 700; ++i) {
+    const double t = 2.5 * i / 700.0;  // ends and every knot included
+    const Eigen::MatrixXd jet = y.jet(t, 4);
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::VectorXd expected = c * basis.derivativeRow(t, k).transpose();
+      for (int r = 0; r < 3; ++r)
+        EXPECT_NEAR(jet(r, k), expected[r], 1e-9 * (1.0 + std::abs(expected[r])) * std::pow(7.0 / 2.5, k)) << t << " " << k;
+      EXPECT_NEAR(y.derivativeAt(1, t, k), expected[1], 1e-9 * (1.0 + std::abs(expected[1])) * std::pow(7.0 / 2.5, k));
+    }
+  }
+  EXPECT_THROW(fpl::SplineTrajectory(basis, Eigen::MatrixXd::Zero(3, basis.size() + 1)), std::invalid_argument);
+  Eigen::MatrixXd bad = c;
+  bad(0, 0) = std::nan("");
+  EXPECT_THROW(fpl::SplineTrajectory(basis, bad), std::invalid_argument);
 }

@@ -1,5 +1,6 @@
 #include "flatsos/planner/numerics/spline_trajectory.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <utility>
 
@@ -11,12 +12,34 @@ SplineTrajectory::SplineTrajectory(BSplineBasis basis, Eigen::MatrixXd coefficie
     throw std::invalid_argument("spline trajectory: need " + std::to_string(basis_.size()) +
                                 " coefficients per signal, got " + std::to_string(coefficients_.cols()));
   if (!coefficients_.allFinite()) throw std::invalid_argument("spline trajectory: coefficients must be finite");
+  for (int span = 0; span < basis_.spans(); ++span)
+    span_powers_.push_back(coefficients_ * basis_.spanPowerMatrix(span).transpose());
 }
 
 Eigen::MatrixXd SplineTrajectory::jet(double t, int orders) const {
   Eigen::MatrixXd out(coefficients_.rows(), orders);
-  for (int k = 0; k < orders; ++k) out.col(k) = coefficients_ * basis_.derivativeRow(t, k).transpose();
+  jetInto(t, out);
   return out;
+}
+
+void SplineTrajectory::jetInto(double t, Eigen::Ref<Eigen::MatrixXd> out) const {
+  // Horner's scheme for each derivative of the span's polynomial in s, then d/dt = (1/h) d/ds.
+  const int span = basis_.spanAt(t);
+  const double h = basis_.spanLength();
+  const double s = std::clamp(t / h - span, 0.0, 1.0);
+  const Eigen::MatrixXd& P = span_powers_[static_cast<std::size_t>(span)];
+  const int degree = basis_.degree();
+  double scale = 1.0;
+  for (Eigen::Index k = 0; k < out.cols(); ++k, scale /= h)
+    for (Eigen::Index r = 0; r < out.rows(); ++r) {
+      double v = 0.0;
+      for (int p = degree; p >= k; --p) {
+        double falling = 1.0;
+        for (Eigen::Index q = 0; q < k; ++q) falling *= static_cast<double>(p - q);
+        v = v * s + falling * P(r, p);
+      }
+      out(r, k) = v * scale;
+    }
 }
 
 double SplineTrajectory::derivativeAt(int row, double t, int order) const {

@@ -430,9 +430,12 @@ GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const 
   GridExcess out;
   out.excess.assign(static_cast<std::size_t>(points), 0.0);
   MusclePoint point;
+  Jet q_jet(flat.numJoints(), 3), y_jet(flat.numFlatOutputs(), 3);
   for (int i = 0; i < points; ++i) {
     const double t = h * i;
-    flat.inverseFromTorque(mp.path.jet(t, 3), jets[static_cast<std::size_t>(i)], Y.jet(t, 3), point);
+    mp.path.jetInto(t, q_jet);
+    Y.jetInto(t, y_jet);
+    flat.inverseFromTorque(q_jet, jets[static_cast<std::size_t>(i)], y_jet, point);
     for (int j = 0; j < flat.numMuscles(); ++j) {
       const double a = point.activation[j], n = point.excitation[j];
       double e = std::max({a_min[j] - a, a - 1.0, -n, n - 1.0, 0.0});

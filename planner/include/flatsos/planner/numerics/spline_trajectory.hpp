@@ -6,6 +6,8 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "flatsos/planner/numerics/bspline.hpp"
@@ -26,6 +28,8 @@ class SplineTrajectory {
 
   /// Derivatives 0 .. orders - 1 at t (signals x orders); t is clamped to [0, T].
   Eigen::MatrixXd jet(double t, int orders) const;
+  /// The same into `out` (signals x orders, orders = its column count; allocates nothing).
+  void jetInto(double t, Eigen::Ref<Eigen::MatrixXd> out) const;
   /// Derivative `order` of signal `row` at t.
   double derivativeAt(int row, double t, int order = 0) const;
   /// Signal `row` on span `span` in powers of the span's scaled time s in [0, 1].
@@ -34,6 +38,7 @@ class SplineTrajectory {
  private:
   BSplineBasis basis_;
   Eigen::MatrixXd coefficients_;
+  std::vector<Eigen::MatrixXd> span_powers_;  ///< per span: signals x (degree + 1), powers of s
 };
 
 }  // namespace flatsos::planner
