@@ -1,0 +1,164 @@
+#include "sos/bound_rows.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "flatsos/muscles/hill_laws.hpp"
+
+namespace flatsos::planner::detail {
+
+namespace fm = flatsos::muscles;
+
+Eigen::VectorXd activation_minima(const FlatOutputMap& flat, const ExcitationBoundsOptions& o) {
+  Eigen::VectorXd a_min(flat.numMuscles());
+  for (int j = 0; j < flat.numMuscles(); ++j)
+    a_min[j] = o.min_activation > 0.0 ? o.min_activation : flat.model().muscle(j).getParameters().activation_floor;
+  return a_min;
+}
+
+BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double t) {
+  const FlatOutputMap& flat = mp.flat;
+  const int m = flat.numMuscles(), p = flat.numFlatOutputs();
+  const Jet q_jet = mp.path.jet(t, 5);
+  const TorqueJet tau = flat.torqueJet(mp.workspace, q_jet);
+  BoundPoint bp;
+  bp.t_s = t;
+  bp.base.resize(m, 3);
+  std::array<Eigen::MatrixXd, 3> full;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::RowVectorXd row = setup.basis.derivativeRow(t, k);
+    Eigen::VectorXd y_particular(p);
+    Eigen::MatrixXd dY = Eigen::MatrixXd::Zero(p, setup.free_coefficients);
+    for (int l = 0; l < p; ++l) {
+      const auto& out = setup.outputs[static_cast<std::size_t>(l)];
+      y_particular[l] = row.dot(out.particular);
+      if (out.nullspace.cols()) dY.block(l, out.offset, 1, out.nullspace.cols()) = row * out.nullspace;
+    }
+    bp.base.col(k) = flat.Ctau() * tau.tau.col(k) + flat.CY() * y_particular;
+    full[static_cast<std::size_t>(k)] = flat.CY() * dY;
+  }
+  for (int c = 0; c < setup.free_coefficients; ++c)
+    if (full[0].col(c).any() || full[1].col(c).any() || full[2].col(c).any()) bp.columns.push_back(c);
+  for (int k = 0; k < 3; ++k) {
+    auto& s = bp.slope[static_cast<std::size_t>(k)];
+    s.resize(m, static_cast<Eigen::Index>(bp.columns.size()));
+    for (std::size_t c = 0; c < bp.columns.size(); ++c) s.col(static_cast<Eigen::Index>(c)) = full[static_cast<std::size_t>(k)].col(bp.columns[c]);
+  }
+  for (int j = 0; j < m; ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
+  return bp;
+}
+
+MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
+                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients) {
+  double F[3];
+  for (int k = 0; k < 3; ++k) {
+    double v = bp.base(j, k);
+    const auto& s = bp.slope[static_cast<std::size_t>(k)];
+    for (std::size_t c = 0; c < bp.columns.size(); ++c) v += s(j, static_cast<Eigen::Index>(c)) * theta[bp.columns[c]];
+    F[k] = v;
+  }
+  const fm::MuscleParameters& p = flat.model().muscle(j).getParameters();
+  const fm::MuscleInverse inv = fm::invert_muscle(p, {F[0], F[1], F[2]}, bp.path[static_cast<std::size_t>(j)], gradients);
+  MuscleBoundRows rows;
+  if (inv.stage != fm::MuscleInverse::Stage::Complete) return rows;
+  rows.defined = true;
+  const fm::ExcitationBoundMargins m = fm::excitation_bound_margins(p, inv.activation, inv.activation_rate_per_s);
+  // Imposed with a margin of 1e-9, so that rounding leaves the plan inside, not at -1e-14.
+  rows.value = {inv.activation - a_min - kBoundMargin, 1.0 - inv.activation - kBoundMargin, m.lower - kBoundMargin,
+                m.upper - kBoundMargin};
+  if (gradients)
+    for (std::size_t o = 0; o < 3; ++o) {
+      const double da = inv.activation_gradient[o], dadot = inv.activation_rate_gradient[o];
+      rows.gradient[0][o] = da;
+      rows.gradient[1][o] = -da;
+      rows.gradient[2][o] = m.lower_d_activation * da + m.lower_d_rate_s * dadot;
+      rows.gradient[3][o] = m.upper_d_activation * da + m.upper_d_rate_s * dadot;
+    }
+  return rows;
+}
+
+double column_derivative(const BoundPoint& bp, const fm::TendonForceJetGradient& g, int j, std::size_t c) {
+  double v = 0.0;
+  for (std::size_t o = 0; o < 3; ++o) v += g[o] * bp.slope[o](j, static_cast<Eigen::Index>(c));
+  return v;
+}
+
+BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
+                          const Eigen::VectorXd& theta, bool jacobian) {
+  BoundRowsAt out;
+  const int m = flat.numMuscles();
+  out.value.reserve(points.size() * static_cast<std::size_t>(m * kRowsPerMuscle));
+  int row = 0;
+  for (const auto& bp : points)
+    for (int j = 0; j < m; ++j) {
+      const MuscleBoundRows rows = bound_rows(flat, bp, j, a_min[j], theta, jacobian);
+      for (int k = 0; k < kRowsPerMuscle; ++k, ++row) {
+        if (!rows.defined) {
+          out.value.push_back(-std::numeric_limits<double>::infinity());
+          out.defined = false;
+          continue;
+        }
+        out.value.push_back(rows.value[static_cast<std::size_t>(k)]);
+        out.violation += std::max(0.0, -rows.value[static_cast<std::size_t>(k)]);
+        if (jacobian)
+          for (std::size_t c = 0; c < bp.columns.size(); ++c)
+            out.jacobian.emplace_back(row, bp.columns[c], column_derivative(bp, rows.gradient[static_cast<std::size_t>(k)], j, c));
+      }
+    }
+  return out;
+}
+
+double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta) {
+  if (lp.G.rows() == 0) return 0.0;
+  return (lp.row_lower - lp.G * theta).cwiseMax(0.0).sum();
+}
+
+GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const std::vector<TorqueJet>& jets,
+                       const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, int points) {
+  const SplineTrajectory Y = flat_outputs_of(setup, theta);
+  const FlatOutputMap& flat = mp.flat;
+  const double h = setup.duration_s / (points - 1);
+  GridExcess out;
+  out.excess.assign(static_cast<std::size_t>(points), 0.0);
+  MusclePoint point;
+  Jet q_jet(flat.numJoints(), 3), y_jet(flat.numFlatOutputs(), 3);
+  for (int i = 0; i < points; ++i) {
+    const double t = h * i;
+    mp.path.jetInto(t, q_jet);
+    Y.jetInto(t, y_jet);
+    flat.inverseFromTorque(q_jet, jets[static_cast<std::size_t>(i)], y_jet, point);
+    for (int j = 0; j < flat.numMuscles(); ++j) {
+      const double a = point.activation[j], n = point.excitation[j];
+      double e = std::max({a_min[j] - a, a - 1.0, -n, n - 1.0, 0.0});
+      const DomainViolation::Kind kind = point.domain_violation[static_cast<std::size_t>(j)].kind;
+      if (!std::isfinite(a) || !std::isfinite(n) || kind == DomainViolation::Kind::SlackTendon ||
+          kind == DomainViolation::Kind::NoForceCapacity || kind == DomainViolation::Kind::ExcitationUnattainable)
+        e = std::numeric_limits<double>::infinity();
+      out.excess[static_cast<std::size_t>(i)] = std::max(out.excess[static_cast<std::size_t>(i)], e);
+      if (e > out.worst) {
+        out.worst = e;
+        std::ostringstream why;
+        why << "muscle '" << flat.model().description().muscles[static_cast<std::size_t>(j)].parameters.name << "' at t = " << t
+            << " s: activation " << a << ", excitation " << n;
+        out.worst_text = why.str();
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<double> violated_times(const GridExcess& g, double h, double tolerance) {
+  std::vector<double> times;
+  const std::size_t n = g.excess.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double e = g.excess[i];
+    if (!(e > tolerance)) continue;
+    const bool left = i == 0 || e >= g.excess[i - 1], right = i + 1 == n || e >= g.excess[i + 1];
+    if (left && right) times.push_back(h * static_cast<double>(i));
+  }
+  return times;
+}
+
+}  // namespace flatsos::planner::detail

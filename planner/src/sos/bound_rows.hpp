@@ -1,0 +1,80 @@
+#pragma once
+// The excitation and activation bounds as rows over the free coefficients theta of the flat
+// outputs: at each time point and muscle four rows ">= 0" with exact gradients (through
+// muscles::invert_muscle and muscles::excitation_bound_margins), and the same bounds checked on a
+// dense grid through the inverse map.
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "flatsos/muscles/muscle_inverse.hpp"
+#include "flatsos/planner/sos_program.hpp"
+#include "sos/sos_setup.hpp"
+
+namespace flatsos::planner::detail {
+
+/// a's lower bound per muscle: the options' min_activation, or each muscle's activation floor.
+Eigen::VectorXd activation_minima(const FlatOutputMap& flat, const ExcitationBoundsOptions& o);
+
+/// Everything about one time point that does not depend on theta: the tendon-force jets are
+/// F^(k) = base(:, k) + slope[k] * theta(columns), k = 0, 1, 2.
+struct BoundPoint {
+  double t_s = 0.0;
+  Eigen::MatrixXd base;                 // m x 3
+  std::vector<int> columns;             // theta entries that move Y's jet here
+  std::array<Eigen::MatrixXd, 3> slope; // m x columns
+  std::vector<muscles::SecondOrderJet> path; // per muscle
+};
+
+BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double t);
+
+// The bound rows of one muscle at one point, each ">= 0": a - a_min, 1 - a, and the two margins
+// of muscles::excitation_bound_margins for 0 <= n <= 1 (smooth in a and da/dt, defined where n
+// is not), with their gradients in the point's tendon-force jet.
+constexpr int kRowsPerMuscle = 4;
+constexpr double kBoundMargin = 1e-9;
+struct MuscleBoundRows {
+  bool defined = false;  // false: slack tendon or no force capacity (no a, no n)
+  std::array<double, kRowsPerMuscle> value{};
+  std::array<muscles::TendonForceJetGradient, kRowsPerMuscle> gradient{};
+};
+
+MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
+                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients);
+
+// d(row)/d theta over the point's columns.
+double column_derivative(const BoundPoint& bp, const muscles::TendonForceJetGradient& g, int j, std::size_t c);
+
+/// The bound rows at every point (and their Jacobian) for theta.
+struct BoundRowsAt {
+  std::vector<double> value;  // per point, muscle, row; -inf where undefined
+  std::vector<Eigen::Triplet<double>> jacobian;  // (row, theta column, derivative)
+  double violation = 0.0;     // sum of max(0, -value)
+  bool defined = true;
+};
+
+BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
+                          const Eigen::VectorXd& theta, bool jacobian);
+
+/// Sum of the reserve rows' violations (N) of the exchange LP in setup.lp.
+double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta);
+
+// The bounds on the check grid for the flat outputs of theta: per grid time the largest excess
+// over any muscle's bounds (0 inside; +inf where the inverse is undefined), and the worst one.
+struct GridExcess {
+  std::vector<double> excess;
+  double worst = 0.0;
+  std::string worst_text;
+};
+
+GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const std::vector<TorqueJet>& jets,
+                       const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, int points);
+
+// Grid times where the excess is a local maximum above the tolerance.
+std::vector<double> violated_times(const GridExcess& g, double h, double tolerance);
+
+}  // namespace flatsos::planner::detail
