@@ -29,6 +29,15 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
     return true;
   }
   result.bounds_imposed = true;
+  if (setup.free_coefficients == 0) {
+    // The boundary conditions fix the flat outputs completely: nothing can move them inside.
+    result.status = SolveStatus::Infeasible;
+    result.message = "infeasible: the boundary conditions fix the flat outputs completely (no free coefficient in "
+                     "this basis) and they leave the bounds: " + excess.worst_text;
+    result.Y = flat_outputs_of(setup, theta);
+    result.bounds_seconds = wall.seconds();
+    return false;
+  }
   std::vector<BoundPoint> points;
   auto add_point = [&](double t) {
     for (const auto& bp : points)

@@ -108,11 +108,13 @@ OutputParameterization eliminate_equalities(const BSplineBasis& basis, const Fla
   for (int i = 0; i < size - n_eq; ++i) A_free.col(i) = Aeq.col(free[static_cast<std::size_t>(i)]);
   const Eigen::PartialPivLU<Eigen::MatrixXd> dep(A_dep);
   const Eigen::VectorXd c_dep = dep.solve(beq);
-  const Eigen::MatrixXd coupling = -dep.solve(A_free);
   out.nullspace = Eigen::MatrixXd::Zero(size, size - n_eq);
-  for (int i = 0; i < n_eq; ++i) {
-    out.particular[dependent[static_cast<std::size_t>(i)]] = c_dep[i];
-    out.nullspace.row(dependent[static_cast<std::size_t>(i)]) = coupling.row(i);
+  for (int i = 0; i < n_eq; ++i) out.particular[dependent[static_cast<std::size_t>(i)]] = c_dep[i];
+  // With no free coefficient (the equalities fix Y) there is no coupling to solve for: Eigen's
+  // triangular solve on a matrix without columns binds a reference to null data (UBSan).
+  if (size > n_eq) {
+    const Eigen::MatrixXd coupling = -dep.solve(A_free);
+    for (int i = 0; i < n_eq; ++i) out.nullspace.row(dependent[static_cast<std::size_t>(i)]) = coupling.row(i);
   }
   for (int i = 0; i < size - n_eq; ++i) out.nullspace(free[static_cast<std::size_t>(i)], i) = 1.0;
   return out;
