@@ -112,3 +112,34 @@ TEST_F(BoundedPlans, ARichBasisThatDeactivatesTooFastIsBounded) {
   const auto quartic = fpl::plan_open_loop(arm.flat, s0, options(1.5));
   EXPECT_LT(plan.sos.cost_N_s, 0.25 * quartic.sos.cost_N_s);
 }
+
+TEST_F(BoundedPlans, ALowEffortPlansReplayErrorFollowsTheMotionsOwnGrowthRate) {
+  // Cubic splines on 48 spans at T = 3 s: bounded, about 372 N s, little co-contraction while the
+  // arm rises to upright, so the open-loop motion is unstable. Replayed open loop its joint angles
+  // drift by about 1 deg whatever the integrator accuracy. The drift is a tiny seed amplified
+  // by that instability: it grows exactly as a 1e-9 rad perturbation of the initial state does.
+  const auto o = options(3.0, 3, 48);
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  expect_executable(plan, o);
+  const auto nominal = flatsos::test::replay_open_loop(arm.flat, s0, plan, 1e-11, 0.15);
+  auto shifted = s0;
+  shifted.q_rad[1] += 1e-9;
+  const auto perturbed = flatsos::test::replay_open_loop(arm.flat, shifted, plan, 1e-11, 0.15);
+  ASSERT_TRUE(nominal.sim.finite && perturbed.sim.finite);
+  ASSERT_EQ(nominal.sim.states.rows.size(), perturbed.sim.states.rows.size());
+  double gain_end = 0.0, seed_min = 1e300, seed_max = 0.0;
+  for (std::size_t k = 0; k < nominal.sim.states.rows.size(); ++k) {
+    const auto& a = nominal.sim.states.rows[k];
+    const auto& b = perturbed.sim.states.rows[k];
+    if (a[0] < 1.5 - 1e-9) continue;
+    const double gain = std::abs(b[3] - a[3]) / 1e-9;           // elbow: the joint that drifts most
+    const double error = std::abs(a[3] - plan.jointJet(a[0])(1, 0));
+    seed_min = std::min(seed_min, error / gain);
+    seed_max = std::max(seed_max, error / gain);
+    gain_end = gain;
+  }
+  EXPECT_GT(gain_end, 1e4);                // the motion amplifies any deviation ...
+  EXPECT_LT(seed_max / seed_min, 1.5);     // ... and the replay error grows at the same rate ...
+  EXPECT_LT(seed_max, 1e-6);               // ... from a seed far below any meaningful angle
+}
