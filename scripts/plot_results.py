@@ -206,6 +206,21 @@ def grid_shape(count):
     return math.ceil(count / columns), columns
 
 
+def plot_activations(axes, muscles, states, controls, excitation_style, excitation_label):
+    """Per muscle panel: the excitation (when the controls have it) under the activation; returns
+    the plotted series for the shared scale."""
+    series = []
+    for ax, m in zip(axes, muscles):
+        n = excitation(controls, m)
+        if n is not None:
+            ax.plot(controls.time, n, label=excitation_label, **excitation_style)
+            series.append(n)
+        a = states["/forceset/%s/activation" % m]
+        ax.plot(states.time, a, color="tab:blue", label="activation")
+        series.append(a)
+    return series
+
+
 def finish_muscle_panels(axes, muscles, series):
     """Titles, one shared y scale and the legend; returns {muscle: [bottom, top]} as drawn."""
     bottom, top = shared_activation_limits(series)
@@ -342,15 +357,7 @@ def receding_horizon(folder, report):
     rows, columns = grid_shape(len(muscles))
     fig = plt.figure(figsize=(4 * columns, 2.6 * rows + 0.8))
     axes = muscle_grid(fig, GridSpec(rows, columns, figure=fig), len(muscles))
-    series = []
-    for ax, m in zip(axes, muscles):
-        a = sim["/forceset/%s/activation" % m]
-        n = excitation(controls, m)
-        if n is not None:
-            ax.plot(controls.time, n, color="tab:gray", lw=0.8, label="applied excitation")
-            series.append(n)
-        ax.plot(sim.time, a, color="tab:blue", label="activation")
-        series.append(a)
+    series = plot_activations(axes, muscles, sim, controls, dict(color="tab:gray", lw=0.8), "applied excitation")
     scales = finish_muscle_panels(axes, muscles, series)
     fig.suptitle("Receding horizon: activations" + (" and applied excitations" if controls is not None else ""))
     fig.tight_layout()
@@ -373,15 +380,7 @@ def forward(folder, report):
         ax_q.plot(states.time, np.degrees(states[j + "/value"]), color="C%d" % (i % 10), label=joint_name(j))
     joint_legend(ax_q)
     axes = muscle_grid(fig, grid, len(muscles), first_row=1)
-    series = []
-    for ax, m in zip(axes, muscles):
-        a = states["/forceset/%s/activation" % m]
-        n = excitation(controls, m)
-        if n is not None:
-            ax.plot(controls.time, n, "--", color="tab:gray", lw=1, label="excitation")
-            series.append(n)
-        ax.plot(states.time, a, color="tab:blue", label="activation")
-        series.append(a)
+    series = plot_activations(axes, muscles, states, controls, dict(ls="--", color="tab:gray", lw=1), "excitation")
     scales = finish_muscle_panels(axes, muscles, series)
     fig.suptitle("Forward simulation: joint angles, activations" + (" and excitations" if controls is not None else ""))
     fig.tight_layout()

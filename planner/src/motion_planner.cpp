@@ -92,26 +92,24 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
       c.max_excitation = std::max(c.max_excitation, mp.excitation.maxCoeff());
     }
     bool outside = false;
-    {
-      for (std::size_t j = 0; j < mp.domain_violation.size(); ++j) {
-        const DomainViolation& v = mp.domain_violation[j];
-        if (!v.violated()) continue;
-        const bool bound_kind = v.kind == DomainViolation::Kind::ActivationOutsideUnitInterval ||
-                                v.kind == DomainViolation::Kind::ActivationBelowFloor ||
-                                v.kind == DomainViolation::Kind::ExcitationOutsideUnitInterval;
-        if (bound_kind && v.excess() <= bound_tolerance) continue;
-        outside = true;
-        if (c.first_violation.empty()) {
-          std::ostringstream why;
-          why << "t = " << t << " s, muscle '" << flat.model().description().muscles[j].parameters.name
-              << "': " << v.describe();
-          c.first_violation = why.str();
-        }
-        first_time.try_emplace({j, v.kind}, t);
-        if (!limiting.violated() || v.kind < limiting.kind || (v.kind == limiting.kind && v.excess() > limiting.excess())) {
-          limiting = v;
-          limiting_muscle = j;
-        }
+    for (std::size_t j = 0; j < mp.domain_violation.size(); ++j) {
+      const DomainViolation& v = mp.domain_violation[j];
+      if (!v.violated()) continue;
+      const bool bound_kind = v.kind == DomainViolation::Kind::ActivationOutsideUnitInterval ||
+                              v.kind == DomainViolation::Kind::ActivationBelowFloor ||
+                              v.kind == DomainViolation::Kind::ExcitationOutsideUnitInterval;
+      if (bound_kind && v.excess() <= bound_tolerance) continue;
+      outside = true;
+      if (c.first_violation.empty()) {
+        std::ostringstream why;
+        why << "t = " << t << " s, muscle '" << flat.model().description().muscles[j].parameters.name
+            << "': " << v.describe();
+        c.first_violation = why.str();
+      }
+      first_time.try_emplace({j, v.kind}, t);
+      if (!limiting.violated() || v.kind < limiting.kind || (v.kind == limiting.kind && v.excess() > limiting.excess())) {
+        limiting = v;
+        limiting_muscle = j;
       }
     }
     if (outside) ++c.points_outside_domain;

@@ -11,6 +11,11 @@
 
 namespace flatsos::planner::detail {
 
+namespace {
+constexpr const char* kBoundsUnmet =
+    "no flat outputs in this basis keep every excitation in [0, 1] and activation in [a_min, 1] with the reserves";
+}  // namespace
+
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosProgramOptions& o,
                               Eigen::VectorXd& theta, SosProgramResult& result) {
   const Stopwatch wall;
@@ -73,9 +78,8 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       if (!nlp.solved) {
         const GridExcess at = nlp.x.size() ? grid_excess(setup, mp, jets, a_min, nlp.x, bo.check_points) : excess;
         result.status = nlp.infeasible ? SolveStatus::Infeasible : SolveStatus::Failed;
-        result.message = std::string(nlp.infeasible ? "infeasible" : "failed") +
-                         ": no flat outputs in this basis keep every excitation in [0, 1] and activation in [a_min, 1] "
-                         "with the reserves (Ipopt: " + nlp.solver_status + "); where it stopped, " + at.worst_text;
+        result.message = std::string(nlp.infeasible ? "infeasible: " : "failed: ") + kBoundsUnmet + " (Ipopt: " +
+                         nlp.solver_status + "); where it stopped, " + at.worst_text;
         result.bounds_seconds = wall.seconds();
         return false;
       }
@@ -101,8 +105,7 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
     // A local minimum of the violation, even at a penalty of 1e12 per unit: the flat outputs of
     // this basis cannot meet the bounds along this joint path (from this start).
     result.status = SolveStatus::Infeasible;
-    result.message = "infeasible: no flat outputs in this basis keep every excitation in [0, 1] and activation in "
-                     "[a_min, 1] with the reserves along this joint path";
+    result.message = std::string("infeasible: ") + kBoundsUnmet + " along this joint path";
     result.Y = flat_outputs_of(setup, theta);  // the closest plan, for the caller's diagnosis
     return false;
   }

@@ -41,13 +41,6 @@ int piece_at(const TorqueModel& torque, double t) {
   return static_cast<int>(torque.pieces.size()) - 1;
 }
 
-// s^order of the piece's scaled time, as a polynomial of the segment's: (a + b s)^order.
-Polynomial power_of_affine(int order, double a, double b) {
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(order + 1);
-  e[order] = 1.0;
-  return Polynomial(e).composeAffine(a, b);
-}
-
 void require_valid_inputs(const FlatOutputMap& flat, const TorqueModel& torque, double T, const FlatOutputBoundary& bc,
                           const Eigen::VectorXd& reserves, const SosProgramOptions& o) {
   const int m = flat.numMuscles(), p = flat.numFlatOutputs();
@@ -172,7 +165,8 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
     // Y's coefficients -> powers of s on this segment.
     Eigen::MatrixXd P = Eigen::MatrixXd::Zero(D + 1, basis.size());
     P.topRows(d + 1) = affine_composition(d + 1, as, bs) * basis.spanPowerMatrix(span);
-    const Polynomial remainder_shape = power_of_affine(piece.remainder_order, a, b);
+    // s_piece^order as a polynomial of the segment's s: (a + b s)^order.
+    const Polynomial remainder_shape(affine_composition(piece.remainder_order + 1, a, b).col(piece.remainder_order));
     const bool starts_at_zero = seg == 0;
     const int margin_order = starts_at_zero ? piece.remainder_order : 0;
     // At t = 0 the initial state fixes the value; with a constant remainder bound the LP row
