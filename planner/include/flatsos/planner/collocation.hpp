@@ -1,0 +1,69 @@
+#pragma once
+// The direct-collocation reference (docs/method/collocation.md): the open-loop minimum-effort
+// problem the flatness planner solves, transcribed the way OpenSim Moco and most optimal-control
+// codes do it, so that its optimum is the yardstick for the flatness plans and users get a
+// baseline:
+//   minimize  integral_0^T sum_j w_j F_j(t) dt
+//   over the muscle states (tendon length, activation), excitations and fibre velocities,
+//   subject to the Hill muscle's laws (muscles/), the joint torques A F = ID(q(t)) along a
+//   prescribed joint path, F_j >= reserve_j, 0 <= n <= 1, a_min <= a <= 1, the initial muscle
+//   state, and rest at T (dL_S/dt = da/dt = 0).
+// Hermite-Simpson collocation (separated form: states and controls at mesh points and interval
+// midpoints) on a uniform mesh, the fibre equilibrium as an implicit constraint (no division by
+// the activation), solved by Ipopt with exact sparse first and second derivatives.
+
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/solve_status.hpp"
+
+namespace flatsos::planner {
+
+struct CollocationOptions {
+  int mesh_intervals = 100;          ///< K uniform intervals: 2K + 1 collocation points
+  /// Cost weights w (one per muscle): empty means the flat outputs' cost sum_l Y_l = (E^T 1)^T F,
+  /// the effort the flatness planner minimizes.
+  Eigen::VectorXd effort_weights;
+  double min_activation = 0.0;       ///< a >= this; 0: each muscle's own activation floor
+  double tolerance = 1e-9;           ///< Ipopt's tol (scaled NLP error)
+  int max_iterations = 3000;
+};
+
+struct CollocationResult {
+  SolveStatus status = SolveStatus::Failed;
+  std::string message;               ///< why, when not solved
+  std::string solver_status;         ///< Ipopt's return status
+  double cost_N_s = 0.0;             ///< the effort: Simpson quadrature of sum_j w_j F_j
+  int mesh_intervals = 0;
+  int variables = 0, constraints = 0;
+  int iterations = 0;
+  double setup_seconds = 0.0;        ///< inverse dynamics and path lengths at the points, start
+  double solve_seconds = 0.0;        ///< Ipopt
+  Eigen::VectorXd time_s;            ///< the 2K + 1 collocation points
+  /// m x (2K + 1), one row per muscle. Between the points each state is the cubic through its
+  /// values and rates at the interval's ends (Hermite-Simpson's own representation), and the
+  /// excitation is the one that cubic implies.
+  Eigen::MatrixXd tendon_force_N, tendon_length_m, activation, excitation, shortening_velocity_m_per_s;
+  Eigen::MatrixXd activation_rate_per_s;  ///< da/dt = sigma(n) (n - a)
+};
+
+/// The weights of the flat outputs' cost: integral sum_l Y_l = integral (E^T 1)^T F.
+Eigen::VectorXd flat_output_effort_weights(const FlatOutputMap& flat);
+
+/// The minimum-effort excitations along a prescribed joint path (for the flatness planner's own:
+/// OpenLoopPlan::path) from the initial muscle state (its tendon lengths and activations) to
+/// rest at path.duration_s. Throws std::invalid_argument naming the field for bad sizes, NaN,
+/// negative reserves or weights, fewer than 1 mesh interval, an initial state outside the
+/// muscles' domain; solver outcomes come back as statuses (Infeasible when Ipopt finds the
+/// problem infeasible).
+CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const JointPath& path, const MuscleState& initial,
+                                               const Eigen::VectorXd& reserves_N, const CollocationOptions& options = {});
+
+}  // namespace flatsos::planner

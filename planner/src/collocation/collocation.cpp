@@ -1,0 +1,300 @@
+#include "flatsos/planner/collocation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+#include "collocation/hermite_simpson.hpp"
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
+#include "numerics/ipopt_support.hpp"
+
+namespace flatsos::planner {
+
+namespace {
+
+using Ipopt::Index;
+using Ipopt::Number;
+
+// Ipopt's view of the transcription.
+class CollocationNlp : public Ipopt::TNLP {
+ public:
+  CollocationNlp(const detail::HermiteSimpsonProblem& problem, std::vector<double> start)
+      : problem_(problem), start_(std::move(start)) {}
+
+  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac, Index& nnz_h, IndexStyleEnum& style) override {
+    n = problem_.variables();
+    m = problem_.constraints();
+    nnz_jac = problem_.jacobianNonzeros();
+    nnz_h = problem_.hessianNonzeros();
+    style = C_STYLE;
+    return true;
+  }
+  bool get_bounds_info(Index, Number* xl, Number* xu, Index, Number* gl, Number* gu) override {
+    problem_.bounds(xl, xu, gl, gu);
+    return true;
+  }
+  bool get_starting_point(Index, bool init_x, Number* x, bool, Number*, Number*, Index, bool, Number*) override {
+    if (init_x) std::copy(start_.begin(), start_.end(), x);
+    return true;
+  }
+  bool eval_f(Index, const Number* x, bool, Number& f) override {
+    f = problem_.objective(x);
+    return std::isfinite(f);
+  }
+  bool eval_grad_f(Index, const Number* x, bool, Number* g) override {
+    problem_.objectiveGradient(x, g);
+    return true;
+  }
+  bool eval_g(Index, const Number* x, bool, Index m, Number* g) override {
+    problem_.constraintValues(x, g);
+    for (Index r = 0; r < m; ++r)
+      if (!std::isfinite(g[r])) return false;
+    return true;
+  }
+  bool eval_jac_g(Index, const Number* x, bool, Index, Index nnz, Index* irow, Index* jcol, Number* values) override {
+    if (!values) {
+      for (Index k = 0; k < nnz; ++k) irow[k] = problem_.jacobianRows()[k], jcol[k] = problem_.jacobianColumns()[k];
+      return true;
+    }
+    problem_.jacobianValues(x, values);
+    return true;
+  }
+  bool eval_h(Index, const Number* x, bool, Number objective_factor, Index, const Number* lambda, bool, Index nnz,
+              Index* irow, Index* jcol, Number* values) override {
+    if (!values) {
+      for (Index k = 0; k < nnz; ++k) irow[k] = problem_.hessianRows()[k], jcol[k] = problem_.hessianColumns()[k];
+      return true;
+    }
+    problem_.hessianValues(x, objective_factor, lambda, values);
+    return true;
+  }
+  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index,
+                         const Number*, const Number*, Number, const Ipopt::IpoptData*,
+                         Ipopt::IpoptCalculatedQuantities*) override {
+    x_.assign(x, x + n);
+  }
+
+  std::vector<double> x_;
+
+ private:
+  const detail::HermiteSimpsonProblem& problem_;
+  std::vector<double> start_;
+};
+
+// The start: the flat outputs held at their initial values, Y(t) = Y(0), mapped to muscle states
+// by the exact inverse map (consistent dynamics, exact joint torques), the excitations,
+// activations and fibre velocities clipped into their bounds. Where a muscle leaves its domain
+// (a slack tendon), the transcription's torque-split start is kept for it. Any start reaches the
+// same optimum (tested); this one took 126 Ipopt iterations on the paper's problem (K = 100),
+// the torque split 274, a static-optimization LP start 163.
+std::vector<double> constant_flat_output_start(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const JointPath& path, const MuscleState& initial,
+                                               const detail::HermiteSimpsonProblem& problem) {
+  using H = detail::HermiteSimpsonProblem;
+  std::vector<double> x(problem.variables());
+  problem.startingPoint(x.data());
+  Jet Y_jet = Eigen::MatrixXd::Zero(flat.numFlatOutputs(), 3);
+  Y_jet.col(0) = flat.forward(workspace, initial).Y.col(0);
+  for (int i = 1; i < problem.points(); ++i) {
+    const MusclePoint mp = flat.inverse(workspace, path.jet(problem.samples().time_s[i], 5), Y_jet);
+    for (int j = 0; j < problem.muscles(); ++j) {
+      const auto& mu = problem.muscle(j);
+      const auto& p = mu.parameters;
+      const double a = mp.activation[j], n = mp.excitation[j], u = mp.shortening_velocity_m_per_s[j];
+      const double s = (mp.tendon_length_m[j] - p.tendon_slack_length_m) / (p.tendon_strain_at_max_force * p.tendon_slack_length_m);
+      if (!(std::isfinite(a) && std::isfinite(n) && std::isfinite(u) && std::isfinite(s))) continue;
+      x[problem.index(i, j, H::kStretch)] = std::max(s, std::sqrt(mu.reserve_N / p.max_isometric_force_N));
+      x[problem.index(i, j, H::kActivation)] = std::clamp(a, mu.min_activation, 1.0);
+      x[problem.index(i, j, H::kExcitation)] = std::clamp(n, 0.0, 1.0);
+      if (i < problem.points() - 1)  // rest at T is fixed
+        x[problem.index(i, j, H::kVelocity)] = std::min(u / p.max_shortening_velocity_m_per_s(), 0.9);
+    }
+  }
+  return x;
+}
+
+struct IpoptOutcome {
+  bool solved = false, infeasible = false;
+  std::string solver_status;
+  int iterations = 0;
+  std::vector<double> x;
+};
+
+IpoptOutcome run_ipopt(const detail::HermiteSimpsonProblem& problem, std::vector<double> start, const CollocationOptions& o,
+                       double duration_s, const Eigen::VectorXd& weights) {
+  auto app = detail::make_ipopt(o.tolerance, o.max_iterations);
+  // The cost in N s is O(100-1000): scaled to O(1)-O(10) per unit of time and weight.
+  app->Options()->SetNumericValue("obj_scaling_factor", 1.0 / (duration_s * std::max(weights.sum(), 1e-12) * 10.0));
+  Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(problem, std::move(start));
+  const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
+  IpoptOutcome out;
+  out.solver_status = detail::ipopt_status_name(status);
+  if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); IsValid(stats)) out.iterations = stats->IterationCount();
+  out.solved = detail::ipopt_solved(status) && static_cast<int>(nlp->x_.size()) == problem.variables();
+  out.infeasible = detail::ipopt_infeasible(status);
+  out.x = std::move(nlp->x_);
+  return out;
+}
+
+void require(const Eigen::VectorXd& v, int size, const std::string& what) {
+  if (v.size() != size)
+    throw std::invalid_argument(what + ": expected " + std::to_string(size) + " values, got " + std::to_string(v.size()));
+  if (!v.allFinite()) throw std::invalid_argument(what + ": values must be finite (NaN or Inf given)");
+}
+
+void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleState& initial, const Eigen::VectorXd& reserves,
+              const CollocationOptions& o) {
+  const int m = flat.numMuscles();
+  if (!(path.duration_s > 0.0) || !std::isfinite(path.duration_s))
+    throw std::invalid_argument("collocation: the joint path's duration must be > 0 s");
+  if (static_cast<int>(path.q.size()) != flat.numJoints())
+    throw std::invalid_argument("collocation: the joint path has " + std::to_string(path.q.size()) +
+                                " joint polynomials, the model " + std::to_string(flat.numJoints()) + " joints");
+  require(initial.tendon_length_m, m, "collocation: initial tendon lengths");
+  require(initial.activation, m, "collocation: initial activations");
+  require(reserves, m, "collocation: reserves");
+  if (reserves.minCoeff() < 0.0) throw std::invalid_argument("collocation: reserves must be >= 0 N");
+  if (o.effort_weights.size() > 0) {
+    require(o.effort_weights, m, "collocation: effort_weights");
+    if (o.effort_weights.minCoeff() < 0.0) throw std::invalid_argument("collocation: effort_weights must be >= 0");
+  }
+  if (o.mesh_intervals < 1) throw std::invalid_argument("collocation: mesh_intervals must be >= 1");
+  if (!(o.min_activation >= 0.0 && o.min_activation < 1.0))
+    throw std::invalid_argument("collocation: min_activation must be in [0, 1)");
+  if (!(o.tolerance > 0.0)) throw std::invalid_argument("collocation: tolerance must be > 0");
+  if (o.max_iterations < 1) throw std::invalid_argument("collocation: max_iterations must be >= 1");
+  for (int j = 0; j < m; ++j) {
+    const auto& p = flat.model().muscle(j).getParameters();
+    if (!(initial.activation[j] > 0.0 && initial.activation[j] <= 1.0))
+      throw std::invalid_argument("collocation: initial activation of '" + p.name + "' is " +
+                                  std::to_string(initial.activation[j]) + ", outside (0, 1]");
+    if (!(initial.tendon_length_m[j] > p.tendon_slack_length_m))
+      throw std::invalid_argument("collocation: initial tendon of '" + p.name + "' is slack");
+  }
+}
+
+}  // namespace
+
+namespace detail {
+
+PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                                int intervals) {
+  const int P = 2 * intervals + 1, m = flat.numMuscles();
+  PathSamples samples;
+  samples.time_s = Eigen::VectorXd::LinSpaced(P, 0.0, path.duration_s);
+  samples.musculotendon_length_m.resize(m, P);
+  samples.lengthening_rate_m_per_s.resize(m, P);
+  samples.torque_N_m.resize(flat.numJoints(), P);
+  samples.moment_arms_m = flat.A();
+  for (int i = 0; i < P; ++i) {
+    const Jet q = path.jet(samples.time_s[i], 3);
+    samples.torque_N_m.col(i) = flat.torque(workspace, q.col(0), q.col(1), q.col(2));
+    for (int j = 0; j < m; ++j) {
+      const muscles::SecondOrderJet L = flat.pathLengthJet(j, q);
+      samples.musculotendon_length_m(j, i) = L.value;
+      samples.lengthening_rate_m_per_s(j, i) = L.rate;
+    }
+  }
+  return samples;
+}
+
+std::vector<CollocationMuscle> collocation_muscles(const FlatOutputMap& flat, const MuscleState& initial,
+                                                   const Eigen::VectorXd& reserves_N, const Eigen::VectorXd& weights,
+                                                   double min_activation) {
+  std::vector<CollocationMuscle> muscles(flat.numMuscles());
+  for (int j = 0; j < flat.numMuscles(); ++j) {
+    const auto& p = flat.model().muscle(j).getParameters();
+    auto& mu = muscles[j];
+    mu.parameters = p;
+    mu.effort_weight = weights[j];
+    mu.reserve_N = reserves_N[j];
+    mu.min_activation = min_activation > 0.0 ? min_activation : p.activation_floor;
+    mu.initial_stretch = (initial.tendon_length_m[j] - p.tendon_slack_length_m) / (p.tendon_strain_at_max_force * p.tendon_slack_length_m);
+    mu.initial_activation = initial.activation[j];
+  }
+  return muscles;
+}
+
+}  // namespace detail
+
+Eigen::VectorXd flat_output_effort_weights(const FlatOutputMap& flat) {
+  return flat.E().transpose() * Eigen::VectorXd::Ones(flat.numFlatOutputs());
+}
+
+CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const JointPath& path, const MuscleState& initial,
+                                               const Eigen::VectorXd& reserves_N, const CollocationOptions& o) {
+  validate(flat, path, initial, reserves_N, o);
+  const Stopwatch setup;
+  const int m = flat.numMuscles();
+  const Eigen::VectorXd weights = o.effort_weights.size() > 0 ? o.effort_weights : flat_output_effort_weights(flat);
+  detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
+  std::vector<detail::CollocationMuscle> muscles =
+      detail::collocation_muscles(flat, initial, reserves_N, weights, o.min_activation);
+
+  // The initial state fixes every tendon force at t = 0; the path must start with the joint
+  // accelerations they produce, or no plan exists along it.
+  Eigen::VectorXd F0(m);
+  for (int j = 0; j < m; ++j)
+    F0[j] = muscles::tendon_force(flat.model().muscle(j).getParameters(), initial.tendon_length_m[j]);
+  const Eigen::VectorXd torque_gap = flat.A() * F0 - samples.torque_N_m.col(0);
+  if (torque_gap.cwiseAbs().maxCoeff() > 1e-6 * (1.0 + samples.torque_N_m.col(0).cwiseAbs().maxCoeff())) {
+    std::ostringstream why;
+    why << "collocation: the joint path does not start with the accelerations of the initial state (the muscles' torques "
+           "differ from the path's inverse dynamics at t = 0 by up to "
+        << torque_gap.cwiseAbs().maxCoeff() << " N m)";
+    throw std::invalid_argument(why.str());
+  }
+  const detail::HermiteSimpsonProblem problem(std::move(muscles), std::move(samples));
+
+  CollocationResult result;
+  result.mesh_intervals = o.mesh_intervals;
+  result.variables = problem.variables();
+  result.constraints = problem.constraints();
+  result.setup_seconds = setup.seconds();
+
+  const Stopwatch solve;
+  const IpoptOutcome outcome =
+      run_ipopt(problem, constant_flat_output_start(flat, workspace, path, initial, problem), o, path.duration_s, weights);
+  result.solve_seconds = solve.seconds();
+  result.solver_status = outcome.solver_status;
+  result.iterations = outcome.iterations;
+  if (outcome.solved) {
+    result.status = SolveStatus::Solved;
+  } else if (outcome.infeasible) {
+    result.status = SolveStatus::Infeasible;
+    result.message = "collocation: no excitations along this joint path meet the reserves and bounds (Ipopt: " +
+                     result.solver_status + ")";
+    return result;
+  } else {
+    result.status = SolveStatus::Failed;
+    result.message = "collocation: Ipopt did not converge (" + result.solver_status + ")";
+    return result;
+  }
+  const double* x = outcome.x.data();
+  const int P = problem.points();
+  result.cost_N_s = problem.objective(x);
+  result.time_s = problem.samples().time_s;
+  result.tendon_force_N.resize(m, P);
+  result.tendon_length_m.resize(m, P);
+  result.activation.resize(m, P);
+  result.excitation.resize(m, P);
+  result.shortening_velocity_m_per_s.resize(m, P);
+  result.activation_rate_per_s.resize(m, P);
+  using H = detail::HermiteSimpsonProblem;
+  for (int i = 0; i < P; ++i)
+    for (int j = 0; j < m; ++j) {
+      result.tendon_force_N(j, i) = problem.tendonForce(x, i, j);
+      result.tendon_length_m(j, i) = problem.tendonLength(x, i, j);
+      result.activation(j, i) = x[problem.index(i, j, H::kActivation)];
+      result.excitation(j, i) = x[problem.index(i, j, H::kExcitation)];
+      result.activation_rate_per_s(j, i) = problem.activationRate(x, i, j);
+      result.shortening_velocity_m_per_s(j, i) = problem.shorteningVelocity(x, i, j);
+    }
+  return result;
+}
+
+}  // namespace flatsos::planner

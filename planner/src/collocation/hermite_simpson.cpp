@@ -1,0 +1,347 @@
+#include "collocation/hermite_simpson.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include <Eigen/Dense>
+
+#include "flatsos/muscles/hill_laws.hpp"
+
+namespace flatsos::planner::detail {
+
+namespace {
+constexpr double kInfinity = 1e19;  // Ipopt's default for "no bound"
+
+// Activation dynamics f_a(n, a) = sigma(n) (n - a), sigma(n) = (beta + (1 - beta) n) / T_act,
+// with its partial derivatives (the second ones are constant).
+struct ActivationRate {
+  double value, d_n, d_a, d_nn, d_na;
+};
+ActivationRate activation_rate(const muscles::MuscleParameters& p, double n, double a) {
+  const double beta = p.activation_beta(), T = p.activation_time_constant_s;
+  const double sigma = (beta + (1.0 - beta) * n) / T;
+  return {sigma * (n - a), ((1.0 - beta) * (2.0 * n - a) + beta) / T, -sigma, 2.0 * (1.0 - beta) / T,
+          -(1.0 - beta) / T};
+}
+
+// Simpson's and the interpolation defect's weights of f at the interval's first, middle and
+// last point, in units of the interval length h.
+constexpr std::array<double, 3> kSimpsonRate = {-1.0 / 6.0, -4.0 / 6.0, -1.0 / 6.0};
+constexpr std::array<double, 3> kInterpolationRate = {-1.0 / 8.0, 0.0, 1.0 / 8.0};
+// ... and of the state itself.
+constexpr std::array<double, 3> kSimpsonState = {-1.0, 0.0, 1.0};
+constexpr std::array<double, 3> kInterpolationState = {-0.5, 1.0, -0.5};
+}  // namespace
+
+// Tendon force, force-length and force-velocity factors at a point, with their derivatives with
+// respect to the scaled unknowns s (tendon stretch) and v (shortening velocity / Vmax).
+struct HermiteSimpsonProblem::MuscleAt {
+  double s, a, n, v;
+  double F, F_s, F_ss;  // N
+  double f, f_s, f_ss;
+  double g, g_v, g_vv;
+};
+
+HermiteSimpsonProblem::HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples)
+    : muscles_(std::move(muscles)), samples_(std::move(samples)) {
+  const int P = points(), m = this->muscles(), N = joints();
+  if (P < 3 || P % 2 == 0) throw std::invalid_argument("Hermite-Simpson: need 2K + 1 >= 3 points");
+  if (samples_.musculotendon_length_m.rows() != m || samples_.musculotendon_length_m.cols() != P ||
+      samples_.lengthening_rate_m_per_s.rows() != m || samples_.lengthening_rate_m_per_s.cols() != P ||
+      samples_.torque_N_m.cols() != P || samples_.moment_arms_m.rows() != N || samples_.moment_arms_m.cols() != m)
+    throw std::invalid_argument("Hermite-Simpson: path samples of inconsistent sizes");
+  for (const auto& mu : muscles_)
+    stretch_scale_m_.push_back(mu.parameters.tendon_strain_at_max_force * mu.parameters.tendon_slack_length_m);
+  // The structure, recorded once at the start (any point gives the same pattern).
+  std::vector<double> x(variables());
+  startingPoint(x.data());
+  visitJacobian(x.data(), [this](int r, int c, double) { jac_rows_.push_back(r), jac_cols_.push_back(c); });
+  std::vector<double> lambda(constraints(), 0.0);
+  visitHessian(x.data(), 1.0, lambda.data(),
+               [this](int r, int c, double) { hess_rows_.push_back(r), hess_cols_.push_back(c); });
+}
+
+int HermiteSimpsonProblem::constraints() const { return restRow(0) + muscles(); }
+
+double HermiteSimpsonProblem::quadratureWeight(int i) const {
+  const double h = intervalLength();
+  if (i % 2 == 1) return 4.0 * h / 6.0;
+  return (i == 0 || i == points() - 1) ? h / 6.0 : 2.0 * h / 6.0;
+}
+
+HermiteSimpsonProblem::MuscleAt HermiteSimpsonProblem::evaluate(const double* x, int i, int j) const {
+  const auto& p = muscles_[j].parameters;
+  const double lambda = stretch_scale_m_[j], vmax = p.max_shortening_velocity_m_per_s();
+  MuscleAt e{};
+  e.s = x[index(i, j, kStretch)];
+  e.a = x[index(i, j, kActivation)];
+  e.n = x[index(i, j, kExcitation)];
+  e.v = x[index(i, j, kVelocity)];
+  const double tendon_length = p.tendon_slack_length_m + lambda * e.s;
+  e.F = muscles::tendon_force(p, tendon_length);
+  e.F_s = muscles::tendon_force_derivative(p, tendon_length) * lambda;
+  e.F_ss = muscles::tendon_force_second_derivative(p, tendon_length) * lambda * lambda;
+  const double fiber_length = samples_.musculotendon_length_m(j, i) - tendon_length;
+  e.f = muscles::force_length(p, fiber_length);
+  e.f_s = -muscles::force_length_derivative(p, fiber_length) * lambda;
+  e.f_ss = muscles::force_length_second_derivative(p, fiber_length) * lambda * lambda;
+  const double u = vmax * e.v;
+  e.g = muscles::force_velocity(p, u);
+  e.g_v = muscles::force_velocity_derivative(p, u) * vmax;
+  e.g_vv = muscles::force_velocity_second_derivative(p, u) * vmax * vmax;
+  return e;
+}
+
+double HermiteSimpsonProblem::tendonForce(const double* x, int i, int j) const {
+  return muscles::tendon_force(muscles_[j].parameters, tendonLength(x, i, j));
+}
+double HermiteSimpsonProblem::tendonLength(const double* x, int i, int j) const {
+  return muscles_[j].parameters.tendon_slack_length_m + stretch_scale_m_[j] * x[index(i, j, kStretch)];
+}
+double HermiteSimpsonProblem::shorteningVelocity(const double* x, int i, int j) const {
+  return muscles_[j].parameters.max_shortening_velocity_m_per_s() * x[index(i, j, kVelocity)];
+}
+double HermiteSimpsonProblem::activationRate(const double* x, int i, int j) const {
+  return activation_rate(muscles_[j].parameters, x[index(i, j, kExcitation)], x[index(i, j, kActivation)]).value;
+}
+
+void HermiteSimpsonProblem::bounds(double* xl, double* xu, double* gl, double* gu) const {
+  const int P = points(), m = muscles();
+  for (int i = 0; i < P; ++i)
+    for (int j = 0; j < m; ++j) {
+      const auto& mu = muscles_[j];
+      const auto& p = mu.parameters;
+      // F = Fmax s^2 above slack: the reserve is a bound on s.
+      xl[index(i, j, kStretch)] = std::sqrt(mu.reserve_N / p.max_isometric_force_N);
+      xu[index(i, j, kStretch)] = kInfinity;
+      xl[index(i, j, kActivation)] = mu.min_activation;
+      xu[index(i, j, kActivation)] = 1.0;
+      xl[index(i, j, kExcitation)] = 0.0;
+      xu[index(i, j, kExcitation)] = 1.0;
+      // Beyond Vmax the fibre has no force (g <= 0). Lengthening is limited to where the
+      // force-velocity law is exact in the forward model (z <= z_hi; beyond, the simulator
+      // continues g^-1 linearly to avoid its pole at gmax, and the flatness planner reports a
+      // plan that needs it as outside the valid domain).
+      xl[index(i, j, kVelocity)] =
+          muscles::force_velocity_inverse(p, muscles::force_ratio_exact_upper_bound(p)) / p.max_shortening_velocity_m_per_s();
+      xu[index(i, j, kVelocity)] = 1.0;
+      if (i == 0) {  // the initial state
+        xl[index(i, j, kStretch)] = xu[index(i, j, kStretch)] = mu.initial_stretch;
+        xl[index(i, j, kActivation)] = xu[index(i, j, kActivation)] = mu.initial_activation;
+      }
+      if (i == P - 1) {  // rest at T: dL_S/dt = u + dL/dt = 0
+        xl[index(i, j, kVelocity)] = xu[index(i, j, kVelocity)] =
+            -samples_.lengthening_rate_m_per_s(j, i) / p.max_shortening_velocity_m_per_s();
+      }
+    }
+  std::fill(gl, gl + constraints(), 0.0);
+  std::fill(gu, gu + constraints(), 0.0);
+}
+
+void HermiteSimpsonProblem::startingPoint(double* x) const {
+  const int P = points(), m = muscles();
+  const Eigen::MatrixXd& A = samples_.moment_arms_m;
+  Eigen::VectorXd fmax(m);
+  for (int j = 0; j < m; ++j) fmax[j] = muscles_[j].parameters.max_isometric_force_N;
+  const Eigen::MatrixXd W = fmax.array().square().matrix().asDiagonal();
+  // min sum (F_j / Fmax_j)^2 subject to A F = tau.
+  const Eigen::MatrixXd split = W * A.transpose() * (A * W * A.transpose()).inverse();
+  for (int i = 0; i < P; ++i) {
+    const Eigen::VectorXd F = split * samples_.torque_N_m.col(i);
+    for (int j = 0; j < m; ++j) {
+      const auto& mu = muscles_[j];
+      const auto& p = mu.parameters;
+      double s, a;
+      if (i == 0) {
+        s = mu.initial_stretch, a = mu.initial_activation;
+      } else {
+        const double force = std::max(F[j], mu.reserve_N + 0.01 * p.max_isometric_force_N);
+        s = std::sqrt(force / p.max_isometric_force_N);
+        const double fiber_length = samples_.musculotendon_length_m(j, i) - p.tendon_slack_length_m - stretch_scale_m_[j] * s;
+        a = std::clamp(force / (p.max_isometric_force_N * muscles::force_length(p, fiber_length)),
+                       std::max(mu.min_activation, 1e-3), 1.0);
+      }
+      x[index(i, j, kStretch)] = s;
+      x[index(i, j, kActivation)] = a;
+      x[index(i, j, kExcitation)] = a;
+      x[index(i, j, kVelocity)] = 0.0;
+    }
+  }
+  // The start's fibre velocity at t = 0 from the initial state's equilibrium; rest at T.
+  for (int j = 0; j < m; ++j) {
+    const auto& p = muscles_[j].parameters;
+    const double tendon_length = tendonLength(x, 0, j);
+    const double u = muscles::fiber_shortening_velocity(p, muscles::tendon_force(p, tendon_length), x[index(0, j, kActivation)],
+                                                        samples_.musculotendon_length_m(j, 0) - tendon_length);
+    x[index(0, j, kVelocity)] = std::min(u / p.max_shortening_velocity_m_per_s(), 0.99);
+    x[index(P - 1, j, kVelocity)] = -samples_.lengthening_rate_m_per_s(j, P - 1) / p.max_shortening_velocity_m_per_s();
+  }
+}
+
+double HermiteSimpsonProblem::objective(const double* x) const {
+  double sum = 0.0;
+  for (int i = 0; i < points(); ++i)
+    for (int j = 0; j < muscles(); ++j) sum += quadratureWeight(i) * muscles_[j].effort_weight * tendonForce(x, i, j);
+  return sum;
+}
+
+void HermiteSimpsonProblem::objectiveGradient(const double* x, double* grad) const {
+  std::fill(grad, grad + variables(), 0.0);
+  for (int i = 0; i < points(); ++i)
+    for (int j = 0; j < muscles(); ++j) {
+      const auto& p = muscles_[j].parameters;
+      grad[index(i, j, kStretch)] = quadratureWeight(i) * muscles_[j].effort_weight *
+                                    muscles::tendon_force_derivative(p, tendonLength(x, i, j)) * stretch_scale_m_[j];
+    }
+}
+
+void HermiteSimpsonProblem::constraintValues(const double* x, double* g) const {
+  const int P = points(), m = muscles(), N = joints();
+  const Eigen::MatrixXd& A = samples_.moment_arms_m;
+  Eigen::VectorXd F(m);
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < m; ++j) {
+      const MuscleAt e = evaluate(x, i, j);
+      F[j] = e.F;
+      g[equilibriumRow(i, j)] = e.F / muscles_[j].parameters.max_isometric_force_N - e.a * e.f * e.g;
+    }
+    if (i > 0)
+      for (int r = 0; r < N; ++r) g[torqueRow(i, r)] = A.row(r).dot(F) - samples_.torque_N_m(r, i);
+  }
+  for (int k = 0; k < intervals(); ++k) {
+    const double h = intervalLength();
+    for (int j = 0; j < m; ++j) {
+      const auto& p = muscles_[j].parameters;
+      const double vmax = p.max_shortening_velocity_m_per_s();
+      double sim_s = 0.0, int_s = 0.0, sim_a = 0.0, int_a = 0.0;
+      for (int c = 0; c < 3; ++c) {
+        const int i = 2 * k + c;
+        const double s = x[index(i, j, kStretch)], a = x[index(i, j, kActivation)];
+        const double rate_s = (vmax * x[index(i, j, kVelocity)] + samples_.lengthening_rate_m_per_s(j, i)) / stretch_scale_m_[j];
+        const double rate_a = activation_rate(p, x[index(i, j, kExcitation)], a).value;
+        sim_s += kSimpsonState[c] * s + h * kSimpsonRate[c] * rate_s;
+        int_s += kInterpolationState[c] * s + h * kInterpolationRate[c] * rate_s;
+        sim_a += kSimpsonState[c] * a + h * kSimpsonRate[c] * rate_a;
+        int_a += kInterpolationState[c] * a + h * kInterpolationRate[c] * rate_a;
+      }
+      g[defectRow(k, j, 0)] = sim_s;
+      g[defectRow(k, j, 1)] = int_s;
+      g[defectRow(k, j, 2)] = sim_a;
+      g[defectRow(k, j, 3)] = int_a;
+    }
+  }
+  for (int j = 0; j < m; ++j)
+    g[restRow(j)] = x[index(P - 1, j, kExcitation)] - x[index(P - 1, j, kActivation)];
+}
+
+template <class Sink>
+void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
+  const int P = points(), m = muscles(), N = joints();
+  const Eigen::MatrixXd& A = samples_.moment_arms_m;
+  for (int i = 0; i < P; ++i)
+    for (int j = 0; j < m; ++j) {
+      const MuscleAt e = evaluate(x, i, j);
+      const int row = equilibriumRow(i, j);
+      sink(row, index(i, j, kStretch), e.F_s / muscles_[j].parameters.max_isometric_force_N - e.a * e.f_s * e.g);
+      sink(row, index(i, j, kActivation), -e.f * e.g);
+      sink(row, index(i, j, kVelocity), -e.a * e.f * e.g_v);
+    }
+  for (int i = 1; i < P; ++i)
+    for (int r = 0; r < N; ++r)
+      for (int j = 0; j < m; ++j)
+        if (A(r, j) != 0.0)
+          sink(torqueRow(i, r), index(i, j, kStretch),
+               A(r, j) * muscles::tendon_force_derivative(muscles_[j].parameters, tendonLength(x, i, j)) *
+                   stretch_scale_m_[j]);
+  for (int k = 0; k < intervals(); ++k) {
+    const double h = intervalLength();
+    for (int j = 0; j < m; ++j) {
+      const auto& p = muscles_[j].parameters;
+      const double rate_s_v = p.max_shortening_velocity_m_per_s() / stretch_scale_m_[j];
+      // Stretch defects: linear in s and v.
+      for (int which = 0; which < 2; ++which) {
+        const auto& state = which == 0 ? kSimpsonState : kInterpolationState;
+        const auto& rate = which == 0 ? kSimpsonRate : kInterpolationRate;
+        for (int c = 0; c < 3; ++c) {
+          const int i = 2 * k + c;
+          if (state[c] != 0.0) sink(defectRow(k, j, which), index(i, j, kStretch), state[c]);
+          if (rate[c] != 0.0) sink(defectRow(k, j, which), index(i, j, kVelocity), h * rate[c] * rate_s_v);
+        }
+      }
+      // Activation defects: the state's own coefficient and the rate's partials share an entry.
+      for (int which = 0; which < 2; ++which) {
+        const auto& state = which == 0 ? kSimpsonState : kInterpolationState;
+        const auto& rate = which == 0 ? kSimpsonRate : kInterpolationRate;
+        for (int c = 0; c < 3; ++c) {
+          const int i = 2 * k + c;
+          const ActivationRate fa =
+              activation_rate(p, x[index(i, j, kExcitation)], x[index(i, j, kActivation)]);
+          if (state[c] != 0.0 || rate[c] != 0.0)
+            sink(defectRow(k, j, 2 + which), index(i, j, kActivation), state[c] + h * rate[c] * fa.d_a);
+          if (rate[c] != 0.0) sink(defectRow(k, j, 2 + which), index(i, j, kExcitation), h * rate[c] * fa.d_n);
+        }
+      }
+    }
+  }
+  for (int j = 0; j < m; ++j) {
+    sink(restRow(j), index(P - 1, j, kActivation), -1.0);
+    sink(restRow(j), index(P - 1, j, kExcitation), 1.0);
+  }
+}
+
+void HermiteSimpsonProblem::jacobianValues(const double* x, double* values) const {
+  int k = 0;
+  visitJacobian(x, [&](int, int, double v) { values[k++] = v; });
+}
+
+template <class Sink>
+void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const double* lambda, Sink&& sink) const {
+  const int P = points(), m = muscles(), N = joints();
+  const Eigen::MatrixXd& A = samples_.moment_arms_m;
+  for (int i = 0; i < P; ++i)
+    for (int j = 0; j < m; ++j) {
+      const auto& p = muscles_[j].parameters;
+      const MuscleAt e = evaluate(x, i, j);
+      // Second derivative of everything that depends on F(s): cost and torques.
+      double F_weight = sigma * quadratureWeight(i) * muscles_[j].effort_weight;
+      if (i > 0)
+        for (int r = 0; r < N; ++r) F_weight += lambda[torqueRow(i, r)] * A(r, j);
+      // The equilibrium row's F / Fmax - a f g.
+      const double le = lambda[equilibriumRow(i, j)];
+      const double ss = F_weight * e.F_ss + le * (e.F_ss / p.max_isometric_force_N - e.a * e.f_ss * e.g);
+      const double as = le * (-e.f_s * e.g), vs = le * (-e.a * e.f_s * e.g_v);
+      const double va = le * (-e.f * e.g_v), vv = le * (-e.a * e.f * e.g_vv);
+      // Activation defects: the weight of f_a(n, a) at this point in each defect row.
+      double fa_weight = 0.0;
+      const double interval = intervalLength();
+      if (i % 2 == 1) {
+        const int k = i / 2;
+        fa_weight = interval * (lambda[defectRow(k, j, 2)] * kSimpsonRate[1] + lambda[defectRow(k, j, 3)] * kInterpolationRate[1]);
+      } else {
+        if (i < P - 1)  // first point of interval i / 2
+          fa_weight += interval * (lambda[defectRow(i / 2, j, 2)] * kSimpsonRate[0] +
+                                   lambda[defectRow(i / 2, j, 3)] * kInterpolationRate[0]);
+        if (i > 0)  // last point of interval i / 2 - 1
+          fa_weight += interval * (lambda[defectRow(i / 2 - 1, j, 2)] * kSimpsonRate[2] +
+                                   lambda[defectRow(i / 2 - 1, j, 3)] * kInterpolationRate[2]);
+      }
+      const ActivationRate fa = activation_rate(p, e.n, e.a);
+      sink(index(i, j, kStretch), index(i, j, kStretch), ss);
+      sink(index(i, j, kActivation), index(i, j, kStretch), as);
+      sink(index(i, j, kVelocity), index(i, j, kStretch), vs);
+      sink(index(i, j, kVelocity), index(i, j, kActivation), va);
+      sink(index(i, j, kVelocity), index(i, j, kVelocity), vv);
+      sink(index(i, j, kExcitation), index(i, j, kExcitation), fa_weight * fa.d_nn);
+      sink(index(i, j, kExcitation), index(i, j, kActivation), fa_weight * fa.d_na);
+    }
+}
+
+void HermiteSimpsonProblem::hessianValues(const double* x, double sigma, const double* lambda, double* values) const {
+  int k = 0;
+  visitHessian(x, sigma, lambda, [&](int, int, double v) { values[k++] = v; });
+}
+
+}  // namespace flatsos::planner::detail

@@ -1,0 +1,135 @@
+#pragma once
+// The Hermite-Simpson transcription of the open-loop minimum-effort problem along a prescribed
+// joint path (docs/method/collocation.md) as a plain sparse NLP: bounds, objective, constraints,
+// Jacobian and Hessian of the Lagrangian in triplet form. No solver types here, so tests can
+// check every derivative against finite differences; collocation.cpp hands it to Ipopt.
+//
+// Variables at each of the P = 2K + 1 points i (mesh points at even i, midpoints at odd i), per
+// muscle j, four scaled unknowns (index 4 (i m + j) + k):
+//   k = 0: s = (L_S - L_slack) / (eps L_slack), the tendon stretch in units of its stretch at
+//          Fmax (s^2 = F / Fmax), so that every state is O(1) whatever the tendon's stiffness;
+//   k = 1: a, the activation;   k = 2: n, the excitation;
+//   k = 3: v = u / Vmax, the fibre shortening velocity in units of its maximum.
+// Constraints, in this order:
+//   fibre equilibrium  F(s)/Fmax - a f(L - L_S) g(u) = 0           P m rows
+//   joint torques      sum_j A_rj F_j - tau_r = 0 (N m)             (P - 1) N rows (not at
+//                      t = 0, where the initial state fixes F: checked when it is built)
+//   per interval and muscle: Simpson and interpolation defects of s and a   4 K m rows
+//   rest at T          n - a = 0 at the last point                  m rows
+// (dL_S/dt = 0 at T fixes v there, the initial state fixes s and a at t = 0: bounds.)
+// Hermite-Simpson represents each state by a C1 piecewise cubic whose slopes at the three
+// points of an interval are the dynamics there; the excitation between points is the one those
+// cubics imply (the inverse activation dynamics of a and da/dt), not an interpolation of n.
+// (Interpolating n instead is not the same trajectory: the optimal n alternates between mesh
+// points and midpoints, near 0.4 and 0.05 on the paper's problem.)
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flatsos/muscles/muscle_parameters.hpp"
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/joint_paths.hpp"
+
+namespace flatsos::planner::detail {
+
+/// One muscle's data for the transcription.
+struct CollocationMuscle {
+  muscles::MuscleParameters parameters;
+  double effort_weight = 1.0;
+  double reserve_N = 0.0;
+  double min_activation = 0.0;
+  double initial_stretch = 0.0;     ///< s at t = 0
+  double initial_activation = 0.0;  ///< a at t = 0
+};
+
+/// The joint path sampled at the collocation points.
+struct PathSamples {
+  Eigen::VectorXd time_s;                 ///< P = 2K + 1 uniform points on [0, T] (a uniform mesh)
+  Eigen::MatrixXd musculotendon_length_m;  ///< m x P
+  Eigen::MatrixXd lengthening_rate_m_per_s;  ///< m x P
+  Eigen::MatrixXd torque_N_m;             ///< N x P, inverse dynamics along the path
+  Eigen::MatrixXd moment_arms_m;          ///< N x m
+};
+
+/// The path at the 2K + 1 points of K uniform intervals (inverse dynamics by Simbody).
+PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                        int intervals);
+/// The model's muscles with the problem's weights, reserves, activation floor (0: each
+/// muscle's own) and initial state.
+std::vector<CollocationMuscle> collocation_muscles(const FlatOutputMap& flat, const MuscleState& initial,
+                                                   const Eigen::VectorXd& reserves_N, const Eigen::VectorXd& weights,
+                                                   double min_activation);
+
+class HermiteSimpsonProblem {
+ public:
+  static constexpr int kPerMuscle = 4;
+  enum Unknown { kStretch = 0, kActivation = 1, kExcitation = 2, kVelocity = 3 };
+
+  HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples);
+
+  int points() const { return static_cast<int>(samples_.time_s.size()); }
+  int intervals() const { return (points() - 1) / 2; }
+  int muscles() const { return static_cast<int>(muscles_.size()); }
+  int joints() const { return static_cast<int>(samples_.torque_N_m.rows()); }
+  int variables() const { return points() * muscles() * kPerMuscle; }
+  int constraints() const;
+  int jacobianNonzeros() const { return static_cast<int>(jac_rows_.size()); }
+  int hessianNonzeros() const { return static_cast<int>(hess_rows_.size()); }
+  int index(int point, int muscle, Unknown k) const { return (point * muscles() + muscle) * kPerMuscle + k; }
+
+  const PathSamples& samples() const { return samples_; }
+  const CollocationMuscle& muscle(int j) const { return muscles_[j]; }
+
+  void bounds(double* x_lower, double* x_upper, double* g_lower, double* g_upper) const;
+  /// A start independent of any planner: at each point the torque split with the least sum of
+  /// squared normalized forces, raised to the reserves, the activation holding it isometrically,
+  /// n = a; the initial state at t = 0.
+  void startingPoint(double* x) const;
+
+  double objective(const double* x) const;  ///< the effort, integral of sum_j w_j F_j (Simpson), N s
+  void objectiveGradient(const double* x, double* gradient) const;
+  void constraintValues(const double* x, double* g) const;
+  /// Triplets in a fixed order (no duplicates); the values are filled in that order.
+  const std::vector<int>& jacobianRows() const { return jac_rows_; }
+  const std::vector<int>& jacobianColumns() const { return jac_cols_; }
+  void jacobianValues(const double* x, double* values) const;
+  /// Lower triangle (row >= column) of objective_factor * Hess(objective) + sum_r
+  /// multipliers_r Hess(g_r): one 4 x 4 block per point and muscle.
+  const std::vector<int>& hessianRows() const { return hess_rows_; }
+  const std::vector<int>& hessianColumns() const { return hess_cols_; }
+  void hessianValues(const double* x, double objective_factor, const double* multipliers, double* values) const;
+
+  /// Quantities in SI units at a point.
+  double tendonForce(const double* x, int point, int muscle) const;
+  double tendonLength(const double* x, int point, int muscle) const;
+  double shorteningVelocity(const double* x, int point, int muscle) const;
+  double activationRate(const double* x, int point, int muscle) const;  ///< sigma(n) (n - a), 1/s
+
+ private:
+  // Every Jacobian (Hessian) entry in its fixed order: sink(row, column, value). One routine for
+  // structure and values keeps them in step.
+  template <class Sink>
+  void visitJacobian(const double* x, Sink&& sink) const;
+  template <class Sink>
+  void visitHessian(const double* x, double objective_factor, const double* multipliers, Sink&& sink) const;
+  struct MuscleAt;  // the laws and their derivatives with respect to the scaled unknowns
+  MuscleAt evaluate(const double* x, int point, int muscle) const;
+
+  int equilibriumRow(int point, int muscle) const { return point * muscles() + muscle; }
+  // Point 0 has no torque rows: the initial state fixes every tendon force there.
+  int torqueRow(int point, int joint) const { return points() * muscles() + (point - 1) * joints() + joint; }
+  int defectRow(int interval, int muscle, int which) const {
+    return points() * muscles() + (points() - 1) * joints() + (interval * muscles() + muscle) * 4 + which;
+  }
+  int restRow(int muscle) const { return defectRow(intervals(), 0, 0) + muscle; }
+  double quadratureWeight(int point) const;  // Simpson's weight of the point, s
+  double intervalLength() const { return samples_.time_s[2] - samples_.time_s[0]; }  // uniform mesh
+
+  std::vector<CollocationMuscle> muscles_;
+  PathSamples samples_;
+  std::vector<double> stretch_scale_m_;  // eps L_slack
+  std::vector<int> jac_rows_, jac_cols_, hess_rows_, hess_cols_;
+};
+
+}  // namespace flatsos::planner::detail
