@@ -24,13 +24,8 @@ class CollocationReference : public ::testing::Test {
   flatsos::test::ArmPlanning arm;
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
 
-  fpl::OpenLoopOptions options(double T, int degree = 4, int spans = 1) const {
-    auto o = flatsos::test::open_loop_options();
-    o.duration_s = T;
-    o.sos.flat_output_degree = degree;
-    o.sos.flat_output_spans = spans;
-    o.torque.pieces = std::max(12, spans);
-    return o;
+  static fpl::OpenLoopOptions options(double T, int degree = 4, int spans = 1) {
+    return flatsos::test::open_loop_options(T, degree, spans);
   }
 
   fpl::JointPath path(double T) const {

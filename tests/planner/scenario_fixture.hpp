@@ -1,5 +1,6 @@
 #pragma once
 // The paper's open-loop scenario (the paper, section 5) on the arm model.
+#include <algorithm>
 #include <memory>
 
 #include "../plugin/arm_fixture.hpp"
@@ -32,6 +33,17 @@ inline planner::OpenLoopOptions open_loop_options() {
   o.duration_s = 3.0;
   o.target_q_rad = Eigen::Vector2d(deg(90), 0.0);
   o.reserves_N = Eigen::VectorXd::Constant(6, 10.0);
+  return o;
+}
+
+/// The same transfer in T seconds with flat outputs in clamped B-splines of the given degree on
+/// `spans` spans (the torque model with at least as many pieces).
+inline planner::OpenLoopOptions open_loop_options(double T, int degree = 4, int spans = 1) {
+  planner::OpenLoopOptions o = open_loop_options();
+  o.duration_s = T;
+  o.sos.flat_output_degree = degree;
+  o.sos.flat_output_spans = spans;
+  o.torque.pieces = std::max(12, spans);
   return o;
 }
 
