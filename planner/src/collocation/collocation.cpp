@@ -181,7 +181,7 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
 namespace detail {
 
 PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                                int intervals) {
+                        int intervals) {
   const int P = 2 * intervals + 1, m = flat.numMuscles();
   PathSamples samples;
   samples.time_s = Eigen::VectorXd::LinSpaced(P, 0.0, path.duration_s);

@@ -43,8 +43,8 @@ struct CollocationResult {
   int mesh_intervals = 0;
   int variables = 0, constraints = 0;
   int iterations = 0;
-  double setup_seconds = 0.0;        ///< inverse dynamics and path lengths at the points, start
-  double solve_seconds = 0.0;        ///< Ipopt
+  double setup_seconds = 0.0;        ///< inverse dynamics and path lengths at the points
+  double solve_seconds = 0.0;        ///< the start (the inverse map at every point) and Ipopt
   Eigen::VectorXd time_s;            ///< the 2K + 1 collocation points
   /// m x (2K + 1), one row per muscle. Between the points each state is the cubic through its
   /// values and rates at the interval's ends (Hermite-Simpson's own representation), and the
