@@ -10,17 +10,14 @@
 #include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
+#include "input_checks.hpp"
 
 namespace flatsos::planner {
 
 namespace {
-// `what` is a C string: checks that pass build no message (the RH step runs them every period).
-void require(const Eigen::VectorXd& v, int size, const char* what) {
-  if (v.size() != size)
-    throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(size) + " values, got " +
-                                std::to_string(v.size()));
-  if (!v.allFinite()) throw std::invalid_argument(std::string(what) + ": values must be finite (NaN or Inf given)");
-}
+
+using detail::require;
+using detail::require_reserves;
 
 // A posture where some path is not longer than its tendon's slack length cannot be held with
 // taut tendons, which flatness needs (typically: degrees given as radians). Allocates nothing
@@ -37,11 +34,6 @@ void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, co
       throw std::invalid_argument(why.str());
     }
   }
-}
-
-void require_reserves(const Eigen::VectorXd& r, int m) {
-  require(r, m, "reserves");
-  if (r.minCoeff() < 0.0) throw std::invalid_argument("reserves: tendon-force reserves must be >= 0 N");
 }
 
 }  // namespace
@@ -137,18 +129,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   require_reserves(o.reserves_N, m);
   if (o.check_points < 2) throw std::invalid_argument("open-loop plan: check_points must be >= 2");
-  require(initial.activation, m, "initial activations");
-  require(initial.tendon_length_m, m, "initial tendon lengths");
-  for (int j = 0; j < m; ++j) {
-    const auto& mp = flat.model().muscle(j).getParameters();
-    if (!(initial.activation[j] > 0.0 && initial.activation[j] <= 1.0))
-      throw std::invalid_argument("initial state: activation of '" + mp.name + "' is " + std::to_string(initial.activation[j]) +
-                                  ", outside (0, 1]");
-    if (!(initial.tendon_length_m[j] > mp.tendon_slack_length_m))
-      throw std::invalid_argument("initial state: tendon of '" + mp.name + "' is slack (" +
-                                  std::to_string(initial.tendon_length_m[j]) + " m <= slack length " +
-                                  std::to_string(mp.tendon_slack_length_m) + " m): flat outputs need taut tendons");
-  }
+  detail::require_initial_muscle_state(flat, initial);
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
   OpenLoopPlan plan;

@@ -9,6 +9,7 @@
 #include "collocation/hermite_simpson.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
+#include "input_checks.hpp"
 #include "numerics/ipopt_support.hpp"
 
 namespace flatsos::planner {
@@ -139,12 +140,6 @@ IpoptOutcome run_ipopt(const detail::HermiteSimpsonProblem& problem, std::vector
   return out;
 }
 
-void require(const Eigen::VectorXd& v, int size, const std::string& what) {
-  if (v.size() != size)
-    throw std::invalid_argument(what + ": expected " + std::to_string(size) + " values, got " + std::to_string(v.size()));
-  if (!v.allFinite()) throw std::invalid_argument(what + ": values must be finite (NaN or Inf given)");
-}
-
 void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleState& initial, const Eigen::VectorXd& reserves,
               const CollocationOptions& o) {
   const int m = flat.numMuscles();
@@ -153,12 +148,10 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
   if (static_cast<int>(path.q.size()) != flat.numJoints())
     throw std::invalid_argument("collocation: the joint path has " + std::to_string(path.q.size()) +
                                 " joint polynomials, the model " + std::to_string(flat.numJoints()) + " joints");
-  require(initial.tendon_length_m, m, "collocation: initial tendon lengths");
-  require(initial.activation, m, "collocation: initial activations");
-  require(reserves, m, "collocation: reserves");
-  if (reserves.minCoeff() < 0.0) throw std::invalid_argument("collocation: reserves must be >= 0 N");
+  detail::require_initial_muscle_state(flat, initial);
+  detail::require_reserves(reserves, m);
   if (o.effort_weights.size() > 0) {
-    require(o.effort_weights, m, "collocation: effort_weights");
+    detail::require(o.effort_weights, m, "collocation: effort_weights");
     if (o.effort_weights.minCoeff() < 0.0) throw std::invalid_argument("collocation: effort_weights must be >= 0");
   }
   if (o.mesh_intervals < 1) throw std::invalid_argument("collocation: mesh_intervals must be >= 1");
@@ -166,14 +159,6 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
     throw std::invalid_argument("collocation: min_activation must be in [0, 1)");
   if (!(o.tolerance > 0.0)) throw std::invalid_argument("collocation: tolerance must be > 0");
   if (o.max_iterations < 1) throw std::invalid_argument("collocation: max_iterations must be >= 1");
-  for (int j = 0; j < m; ++j) {
-    const auto& p = flat.model().muscle(j).getParameters();
-    if (!(initial.activation[j] > 0.0 && initial.activation[j] <= 1.0))
-      throw std::invalid_argument("collocation: initial activation of '" + p.name + "' is " +
-                                  std::to_string(initial.activation[j]) + ", outside (0, 1]");
-    if (!(initial.tendon_length_m[j] > p.tendon_slack_length_m))
-      throw std::invalid_argument("collocation: initial tendon of '" + p.name + "' is slack");
-  }
 }
 
 }  // namespace
