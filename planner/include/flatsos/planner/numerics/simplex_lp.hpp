@@ -5,6 +5,8 @@
 // parallel (the points of a rich flat-output basis crowd where constraints are active).
 // Same problem and result types as the Ipopt solver in linear_program.hpp.
 
+#include <vector>
+
 #include <Eigen/SparseCore>
 
 #include "flatsos/planner/numerics/linear_program.hpp"
@@ -25,5 +27,17 @@ struct SparseLinearProgram {
   Eigen::VectorXd x_lower, x_upper;
 };
 LinearProgramResult solve_linear_program_simplex(const SparseLinearProgram& lp);
+
+/// A simplex basis: the status of every variable, then of every row's activity (not Basic: at
+/// that bound). Sequences of similar LPs (a sequential LP's steps) restart from the last basis.
+enum class BasisStatus : unsigned char { Basic, AtLower, AtUpper };
+struct SimplexBasis {
+  std::vector<BasisStatus> variables, rows;
+};
+
+/// Starts from `basis` when its sizes match the LP (with as many basic entries as rows; a start
+/// with too many or too few is repaired), cold otherwise, and leaves the final basis in it.
+LinearProgramResult solve_linear_program_simplex(const SparseLinearProgram& lp, SimplexBasis& basis);
+LinearProgramResult solve_linear_program_simplex(const LinearProgram& lp, SimplexBasis& basis);
 
 }  // namespace flatsos::planner
