@@ -65,7 +65,8 @@ MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int 
   if (inv.stage != fm::MuscleInverse::Stage::Complete) return rows;
   rows.defined = true;
   const fm::ExcitationBoundMargins m = fm::excitation_bound_margins(p, inv.activation, inv.activation_rate_per_s);
-  // Imposed with a margin of 1e-9, so that rounding leaves the plan inside, not at -1e-14.
+  // Imposed with a margin (kBoundMargin) wider than the step LPs resolve rows (about 4e-7 with
+  // Clp's scaling), so that a row met to that resolution still leaves the plan inside.
   rows.value = {inv.activation - a_min - kBoundMargin, 1.0 - inv.activation - kBoundMargin, m.lower - kBoundMargin,
                 m.upper - kBoundMargin};
   if (gradients)

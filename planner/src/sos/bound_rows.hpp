@@ -36,7 +36,7 @@ BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double 
 // of muscles::excitation_bound_margins for 0 <= n <= 1 (smooth in a and da/dt, defined where n
 // is not), with their gradients in the point's tendon-force jet.
 constexpr int kRowsPerMuscle = 4;
-constexpr double kBoundMargin = 1e-9;
+constexpr double kBoundMargin = 1e-6;
 struct MuscleBoundRows {
   bool defined = false;  // false: slack tendon or no force capacity (no a, no n)
   std::array<double, kRowsPerMuscle> value{};

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "flatsos/planner/numerics/simplex_lp.hpp"
 
@@ -14,7 +15,7 @@ constexpr double kInitialPenalty = 1e4, kMaxPenalty = 1e12;
 
 SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
                                const Eigen::VectorXd& a_min, double reserve_margin_N, Eigen::VectorXd& theta, double& radius,
-                               int max_iterations) {
+                               SlpBasis& basis, int max_iterations) {
   SlpOutcome out;
   const LinearProgram& lp = setup.lp;
   const Eigen::Index n = setup.free_coefficients;
@@ -28,6 +29,20 @@ SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat,
     return lp.cost.dot(x) + penalty * (r.violation + reserve_violation_N(lp, x));
   };
   double phi = merit(theta, rows);
+  basis.step.resize(static_cast<std::size_t>(n), BasisStatus::AtLower);
+  // Reserve row r of setup.lp is point p of constraint c (rows in that order; rounds append
+  // points): their statuses are kept per constraint and point.
+  basis.reserve_row.resize(setup.constraints.size());
+  basis.reserve_slack.resize(setup.constraints.size());
+  std::vector<std::pair<std::size_t, std::size_t>> reserve_id;
+  for (std::size_t c = 0; c < setup.constraints.size(); ++c) {
+    const std::size_t points_c = setup.constraints[c].points.size();
+    basis.reserve_row[c].resize(points_c, BasisStatus::Basic);
+    basis.reserve_slack[c].resize(points_c, BasisStatus::AtLower);
+    for (std::size_t k = 0; k < points_c; ++k) reserve_id.emplace_back(c, k);
+  }
+  if (reserve_id.size() != static_cast<std::size_t>(lp.G.rows()))
+    throw std::logic_error("bounds SLP: the exchange rows do not match the constraints' points");
   for (; out.iterations < max_iterations; ++out.iterations) {
     // Rows that cannot reach zero inside the box are left out of this LP.
     std::vector<double> row_norm(rows.value.size(), 0.0);
@@ -40,22 +55,34 @@ SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat,
     for (Eigen::Index r = 0; r < lp.G.rows(); ++r)
       if (reserve_value[r] - radius * lp.G.row(r).cwiseAbs().sum() < 0.0) reserve_rows_in.push_back(static_cast<int>(r));
     // Variables: d (n), then a slack for each row violated at theta (d = 0 meets the others, so
-    // the LP stays feasible with far fewer columns).
+    // the LP stays feasible with far fewer columns). Each LP starts from the last LP's basis,
+    // matched by row identity (bound row or reserve row).
+    basis.bound_row.resize(rows.value.size(), BasisStatus::Basic);
+    basis.bound_slack.resize(rows.value.size(), BasisStatus::AtLower);
     std::vector<double> lp_lower;
     std::vector<Eigen::Triplet<double>> entries;
+    std::vector<BasisStatus*> row_status, slack_status;  // where each LP row's and slack's status is kept
     int slacks = 0;
-    auto add_row = [&](double lower) {
+    auto add_row = [&](double lower, BasisStatus& status, BasisStatus& slack) {
       const int r = static_cast<int>(lp_lower.size());
       lp_lower.push_back(lower);
-      if (lower > 0.0) entries.emplace_back(r, n + slacks++, 1.0);
+      row_status.push_back(&status);
+      if (lower > 0.0) {
+        entries.emplace_back(r, n + slacks++, 1.0);
+        slack_status.push_back(&slack);
+      }
       return r;
     };
     std::vector<int> lp_row_of(rows.value.size(), -1);
-    for (int i : bound_rows_in) lp_row_of[static_cast<std::size_t>(i)] = add_row(-rows.value[static_cast<std::size_t>(i)]);
+    for (int i : bound_rows_in) {
+      const auto k = static_cast<std::size_t>(i);
+      lp_row_of[k] = add_row(-rows.value[k], basis.bound_row[k], basis.bound_slack[k]);
+    }
     for (const auto& t : rows.jacobian)
       if (const int r = lp_row_of[static_cast<std::size_t>(t.row())]; r >= 0) entries.emplace_back(r, t.col(), t.value());
     for (int r : reserve_rows_in) {
-      const int row = add_row(-reserve_value[r]);
+      const auto [constraint, point] = reserve_id[static_cast<std::size_t>(r)];
+      const int row = add_row(-reserve_value[r], basis.reserve_row[constraint][point], basis.reserve_slack[constraint][point]);
       for (Eigen::Index c = 0; c < n; ++c)
         if (lp.G(r, c) != 0.0) entries.emplace_back(row, c, lp.G(r, c));
     }
@@ -76,13 +103,21 @@ SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat,
     sub.row_upper = Eigen::VectorXd::Constant(lp_rows, 1e19);
     sub.G.resize(lp_rows, vars);
     sub.G.setFromTriplets(entries.begin(), entries.end());
-    const LinearProgramResult step = solve_linear_program_simplex(sub);
+    SimplexBasis start;
+    start.variables = basis.step;
+    for (BasisStatus* status : slack_status) start.variables.push_back(*status);
+    for (BasisStatus* status : row_status) start.rows.push_back(*status);
+    const LinearProgramResult step = solve_linear_program_simplex(sub, start);
+    std::copy_n(start.variables.begin(), n, basis.step.begin());
+    for (std::size_t k = 0; k < slack_status.size(); ++k) *slack_status[k] = start.variables[static_cast<std::size_t>(n) + k];
+    for (std::size_t k = 0; k < row_status.size(); ++k) *row_status[k] = start.rows[k];
     out.lp_pivots += step.iterations;
     if (step.status != SolveStatus::Solved) {
       out.failure = "a step LP was not solved (Clp: " + step.solver_status + ")";
       return out;
     }
     const Eigen::VectorXd d = step.x.head(n);
+    const bool lp_paid_violation = slacks > 0 && step.x.tail(slacks).sum() > kBoundMargin;
     // The predicted decrease from the linearized rows at d itself, not from the LP's slacks:
     // those carry the LP's own feasibility tolerance, which the penalty would magnify. The rows
     // left out are >= 0 at 0 and at d in the linearization: they add nothing.
@@ -101,14 +136,17 @@ SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat,
     const double predicted = penalty * (violation_now - violation_at_d) - lp.cost.dot(d);
     const double step_size = d.size() ? d.cwiseAbs().maxCoeff() : 0.0;
     // Settled: nothing left to gain, or steps far below any meaningful force. Done when every
-    // imposed row holds (bound rows to their margin, reserve rows to half the exchange margin);
-    // otherwise the violated rows' multipliers exceed the penalty: raise it and go on.
+    // imposed row holds (bound rows to their margin, so that a and n are inside at the point;
+    // reserve rows to half the exchange margin); otherwise the violated rows' multipliers exceed
+    // the penalty: raise it and go on.
     auto settle = [&]() {
       const double worst_row = *std::min_element(rows.value.begin(), rows.value.end());
       const double worst_reserve = lp.G.rows() ? (lp.G * theta - lp.row_lower).minCoeff() : 0.0;
       const bool rows_hold = worst_row >= -kBoundMargin && worst_reserve >= -0.5 * reserve_margin_N;
-      out.rows_violated = !rows_hold;
-      if (rows_hold || penalty >= kMaxPenalty) return true;
+      // An LP that left every slack at zero believes its rows met: what remains is below its
+      // resolution, a higher price only repeats the same LP, and it is no sign of infeasibility.
+      out.rows_violated = !rows_hold && lp_paid_violation;
+      if (rows_hold || penalty >= kMaxPenalty || !lp_paid_violation) return true;
       penalty *= 10.0;
       phi = merit(theta, rows);
       return false;

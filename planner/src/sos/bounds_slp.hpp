@@ -15,9 +15,18 @@
 
 #include <Eigen/Core>
 
+#include "flatsos/planner/numerics/simplex_lp.hpp"
 #include "sos/bound_rows.hpp"
 
 namespace flatsos::planner::detail {
+
+/// The last step LP's basis by row identity, kept across iterations and exchange rounds: each
+/// step LP differs from the last by a small move, so it restarts a few pivots from its optimum.
+struct SlpBasis {
+  std::vector<BasisStatus> step;                        // per free coefficient
+  std::vector<BasisStatus> bound_row, bound_slack;      // per bound row (point, muscle, row)
+  std::vector<std::vector<BasisStatus>> reserve_row, reserve_slack;  // per reserve constraint and point
+};
 
 struct SlpOutcome {
   bool converged = false;
@@ -26,9 +35,9 @@ struct SlpOutcome {
   std::string failure;
 };
 
-/// Improves theta in place (and the trust radius, kept across exchange rounds).
+/// Improves theta in place (and the trust radius and the LP basis, kept across exchange rounds).
 SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
                                const Eigen::VectorXd& a_min, double reserve_margin_N, Eigen::VectorXd& theta, double& radius,
-                               int max_iterations);
+                               SlpBasis& basis, int max_iterations);
 
 }  // namespace flatsos::planner::detail

@@ -56,12 +56,14 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
 
   double radius = 0.1 * (1.0 + theta.cwiseAbs().maxCoeff());
   bool last_rows_violated = false;
+  SlpBasis slp_basis;
   for (int round = 0; round < bo.max_rounds; ++round) {
     result.bound_rounds = round + 1;
     result.lp_points = build_exchange_rows(setup, o.feasibility_margin_N);
     result.bound_points = static_cast<int>(points.size());
     if (bo.solver == BoundsSolver::SequentialLp) {
-      const SlpOutcome slp = solve_bounds_by_slp(setup, flat, points, a_min, o.feasibility_margin_N, theta, radius, bo.max_slp_iterations);
+      const SlpOutcome slp =
+          solve_bounds_by_slp(setup, flat, points, a_min, o.feasibility_margin_N, theta, radius, slp_basis, bo.max_slp_iterations);
       result.bound_slp_iterations += slp.iterations;
       result.simplex_pivots += slp.lp_pivots;
       if (!slp.converged) {

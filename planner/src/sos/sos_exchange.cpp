@@ -25,11 +25,24 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
   }
   theta = Eigen::VectorXd::Zero(n_theta);
   bool converged = false;
+  // Each round's LP starts from the last one's basis: a point's row keeps its status while it
+  // stays (rows follow the constraints' points in order), new points start inactive.
+  std::vector<BasisStatus> theta_status(static_cast<std::size_t>(n_theta), BasisStatus::AtLower);
+  std::vector<std::vector<BasisStatus>> point_status(constraints.size());
   auto solve_round = [&](int round) -> bool {
     LinearProgramResult lr;
     if (o.study.lp_solver == ExchangeLpSolver::Simplex) {
-      lr = solve_linear_program_simplex(lp);
+      SimplexBasis basis{theta_status, {}};
+      for (std::size_t c = 0; c < constraints.size(); ++c) {
+        point_status[c].resize(constraints[c].points.size(), BasisStatus::Basic);
+        basis.rows.insert(basis.rows.end(), point_status[c].begin(), point_status[c].end());
+      }
+      lr = solve_linear_program_simplex(lp, basis);
       result.simplex_pivots += lr.iterations;
+      theta_status = basis.variables;
+      auto row = basis.rows.begin();
+      for (auto& statuses : point_status)
+        for (auto& status : statuses) status = *row++;
     } else {
       LinearProgramOptions lpo;
       if (round > 0) lpo.start = theta;
@@ -58,12 +71,16 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
       // Keep the LPs small: initial points far from active leave the next LP. A pruned
       // constraint that becomes violated is caught by the exact minimum below and comes back
       // as a sticky point.
-      for (auto& c : constraints) {
+      for (std::size_t k = 0; k < constraints.size(); ++k) {
+        auto& c = constraints[k];
+        auto& statuses = point_status[k];
+        statuses.resize(c.points.size(), BasisStatus::Basic);
         const Polynomial g = c.at(theta);
         for (std::size_t i = c.points.size(); i-- > 0;)
           if (!c.sticky[i] && g(c.points[i]) > o.study.prune_slack_N) {
             c.points.erase(c.points.begin() + static_cast<std::ptrdiff_t>(i));
             c.sticky.erase(c.sticky.begin() + static_cast<std::ptrdiff_t>(i));
+            statuses.erase(statuses.begin() + static_cast<std::ptrdiff_t>(i));
           }
       }
     }
