@@ -146,9 +146,6 @@ LinearProgramResult solve_sparse(const SparseLinearProgram& lp, SimplexBasis* ba
                       lp.x_lower, lp.x_upper, basis);
 }
 
-}  // namespace
-
-namespace {
 LinearProgramResult solve_dense(const LinearProgram& lp, SimplexBasis* basis) {
   const Eigen::Index n = lp.cost.size(), rows = lp.G.rows();
   require_consistent(n, rows, lp.G.rows(), lp.G.cols(), lp.cost, lp.row_lower, lp.row_upper, lp.x_lower, lp.x_upper);

@@ -30,7 +30,7 @@ struct SlpBasis {
 
 struct SlpOutcome {
   bool converged = false;
-  bool rows_violated = false;  // settled at the largest penalty with imposed rows still violated
+  bool rows_violated = false;  // settled with imposed rows violated although the LP paid for it at the largest penalty
   int iterations = 0, lp_pivots = 0;
   std::string failure;
 };
