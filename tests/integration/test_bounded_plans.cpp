@@ -10,6 +10,7 @@
 #include "open_loop_replay.hpp"
 
 namespace fpl = flatsos::planner;
+using flatsos::test::open_loop_options;
 using flatsos::test::deg;
 
 namespace {
@@ -18,10 +19,6 @@ class BoundedPlans : public ::testing::Test {
  protected:
   flatsos::test::ArmPlanning arm;
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
-
-  static fpl::OpenLoopOptions options(double T, int degree = 4, int spans = 1) {
-    return flatsos::test::open_loop_options(T, degree, spans);
-  }
 
   // Every bound on a 3001-point grid, to 1e-6, and every reserve.
   void expect_executable(const fpl::OpenLoopPlan& plan, const fpl::OpenLoopOptions& o) const {
@@ -40,7 +37,7 @@ class BoundedPlans : public ::testing::Test {
 }  // namespace
 
 TEST_F(BoundedPlans, ThePapersQuarticAtThreeSecondsNeedsNoBound) {
-  const auto o = options(3.0);
+  const auto o = open_loop_options(3.0);
   const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   EXPECT_FALSE(plan.sos.bounds_imposed);
@@ -49,14 +46,14 @@ TEST_F(BoundedPlans, ThePapersQuarticAtThreeSecondsNeedsNoBound) {
 }
 
 TEST_F(BoundedPlans, TheQuarticAtOneAndAHalfSecondsIsBoundedAtAHigherCost) {
-  auto unbounded = options(1.5);
+  auto unbounded = open_loop_options(1.5);
   unbounded.sos.bounds.enforce = false;
   const auto free = fpl::plan_open_loop(arm.flat, s0, unbounded);
   ASSERT_EQ(free.status, fpl::SolveStatus::Infeasible);
   EXPECT_NE(free.message.find("excitation"), std::string::npos) << free.message;
   EXPECT_GT(free.check.max_excitation, 1.2);
 
-  const auto o = options(1.5);
+  const auto o = open_loop_options(1.5);
   const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   EXPECT_TRUE(plan.sos.bounds_imposed);
@@ -67,7 +64,7 @@ TEST_F(BoundedPlans, TheQuarticAtOneAndAHalfSecondsIsBoundedAtAHigherCost) {
 }
 
 TEST_F(BoundedPlans, SequentialLpAndIpoptReachTheSameBoundedOptimum) {
-  const auto o = options(1.5);
+  const auto o = open_loop_options(1.5);
   auto by_ipopt = o;
   by_ipopt.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
   const auto slp = fpl::plan_open_loop(arm.flat, s0, o);
@@ -80,7 +77,7 @@ TEST_F(BoundedPlans, SequentialLpAndIpoptReachTheSameBoundedOptimum) {
 }
 
 TEST_F(BoundedPlans, SimbodyExecutesTheBoundedPlan) {
-  const auto o = options(1.5);
+  const auto o = open_loop_options(1.5);
   const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   const flatsos::test::OpenLoopReplay replay = flatsos::test::replay_open_loop(arm.flat, s0, plan, 1e-10, 0.01);
@@ -92,19 +89,19 @@ TEST_F(BoundedPlans, SimbodyExecutesTheBoundedPlan) {
 
 TEST_F(BoundedPlans, ARichBasisThatDeactivatesTooFastIsBounded) {
   // Cubic splines on 24 spans at T = 1.5 s: the reserves-only optimum drives an excitation below 0.
-  auto unbounded = options(1.5, 3, 24);
+  auto unbounded = open_loop_options(1.5, 3, 24);
   unbounded.sos.bounds.enforce = false;
   const auto free = fpl::plan_open_loop(arm.flat, s0, unbounded);
   ASSERT_EQ(free.status, fpl::SolveStatus::Infeasible) << free.message;
   EXPECT_LT(free.check.min_excitation, 0.0);
 
-  const auto o = options(1.5, 3, 24);
+  const auto o = open_loop_options(1.5, 3, 24);
   const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   EXPECT_TRUE(plan.sos.bounds_imposed);
   EXPECT_GE(plan.sos.cost_N_s, free.sos.cost_N_s);
   expect_executable(plan, o);
-  const auto quartic = fpl::plan_open_loop(arm.flat, s0, options(1.5));
+  const auto quartic = fpl::plan_open_loop(arm.flat, s0, open_loop_options(1.5));
   EXPECT_LT(plan.sos.cost_N_s, 0.25 * quartic.sos.cost_N_s);
 }
 
@@ -113,7 +110,7 @@ TEST_F(BoundedPlans, ALowEffortPlansReplayErrorFollowsTheMotionsOwnGrowthRate) {
   // arm rises to upright, so the open-loop motion is unstable. Replayed open loop its joint angles
   // drift by about 1 deg whatever the integrator accuracy. The drift is a tiny seed amplified
   // by that instability: it grows exactly as a 1e-9 rad perturbation of the initial state does.
-  const auto o = options(3.0, 3, 48);
+  const auto o = open_loop_options(3.0, 3, 48);
   const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   expect_executable(plan, o);

@@ -15,6 +15,7 @@
 #include "flatsos/planner/collocation.hpp"
 
 namespace fpl = flatsos::planner;
+using flatsos::test::open_loop_options;
 namespace fm = flatsos::muscles;
 
 namespace {
@@ -24,12 +25,8 @@ class CollocationReference : public ::testing::Test {
   flatsos::test::ArmPlanning arm;
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
 
-  static fpl::OpenLoopOptions options(double T, int degree = 4, int spans = 1) {
-    return flatsos::test::open_loop_options(T, degree, spans);
-  }
-
   fpl::JointPath path(double T) const {
-    auto o = options(T);
+    auto o = open_loop_options(T);
     o.sos.bounds.enforce = false;
     return fpl::plan_open_loop(arm.flat, s0, o).path;
   }
@@ -38,7 +35,7 @@ class CollocationReference : public ::testing::Test {
     auto ws = arm.flat.makeWorkspace();
     fpl::CollocationOptions co;
     co.mesh_intervals = intervals;
-    return fpl::solve_collocation_along_path(arm.flat, ws, p, s0, options(p.duration_s).reserves_N, co);
+    return fpl::solve_collocation_along_path(arm.flat, ws, p, s0, open_loop_options(p.duration_s).reserves_N, co);
   }
 };
 
@@ -64,7 +61,7 @@ TEST_F(CollocationReference, ItsSolutionObeysTheModelsLawsEvaluatedIndependently
   const auto r = collocate(p, 100);
   ASSERT_EQ(r.status, fpl::SolveStatus::Solved) << r.message;
   auto ws = arm.flat.makeWorkspace();
-  const auto reserves = options(3.0).reserves_N;
+  const auto reserves = open_loop_options(3.0).reserves_N;
   for (int i = 0; i < r.time_s.size(); ++i) {
     const fpl::Jet q = p.jet(r.time_s[i], 3);
     const Eigen::VectorXd tau = arm.flat.torque(ws, q.col(0), q.col(1), q.col(2));
@@ -97,7 +94,7 @@ TEST_F(CollocationReference, RichFlatnessPlansComeWithinOnePercentAndNeverBelow)
   for (const auto& [T, degree, spans] : {std::tuple{3.0, 5, 48}, std::tuple{1.5, 3, 48}}) {
     const auto reference = collocate(path(T), T > 2.0 ? 150 : 100);
     ASSERT_EQ(reference.status, fpl::SolveStatus::Solved) << reference.message;
-    const auto plan = fpl::plan_open_loop(arm.flat, s0, options(T, degree, spans));
+    const auto plan = fpl::plan_open_loop(arm.flat, s0, open_loop_options(T, degree, spans));
     ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
     EXPECT_GE(plan.sos.cost_N_s, reference.cost_N_s * (1.0 - 1e-3)) << "T = " << T;
     EXPECT_LE(plan.sos.cost_N_s, reference.cost_N_s * 1.01) << "T = " << T;
@@ -111,7 +108,7 @@ TEST_F(CollocationReference, RichFlatnessPlansComeWithinOnePercentAndNeverBelow)
 TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReportedSolved) {
   const fpl::JointPath p = path(3.0);
   auto ws = arm.flat.makeWorkspace();
-  const Eigen::VectorXd reserves = options(3.0).reserves_N;
+  const Eigen::VectorXd reserves = open_loop_options(3.0).reserves_N;
   auto expect_error = [&](auto call, const std::string& field) {
     try {
       call();
