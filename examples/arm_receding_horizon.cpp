@@ -42,6 +42,10 @@ int main(int argc, char** argv) {
   app.add_option("--period-s", options.control_period_s, "control period delta, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--slp-solver", solver, "exact (vertex enumeration, tested against Ipopt) or ipopt")
       ->capture_default_str()->check(CLI::IsMember({"exact", "ipopt"}));
+  bool no_bounds = false;
+  app.add_flag("--no-excitation-bounds", no_bounds,
+               "plan without the excitation bounds on each control period (the paper's step: excitations outside "
+               "[0, 1] are clamped by the muscle and counted)");
   app.add_option("--observer-gain-per-s", options.disturbance_observer_gain_per_s,
                  "disturbance observer gain in [0, 40] 1/s: integrates the plan's prediction error so that a model "
                  "mismatch leaves no offset (20 recommended; 0: the paper's controller)")
@@ -69,6 +73,7 @@ int main(int argc, char** argv) {
     options.plan.target_q_rad = in.target_q_rad;
     options.plan.reserves_N = in.reserves_N;
     options.plan.solver = solver == "ipopt" ? fpl::SlpSolver::Ipopt : fpl::SlpSolver::VertexEnumeration;
+    options.plan.excitation_bounds.enforce = !no_bounds;
     if (options.control_period_s > options.plan.horizon_s)
       throw CLI::ValidationError("--period-s", "must not exceed --horizon-s");
     const fp::IntegratorKind kind = fp::integrator_from_name(integrator);
@@ -125,6 +130,7 @@ int main(int argc, char** argv) {
     summary["wall_seconds"] = run.wall_seconds;
     summary["real_time_factor"] = run.real_time_factor;
     summary["excitation_clamps"] = controller.clampedSamples();
+    summary["excitation_bounds"] = {{"enforced", !no_bounds}, {"bounded_steps", controller.boundedSteps()}};
     summary["plan_failures"] = controller.planFailures();
     summary["finite"] = finite;
     summary["integrator"] = integrator;
@@ -154,7 +160,8 @@ int main(int argc, char** argv) {
     ex::write_json(out_dir + "/summary.json", summary);
     std::cout << "arm_receding_horizon: " << steps << " steps, final q = [" << q_final.transpose() << "] deg, settling "
               << (settling >= 0 ? ex::format(settling) + " s" : std::string("never")) << ", plan failures "
-              << controller.planFailures() << ", clamped samples " << controller.clampedSamples() << "\n  median step "
+              << controller.planFailures() << ", clamped samples " << controller.clampedSamples() << ", bounded steps "
+              << controller.boundedSteps() << "\n  median step "
               << 1e3 * ex::median(step_times) << " ms, real-time factor " << run.real_time_factor << "\n  wrote " << out_dir
               << "/{simulation.sto, simulation_controls.sto, predictions/step_*.sto, summary.json}\n";
     if (!failures.empty()) {

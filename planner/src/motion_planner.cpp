@@ -11,6 +11,7 @@
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "input_checks.hpp"
+#include "period_bounds.hpp"
 
 namespace flatsos::planner {
 
@@ -206,6 +207,13 @@ void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
   require_reserves(o.reserves_N, flat.numMuscles());
   if (o.torque_offset_N_m.size() > 0) require(o.torque_offset_N_m, n, "torque offset");
   if (o.warm_start) require(*o.warm_start, flat.numFlatOutputs(), "SLP warm start");
+  const PeriodExcitationBounds& b = o.excitation_bounds;
+  if (b.enforce) {
+    if (!(b.period_s > 0.0 && b.period_s <= o.horizon_s))
+      throw std::invalid_argument("RH step: excitation_bounds.period_s must be in (0, horizon]");
+    if (b.samples < 2) throw std::invalid_argument("RH step: excitation_bounds.samples must be >= 2");
+    if (b.max_iterations < 1) throw std::invalid_argument("RH step: excitation_bounds.max_iterations must be >= 1");
+  }
 }
 
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
@@ -232,6 +240,7 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
 
   step.status = SolveStatus::Failed;
   step.message.clear();
+  step.first_period_sampled = false;
   fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
   step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation
   const bool offset = o.torque_offset_N_m.size() > 0;
@@ -252,6 +261,7 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   solve_slp(flat.CY(), step.bound_N, o.solver, o.warm_start, step.buffers.slp, step.slp);
   step.status = step.slp.status;
   step.message = step.slp.message;
+  detail::impose_period_bounds(flat, workspace, o, step);
   step.wall_seconds = wall.seconds();
 }
 

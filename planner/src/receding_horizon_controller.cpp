@@ -13,14 +13,24 @@ namespace {
 // The plan's joint jet at tau into `out` (its column count: the orders); from its end on the plan
 // rests at its target (the cubic's acceleration at T is not zero, a rest's is).
 
+// The step's options as the controller plans with them: the excitation bounds on exactly the
+// samples it applies.
+RecedingHorizonOptions controller_plan_options(const RecedingHorizonControllerOptions& o) {
+  RecedingHorizonOptions plan = o.plan;
+  plan.excitation_bounds.period_s = o.control_period_s;
+  plan.excitation_bounds.samples = o.excitation_samples_per_period;
+  return plan;
+}
+
 const RecedingHorizonControllerOptions& validated(const RecedingHorizonControllerOptions& o, const FlatOutputMap& flat) {
   if (!(o.control_period_s > 0.0) || !std::isfinite(o.control_period_s))
     throw std::invalid_argument("RH controller: control period must be > 0 s");
   if (o.excitation_samples_per_period < 2)
     throw std::invalid_argument("RH controller: need at least 2 excitation samples per period");
-  validate(o.plan, flat);
-  if (!(o.control_period_s <= o.plan.horizon_s))
+  // (A horizon that is not > 0 is named by validate.)
+  if (o.plan.horizon_s > 0.0 && !(o.control_period_s <= o.plan.horizon_s))
     throw std::invalid_argument("RH controller: the control period must not exceed the horizon");
+  validate(controller_plan_options(o), flat);
   if (!o.planner) throw std::invalid_argument("RH controller: no planner function");
   return o;
 }
@@ -46,7 +56,7 @@ RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, Recedin
       workspace_(flat_.makeWorkspace()),
       observer_(flat_.numJoints(), options_.disturbance_observer_gain_per_s),
       fitter_(options_.excitation_samples_per_period, options_.control_period_s),
-      plan_options_(options_.plan) {
+      plan_options_(controller_plan_options(options_)) {
   const int n = flat_.numJoints(), m = flat_.numMuscles();
   for (auto* v : {&q_, &qd_, &qdd_, &measured_torque_, &predicted_torque_}) v->setZero(n);
   predicted_jet_.setZero(n, 3);
@@ -87,6 +97,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   rec.status = SolveStatus::Failed;
   rec.message.clear();
   rec.used_previous_plan = false;
+  rec.bounds_imposed = false;
   rec.clamped_samples = 0;
   rec.plan_seconds = 0.0;
   if (observer_.enabled()) {
@@ -103,6 +114,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     rec.plan_seconds = plan_time.seconds();
     rec.status = step_.status;
     rec.message = step_.message;
+    rec.bounds_imposed = step_.bounds_imposed;
     if (step_.status == SolveStatus::Solved) {
       candidate_.alpha = step_.alpha();
       candidate_.path = step_.path;
@@ -115,7 +127,15 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     rec.message = e.what();
   }
 
-  bool have_excitations = have_candidate && sampleExcitations(candidate_, t);
+  // A bounded step has sampled exactly these excitations already (same samples, see
+  // controller_plan_options).
+  bool have_excitations = false;
+  if (have_candidate && step_.first_period_sampled && step_.buffers.excitations.rows() == fitter_.samples()) {
+    excitations_ = step_.buffers.excitations;  // same size every period: no allocation
+    have_excitations = true;
+  } else if (have_candidate) {
+    have_excitations = sampleExcitations(candidate_, t);
+  }
   if (have_excitations) {
     in_use_ = candidate_;  // same sizes after the first period: copies into in_use_'s storage
   } else {
@@ -140,6 +160,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   }
   if (rec.status != SolveStatus::Solved) ++plan_failures_;
   clamped_samples_ += rec.clamped_samples;
+  if (rec.bounds_imposed) ++bounded_steps_;
   ++steps_;
   rec.wall_seconds = wall.seconds();
   if (options_.keep_history) history_.push_back(rec);

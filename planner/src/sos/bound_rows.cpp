@@ -51,7 +51,7 @@ BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double 
 }
 
 MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
-                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients) {
+                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin) {
   double F[3];
   for (int k = 0; k < 3; ++k) {
     double v = bp.base(j, k);
@@ -65,10 +65,9 @@ MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int 
   if (inv.stage != fm::MuscleInverse::Stage::Complete) return rows;
   rows.defined = true;
   const fm::ExcitationBoundMargins m = fm::excitation_bound_margins(p, inv.activation, inv.activation_rate_per_s);
-  // Imposed with a margin (kBoundMargin) wider than the step LPs resolve rows (about 4e-7 with
-  // Clp's scaling), so that a row met to that resolution still leaves the plan inside.
-  rows.value = {inv.activation - a_min - kBoundMargin, 1.0 - inv.activation - kBoundMargin, m.lower - kBoundMargin,
-                m.upper - kBoundMargin};
+  // Imposed with a margin (kBoundMargin at least) wider than the step LPs resolve rows (about
+  // 4e-7 with Clp's scaling), so that a row met to that resolution still leaves the plan inside.
+  rows.value = {inv.activation - a_min - margin, 1.0 - inv.activation - margin, m.lower - margin, m.upper - margin};
   if (gradients)
     for (std::size_t o = 0; o < 3; ++o) {
       const double da = inv.activation_gradient[o], dadot = inv.activation_rate_gradient[o];
@@ -87,14 +86,14 @@ double column_derivative(const BoundPoint& bp, const fm::TendonForceJetGradient&
 }
 
 BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
-                          const Eigen::VectorXd& theta, bool jacobian) {
+                          const Eigen::VectorXd& theta, bool jacobian, double margin) {
   BoundRowsAt out;
   const int m = flat.numMuscles();
   out.value.reserve(points.size() * static_cast<std::size_t>(m * kRowsPerMuscle));
   int row = 0;
   for (const auto& bp : points)
     for (int j = 0; j < m; ++j) {
-      const MuscleBoundRows rows = bound_rows(flat, bp, j, a_min[j], theta, jacobian);
+      const MuscleBoundRows rows = bound_rows(flat, bp, j, a_min[j], theta, jacobian, margin);
       for (int k = 0; k < kRowsPerMuscle; ++k, ++row) {
         if (!rows.defined) {
           out.value.push_back(-std::numeric_limits<double>::infinity());

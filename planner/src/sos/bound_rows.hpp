@@ -43,8 +43,9 @@ struct MuscleBoundRows {
   std::array<muscles::TendonForceJetGradient, kRowsPerMuscle> gradient{};
 };
 
+/// `margin`: how far inside the bounds the rows put a and n (kBoundMargin: the open-loop plans').
 MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
-                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients);
+                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin = kBoundMargin);
 
 // d(row)/d theta over the point's columns.
 double column_derivative(const BoundPoint& bp, const muscles::TendonForceJetGradient& g, int j, std::size_t c);
@@ -58,7 +59,7 @@ struct BoundRowsAt {
 };
 
 BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
-                          const Eigen::VectorXd& theta, bool jacobian);
+                          const Eigen::VectorXd& theta, bool jacobian, double margin = kBoundMargin);
 
 /// Sum of the reserve rows' violations (N) of the exchange LP in setup.lp.
 double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta);

@@ -13,13 +13,15 @@ namespace {
 constexpr double kInitialPenalty = 1e4, kMaxPenalty = 1e12;
 }  // namespace
 
-SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
-                               const Eigen::VectorXd& a_min, double reserve_margin_N, Eigen::VectorXd& theta, double& radius,
-                               SlpBasis& basis, int max_iterations) {
+SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
+                               const Eigen::VectorXd& a_min, Eigen::VectorXd& theta, double& radius, SlpBasis& basis,
+                               int max_iterations) {
   SlpOutcome out;
-  const LinearProgram& lp = setup.lp;
-  const Eigen::Index n = setup.free_coefficients;
-  BoundRowsAt rows = evaluate_rows(flat, points, a_min, theta, true);
+  const LinearProgram& lp = linear.lp;
+  const Eigen::Index n = theta.size();
+  if (lp.cost.size() != n || lp.G.cols() != n) throw std::logic_error("bounds SLP: the linear part has other variables than theta");
+  auto rows_at = [&](const Eigen::VectorXd& x) { return evaluate_rows(flat, points, a_min, x, true, linear.bound_margin); };
+  BoundRowsAt rows = rows_at(theta);
   if (!rows.defined) {
     out.failure = "the start leaves the muscles' domain at a bound point";
     return out;
@@ -30,19 +32,20 @@ SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat,
   };
   double phi = merit(theta, rows);
   basis.step.resize(static_cast<std::size_t>(n), BasisStatus::AtLower);
-  // Reserve row r of setup.lp is point p of constraint c (rows in that order; rounds append
-  // points): their statuses are kept per constraint and point.
-  basis.reserve_row.resize(setup.constraints.size());
-  basis.reserve_slack.resize(setup.constraints.size());
+  // Reserve row r of lp is row k of group c (rows in that order; rounds append rows to groups):
+  // their statuses are kept per group and row.
+  const std::size_t groups = linear.rows_per_group.size();
+  basis.reserve_row.resize(groups);
+  basis.reserve_slack.resize(groups);
   std::vector<std::pair<std::size_t, std::size_t>> reserve_id;
-  for (std::size_t c = 0; c < setup.constraints.size(); ++c) {
-    const std::size_t points_c = setup.constraints[c].points.size();
+  for (std::size_t c = 0; c < groups; ++c) {
+    const std::size_t points_c = linear.rows_per_group[c];
     basis.reserve_row[c].resize(points_c, BasisStatus::Basic);
     basis.reserve_slack[c].resize(points_c, BasisStatus::AtLower);
     for (std::size_t k = 0; k < points_c; ++k) reserve_id.emplace_back(c, k);
   }
   if (reserve_id.size() != static_cast<std::size_t>(lp.G.rows()))
-    throw std::logic_error("bounds SLP: the exchange rows do not match the constraints' points");
+    throw std::logic_error("bounds SLP: the reserve rows do not match their groups");
   for (; out.iterations < max_iterations; ++out.iterations) {
     // Rows that cannot reach zero inside the box are left out of this LP.
     std::vector<double> row_norm(rows.value.size(), 0.0);
@@ -142,7 +145,7 @@ SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat,
     auto settle = [&]() {
       const double worst_row = *std::min_element(rows.value.begin(), rows.value.end());
       const double worst_reserve = lp.G.rows() ? (lp.G * theta - lp.row_lower).minCoeff() : 0.0;
-      const bool rows_hold = worst_row >= -kBoundMargin && worst_reserve >= -0.5 * reserve_margin_N;
+      const bool rows_hold = worst_row >= -kBoundMargin && worst_reserve >= -0.5 * linear.reserve_margin_N;
       // An LP that left every slack at zero believes its rows met: what remains is below its
       // resolution, a higher price only repeats the same LP, and it is no sign of infeasibility.
       out.rows_violated = !rows_hold && lp_paid_violation;
@@ -159,7 +162,7 @@ SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat,
       continue;
     }
     const Eigen::VectorXd trial = theta + d;
-    BoundRowsAt trial_rows = evaluate_rows(flat, points, a_min, trial, true);
+    BoundRowsAt trial_rows = rows_at(trial);
     const double trial_phi = trial_rows.defined ? merit(trial, trial_rows) : std::numeric_limits<double>::infinity();
     const double ratio = (phi - trial_phi) / predicted;
     if (ratio < 0.25) radius = 0.5 * step_size;

@@ -35,9 +35,20 @@ struct SlpOutcome {
   std::string failure;
 };
 
+/// The linear part of the problem the bound rows join: minimize lp.cost . theta subject to
+/// lp.G theta >= lp.row_lower (the reserve rows, kept as they are) and lp's variable bounds. The
+/// reserve rows come in groups whose rows may be appended between calls (the exchange: one group
+/// per constraint, a row per point): `rows_per_group` identifies each row for the basis.
+struct SlpLinearPart {
+  const LinearProgram& lp;
+  std::vector<std::size_t> rows_per_group;
+  double reserve_margin_N = 0.0;        // reserve rows hold to half of this
+  double bound_margin = kBoundMargin;   // how far inside the bounds the bound rows put a and n
+};
+
 /// Improves theta in place (and the trust radius and the LP basis, kept across exchange rounds).
-SlpOutcome solve_bounds_by_slp(const SosSetup& setup, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
-                               const Eigen::VectorXd& a_min, double reserve_margin_N, Eigen::VectorXd& theta, double& radius,
-                               SlpBasis& basis, int max_iterations);
+SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
+                               const Eigen::VectorXd& a_min, Eigen::VectorXd& theta, double& radius, SlpBasis& basis,
+                               int max_iterations);
 
 }  // namespace flatsos::planner::detail

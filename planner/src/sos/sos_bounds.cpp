@@ -62,8 +62,9 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
     result.lp_points = build_exchange_rows(setup, o.feasibility_margin_N);
     result.bound_points = static_cast<int>(points.size());
     if (bo.solver == BoundsSolver::SequentialLp) {
-      const SlpOutcome slp =
-          solve_bounds_by_slp(setup, flat, points, a_min, o.feasibility_margin_N, theta, radius, slp_basis, bo.max_slp_iterations);
+      SlpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
+      for (const auto& c : setup.constraints) linear.rows_per_group.push_back(c.points.size());
+      const SlpOutcome slp = solve_bounds_by_slp(linear, flat, points, a_min, theta, radius, slp_basis, bo.max_slp_iterations);
       result.bound_slp_iterations += slp.iterations;
       result.simplex_pivots += slp.lp_pivots;
       if (!slp.converged) {

@@ -14,6 +14,7 @@
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/planner/slp.hpp"
 #include "flatsos/planner/sos_program.hpp"
 #include "flatsos/planner/torque_model.hpp"
@@ -84,6 +85,17 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
                      const SplineTrajectory& Y, const Eigen::VectorXd& reserves_N, int points,
                      double bound_tolerance = 0.0);
 
+/// Bounds on what an RH step's plan asks of the muscles over its first control period (what the
+/// controller applies): 0 <= n <= 1 and floor <= a <= 1 at `samples` uniform times in
+/// [0, period_s]. The RH controller sets period_s and samples to its own control period and
+/// excitation samples, so it never has an excitation to clamp.
+struct PeriodExcitationBounds {
+  bool enforce = true;
+  double period_s = 0.05;
+  int samples = 11;
+  int max_iterations = 100;  ///< LP steps of the bounds' sequential LP
+};
+
 struct RecedingHorizonOptions {
   double horizon_s = 0.5;
   int grid_points = 11;               ///< torque box sampled here (the paper's grid)
@@ -94,6 +106,7 @@ struct RecedingHorizonOptions {
   /// Joint torque the muscles need not produce (N m per joint; empty: none): the planned
   /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
   Eigen::VectorXd torque_offset_N_m;
+  PeriodExcitationBounds excitation_bounds;
 };
 
 struct RecedingHorizonStep {
@@ -102,8 +115,16 @@ struct RecedingHorizonStep {
   JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon
   Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
   Eigen::VectorXd bound_N;            ///< the SLP's B (slp_bound_vector of the box and reserves)
-  SlpResult slp;
+  SlpResult slp;                      ///< alpha and its cost (moved inside the bounds when they were imposed)
   Eigen::VectorXd torque_offset_N_m;  ///< the options' offset the step was planned with (may be empty)
+  /// The SLP's optimum left the excitation bounds on the first period and the bounds' sequential
+  /// LP moved alpha inside (cost raised); its LP steps.
+  bool bounds_imposed = false;
+  int bound_iterations = 0;
+  /// buffers.excitations hold this step's excitations (alpha, path, offset as returned) on the
+  /// bounds' samples of the first period, so a controller need not compute them again. Set by
+  /// plan_receding_horizon_step; a planner that changes the step afterwards must clear it.
+  bool first_period_sampled = false;
   const Eigen::VectorXd& alpha() const { return slp.alpha; }  ///< constant Y, N
   /// The excitations the plan asks for at `count` times tau0 + i h (s from the step's start;
   /// after the horizon the target is held at rest): count x m, what the RH controller applies
@@ -118,24 +139,29 @@ struct RecedingHorizonStep {
     Jet joint_jet;
     Eigen::VectorXd torque_N_m;
     SlpWorkspace slp;
+    PlanExcitationScratch period;                  ///< the first period's samples
+    Eigen::MatrixXd excitations, activations;      ///< there: samples x m
   } buffers;
 };
 
 /// Checks RH options against the model: horizon > 0 s, >= 2 grid points, target and reserves
 /// (>= 0 N) of the model's sizes and finite, a torque offset (if any) of one entry per joint,
-/// a warm start (if any) of one entry per flat output. Throws std::invalid_argument naming the
-/// field.
+/// a warm start (if any) of one entry per flat output, enforced excitation bounds on a period in
+/// (0, horizon] with >= 2 samples. Throws std::invalid_argument naming the field.
 void validate(const RecedingHorizonOptions& options, const FlatOutputMap& flat);
 
 /// One RH step from the measured joint state (the SLP formulation: no initial constraints on Y,
-/// terminal equilibrium). Throws std::invalid_argument for bad options (see validate) or a
+/// terminal equilibrium), with the excitation bounds on its first period (options.
+/// excitation_bounds): Infeasible when no constant alpha meets them (the message names the
+/// muscle and time). Throws std::invalid_argument for bad options (see validate) or a
 /// joint state of the wrong size or not finite.
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                                const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                                const RecedingHorizonOptions& options);
 /// The same into `step`, reusing its storage: with SlpSolver::VertexEnumeration and a step that
 /// has planned for this model before, nothing is allocated (the receding-horizon controller's
-/// inner loop). Ipopt allocates inside.
+/// inner loop) unless the bounds must move alpha (their sequential LP allocates, as does Clp).
+/// Ipopt allocates inside.
 void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                 const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                 const RecedingHorizonOptions& options, RecedingHorizonStep& step);

@@ -27,10 +27,12 @@ void rest_held_jet(const JointPath& path, double tau_s, Jet& out);
 
 /// Excitations at `count` times tau0 + i h (s from the plan's start) into `out` (count x m).
 /// `torque_offset_N_m`: empty or one per joint (the torque the muscles need not produce).
-/// Returns false, leaving `out` partly written, when an excitation is not finite (the plan left
-/// the model's valid domain there).
+/// `activations` (optional): the activations at the same times, count x m. Returns false, leaving
+/// the outputs partly written, when an excitation is not finite (the plan left the model's
+/// valid domain there).
 bool sample_plan_excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
                              const Eigen::VectorXd& alpha, const Eigen::VectorXd& torque_offset_N_m, double tau0_s,
-                             double h_s, int count, PlanExcitationScratch& scratch, Eigen::MatrixXd& out);
+                             double h_s, int count, PlanExcitationScratch& scratch, Eigen::MatrixXd& out,
+                             Eigen::MatrixXd* activations = nullptr);
 
 }  // namespace flatsos::planner

@@ -4,8 +4,10 @@
 // period delta: read q, qd (and qdd, for the observer) from the plant's State, update the
 // disturbance observer, plan one RH step (cubic to the target over the horizon, torque box, SLP),
 // evaluate the plan's excitations on the first period by the exact inverse map, and give each
-// muscle a polynomial signal over [t, t + delta]. Excitations outside [0, 1] are clamped (by
-// the muscle) and counted here. A failed step never stops the loop: the previous plan's tail,
+// muscle a polynomial signal over [t, t + delta]. The step keeps the excitations of those
+// samples in [0, 1] (and activations in [floor, 1]) by construction unless the options turn its
+// bounds off (plan.excitation_bounds.enforce); any sample outside [0, 1] (such a step, or a
+// previous plan's tail after a failed step) is clamped by the muscle and counted here. A failed step never stops the loop: the previous plan's tail,
 // with the torque offset it was planned for, is used and the failure recorded.
 //
 // Prepared once in the constructor (validated options, the planner's workspace, the excitation
@@ -34,13 +36,16 @@ namespace flatsos::planner {
 
 /// The planning step a controller calls, writing into the step it is given (the controller's
 /// own, reused every period); replaceable (another planner, or fault injection in tests).
-/// Default: the in-place plan_receding_horizon_step.
+/// Default: the in-place plan_receding_horizon_step. A planner that changes the step it got from
+/// there clears its first_period_sampled (the controller applies those samples when set).
 using RecedingHorizonPlanner =
     std::function<void(const FlatOutputMap&, plugin::ModelWorkspace&, const Eigen::VectorXd& q_rad,
                        const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions&, RecedingHorizonStep& out)>;
 
 struct RecedingHorizonControllerOptions {
-  RecedingHorizonOptions plan;             ///< horizon, grid, target, reserves, SLP solver
+  /// Horizon, grid, target, reserves, SLP solver, excitation bounds (their period and samples
+  /// are the controller's own: control_period_s, excitation_samples_per_period).
+  RecedingHorizonOptions plan;
   RecedingHorizonPlanner planner = [](const FlatOutputMap& f, plugin::ModelWorkspace& w, const Eigen::VectorXd& q,
                                       const Eigen::VectorXd& qd, const RecedingHorizonOptions& o,
                                       RecedingHorizonStep& out) { plan_receding_horizon_step(f, w, q, qd, o, out); };
@@ -69,6 +74,7 @@ struct RecedingHorizonRecord {
   SolveStatus status = SolveStatus::Failed;
   std::string message;
   bool used_previous_plan = false;   ///< this step failed and ran on the previous plan's tail
+  bool bounds_imposed = false;       ///< the step's SLP optimum left the excitation bounds: alpha was moved
   PlanInUse plan;                    ///< the plan in use for this period (empty: none yet)
   Eigen::VectorXd observer_offset_N_m;  ///< the observer's estimate at this step (what a new plan was asked for)
   int clamped_samples = 0;           ///< excitation samples outside [0, 1] this period
@@ -95,6 +101,8 @@ class RecedingHorizonController final : public plugin::Controller {
   int steps() const { return steps_; }
   int planFailures() const { return plan_failures_; }
   int clampedSamples() const { return clamped_samples_; }
+  /// Steps whose SLP optimum left the excitation bounds on the first period (alpha moved inside).
+  int boundedSteps() const { return bounded_steps_; }
   const RecedingHorizonControllerOptions& options() const { return options_; }
   /// Implausible options that were accepted (a target beyond one turn: degrees as radians?).
   std::vector<std::string> warnings() const;
@@ -118,10 +126,10 @@ class RecedingHorizonController final : public plugin::Controller {
   PlanInUse in_use_, candidate_;
   RecedingHorizonRecord record_;
   std::vector<RecedingHorizonRecord> history_;
-  int steps_ = 0, plan_failures_ = 0, clamped_samples_ = 0;
+  int steps_ = 0, plan_failures_ = 0, clamped_samples_ = 0, bounded_steps_ = 0;
 
   // Storage reused every period (sized in the constructor or on the first period).
-  RecedingHorizonOptions plan_options_;  ///< options_.plan with the observer's current offset
+  RecedingHorizonOptions plan_options_;  ///< options_.plan with this controller's bounds and the observer's current offset
   RecedingHorizonStep step_;
   Eigen::VectorXd q_, qd_, qdd_, measured_torque_, predicted_torque_;
   Jet predicted_jet_;  ///< N x 3

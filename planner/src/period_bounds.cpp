@@ -1,0 +1,154 @@
+#include "period_bounds.hpp"
+
+#include <algorithm>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sos/bound_rows.hpp"
+#include "sos/bounds_slp.hpp"
+
+namespace flatsos::planner::detail {
+
+namespace {
+
+// How far inside its bounds every sample's a and n are put: the controller hands each muscle a
+// polynomial fitted to the samples, which reproduces them to about 1e-6; the margin keeps the
+// samples themselves strictly inside. Reserve rows C_Y alpha >= B hold to half of the other.
+constexpr double kSampleMargin = 1e-5;
+constexpr double kReserveMargin_N = 1e-6;
+
+double sample_spacing_s(const PeriodExcitationBounds& b) { return b.period_s / (b.samples - 1); }
+
+// The first period's excitations and activations of the step's current alpha into its buffers;
+// false where they are not finite.
+bool sample_period(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
+                   RecedingHorizonStep& step) {
+  auto& buf = step.buffers;
+  return sample_plan_excitations(flat, workspace, step.path, step.alpha(), step.torque_offset_N_m, 0.0, sample_spacing_s(b),
+                                 b.samples, buf.period, buf.excitations, &buf.activations);
+}
+
+// The largest excess of a sample's a or n over its bounds (0 inside), and where.
+struct SampleExcess {
+  double value = 0.0;
+  int sample = 0, muscle = 0;
+};
+
+SampleExcess worst_excess(const FlatOutputMap& flat, const RecedingHorizonStep& step) {
+  SampleExcess worst;
+  const Eigen::MatrixXd &n = step.buffers.excitations, &a = step.buffers.activations;
+  for (int j = 0; j < flat.numMuscles(); ++j) {
+    const double floor = flat.model().muscle(j).getParameters().activation_floor;
+    for (Eigen::Index i = 0; i < n.rows(); ++i) {
+      const double e = std::max({floor - a(i, j), a(i, j) - 1.0, -n(i, j), n(i, j) - 1.0});
+      if (e > worst.value) worst = {e, static_cast<int>(i), j};
+    }
+  }
+  return worst;
+}
+
+std::string describe(const FlatOutputMap& flat, const PeriodExcitationBounds& b, const RecedingHorizonStep& step,
+                     const SampleExcess& e) {
+  std::ostringstream why;
+  why << "muscle '" << flat.model().muscle(e.muscle).getParameters().name << "' at t = " << sample_spacing_s(b) * e.sample
+      << " s: activation " << step.buffers.activations(e.sample, e.muscle) << ", excitation "
+      << step.buffers.excitations(e.sample, e.muscle);
+  return why.str();
+}
+
+// The violation that made the sampling stop (its last point).
+std::string domain_violation(const FlatOutputMap& flat, const RecedingHorizonStep& step) {
+  const std::vector<DomainViolation>& v = step.buffers.period.point.domain_violation;
+  for (std::size_t j = 0; j < v.size(); ++j)
+    if (v[j].violated()) return "muscle '" + flat.model().muscle(static_cast<int>(j)).getParameters().name + "': " + v[j].describe();
+  return "an excitation is not finite";
+}
+
+// The bound rows' data at every sample: F^(k) = C_tau tau^(k) (the offset already taken off
+// by the sampling) + C_Y alpha for k = 0 only.
+std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExcitationBounds& b,
+                                      const RecedingHorizonStep& step) {
+  const int m = flat.numMuscles(), p = flat.numFlatOutputs();
+  std::vector<BoundPoint> points(static_cast<std::size_t>(b.samples));
+  Jet q_jet(flat.numJoints(), 3);
+  for (int i = 0; i < b.samples; ++i) {
+    BoundPoint& bp = points[static_cast<std::size_t>(i)];
+    bp.t_s = sample_spacing_s(b) * i;
+    const TorqueJet& tau = step.buffers.period.torque_grid.jets[static_cast<std::size_t>(i)];
+    bp.base = flat.Ctau() * tau.tau;
+    for (int c = 0; c < p; ++c) bp.columns.push_back(c);
+    bp.slope = {flat.CY(), Eigen::MatrixXd::Zero(m, p), Eigen::MatrixXd::Zero(m, p)};
+    rest_held_jet(step.path, bp.t_s, q_jet);
+    for (int j = 0; j < m; ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
+  }
+  return points;
+}
+
+}  // namespace
+
+void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+                          RecedingHorizonStep& step) {
+  step.bounds_imposed = false;
+  step.bound_iterations = 0;
+  step.first_period_sampled = false;
+  const PeriodExcitationBounds& b = o.excitation_bounds;
+  if (!b.enforce || step.status != SolveStatus::Solved) return;
+  if (!sample_period(flat, workspace, b, step)) {
+    // Outside the valid domain (a too fast fibre, an unattainable excitation): no bound rows to
+    // move alpha by from there, and nothing the muscles could execute.
+    step.status = SolveStatus::Failed;
+    step.message = "the plan leaves the model's valid domain on the first period: " + domain_violation(flat, step);
+    return;
+  }
+  if (worst_excess(flat, step).value <= 0.0) {
+    step.first_period_sampled = true;
+    return;
+  }
+
+  step.bounds_imposed = true;
+  const int m = flat.numMuscles(), p = flat.numFlatOutputs();
+  const std::vector<BoundPoint> points = period_points(flat, b, step);
+  LinearProgram lp;
+  lp.cost = Eigen::VectorXd::Ones(p);
+  lp.G = flat.CY();
+  lp.row_lower = step.bound_N;
+  lp.row_upper = Eigen::VectorXd::Constant(m, 1e19);
+  lp.x_lower = Eigen::VectorXd::Zero(p);
+  lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
+  const SlpLinearPart linear{lp, {static_cast<std::size_t>(m)}, kReserveMargin_N, kSampleMargin};
+  Eigen::VectorXd alpha = step.slp.alpha;
+  double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
+  SlpBasis basis;
+  const SlpOutcome slp =
+      solve_bounds_by_slp(linear, flat, points, activation_minima(flat, ExcitationBoundsOptions{}), alpha, radius, basis,
+                          b.max_iterations);
+  step.bound_iterations = slp.iterations;
+  step.slp.alpha = alpha;
+  step.slp.cost_N = alpha.sum();
+  if (!slp.converged) {
+    step.status = SolveStatus::Failed;
+    step.message = "the excitation bounds on the first period were not met: " + slp.failure;
+    return;
+  }
+  const bool finite = sample_period(flat, workspace, b, step);
+  const SampleExcess left = finite ? worst_excess(flat, step) : SampleExcess{};
+  if (slp.rows_violated) {
+    step.status = SolveStatus::Infeasible;
+    step.message = "infeasible: no constant flat outputs keep every excitation in [0, 1] and activation in [floor, 1] "
+                   "over the first period with the reserves" +
+                   (finite ? "; closest: " + describe(flat, b, step, left) : std::string());
+  } else if (!finite) {
+    step.status = SolveStatus::Failed;
+    step.message = "the excitation bounds' sequential LP left the model's valid domain on the first period: " +
+                   domain_violation(flat, step);
+  } else if (left.value > 0.0) {
+    step.status = SolveStatus::Failed;
+    step.message = "the excitation bounds' sequential LP converged, but the first period still leaves them: " +
+                   describe(flat, b, step, left);
+  } else {
+    step.first_period_sampled = true;
+  }
+}
+
+}  // namespace flatsos::planner::detail

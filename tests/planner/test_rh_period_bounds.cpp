@@ -1,0 +1,169 @@
+// Bounded receding-horizon steps: the first period's excitations in [0, 1] and activations in
+// [floor, 1] by construction, at a local optimum of the bounded step (first-order conditions with
+// finite-difference gradients of the sampled inverse map, independent of the bound rows'
+// analytic gradients), the reserves kept; infeasible bounds named.
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
+
+#include "scenario_fixture.hpp"
+
+namespace fpl = flatsos::planner;
+namespace fp = flatsos::plugin;
+using flatsos::test::deg;
+
+namespace {
+
+struct PaperFirstStep {
+  flatsos::test::ArmPlanning arm;
+  fp::ModelWorkspace ws = arm.flat.makeWorkspace();
+  fpl::RecedingHorizonOptions options = [] {
+    fpl::RecedingHorizonOptions o;
+    o.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
+    o.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
+    return o;
+  }();
+  Eigen::Vector2d q{deg(20), deg(20)}, qd{0.0, 0.0};
+
+  fpl::RecedingHorizonStep plan(bool bounds) {
+    fpl::RecedingHorizonOptions o = options;
+    o.excitation_bounds.enforce = bounds;
+    return fpl::plan_receding_horizon_step(arm.flat, ws, q, qd, o);
+  }
+  // The first period's samples of a plan with flat outputs alpha: excitations and activations.
+  bool sample(const fpl::RecedingHorizonStep& step, const Eigen::VectorXd& alpha, Eigen::MatrixXd& n, Eigen::MatrixXd& a) {
+    const auto& b = options.excitation_bounds;
+    fpl::PlanExcitationScratch scratch;
+    return fpl::sample_plan_excitations(arm.flat, ws, step.path, alpha, step.torque_offset_N_m, 0.0,
+                                        b.period_s / (b.samples - 1), b.samples, scratch, n, &a);
+  }
+};
+
+// Every constraint of the bounded step as c(alpha) >= 0: per sample and muscle n, 1 - n,
+// a - floor, 1 - a; then C_Y alpha - B; then alpha.
+Eigen::VectorXd constraints(PaperFirstStep& s, const fpl::RecedingHorizonStep& step, const Eigen::VectorXd& alpha) {
+  Eigen::MatrixXd n, a;
+  EXPECT_TRUE(s.sample(step, alpha, n, a));
+  const int m = 6;
+  Eigen::VectorXd c(4 * n.size() + m + alpha.size());
+  int k = 0;
+  for (Eigen::Index i = 0; i < n.rows(); ++i)
+    for (int j = 0; j < m; ++j) {
+      const double floor = s.arm.model->muscle(j).getParameters().activation_floor;
+      c[k++] = n(i, j);
+      c[k++] = 1.0 - n(i, j);
+      c[k++] = a(i, j) - floor;
+      c[k++] = 1.0 - a(i, j);
+    }
+  c.segment(k, m) = s.arm.flat.CY() * alpha - step.bound_N;
+  c.tail(alpha.size()) = alpha;
+  return c;
+}
+
+}  // namespace
+
+TEST(RecedingHorizonStepBounds, KeepTheFirstPeriodInsideAtAFirstOrderOptimum) {
+  PaperFirstStep s;
+  const auto free = s.plan(false);
+  ASSERT_EQ(free.status, fpl::SolveStatus::Solved) << free.message;
+  EXPECT_FALSE(free.bounds_imposed);
+  Eigen::MatrixXd n, a;
+  ASSERT_TRUE(s.sample(free, free.alpha(), n, a));
+  // Precondition: the paper's step asks the anterior deltoid for more than 1 in the first period.
+  ASSERT_GT(n.maxCoeff(), 1.01);
+
+  const auto bounded = s.plan(true);
+  ASSERT_EQ(bounded.status, fpl::SolveStatus::Solved) << bounded.message;
+  EXPECT_TRUE(bounded.bounds_imposed);
+  EXPECT_GT(bounded.bound_iterations, 0);
+  EXPECT_EQ(bounded.bound_N, free.bound_N);
+  EXPECT_NEAR(bounded.slp.cost_N, bounded.alpha().sum(), 1e-12);
+  EXPECT_GT(bounded.slp.cost_N, free.slp.cost_N);  // the bounds cost effort
+  const Eigen::VectorXd c = constraints(s, bounded, bounded.alpha());
+  EXPECT_GE(c.head(c.size() - 10).minCoeff(), 0.0);           // a, n inside, exactly
+  EXPECT_GE(c.segment(c.size() - 10, 6).minCoeff(), -1e-6);   // reserves (N)
+  EXPECT_GE(bounded.alpha().minCoeff(), 0.0);
+  // What the controller would apply: the step's own excitations.
+  const Eigen::MatrixXd applied = bounded.excitations(s.arm.flat, s.ws, 0.0, 0.005, 11);
+  EXPECT_GE(applied.minCoeff(), 0.0);
+  EXPECT_LE(applied.maxCoeff(), 1.0);
+
+  // First order: the cost gradient (all ones) is a nonnegative combination of the active
+  // constraints' gradients, taken by central differences of the sampled inverse map.
+  const Eigen::VectorXd alpha = bounded.alpha();
+  const int p = static_cast<int>(alpha.size());
+  std::vector<int> active;
+  for (Eigen::Index k = 0; k < c.size(); ++k)
+    if (c[k] < 1e-3) active.push_back(static_cast<int>(k));
+  ASSERT_FALSE(active.empty());
+  ASSERT_LE(static_cast<int>(active.size()), p) << "degenerate: more active constraints than flat outputs";
+  Eigen::MatrixXd J(p, static_cast<Eigen::Index>(active.size()));
+  const double h = 1e-4;
+  for (int l = 0; l < p; ++l) {
+    Eigen::VectorXd up = alpha, down = alpha;
+    up[l] += h;
+    down[l] -= h;
+    const Eigen::VectorXd dc = (constraints(s, bounded, up) - constraints(s, bounded, down)) / (2 * h);
+    for (std::size_t k = 0; k < active.size(); ++k) J(l, static_cast<Eigen::Index>(k)) = dc[active[k]];
+  }
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(p);
+  const Eigen::VectorXd mu = J.colPivHouseholderQr().solve(ones);
+  EXPECT_LT((J * mu - ones).norm(), 1e-4 * std::sqrt(p)) << "not stationary: multipliers " << mu.transpose();
+  EXPECT_GE(mu.minCoeff(), 0.0) << "a negative multiplier: the cost still falls along some active constraint";
+}
+
+TEST(RecedingHorizonStepBounds, AStepThatNeedsNoBoundsIsTheSlpOptimum) {
+  PaperFirstStep s;
+  s.q = Eigen::Vector2d(deg(78), deg(79));  // near the target: gentle torques
+  s.qd = Eigen::Vector2d(0.05, 0.02);
+  const auto free = s.plan(false), bounded = s.plan(true);
+  ASSERT_EQ(bounded.status, fpl::SolveStatus::Solved) << bounded.message;
+  EXPECT_FALSE(bounded.bounds_imposed);
+  EXPECT_EQ(bounded.bound_iterations, 0);
+  EXPECT_EQ(bounded.alpha(), free.alpha());
+}
+
+TEST(RecedingHorizonStepBounds, InfeasibleBoundsAreReportedWithTheMuscleAndTime) {
+  PaperFirstStep s;
+  s.options.horizon_s = 0.3;  // 60 degrees in 0.3 s: no constant flat outputs can deliver it
+  const auto bounded = s.plan(true);
+  EXPECT_EQ(bounded.status, fpl::SolveStatus::Infeasible) << bounded.message;
+  EXPECT_TRUE(bounded.bounds_imposed);
+  EXPECT_NE(bounded.message.find("muscle '"), std::string::npos) << bounded.message;
+  EXPECT_NE(bounded.message.find(" s: activation "), std::string::npos) << bounded.message;
+}
+
+TEST(RecedingHorizonStepBounds, BadBoundOptionsAreNamed) {
+  PaperFirstStep s;
+  auto rejects = [&](auto spoil, const std::string& field) {
+    fpl::RecedingHorizonOptions o = s.options;
+    spoil(o.excitation_bounds);
+    try {
+      fpl::plan_receding_horizon_step(s.arm.flat, s.ws, s.q, s.qd, o);
+      ADD_FAILURE() << "accepted bad " << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  rejects([](auto& b) { b.period_s = 0.0; }, "excitation_bounds.period_s");
+  rejects([](auto& b) { b.period_s = 0.6; }, "excitation_bounds.period_s");  // beyond the 0.5 s horizon
+  rejects([](auto& b) { b.samples = 1; }, "excitation_bounds.samples");
+  rejects([](auto& b) { b.max_iterations = 0; }, "excitation_bounds.max_iterations");
+  fpl::RecedingHorizonOptions off = s.options;  // off, they are not checked
+  off.excitation_bounds.enforce = false;
+  off.excitation_bounds.samples = 1;
+  EXPECT_EQ(fpl::plan_receding_horizon_step(s.arm.flat, s.ws, s.q, s.qd, off).status, fpl::SolveStatus::Solved);
+}
+
+TEST(RecedingHorizonStepBounds, AFirstPeriodOutsideTheDomainIsAFailedStepNotASolvedOne) {
+  PaperFirstStep s;
+  s.options.horizon_s = 0.1;  // 60 degrees in 0.1 s: fibres faster than they can shorten
+  const auto free = s.plan(false);
+  Eigen::MatrixXd n, a;
+  ASSERT_EQ(free.status, fpl::SolveStatus::Solved);  // the SLP alone does not look at the excitations
+  ASSERT_FALSE(s.sample(free, free.alpha(), n, a));
+  const auto bounded = s.plan(true);
+  EXPECT_EQ(bounded.status, fpl::SolveStatus::Failed);
+  EXPECT_NE(bounded.message.find("leaves the model's valid domain on the first period: muscle '"), std::string::npos)
+      << bounded.message;
+}
