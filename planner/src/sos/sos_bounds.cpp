@@ -12,6 +12,7 @@
 namespace flatsos::planner::detail {
 
 namespace {
+constexpr double kRoundStartRadius = 0.01;  // of the largest coefficient
 constexpr const char* kBoundsUnmet =
     "no flat outputs in this basis keep every excitation in [0, 1] and activation in [a_min, 1] with the reserves";
 }  // namespace
@@ -62,6 +63,10 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
     result.lp_points = build_exchange_rows(setup, o.feasibility_margin_N);
     result.bound_points = static_cast<int>(points.size());
     if (bo.solver == BoundsSolver::SequentialLp) {
+      // The last round ended with a radius as small as its last step (1e-4 N and less); the
+      // points this round added need moves of newtons: growing back by doubling took about ten
+      // steps per round (85 steps in 9 rounds at T = 1.5 s, 33 with this floor).
+      radius = std::max(radius, kRoundStartRadius * (1.0 + theta.cwiseAbs().maxCoeff()));
       SlpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
       for (const auto& c : setup.constraints) linear.rows_per_group.push_back(c.points.size());
       const SlpOutcome slp = solve_bounds_by_slp(linear, flat, points, a_min, theta, radius, slp_basis, bo.max_slp_iterations);
