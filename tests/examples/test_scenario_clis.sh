@@ -29,6 +29,11 @@ expect 2 "--observer-gain-per-s" -- "$rh" --observer-gain-per-s 50 --out "$tmp/o
 expect 0 "settling" -- "$rh" --duration-s 1.5 --out "$tmp/rh"
 grep -q '"integrator_accuracy": 1e-05' "$tmp/rh/summary.json" || { echo "FAILED: rosenbrock default accuracy not 1e-5"; fail=1; }
 grep -q '"success": true' "$tmp/rh/summary.json" || { echo "FAILED: a settled run is not a success"; fail=1; }
+# Bounded steps (the default) leave nothing to clamp; the paper's step clamps the first period.
+grep -q '"excitation_clamps": 0,' "$tmp/rh/summary.json" || { echo "FAILED: bounded steps clamped excitations"; fail=1; }
+expect 1 "bounded steps 0" -- "$rh" --duration-s 0.2 --no-excitation-bounds --out "$tmp/rh_paper"
+grep -q '"enforced": false' "$tmp/rh_paper/summary.json" || { echo "FAILED: --no-excitation-bounds not in the summary"; fail=1; }
+grep -q '"excitation_clamps": 0,' "$tmp/rh_paper/summary.json" && { echo "FAILED: the paper's step clamped nothing"; fail=1; }
 # A run that never reaches its target fails its task: exit 1, the reason in the summary, the files complete.
 expect 1 "never settled within 1 deg of the target in 0.1 s" -- "$rh" --duration-s 0.1 --integrator bdf --observer-gain-per-s 20 --out "$tmp/rhb"
 grep -q '"integrator_accuracy": 1e-08' "$tmp/rhb/summary.json" || { echo "FAILED: bdf default accuracy not 1e-8"; fail=1; }
