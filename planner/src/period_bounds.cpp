@@ -133,7 +133,10 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   }
   const bool finite = sample_period(flat, workspace, b, step);
   const SampleExcess left = finite ? worst_excess(flat, step) : SampleExcess{};
-  if (slp.rows_violated) {
+  if (finite && left.value <= 0.0) {
+    // Every sample inside, even where a row's margin was not quite reached: what is applied holds.
+    step.first_period_sampled = true;
+  } else if (slp.rows_violated) {
     step.status = SolveStatus::Infeasible;
     step.message = "infeasible: no constant flat outputs keep every excitation in [0, 1] and activation in [floor, 1] "
                    "over the first period with the reserves" +
@@ -142,12 +145,10 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     step.status = SolveStatus::Failed;
     step.message = "the excitation bounds' sequential LP left the model's valid domain on the first period: " +
                    domain_violation(flat, step);
-  } else if (left.value > 0.0) {
+  } else {
     step.status = SolveStatus::Failed;
     step.message = "the excitation bounds' sequential LP converged, but the first period still leaves them: " +
                    describe(flat, b, step, left);
-  } else {
-    step.first_period_sampled = true;
   }
 }
 

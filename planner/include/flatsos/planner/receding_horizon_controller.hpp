@@ -7,8 +7,9 @@
 // muscle a polynomial signal over [t, t + delta]. The step keeps the excitations of those
 // samples in [0, 1] (and activations in [floor, 1]) by construction unless the options turn its
 // bounds off (plan.excitation_bounds.enforce); any sample outside [0, 1] (such a step, or a
-// previous plan's tail after a failed step) is clamped by the muscle and counted here. A failed step never stops the loop: the previous plan's tail,
-// with the torque offset it was planned for, is used and the failure recorded.
+// previous plan's tail after a failed step) is clamped by the muscle and counted here. A failed
+// step never stops the loop: the previous plan's tail, with the torque offset it was planned
+// for, is used and the failure recorded.
 //
 // Prepared once in the constructor (validated options, the planner's workspace, the excitation
 // fit's solution operator); per period only the feedback work remains, in storage the controller
