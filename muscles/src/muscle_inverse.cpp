@@ -55,25 +55,31 @@ MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& for
   out.excitation_real = n.real_root;
   if (!with_gradients) return out;
 
-  // The chain rule through every line above (Phi_S''' = 0: the tendon law is quadratic).
-  const Grad eF{1.0, 0.0, 0.0}, edF{0.0, 1.0, 0.0}, eddF{0.0, 0.0, 1.0};
-  const Grad ls_x = (1.0 / d1) * eF;
-  const Grad d1_x = d2 * ls_x;
-  const Grad dls_x = (1.0 / d1) * edF - (dls / d1) * d1_x;
-  const Grad ddls_x = (1.0 / d1) * eddF - (2.0 * d2 * dls / d1) * dls_x - (ddls / d1) * d1_x;
-  const Grad u_x = dls_x, du_x = ddls_x, lc_x = -1.0 * ls_x;
+  // The chain rule through every line above (Phi_S''' = 0: the tendon law is quadratic), once
+  // for the tendon-force jet and once for the path's jet: the same lines, other seeds.
   const double f2 = force_length_second_derivative(p, lc);
   const double g2 = force_velocity_second_derivative(p, u);
-  const Grad f_x = f1 * lc_x, f1_x = f2 * lc_x;
-  const Grad g_x = g1 * u_x, g1_x = g2 * u_x;
-  const Grad df_x = (-u) * f1_x - f1 * u_x;
-  const Grad dg_x = du * g1_x + g1 * du_x;
-  const Grad a_x = a * ((1.0 / F) * eF - (1.0 / f) * f_x - (1.0 / g) * g_x);
-  const Grad r_x = (1.0 / F) * edF - (dF / (F * F)) * eF - (1.0 / f) * df_x + (df / (f * f)) * f_x - (1.0 / g) * dg_x +
-                   (dg / (g * g)) * g_x;
-  const Grad da_x = r * a_x + a * r_x;
-  out.activation_gradient = a_x;
-  out.activation_rate_gradient = da_x;
+  struct Seeds {
+    Grad F, dF, ddF, L, dL, ddL;
+  };
+  auto chain = [&](const Seeds& x, Grad& a_x, Grad& da_x) {
+    const Grad ls_x = (1.0 / d1) * x.F;
+    const Grad d1_x = d2 * ls_x;
+    const Grad dls_x = (1.0 / d1) * x.dF - (dls / d1) * d1_x;
+    const Grad ddls_x = (1.0 / d1) * x.ddF - (2.0 * d2 * dls / d1) * dls_x - (ddls / d1) * d1_x;
+    const Grad u_x = dls_x - x.dL, du_x = ddls_x - x.ddL, lc_x = x.L - ls_x;
+    const Grad f_x = f1 * lc_x, f1_x = f2 * lc_x;
+    const Grad g_x = g1 * u_x, g1_x = g2 * u_x;
+    const Grad df_x = (-u) * f1_x - f1 * u_x;
+    const Grad dg_x = du * g1_x + g1 * du_x;
+    a_x = a * ((1.0 / F) * x.F - (1.0 / f) * f_x - (1.0 / g) * g_x);
+    const Grad r_x = (1.0 / F) * x.dF - (dF / (F * F)) * x.F - (1.0 / f) * df_x + (df / (f * f)) * f_x -
+                     (1.0 / g) * dg_x + (dg / (g * g)) * g_x;
+    da_x = r * a_x + a * r_x;
+  };
+  const Grad zero{0.0, 0.0, 0.0}, e0{1.0, 0.0, 0.0}, e1{0.0, 1.0, 0.0}, e2{0.0, 0.0, 1.0};
+  chain({e0, e1, e2, zero, zero, zero}, out.activation_gradient, out.activation_rate_gradient);
+  chain({zero, zero, zero, e0, e1, e2}, out.path_activation_gradient, out.path_activation_rate_gradient);
   if (n.real_root) {
     // Q(n, a, da) = (1 - beta) n^2 + (beta - (1 - beta) a) n - beta a - T_act da = 0.
     const double beta = p.activation_beta();
@@ -81,7 +87,9 @@ MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& for
     const double Q_n = 2.0 * (1.0 - beta) * nn + beta - (1.0 - beta) * a;
     const double Q_a = -(1.0 - beta) * nn - beta;
     const double Q_da = -p.activation_time_constant_s;
-    out.excitation_gradient = (-1.0 / Q_n) * (Q_a * a_x + Q_da * da_x);
+    out.excitation_gradient = (-1.0 / Q_n) * (Q_a * out.activation_gradient + Q_da * out.activation_rate_gradient);
+    out.path_excitation_gradient =
+        (-1.0 / Q_n) * (Q_a * out.path_activation_gradient + Q_da * out.path_activation_rate_gradient);
   }
   return out;
 }

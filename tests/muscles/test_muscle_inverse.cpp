@@ -1,7 +1,7 @@
 // The inverse of one muscle: second derivatives of the force-length and force-velocity laws
 // against finite differences; the inverse's gradients (activation and excitation with respect to
-// the tendon-force jet) against finite differences; the forward laws reproduce what the inverse
-// says (round trip); and the stages where nothing further is defined.
+// the tendon-force jet and to the path-length jet) against finite differences; the forward laws
+// reproduce what the inverse says (round trip); and the stages where nothing further is defined.
 #include <gtest/gtest.h>
 
 #include "finite_difference.hpp"
@@ -92,6 +92,41 @@ TEST(MuscleInverse, GradientsMatchFiniteDifferences) {
           << "d n / d x" << k;
     }
   }
+}
+
+TEST(MuscleInverse, PathGradientsMatchFiniteDifferences) {
+  const auto p = triceps();
+  int checked = 0;
+  for (const Sample& s : samples(p, 60)) {
+    const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, true);
+    if (inv.stage != fm::MuscleInverse::Stage::Complete) continue;
+    const double scales[3] = {p.optimal_fiber_length_m, 0.1, 1.0};  // m, m/s, m/s^2
+    for (int k = 0; k < 3; ++k) {
+      auto vary = [&](double x, int which) {
+        fm::SecondOrderJet path = s.path;
+        (k == 0 ? path.value : k == 1 ? path.rate : path.acceleration) = x;
+        const fm::MuscleInverse v = fm::invert_muscle(p, s.force, path, false);
+        return which == 0 ? v.activation : which == 1 ? v.activation_rate_per_s : v.excitation;
+      };
+      const double x0 = k == 0 ? s.path.value : k == 1 ? s.path.rate : s.path.acceleration;
+      const double h = default_step(x0, 1e-3 * scales[k]);
+      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_activation_gradient[k], central_difference([&](double x) { return vary(x, 0); }, x0, h))
+          << "d a / d L" << k;
+      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_activation_rate_gradient[k],
+                                       central_difference([&](double x) { return vary(x, 1); }, x0, h))
+          << "d da/dt / d L" << k;
+      if (inv.excitation_real) {
+        EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_excitation_gradient[k],
+                                         central_difference([&](double x) { return vary(x, 2); }, x0, h))
+            << "d n / d L" << k;
+      }
+    }
+    // The length moves a and da/dt (through f and g): the gradients are not trivially zero.
+    EXPECT_NE(inv.path_activation_gradient[0], 0.0);
+    EXPECT_NE(inv.path_activation_rate_gradient[2], 0.0);
+    ++checked;
+  }
+  EXPECT_GE(checked, 30);
 }
 
 TEST(MuscleInverse, ForwardLawsReproduceTheInverse) {

@@ -2,8 +2,9 @@
 // The inverse of one muscle (docs/method/flatness.md): from its tendon force and the path's
 // length, each with two time derivatives, to the fibre state, the activation and the excitation
 // that produce them, and (on request) the exact gradients of activation and excitation with
-// respect to (F, dF/dt, d2F/dt2). The flatness planner's inverse map and its bounded
-// optimization (0 <= n <= 1, floor <= a <= 1 as constraints on the tendon-force jet) share it.
+// respect to (F, dF/dt, d2F/dt2) and to the path's (L, dL/dt, d2L/dt2). The flatness planner's
+// inverse map and its bounded optimization (0 <= n <= 1, floor <= a <= 1 as constraints on the
+// tendon-force jet, and on the joint path when it is free) share it.
 //
 //   L_S = Phi_S^-1(F), dL_S = dF / Phi_S', ddL_S = (ddF - Phi_S'' dL_S^2) / Phi_S'
 //   u = dL_S - dL (shortening), L_C = L - L_S, f = f(L_C), g = g(u)
@@ -24,6 +25,8 @@ struct SecondOrderJet {
 
 /// d(quantity)/d(F, dF/dt, d2F/dt2).
 using TendonForceJetGradient = std::array<double, 3>;
+/// d(quantity)/d(L, dL/dt, d2L/dt2).
+using PathLengthJetGradient = std::array<double, 3>;
 
 struct MuscleInverse {
   enum class Stage {
@@ -40,6 +43,9 @@ struct MuscleInverse {
   bool excitation_real = true;  ///< false: no excitation gives da/dt (excitation is then the closest)
   /// Set when asked for and stage is Complete (and, for the excitation, excitation_real).
   TendonForceJetGradient activation_gradient{}, activation_rate_gradient{}, excitation_gradient{};
+  /// The same with respect to the path's jet (L, dL/dt, d2L/dt2): what a joint path that moves
+  /// changes through the muscle's length.
+  PathLengthJetGradient path_activation_gradient{}, path_activation_rate_gradient{}, path_excitation_gradient{};
 };
 
 /// `path` is the musculotendon length L and its rates (m, m/s, m/s^2).
