@@ -1,7 +1,10 @@
 #include "flatsos/plugin/model/pin_tree_dynamics.hpp"
 
 #include <map>
+#include <stdexcept>
 #include <string>
+
+#include "flatsos/plugin/model/dual_number.hpp"
 
 namespace flatsos::plugin {
 
@@ -48,51 +51,143 @@ void PinTreeDynamics::inverseDynamics(Scratch& scratch, const Eigen::Ref<const E
                                       const Eigen::Ref<const Eigen::VectorXd>& qd,
                                       const Eigen::Ref<const Eigen::VectorXd>& qdd,
                                       Eigen::Ref<Eigen::VectorXd> tau) const {
+  inverseDynamicsOf<double>(scratch, q.data(), qd.data(), qdd.data(), tau.data());
+}
+
+template <class S>
+void PinTreeDynamics::inverseDynamicsOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const {
+  using Vec = Eigen::Matrix<S, 3, 1>;
+  using Mat = Eigen::Matrix<S, 3, 3>;
   const int n = numJoints();
+  scratch.bodies.resize(joints_.size());  // no allocation once sized
+  const Vec gravity = gravity_m_per_s2_.cast<S>();
   // Outward: kinematics of each body from its parent's (parents come first), and the body's own
   // inertial and gravity load.
   for (int i = 0; i < n; ++i) {
     const Joint& j = joints_[static_cast<std::size_t>(i)];
-    Scratch::Body& b = scratch.bodies[static_cast<std::size_t>(i)];
-    Eigen::Matrix3d parent_rotation = Eigen::Matrix3d::Identity();
-    Eigen::Vector3d parent_origin = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero(),
-                    wd = Eigen::Vector3d::Zero(), a = Eigen::Vector3d::Zero();
+    auto& b = scratch.bodies[static_cast<std::size_t>(i)];
+    Mat parent_rotation = Mat::Identity();
+    Vec parent_origin = Vec::Zero(), w = Vec::Zero(), wd = Vec::Zero(), a = Vec::Zero();
     if (j.parent >= 0) {
-      const Scratch::Body& p = scratch.bodies[static_cast<std::size_t>(j.parent)];
+      const auto& p = scratch.bodies[static_cast<std::size_t>(j.parent)];
       parent_rotation = p.rotation;
       parent_origin = p.origin_m;
       w = p.angular_velocity;
       wd = p.angular_acceleration;
       a = p.origin_acceleration;
     }
-    const Eigen::Vector3d r = parent_rotation * j.location_in_parent_m;  // parent origin -> joint
-    b.axis = parent_rotation * j.axis;
-    b.rotation = parent_rotation * Eigen::AngleAxisd(q[i], j.axis).toRotationMatrix();
+    const Vec r = parent_rotation * j.location_in_parent_m.cast<S>();  // parent origin -> joint
+    const Vec axis = j.axis.cast<S>();
+    b.axis = parent_rotation * axis;
+    // Rodrigues: the rotation by q about the unit axis, R = I + sin q K + (1 - cos q) K^2.
+    Mat K;
+    K << S(0.0), -axis[2], axis[1], axis[2], S(0.0), -axis[0], -axis[1], axis[0], S(0.0);
+    using std::cos;
+    using std::sin;
+    const Mat joint_rotation = Mat::Identity() + sin(q[i]) * K + (S(1.0) - cos(q[i])) * (K * K);
+    b.rotation = parent_rotation * joint_rotation;
     b.origin_m = parent_origin + r;
     b.origin_acceleration = a + wd.cross(r) + w.cross(w.cross(r));
     b.angular_velocity = w + b.axis * qd[i];
     // The axis is fixed in the parent, so it turns with the parent's angular velocity.
     b.angular_acceleration = wd + b.axis * qdd[i] + w.cross(b.axis) * qd[i];
 
-    const Eigen::Vector3d& wb = b.angular_velocity;
-    const Eigen::Vector3d c = b.rotation * j.mass_center_m;  // origin -> mass center
-    const Eigen::Vector3d com_acceleration =
-        b.origin_acceleration + b.angular_acceleration.cross(c) + wb.cross(wb.cross(c));
-    const Eigen::Matrix3d inertia = b.rotation * j.inertia_about_com_kg_m2 * b.rotation.transpose();
-    b.force_N = j.mass_kg * (com_acceleration - gravity_m_per_s2_);
+    const Vec& wb = b.angular_velocity;
+    const Vec c = b.rotation * j.mass_center_m.cast<S>();  // origin -> mass center
+    const Vec com_acceleration = b.origin_acceleration + b.angular_acceleration.cross(c) + wb.cross(wb.cross(c));
+    const Mat inertia = b.rotation * j.inertia_about_com_kg_m2.cast<S>() * b.rotation.transpose();
+    b.force_N = S(j.mass_kg) * (com_acceleration - gravity);
     b.moment_N_m = inertia * b.angular_acceleration + wb.cross(inertia * wb) + c.cross(b.force_N);
   }
   // Inward: children add their loads to their parents (children come after their parents).
   for (int i = n - 1; i >= 0; --i) {
     const Joint& j = joints_[static_cast<std::size_t>(i)];
-    const Scratch::Body& b = scratch.bodies[static_cast<std::size_t>(i)];
+    const auto& b = scratch.bodies[static_cast<std::size_t>(i)];
     tau[i] = b.axis.dot(b.moment_N_m);
     if (j.parent >= 0) {
-      Scratch::Body& p = scratch.bodies[static_cast<std::size_t>(j.parent)];
+      auto& p = scratch.bodies[static_cast<std::size_t>(j.parent)];
       p.force_N += b.force_N;
       p.moment_N_m += b.moment_N_m + (b.origin_m - p.origin_m).cross(b.force_N);
     }
   }
 }
+
+namespace {
+
+// tau along a motion as a second-order dual number: each of q, qd, qdd is x + e1 x' + e2 x' +
+// e1 e2 x'' with (x, x', x'') read from the jet, so the product terms of tau are d/dt and
+// d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)) (chain rule: ID'' [x', x'] + ID' x'').
+template <class S, class JetAt>
+void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>& tau_out) {
+  using H = Dual<Dual<S>>;
+  const int n = tree.numJoints();
+  std::vector<H> q(static_cast<std::size_t>(n)), qd(q), qdd(q), tau(q);
+  auto seed = [&](int joint, int order) {
+    const S x = jet(joint, order), x1 = jet(joint, order + 1), x2 = jet(joint, order + 2);
+    return H(Dual<S>(x, x1), Dual<S>(x1, x2));
+  };
+  for (int i = 0; i < n; ++i) {
+    q[static_cast<std::size_t>(i)] = seed(i, 0);
+    qd[static_cast<std::size_t>(i)] = seed(i, 1);
+    qdd[static_cast<std::size_t>(i)] = seed(i, 2);
+  }
+  PinTreeDynamics::ScratchOf<H> scratch;
+  tree.inverseDynamicsOf<H>(scratch, q.data(), qd.data(), qdd.data(), tau.data());
+  tau_out.resize(static_cast<std::size_t>(3 * n));
+  for (int i = 0; i < n; ++i) {
+    const H& t = tau[static_cast<std::size_t>(i)];
+    tau_out[static_cast<std::size_t>(3 * i)] = t.value.value;
+    tau_out[static_cast<std::size_t>(3 * i + 1)] = t.derivative.value;
+    tau_out[static_cast<std::size_t>(3 * i + 2)] = t.derivative.derivative;
+  }
+}
+
+void require_jet(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::MatrixXd>& q_jet) {
+  if (q_jet.rows() != tree.numJoints() || q_jet.cols() < 5)
+    throw std::invalid_argument("torque jet: the joint jet must be " + std::to_string(tree.numJoints()) +
+                                " x 5 (q and four derivatives), not " + std::to_string(q_jet.rows()) + " x " +
+                                std::to_string(q_jet.cols()));
+}
+
+}  // namespace
+
+Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet) const {
+  require_jet(*this, q_jet);
+  std::vector<double> tau;
+  torque_jet_of<double>(*this, [&](int r, int l) { return q_jet(r, l); }, tau);
+  Eigen::MatrixXd out(numJoints(), 3);
+  for (int i = 0; i < numJoints(); ++i)
+    for (int k = 0; k < 3; ++k) out(i, k) = tau[static_cast<std::size_t>(3 * i + k)];
+  return out;
+}
+
+Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet,
+                                           Eigen::MatrixXd& gradient) const {
+  require_jet(*this, q_jet);
+  const int n = numJoints();
+  gradient.resize(3 * n, 5 * n);
+  Eigen::MatrixXd out(n, 3);
+  std::vector<Dual<double>> tau;
+  // One pass per jet entry, with a third infinitesimal on that entry.
+  for (int r = 0; r < n; ++r)
+    for (int l = 0; l < 5; ++l) {
+      torque_jet_of<Dual<double>>(
+          *this, [&](int joint, int order) { return Dual<double>(q_jet(joint, order), joint == r && order == l ? 1.0 : 0.0); },
+          tau);
+      for (int row = 0; row < 3 * n; ++row) gradient(row, 5 * r + l) = tau[static_cast<std::size_t>(row)].derivative;
+    }
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) out(i, k) = tau[static_cast<std::size_t>(3 * i + k)].value;
+  return out;
+}
+
+template void PinTreeDynamics::inverseDynamicsOf<double>(ScratchOf<double>&, const double*, const double*, const double*,
+                                                         double*) const;
+template void PinTreeDynamics::inverseDynamicsOf<Dual<double>>(ScratchOf<Dual<double>>&, const Dual<double>*,
+                                                               const Dual<double>*, const Dual<double>*,
+                                                               Dual<double>*) const;
+template void PinTreeDynamics::inverseDynamicsOf<Dual<Dual<double>>>(ScratchOf<Dual<Dual<double>>>&,
+                                                                     const Dual<Dual<double>>*, const Dual<Dual<double>>*,
+                                                                     const Dual<Dual<double>>*, Dual<Dual<double>>*) const;
 
 }  // namespace flatsos::plugin

@@ -6,7 +6,10 @@
 // MusculoskeletalModel builds in Simbody (tested against Simbody's inverse dynamics), but
 // evaluated in caller-owned scratch: no heap allocation per call, which the receding-horizon
 // controller needs (Simbody's calcResidualForceIgnoringConstraints allocates ~11 temporaries per
-// call internally, and the controller calls it ~20 times per control period).
+// call internally, and the controller calls it ~20 times per control period). Written once for
+// any scalar type: with dual numbers the same recursion gives the torques' time derivatives along
+// a motion and their derivatives with respect to it, exactly (what a planner that moves the
+// joint path needs).
 
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
@@ -22,16 +25,19 @@ namespace flatsos::plugin {
 
 class PinTreeDynamics {
  public:
-  /// Per-body kinematics and transmitted loads of one evaluation (ground frame).
-  struct Scratch {
+  /// Per-body kinematics and transmitted loads of one evaluation (ground frame), in the scalar
+  /// type of the evaluation (double, or dual numbers for exact derivatives).
+  template <class S>
+  struct ScratchOf {
     struct Body {
-      Eigen::Matrix3d rotation;             ///< body frame -> ground
-      Eigen::Vector3d origin_m, axis;       ///< joint position and axis in ground
-      Eigen::Vector3d angular_velocity, angular_acceleration, origin_acceleration;
-      Eigen::Vector3d force_N, moment_N_m;  ///< transmitted through the joint (moment about the origin)
+      Eigen::Matrix<S, 3, 3> rotation;             ///< body frame -> ground
+      Eigen::Matrix<S, 3, 1> origin_m, axis;       ///< joint position and axis in ground
+      Eigen::Matrix<S, 3, 1> angular_velocity, angular_acceleration, origin_acceleration;
+      Eigen::Matrix<S, 3, 1> force_N, moment_N_m;  ///< transmitted through the joint (moment about the origin)
     };
     std::vector<Body> bodies;
   };
+  using Scratch = ScratchOf<double>;
 
   /// From a validated description (joints listed parents first).
   explicit PinTreeDynamics(const ModelDescription& description);
@@ -46,6 +52,19 @@ class PinTreeDynamics {
                        const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
                        const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2,
                        Eigen::Ref<Eigen::VectorXd> tau_N_m) const;
+  /// The same in another scalar type (instantiated for double and nested dual numbers,
+  /// dual_number.hpp); q, qd, qdd and tau have numJoints() entries, scratch is resized.
+  template <class S>
+  void inverseDynamicsOf(ScratchOf<S>& scratch, const S* q_rad, const S* qd_rad_per_s, const S* qdd_rad_per_s2,
+                         S* tau_N_m) const;
+
+  /// tau and its first two time derivatives along a motion with joint jet `q_jet` (N x 5: q and
+  /// its first four time derivatives), exactly (second-order dual numbers along the motion, no
+  /// differences in time): N x 3.
+  Eigen::MatrixXd torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet) const;
+  /// The same and its derivatives with respect to the jet's entries: gradient(3 * i + k,
+  /// 5 * r + l) = d (d^k tau_i / dt^k) / d (d^l q_r / dt^l), a 3N x 5N matrix.
+  Eigen::MatrixXd torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet, Eigen::MatrixXd& gradient) const;
 
  private:
   struct Joint {
