@@ -116,13 +116,13 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   lp.row_upper = Eigen::VectorXd::Constant(m, 1e19);
   lp.x_lower = Eigen::VectorXd::Zero(p);
   lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
-  const SlpLinearPart linear{lp, {static_cast<std::size_t>(m)}, kReserveMargin_N, kSampleMargin};
+  const SlpLinearPart linear{lp, {static_cast<std::size_t>(m)}, kReserveMargin_N};
   Eigen::VectorXd alpha = step.slp.alpha;
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
   SlpBasis basis;
-  const SlpOutcome slp =
-      solve_bounds_by_slp(linear, flat, points, activation_minima(flat, ExcitationBoundsOptions{}), alpha, radius, basis,
-                          b.max_iterations);
+  const SlpOutcome slp = solve_bounds_by_slp(
+      linear, bound_rows_of(flat, points, activation_minima(flat, ExcitationBoundsOptions{}), kSampleMargin), alpha,
+      radius, basis, b.max_iterations);
   step.bound_iterations = slp.iterations;
   step.slp.alpha = alpha;
   step.slp.cost_N = alpha.sum();

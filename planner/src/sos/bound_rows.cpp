@@ -18,11 +18,8 @@ Eigen::VectorXd activation_minima(const FlatOutputMap& flat, const ExcitationBou
   return a_min;
 }
 
-BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double t) {
-  const FlatOutputMap& flat = mp.flat;
+BoundPoint flat_output_point(const SosSetup& setup, const FlatOutputMap& flat, double t) {
   const int m = flat.numMuscles(), p = flat.numFlatOutputs();
-  const Jet q_jet = mp.path.jet(t, 5);
-  const TorqueJet tau = flat.torqueJet(mp.workspace, q_jet);
   BoundPoint bp;
   bp.t_s = t;
   bp.base.resize(m, 3);
@@ -36,7 +33,7 @@ BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double 
       y_particular[l] = row.dot(out.particular);
       if (out.nullspace.cols()) dY.block(l, out.offset, 1, out.nullspace.cols()) = row * out.nullspace;
     }
-    bp.base.col(k) = flat.Ctau() * tau.tau.col(k) + flat.CY() * y_particular;
+    bp.base.col(k) = flat.CY() * y_particular;
     full[static_cast<std::size_t>(k)] = flat.CY() * dY;
   }
   for (int c = 0; c < setup.free_coefficients; ++c)
@@ -46,21 +43,22 @@ BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double 
     s.resize(m, static_cast<Eigen::Index>(bp.columns.size()));
     for (std::size_t c = 0; c < bp.columns.size(); ++c) s.col(static_cast<Eigen::Index>(c)) = full[static_cast<std::size_t>(k)].col(bp.columns[c]);
   }
-  for (int j = 0; j < m; ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
   return bp;
 }
 
-MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
-                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin) {
-  double F[3];
-  for (int k = 0; k < 3; ++k) {
-    double v = bp.base(j, k);
-    const auto& s = bp.slope[static_cast<std::size_t>(k)];
-    for (std::size_t c = 0; c < bp.columns.size(); ++c) v += s(j, static_cast<Eigen::Index>(c)) * theta[bp.columns[c]];
-    F[k] = v;
-  }
-  const fm::MuscleParameters& p = flat.model().muscle(j).getParameters();
-  const fm::MuscleInverse inv = fm::invert_muscle(p, {F[0], F[1], F[2]}, bp.path[static_cast<std::size_t>(j)], gradients);
+BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double t) {
+  const FlatOutputMap& flat = mp.flat;
+  const Jet q_jet = mp.path.jet(t, 5);
+  const TorqueJet tau = flat.torqueJet(mp.workspace, q_jet);
+  BoundPoint bp = flat_output_point(setup, flat, t);
+  for (int k = 0; k < 3; ++k) bp.base.col(k) += flat.Ctau() * tau.tau.col(k);
+  for (int j = 0; j < flat.numMuscles(); ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
+  return bp;
+}
+
+MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::SecondOrderJet& force,
+                                  const fm::SecondOrderJet& path, double a_min, bool gradients, double margin) {
+  const fm::MuscleInverse inv = fm::invert_muscle(p, force, path, gradients);
   MuscleBoundRows rows;
   if (inv.stage != fm::MuscleInverse::Stage::Complete) return rows;
   rows.defined = true;
@@ -75,8 +73,26 @@ MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int 
       rows.gradient[1][o] = -da;
       rows.gradient[2][o] = m.lower_d_activation * da + m.lower_d_rate_s * dadot;
       rows.gradient[3][o] = m.upper_d_activation * da + m.upper_d_rate_s * dadot;
+      const double pa = inv.path_activation_gradient[o], padot = inv.path_activation_rate_gradient[o];
+      rows.path_gradient[0][o] = pa;
+      rows.path_gradient[1][o] = -pa;
+      rows.path_gradient[2][o] = m.lower_d_activation * pa + m.lower_d_rate_s * padot;
+      rows.path_gradient[3][o] = m.upper_d_activation * pa + m.upper_d_rate_s * padot;
     }
   return rows;
+}
+
+MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
+                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin) {
+  double F[3];
+  for (int k = 0; k < 3; ++k) {
+    double v = bp.base(j, k);
+    const auto& s = bp.slope[static_cast<std::size_t>(k)];
+    for (std::size_t c = 0; c < bp.columns.size(); ++c) v += s(j, static_cast<Eigen::Index>(c)) * theta[bp.columns[c]];
+    F[k] = v;
+  }
+  return muscle_bound_rows(flat.model().muscle(j).getParameters(), {F[0], F[1], F[2]}, bp.path[static_cast<std::size_t>(j)],
+                           a_min, gradients, margin);
 }
 
 double column_derivative(const BoundPoint& bp, const fm::TendonForceJetGradient& g, int j, std::size_t c) {

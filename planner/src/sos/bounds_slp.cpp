@@ -13,14 +13,20 @@ namespace {
 constexpr double kInitialPenalty = 1e4, kMaxPenalty = 1e12;
 }  // namespace
 
-SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
-                               const Eigen::VectorXd& a_min, Eigen::VectorXd& theta, double& radius, SlpBasis& basis,
-                               int max_iterations) {
+NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
+                            double margin) {
+  return [&flat, &points, a_min, margin](const Eigen::VectorXd& x, bool jacobian) {
+    return evaluate_rows(flat, points, a_min, x, jacobian, margin);
+  };
+}
+
+SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& nonlinear_rows, Eigen::VectorXd& theta,
+                               double& radius, SlpBasis& basis, int max_iterations) {
   SlpOutcome out;
   const LinearProgram& lp = linear.lp;
   const Eigen::Index n = theta.size();
   if (lp.cost.size() != n || lp.G.cols() != n) throw std::logic_error("bounds SLP: the linear part has other variables than theta");
-  auto rows_at = [&](const Eigen::VectorXd& x) { return evaluate_rows(flat, points, a_min, x, true, linear.bound_margin); };
+  auto rows_at = [&](const Eigen::VectorXd& x) { return nonlinear_rows(x, true); };
   BoundRowsAt rows = rows_at(theta);
   if (!rows.defined) {
     out.failure = "the start leaves the muscles' domain at a bound point";

@@ -10,6 +10,7 @@
 // move little per newton and their multipliers are large: the penalty grows tenfold whenever the
 // iteration settles with rows still violated.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -43,12 +44,18 @@ struct SlpLinearPart {
   const LinearProgram& lp;
   std::vector<std::size_t> rows_per_group;
   double reserve_margin_N = 0.0;        // reserve rows hold to half of this
-  double bound_margin = kBoundMargin;   // how far inside the bounds the bound rows put a and n
 };
 
-/// Improves theta in place (and the trust radius and the LP basis, kept across exchange rounds).
-SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
-                               const Eigen::VectorXd& a_min, Eigen::VectorXd& theta, double& radius, SlpBasis& basis,
-                               int max_iterations);
+/// The nonlinear rows ">= 0" at x, with their Jacobian when asked for. Rows keep their index
+/// between calls and between rounds (new rows are appended), which the LP basis relies on.
+using NonlinearRows = std::function<BoundRowsAt(const Eigen::VectorXd& x, bool jacobian)>;
+
+/// Improves x in place (and the trust radius and the LP basis, kept across exchange rounds).
+SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& rows_at, Eigen::VectorXd& theta,
+                               double& radius, SlpBasis& basis, int max_iterations);
+
+/// The bound rows of `points` (bound_rows.hpp) for theta: what the bounds of a fixed joint path add.
+NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
+                            double margin);
 
 }  // namespace flatsos::planner::detail
