@@ -32,6 +32,8 @@ PinTreeDynamics::PinTreeDynamics(const ModelDescription& description)
     j.parent = jd.parent == "ground" ? -1 : joint_of_body.at(jd.parent);
     j.location_in_parent_m = jd.location_in_parent_m;
     j.axis = jd.axis.normalized();
+    j.axis_cross << 0.0, -j.axis[2], j.axis[1], j.axis[2], 0.0, -j.axis[0], -j.axis[1], j.axis[0], 0.0;
+    j.axis_cross_squared = j.axis_cross * j.axis_cross;
     const BodyDescription& b = *bodies.at(jd.child);
     j.mass_kg = b.mass_kg;
     j.mass_center_m = b.mass_center_m;
@@ -77,14 +79,12 @@ void PinTreeDynamics::inverseDynamicsOf(ScratchOf<S>& scratch, const S* q, const
       a = p.origin_acceleration;
     }
     const Vec r = parent_rotation * j.location_in_parent_m.cast<S>();  // parent origin -> joint
-    const Vec axis = j.axis.cast<S>();
-    b.axis = parent_rotation * axis;
+    b.axis = parent_rotation * j.axis.cast<S>();
     // Rodrigues: the rotation by q about the unit axis, R = I + sin q K + (1 - cos q) K^2.
-    Mat K;
-    K << S(0.0), -axis[2], axis[1], axis[2], S(0.0), -axis[0], -axis[1], axis[0], S(0.0);
     using std::cos;
     using std::sin;
-    const Mat joint_rotation = Mat::Identity() + sin(q[i]) * K + (S(1.0) - cos(q[i])) * (K * K);
+    const Mat joint_rotation = Mat::Identity() + sin(q[i]) * j.axis_cross.cast<S>() +
+                               (S(1.0) - cos(q[i])) * j.axis_cross_squared.cast<S>();
     b.rotation = parent_rotation * joint_rotation;
     b.origin_m = parent_origin + r;
     b.origin_acceleration = a + wd.cross(r) + w.cross(w.cross(r));

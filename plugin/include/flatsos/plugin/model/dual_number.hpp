@@ -54,13 +54,6 @@ struct Dual {
   friend bool operator!=(const Dual& a, const Dual& b) { return !(a == b); }
 };
 
-/// The innermost real value of a (possibly nested) dual number.
-inline double real_part(double x) { return x; }
-template <class T>
-double real_part(const Dual<T>& x) {
-  return real_part(x.value);
-}
-
 }  // namespace flatsos::plugin
 
 namespace Eigen {

@@ -71,6 +71,7 @@ class PinTreeDynamics {
     int parent = -1;                       ///< joint index of the parent body; -1: ground
     Eigen::Vector3d location_in_parent_m;  ///< joint origin in the parent's frame
     Eigen::Vector3d axis;                  ///< unit axis, parent frame (fixed in the child too)
+    Eigen::Matrix3d axis_cross, axis_cross_squared;  ///< K (K v = axis x v) and K^2, for Rodrigues
     double mass_kg = 0.0;
     Eigen::Vector3d mass_center_m;         ///< child body frame
     Eigen::Matrix3d inertia_about_com_kg_m2;  ///< child body frame
