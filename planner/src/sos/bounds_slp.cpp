@@ -82,7 +82,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       }
       return r;
     };
-    std::vector<int> lp_row_of(rows.value.size(), -1);
+    std::vector<int> lp_row_of(rows.value.size(), -1), reserve_lp_row;
     for (int i : bound_rows_in) {
       const auto k = static_cast<std::size_t>(i);
       lp_row_of[k] = add_row(-rows.value[k], basis.bound_row[k], basis.bound_slack[k]);
@@ -92,6 +92,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     for (int r : reserve_rows_in) {
       const auto [constraint, point] = reserve_id[static_cast<std::size_t>(r)];
       const int row = add_row(-reserve_value[r], basis.reserve_row[constraint][point], basis.reserve_slack[constraint][point]);
+      reserve_lp_row.push_back(row);
       for (Eigen::Index c = 0; c < n; ++c)
         if (lp.G(r, c) != 0.0) entries.emplace_back(row, c, lp.G(r, c));
     }
@@ -125,6 +126,12 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       out.failure = "a step LP was not solved (Clp: " + step.solver_status + ")";
       return out;
     }
+    out.row_multipliers.assign(rows.value.size(), 0.0);
+    for (std::size_t i = 0; i < rows.value.size(); ++i)
+      if (lp_row_of[i] >= 0) out.row_multipliers[i] = std::max(0.0, step.row_multipliers[lp_row_of[i]]);
+    out.linear_row_multipliers = Eigen::VectorXd::Zero(lp.G.rows());
+    for (std::size_t k = 0; k < reserve_rows_in.size(); ++k)
+      out.linear_row_multipliers[reserve_rows_in[k]] = std::max(0.0, step.row_multipliers[reserve_lp_row[k]]);
     const Eigen::VectorXd d = step.x.head(n);
     const bool lp_paid_violation = slacks > 0 && step.x.tail(slacks).sum() > kBoundMargin;
     // The predicted decrease from the linearized rows at d itself, not from the LP's slacks:

@@ -34,6 +34,11 @@ struct SlpOutcome {
   bool rows_violated = false;  // settled with imposed rows violated although the LP paid for it at the largest penalty
   int iterations = 0, lp_pivots = 0;
   std::string failure;
+  /// The last step LP's multipliers (>= 0): per nonlinear row, then per row of the linear part's
+  /// lp.G; 0 for rows that LP left out. At convergence they are the problem's KKT multipliers,
+  /// which give the optimum's sensitivity to anything the rows depend on (free_path.cpp).
+  std::vector<double> row_multipliers;
+  Eigen::VectorXd linear_row_multipliers;
 };
 
 /// The linear part of the problem the bound rows join: minimize lp.cost . theta subject to
