@@ -255,6 +255,16 @@ muscles::SecondOrderJet FlatOutputMap::pathLengthJet(int j, const Jet& q_jet) co
           q_jet.cols() > 2 ? -A_.col(j).dot(q_jet.col(2)) : 0.0};
 }
 
+void FlatOutputMap::pathLengthJetGradient(int j, const Jet& q_jet, Eigen::Ref<Eigen::MatrixXd> out) const {
+  if (out.rows() != 3 || out.cols() != 5 * q_jet.rows())
+    throw std::invalid_argument("path-length jet gradient: the output must be 3 x 5N");
+  // Constant moment arms: d^k L / dt^k = -A^T q^(k) (k >= 1) and L = L(q): order k of L moves
+  // only with order k of q.
+  out.setZero();
+  for (int r = 0; r < q_jet.rows(); ++r)
+    for (int k = 0; k < 3; ++k) out(k, 5 * r + k) = -A_(r, j);
+}
+
 FlatState FlatOutputMap::forward(const MuscleState& s) const {
   plugin::ModelWorkspace ws = makeWorkspace();
   return forward(ws, s);

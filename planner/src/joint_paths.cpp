@@ -3,19 +3,31 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace flatsos::planner {
 
 Jet JointPath::jet(double t, int orders) const {
-  Jet out(static_cast<Eigen::Index>(q.size()), orders);
+  Jet out(numJoints(), orders);
   jetInto(t, out);
   return out;
 }
 
+JointPath JointPath::fromSpline(SplineTrajectory s) {
+  JointPath path;
+  path.duration_s = s.duration();
+  path.spline = std::move(s);
+  return path;
+}
+
 void JointPath::jetInto(double t, Eigen::Ref<Jet> out) const {
-  if (out.rows() != static_cast<Eigen::Index>(q.size()))
+  if (out.rows() != numJoints())
     throw std::invalid_argument("joint path jet: the output has " + std::to_string(out.rows()) + " rows, the path " +
-                                std::to_string(q.size()) + " joints");
+                                std::to_string(numJoints()) + " joints");
+  if (spline) {
+    spline->jetInto(t, out);
+    return;
+  }
   for (std::size_t i = 0; i < q.size(); ++i)
     for (Eigen::Index k = 0; k < out.cols(); ++k)
       out(static_cast<Eigen::Index>(i), k) = q[i].derivativeAt(t, static_cast<int>(k));

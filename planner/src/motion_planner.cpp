@@ -11,7 +11,10 @@
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "input_checks.hpp"
+#include "path/free_path.hpp"
 #include "period_bounds.hpp"
+#include "sos/bound_rows.hpp"
+#include "sos/sos_setup.hpp"
 
 namespace flatsos::planner {
 
@@ -35,6 +38,68 @@ void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, co
       throw std::invalid_argument(why.str());
     }
   }
+}
+
+// The plan along plan.path (torque model, SOS program with the bounds, dense check): sets every
+// field but the path, the warnings and the free-path report.
+void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const FlatOutputBoundary& bc,
+                     const OpenLoopOptions& o, OpenLoopPlan& plan) {
+  const Stopwatch setup;
+  plan.torque = build_torque_model(flat, workspace, plan.path, o.torque);
+  const double before_sos = setup.seconds();
+  const MusclesAlongPath muscles{flat, plan.path, workspace};
+  plan.sos = solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
+  plan.setup_seconds = before_sos + plan.sos.setup_seconds;
+  plan.solve_seconds = plan.sos.solve_seconds;
+  plan.certify_seconds = plan.sos.certify_seconds;
+  plan.status = plan.sos.status;
+  plan.message = plan.sos.message;
+  if (plan.status == SolveStatus::Infeasible && plan.sos.bounds_imposed && plan.sos.Y) {
+    // The bounds cannot be met: say where the closest plan leaves the muscles' domain.
+    auto closest = check_plan(flat, workspace, plan.path, *plan.sos.Y, o.reserves_N, o.check_points, o.sos.bounds.tolerance);
+    if (!closest.limiting_violation.empty())
+      plan.message += "; the closest plan leaves the model's valid domain: " + closest.limiting_violation;
+    plan.check = std::move(closest);
+    return;
+  }
+  if (plan.status != SolveStatus::Solved) return;
+  plan.Y = plan.sos.Y;
+
+  const Stopwatch check;
+  plan.check = check_plan(flat, workspace, plan.path, *plan.Y, o.reserves_N, o.check_points,
+                          o.sos.bounds.enforce ? o.sos.bounds.tolerance : 0.0);
+  plan.check_seconds = check.seconds();
+  if (plan.check.min_reserve_margin_N < -1e-6) {
+    plan.status = SolveStatus::Failed;
+    plan.message = "the plan violates a tendon-force reserve on the check grid by " +
+                   std::to_string(-plan.check.min_reserve_margin_N) + " N (torque-model remainder underestimated)";
+  } else if (plan.check.points_outside_domain > 0) {
+    // The SOS program was solved, but the muscles cannot execute the plan (a > 1, n outside
+    // [0, 1], u >= Vmax, ...): not a usable plan.
+    plan.status = SolveStatus::Infeasible;
+    plan.message = "the plan leaves the model's valid domain: " + plan.check.limiting_violation + "; at " +
+                   std::to_string(plan.check.points_outside_domain) + " of " + std::to_string(plan.check.points) +
+                   " check points, the first at " + plan.check.first_violation;
+  }
+}
+
+void require_free_path_options(const OpenLoopOptions& o) {
+  const FreeJointPathOptions& f = o.free_path;
+  if (!f.enabled) return;
+  if (!o.sos.bounds.enforce)
+    throw std::invalid_argument("open-loop plan: free_path needs the excitation bounds (sos.bounds.enforce): without "
+                                "them a faster path always costs less");
+  if (f.degree < 5) throw std::invalid_argument("open-loop plan: free_path.degree must be >= 5 (q'''' continuous)");
+  if (f.spans < 1 || f.degree + f.spans - 9 < 1)
+    throw std::invalid_argument("open-loop plan: free_path.degree + free_path.spans must be >= 10 (9 boundary "
+                                "derivatives per joint and at least one free coefficient)");
+  if (f.points_per_span < 1) throw std::invalid_argument("open-loop plan: free_path.points_per_span must be >= 1");
+  if (f.check_points < 2) throw std::invalid_argument("open-loop plan: free_path.check_points must be >= 2");
+  if (!(f.tolerance >= 0.0) || !(f.tolerance_N >= 0.0))
+    throw std::invalid_argument("open-loop plan: free_path tolerances must be >= 0");
+  if (!(f.relative_tolerance > 0.0)) throw std::invalid_argument("open-loop plan: free_path.relative_tolerance must be > 0");
+  if (f.max_rounds < 1 || f.max_path_iterations < 1 || f.max_slp_iterations < 1)
+    throw std::invalid_argument("open-loop plan: free_path.max_rounds, max_path_iterations and max_slp_iterations must be >= 1");
 }
 
 }  // namespace
@@ -130,6 +195,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   require_reserves(o.reserves_N, m);
   if (o.check_points < 2) throw std::invalid_argument("open-loop plan: check_points must be >= 2");
+  require_free_path_options(o);
   detail::require_initial_muscle_state(flat, initial);
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
@@ -155,46 +221,46 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   Eigen::MatrixXd terminal = Eigen::MatrixXd::Zero(n, 5);
   terminal.col(0) = o.target_q_rad;
   plan.path = fit_joint_path(o.duration_s, y0.q, terminal);
-  plan.torque = build_torque_model(flat, workspace, plan.path, o.torque);
   FlatOutputBoundary bc;
   bc.initial = y0.Y;                          // Y(0), dY(0)
   bc.terminal = Eigen::MatrixXd::Zero(p, 2);  // dY(T) = ddY(T) = 0
   bc.terminal_first_order = 1;
   const double before_sos = setup.seconds();
-  const MusclesAlongPath muscles{flat, plan.path, workspace};
-  plan.sos = solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
-  plan.setup_seconds = before_sos + plan.sos.setup_seconds;
-  plan.solve_seconds = plan.sos.solve_seconds;
-  plan.certify_seconds = plan.sos.certify_seconds;
-  plan.status = plan.sos.status;
-  plan.message = plan.sos.message;
-  if (plan.status == SolveStatus::Infeasible && plan.sos.bounds_imposed && plan.sos.Y) {
-    // The bounds cannot be met: say where the closest plan leaves the muscles' domain.
-    auto closest = check_plan(flat, workspace, plan.path, *plan.sos.Y, o.reserves_N, o.check_points, o.sos.bounds.tolerance);
-    if (!closest.limiting_violation.empty())
-      plan.message += "; the closest plan leaves the model's valid domain: " + closest.limiting_violation;
-    plan.check = std::move(closest);
+  plan_along_path(flat, workspace, bc, o, plan);
+  plan.setup_seconds += before_sos;
+  if (!o.free_path.enabled) return plan;
+
+  // The joint path as a variable too, from the prescribed path's plan (or, when the bounds cannot
+  // be met along it, from its closest plan).
+  const Stopwatch free_path;
+  plan.free_path.prescribed_status = to_string(plan.status);
+  plan.free_path.prescribed_cost_N_s = plan.status == SolveStatus::Solved ? plan.sos.cost_N_s : 0.0;
+  if (!plan.sos.Y) return plan;  // nothing to start from: the prescribed plan's status says why
+  const detail::SosSetup program = detail::set_up_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos);
+  const Eigen::VectorXd a_min = detail::activation_minima(flat, o.sos.bounds);
+  const detail::FreePathOutcome free = detail::optimize_joint_path(
+      program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, *plan.sos.Y), o.reserves_N, a_min, o.free_path);
+  FreePathReport& report = plan.free_path;
+  report.cost_at_points_N_s = free.cost_N_s;
+  report.rounds = free.rounds;
+  report.points = free.points;
+  report.path_iterations = free.path_iterations;
+  report.evaluations = free.evaluations;
+  report.slp_iterations = free.slp_iterations;
+  if (!free.converged) {
+    report.seconds = free_path.seconds();
+    plan.status = free.infeasible ? SolveStatus::Infeasible : SolveStatus::Failed;
+    plan.message = "the joint path was not optimized: " + free.failure + " (the prescribed path's plan: " +
+                   report.prescribed_status + ")";
+    plan.Y.reset();
     return plan;
   }
-  if (plan.status != SolveStatus::Solved) return plan;
-  plan.Y = plan.sos.Y;
-
-  const Stopwatch check;
-  plan.check = check_plan(flat, workspace, plan.path, *plan.Y, o.reserves_N, o.check_points,
-                          o.sos.bounds.enforce ? o.sos.bounds.tolerance : 0.0);
-  plan.check_seconds = check.seconds();
-  if (plan.check.min_reserve_margin_N < -1e-6) {
-    plan.status = SolveStatus::Failed;
-    plan.message = "the plan violates a tendon-force reserve on the check grid by " +
-                   std::to_string(-plan.check.min_reserve_margin_N) + " N (torque-model remainder underestimated)";
-  } else if (plan.check.points_outside_domain > 0) {
-    // The SOS program was solved, but the muscles cannot execute the plan (a > 1, n outside
-    // [0, 1], u >= Vmax, ...): not a usable plan.
-    plan.status = SolveStatus::Infeasible;
-    plan.message = "the plan leaves the model's valid domain: " + plan.check.limiting_violation + "; at " +
-                   std::to_string(plan.check.points_outside_domain) + " of " + std::to_string(plan.check.points) +
-                   " check points, the first at " + plan.check.first_violation;
-  }
+  plan.path = free.path;
+  plan.Y.reset();
+  plan.check = PlanCheck{};
+  plan_along_path(flat, workspace, bc, o, plan);
+  report.optimized = true;
+  report.seconds = free_path.seconds();
   return plan;
 }
 

@@ -26,8 +26,8 @@ std::shared_ptr<const PlannedExcitation> PlannedExcitation::create(FlatOutputMap
   if (std::abs(Y.duration() - path.duration_s) > 1e-12 * path.duration_s)
     throw std::invalid_argument("planned excitation: the flat outputs last " + std::to_string(Y.duration()) +
                                 " s, the joint path " + std::to_string(path.duration_s) + " s");
-  if (static_cast<int>(path.q.size()) != flat.numJoints())
-    throw std::invalid_argument("planned excitation: the joint path has " + std::to_string(path.q.size()) +
+  if (path.numJoints() != flat.numJoints())
+    throw std::invalid_argument("planned excitation: the joint path has " + std::to_string(path.numJoints()) +
                                 " joints, the model " + std::to_string(flat.numJoints()));
   return std::shared_ptr<const PlannedExcitation>(
       new PlannedExcitation(std::move(flat), std::move(path), std::move(Y), start_time_s));

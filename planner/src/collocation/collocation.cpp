@@ -145,8 +145,8 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
   const int m = flat.numMuscles();
   if (!(path.duration_s > 0.0) || !std::isfinite(path.duration_s))
     throw std::invalid_argument("collocation: the joint path's duration must be > 0 s");
-  if (static_cast<int>(path.q.size()) != flat.numJoints())
-    throw std::invalid_argument("collocation: the joint path has " + std::to_string(path.q.size()) +
+  if (path.numJoints() != flat.numJoints())
+    throw std::invalid_argument("collocation: the joint path has " + std::to_string(path.numJoints()) +
                                 " joint polynomials, the model " + std::to_string(flat.numJoints()) + " joints");
   detail::require_initial_muscle_state(flat, initial);
   detail::require_reserves(reserves, m);

@@ -73,6 +73,11 @@ MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::Secon
       rows.gradient[1][o] = -da;
       rows.gradient[2][o] = m.lower_d_activation * da + m.lower_d_rate_s * dadot;
       rows.gradient[3][o] = m.upper_d_activation * da + m.upper_d_rate_s * dadot;
+      const double pa = inv.path_activation_gradient[o], padot = inv.path_activation_rate_gradient[o];
+      rows.path_gradient[0][o] = pa;
+      rows.path_gradient[1][o] = -pa;
+      rows.path_gradient[2][o] = m.lower_d_activation * pa + m.lower_d_rate_s * padot;
+      rows.path_gradient[3][o] = m.upper_d_activation * pa + m.upper_d_rate_s * padot;
     }
   return rows;
 }

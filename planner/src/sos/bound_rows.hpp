@@ -31,7 +31,8 @@ struct BoundPoint {
 };
 
 BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double t);
-/// The flat outputs' part alone (base = C_Y times Y's particular jet; no torque, no path).
+/// The flat outputs' part alone (base = C_Y times Y's particular jet; no torque, no path): for a
+/// joint path that is itself a variable.
 BoundPoint flat_output_point(const SosSetup& setup, const FlatOutputMap& flat, double t);
 
 // The bound rows of one muscle at one point, each ">= 0": a - a_min, 1 - a, and the two margins
@@ -42,7 +43,8 @@ constexpr double kBoundMargin = 1e-6;
 struct MuscleBoundRows {
   bool defined = false;  // false: slack tendon or no force capacity (no a, no n)
   std::array<double, kRowsPerMuscle> value{};
-  std::array<muscles::TendonForceJetGradient, kRowsPerMuscle> gradient{};  // in (F, dF, ddF)
+  std::array<muscles::TendonForceJetGradient, kRowsPerMuscle> gradient{};     // in (F, dF, ddF)
+  std::array<muscles::PathLengthJetGradient, kRowsPerMuscle> path_gradient{};  // in (L, dL, ddL)
 };
 
 /// The rows of one muscle from its tendon-force and path-length jets.

@@ -63,56 +63,6 @@ void require_valid_inputs(const FlatOutputMap& flat, const TorqueModel& torque, 
                                 " boundary equalities (needs degree + spans >= " + std::to_string(n_eq) + ")");
 }
 
-// Y_l's B-spline coefficients = particular + nullspace theta_l under the boundary equalities.
-// The equalities touch only the first and last few coefficients (local support), so the free
-// coefficients theta_l are the other B-spline coefficients themselves and the solved-for ones
-// depend only on their neighbours: the constraint rows stay sparse and local, and theta is as
-// well scaled as the coefficients (newtons). The solved-for columns are chosen by full pivoting.
-OutputParameterization eliminate_equalities(const BSplineBasis& basis, const FlatOutputBoundary& bc, int l) {
-  const int n_eq = static_cast<int>(bc.initial.cols() + bc.terminal.cols());
-  const int size = basis.size();
-  Eigen::MatrixXd Aeq(n_eq, size);
-  Eigen::VectorXd beq(n_eq);
-  int row = 0;
-  for (int k = 0; k < bc.initial.cols(); ++k, ++row) {
-    Aeq.row(row) = basis.derivativeRow(0.0, k);
-    beq[row] = bc.initial(l, k);
-  }
-  for (int k = 0; k < bc.terminal.cols(); ++k, ++row) {
-    Aeq.row(row) = basis.derivativeRow(basis.duration(), bc.terminal_first_order + k);
-    beq[row] = bc.terminal(l, k);
-  }
-  OutputParameterization out;
-  out.particular = Eigen::VectorXd::Zero(size);
-  if (n_eq == 0) {
-    out.nullspace = Eigen::MatrixXd::Identity(size, size);
-    return out;
-  }
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(Aeq);
-  lu.setThreshold(1e-10);
-  if (lu.rank() < n_eq)
-    throw std::invalid_argument("SOS program: the boundary equalities on Y are dependent for this basis");
-  std::vector<bool> solved_for(static_cast<std::size_t>(size), false);
-  Eigen::MatrixXd A_dep(n_eq, n_eq), A_free(n_eq, size - n_eq);
-  std::vector<int> dependent, free;
-  for (int i = 0; i < n_eq; ++i) solved_for[static_cast<std::size_t>(lu.permutationQ().indices()[i])] = true;
-  for (int j = 0; j < size; ++j) (solved_for[static_cast<std::size_t>(j)] ? dependent : free).push_back(j);
-  for (int i = 0; i < n_eq; ++i) A_dep.col(i) = Aeq.col(dependent[static_cast<std::size_t>(i)]);
-  for (int i = 0; i < size - n_eq; ++i) A_free.col(i) = Aeq.col(free[static_cast<std::size_t>(i)]);
-  const Eigen::PartialPivLU<Eigen::MatrixXd> dep(A_dep);
-  const Eigen::VectorXd c_dep = dep.solve(beq);
-  out.nullspace = Eigen::MatrixXd::Zero(size, size - n_eq);
-  for (int i = 0; i < n_eq; ++i) out.particular[dependent[static_cast<std::size_t>(i)]] = c_dep[i];
-  // With no free coefficient (the equalities fix Y) there is no coupling to solve for: Eigen's
-  // triangular solve on a matrix without columns binds a reference to null data (UBSan).
-  if (size > n_eq) {
-    const Eigen::MatrixXd coupling = -dep.solve(A_free);
-    for (int i = 0; i < n_eq; ++i) out.nullspace.row(dependent[static_cast<std::size_t>(i)]) = coupling.row(i);
-  }
-  for (int i = 0; i < size - n_eq; ++i) out.nullspace(free[static_cast<std::size_t>(i)], i) = 1.0;
-  return out;
-}
-
 }  // namespace
 
 Eigen::RowVectorXd monomials(double s, Eigen::Index size) {
@@ -297,6 +247,56 @@ bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& 
   return added;
 }
 
+// Y_l's B-spline coefficients = particular + nullspace theta_l under the boundary equalities.
+// The equalities touch only the first and last few coefficients (local support), so the free
+// coefficients theta_l are the other B-spline coefficients themselves and the solved-for ones
+// depend only on their neighbours: the constraint rows stay sparse and local, and theta is as
+// well scaled as the coefficients (newtons). The solved-for columns are chosen by full pivoting.
+OutputParameterization eliminate_equalities(const BSplineBasis& basis, const FlatOutputBoundary& bc, int l) {
+  const int n_eq = static_cast<int>(bc.initial.cols() + bc.terminal.cols());
+  const int size = basis.size();
+  Eigen::MatrixXd Aeq(n_eq, size);
+  Eigen::VectorXd beq(n_eq);
+  int row = 0;
+  for (int k = 0; k < bc.initial.cols(); ++k, ++row) {
+    Aeq.row(row) = basis.derivativeRow(0.0, k);
+    beq[row] = bc.initial(l, k);
+  }
+  for (int k = 0; k < bc.terminal.cols(); ++k, ++row) {
+    Aeq.row(row) = basis.derivativeRow(basis.duration(), bc.terminal_first_order + k);
+    beq[row] = bc.terminal(l, k);
+  }
+  OutputParameterization out;
+  out.particular = Eigen::VectorXd::Zero(size);
+  if (n_eq == 0) {
+    out.nullspace = Eigen::MatrixXd::Identity(size, size);
+    return out;
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(Aeq);
+  lu.setThreshold(1e-10);
+  if (lu.rank() < n_eq)
+    throw std::invalid_argument("SOS program: the boundary equalities on Y are dependent for this basis");
+  std::vector<bool> solved_for(static_cast<std::size_t>(size), false);
+  Eigen::MatrixXd A_dep(n_eq, n_eq), A_free(n_eq, size - n_eq);
+  std::vector<int> dependent, free;
+  for (int i = 0; i < n_eq; ++i) solved_for[static_cast<std::size_t>(lu.permutationQ().indices()[i])] = true;
+  for (int j = 0; j < size; ++j) (solved_for[static_cast<std::size_t>(j)] ? dependent : free).push_back(j);
+  for (int i = 0; i < n_eq; ++i) A_dep.col(i) = Aeq.col(dependent[static_cast<std::size_t>(i)]);
+  for (int i = 0; i < size - n_eq; ++i) A_free.col(i) = Aeq.col(free[static_cast<std::size_t>(i)]);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> dep(A_dep);
+  const Eigen::VectorXd c_dep = dep.solve(beq);
+  out.nullspace = Eigen::MatrixXd::Zero(size, size - n_eq);
+  for (int i = 0; i < n_eq; ++i) out.particular[dependent[static_cast<std::size_t>(i)]] = c_dep[i];
+  // With no free coefficient (the equalities fix Y) there is no coupling to solve for: Eigen's
+  // triangular solve on a matrix without columns binds a reference to null data (UBSan).
+  if (size > n_eq) {
+    const Eigen::MatrixXd coupling = -dep.solve(A_free);
+    for (int i = 0; i < n_eq; ++i) out.nullspace.row(dependent[static_cast<std::size_t>(i)]) = coupling.row(i);
+  }
+  for (int i = 0; i < size - n_eq; ++i) out.nullspace(free[static_cast<std::size_t>(i)], i) = 1.0;
+  return out;
+}
+
 SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta) {
   Eigen::MatrixXd coefficients(static_cast<Eigen::Index>(setup.outputs.size()), setup.basis.size());
   for (std::size_t l = 0; l < setup.outputs.size(); ++l) {
@@ -306,6 +306,19 @@ SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& t
     coefficients.row(static_cast<Eigen::Index>(l)) = c.transpose();
   }
   return SplineTrajectory(setup.basis, std::move(coefficients));
+}
+
+Eigen::VectorXd theta_of(const SosSetup& setup, const SplineTrajectory& Y) {
+  if (Y.basis().size() != setup.basis.size() || Y.signals() != static_cast<int>(setup.outputs.size()))
+    throw std::logic_error("theta_of: the flat outputs are not in the program's basis");
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(setup.free_coefficients);
+  for (std::size_t l = 0; l < setup.outputs.size(); ++l) {
+    const auto& out = setup.outputs[l];
+    if (!out.nullspace.cols()) continue;
+    const Eigen::VectorXd rest = Y.coefficients().row(static_cast<Eigen::Index>(l)).transpose() - out.particular;
+    theta.segment(out.offset, out.nullspace.cols()) = out.nullspace.colPivHouseholderQr().solve(rest);
+  }
+  return theta;
 }
 
 }  // namespace flatsos::planner::detail

@@ -90,5 +90,12 @@ bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& 
 
 /// The flat outputs of theta.
 SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta);
+/// The theta of flat outputs in the program's basis that meet its equalities (flat_outputs_of's inverse).
+Eigen::VectorXd theta_of(const SosSetup& setup, const SplineTrajectory& Y);
+
+/// Row l of the boundary equalities' spline (any clamped B-spline basis: flat outputs or joint
+/// paths): coefficients = particular + nullspace x, the free coefficients x being B-spline
+/// coefficients themselves. Throws std::invalid_argument when the equalities are dependent.
+OutputParameterization eliminate_equalities(const BSplineBasis& basis, const FlatOutputBoundary& bc, int l);
 
 }  // namespace flatsos::planner::detail

@@ -166,6 +166,9 @@ class FlatOutputMap {
   /// Musculotendon length of muscle j and its first two time derivatives along a joint motion
   /// (q_jet N x 1..5; missing rates are 0).
   muscles::SecondOrderJet pathLengthJet(int muscle, const Jet& q_jet) const;
+  /// Its derivatives with respect to the joint jet's entries: out(k, 5 r + l) = d (d^k L / dt^k)
+  /// / d (d^l q_r / dt^l), k = 0..2, l = 0..4 (out: 3 x 5N).
+  void pathLengthJetGradient(int muscle, const Jet& q_jet, Eigen::Ref<Eigen::MatrixXd> out) const;
 
   /// Forward map of a muscle state. Throws std::invalid_argument for sizes or NaN.
   FlatState forward(plugin::ModelWorkspace& workspace, const MuscleState& s) const;

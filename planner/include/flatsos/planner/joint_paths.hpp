@@ -1,7 +1,8 @@
 #pragma once
 // Primary motion planning (PMPP): one polynomial per joint through boundary derivatives.
 // Open loop: degree 8 from (q, qd, qdd, q''') at 0 to (q_T, 0, 0, 0, 0) at T; receding horizon:
-// a cubic from (q, qd) to (q_T, 0).
+// a cubic from (q, qd) to (q_T, 0). A joint path the planner optimizes (free path) is a clamped
+// B-spline through the same boundary derivatives instead.
 
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
@@ -10,14 +11,21 @@
 
 #include <Eigen/Core>
 
+#include <optional>
+
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/numerics/polynomial.hpp"
+#include "flatsos/planner/numerics/spline_trajectory.hpp"
 
 namespace flatsos::planner {
 
 struct JointPath {
   double duration_s = 0.0;
-  std::vector<Polynomial> q;  ///< per joint, ascending powers of t (s), radians
+  std::vector<Polynomial> q;  ///< per joint, ascending powers of t (s), radians (empty with a spline)
+  std::optional<SplineTrajectory> spline;  ///< a free path: one row per joint (radians); then q is empty
+  /// A path given by a spline (one row per joint) over its basis' duration.
+  static JointPath fromSpline(SplineTrajectory spline);
+  int numJoints() const { return spline ? spline->signals() : static_cast<int>(q.size()); }
   /// N x orders jet (derivatives 0..orders-1) at time t.
   Jet jet(double t, int orders = 5) const;
   /// The same into `out` (N x orders, orders = its column count; allocates nothing).

@@ -37,6 +37,42 @@ struct PlanCheck {
   std::string limiting_violation;
 };
 
+/// The joint path as part of the optimization (the predictive problem, not only the redundancy
+/// along a given path): each joint a clamped B-spline of `degree` on `spans` uniform spans
+/// through the same boundary derivatives as the degree-8 path (q..q''' at 0, rest at T). Its free
+/// coefficients c (degree + spans - 9 per joint) minimize V(c), the bounded plan's cost along the
+/// path of c at time points found by exchange, by a quasi-Newton method whose gradient is the
+/// bounded plan's multipliers times the rows' derivatives in c; then the plan along the optimized
+/// path is made and certified as along any path. Needs the excitation bounds (without them a
+/// path that moves faster always costs less).
+struct FreeJointPathOptions {
+  bool enabled = false;
+  int degree = 8;             ///< >= 5 (q'''' continuous); 8 holds the prescribed path exactly
+  int spans = 6;
+  int points_per_span = 2;    ///< of the flat outputs' spans, imposed from the start
+  int check_points = 3001;    ///< the dense grid on which the exchange looks for violations
+  /// Allowed excess of a and n and reserve deficit on that grid while the path moves. The plan
+  /// along the final path meets the SOS program's own tolerances: these only decide when the
+  /// path's points suffice (a deficit of 1e-3 N moves the cost by far less than 1e-6).
+  double tolerance = 1e-4;
+  double tolerance_N = 1e-3;
+  double relative_tolerance = 1e-6;  ///< stop when a step lowers the cost by less than this fraction
+  int max_rounds = 20;
+  int max_path_iterations = 200;  ///< quasi-Newton steps per exchange round
+  int max_slp_iterations = 200;   ///< sequential-LP steps per evaluation of V(c)
+};
+
+/// What optimizing the joint path did (OpenLoopOptions::free_path).
+struct FreePathReport {
+  bool optimized = false;         ///< the path was optimized and the plan is along it
+  double prescribed_cost_N_s = 0.0;  ///< the plan along the degree-8 path (0 when it has none)
+  std::string prescribed_status;  ///< of that plan: "solved", "infeasible", ...
+  double cost_at_points_N_s = 0.0;   ///< the path optimization's own cost (exact torques at its points)
+  int rounds = 0, points = 0;     ///< exchange rounds, time points
+  int path_iterations = 0, evaluations = 0, slp_iterations = 0;  ///< quasi-Newton steps, V(c) evaluations, their LP steps
+  double seconds = 0.0;
+};
+
 struct OpenLoopOptions {
   double duration_s = 3.0;
   Eigen::VectorXd target_q_rad;       ///< rest target (qd = qdd = q''' = q'''' = 0 there)
@@ -44,6 +80,7 @@ struct OpenLoopOptions {
   TorqueModelOptions torque;          ///< K pieces of degree r (K = 1, r = 0: the paper's box)
   SosProgramOptions sos;              ///< includes the flat-output degree (4: quartic)
   int check_points = 301;             ///< dense grid of the a-posteriori check
+  FreeJointPathOptions free_path;
 };
 
 struct OpenLoopPlan {
@@ -51,11 +88,12 @@ struct OpenLoopPlan {
   std::string message;
   /// Implausible inputs that were accepted (joint angles beyond one turn: degrees as radians?).
   std::vector<std::string> warnings;
-  JointPath path;                     ///< degree-8 joint polynomials
+  JointPath path;                     ///< degree-8 joint polynomials, or the optimized spline (free path)
   std::optional<SplineTrajectory> Y;  ///< flat outputs (N); none unless the SOS program was solved
   SosProgramResult sos;
   TorqueModel torque;
   PlanCheck check;
+  FreePathReport free_path;
   double setup_seconds = 0.0;         ///< forward map, joint paths, torque model, SOS setup
   double solve_seconds = 0.0;         ///< exchange LPs
   double certify_seconds = 0.0;

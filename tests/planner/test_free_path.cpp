@@ -1,0 +1,166 @@
+// The joint path as a variable (OpenLoopOptions::free_path). V(c), the bounded plan's cost along
+// the path of c at fixed time points, has the gradient its multipliers give (finite-difference
+// twin); the optimized path's plan keeps every bound on a 3001-point grid, meets the reserves, is
+// certified, costs far less than the prescribed path's, and no small move of the path lowers V;
+// bad options are named.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "path/free_path.hpp"
+#include "scenario_fixture.hpp"
+#include "sos/bound_rows.hpp"
+#include "sos/sos_setup.hpp"
+
+namespace fpl = flatsos::planner;
+namespace fpd = flatsos::planner::detail;
+using flatsos::test::open_loop_options;
+
+namespace {
+
+// Cubic splines on 12 spans at T = 3 s: the bounds are active along the prescribed path.
+constexpr double kDuration_s = 3.0;
+constexpr int kDegree = 3, kSpans = 12;
+
+class FreePath : public ::testing::Test {
+ protected:
+  flatsos::test::ArmPlanning arm;
+  fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
+  fpl::OpenLoopOptions o = open_loop_options(kDuration_s, kDegree, kSpans);
+
+  // What plan_open_loop hands the path optimization: the SOS setup along the prescribed path.
+  struct Problem {
+    fpl::OpenLoopPlan prescribed;
+    std::optional<fpd::SosSetup> setup;
+    Eigen::MatrixXd initial_q_jet;
+    Eigen::VectorXd a_min;
+  };
+  Problem problem() {
+    Problem p;
+    p.prescribed = fpl::plan_open_loop(arm.flat, s0, o);
+    auto ws = arm.flat.makeWorkspace();
+    const fpl::FlatState y0 = arm.flat.forward(ws, s0);
+    fpl::FlatOutputBoundary bc;
+    bc.initial = y0.Y;
+    bc.terminal = Eigen::MatrixXd::Zero(arm.flat.numFlatOutputs(), 2);
+    bc.terminal_first_order = 1;
+    p.setup.emplace(fpd::set_up_sos_program(arm.flat, p.prescribed.torque, o.duration_s, bc, o.reserves_N, o.sos));
+    p.initial_q_jet = y0.q;
+    p.a_min = fpd::activation_minima(arm.flat, o.sos.bounds);
+    return p;
+  }
+
+  fpd::PathValue value(const Problem& p, const std::vector<double>& times, const Eigen::VectorXd& c,
+                       const Eigen::VectorXd& theta) const {
+    return fpd::path_value(*p.setup, arm.flat, p.initial_q_jet, o.target_q_rad, o.reserves_N, p.a_min, o.free_path, times, c,
+                           theta);
+  }
+
+  static std::vector<double> uniform_times(double T, int count) {
+    std::vector<double> t;
+    for (int i = 0; i <= count; ++i) t.push_back(T * i / count);
+    return t;
+  }
+};
+
+}  // namespace
+
+TEST_F(FreePath, TheValuesGradientIsTheMultipliersTimesTheRowsDerivatives) {
+  // At T = 1.5 s on 24 spans the bound rows are active along the prescribed path: both kinds of
+  // rows carry multipliers.
+  o = open_loop_options(1.5, kDegree, 24);
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  ASSERT_TRUE(p.prescribed.sos.bounds_imposed);
+  Eigen::VectorXd c = fpd::path_coefficients(*p.setup, p.prescribed.path, p.initial_q_jet, o.target_q_rad, o.free_path);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> move(-0.01, 0.01);
+  for (Eigen::Index i = 0; i < c.size(); ++i) c[i] += move(rng);  // generic: away from V's kinks
+  const std::vector<double> times = uniform_times(1.5, 48);
+  const fpd::PathValue at = value(p, times, c, fpd::theta_of(*p.setup, *p.prescribed.Y));
+  ASSERT_TRUE(at.ok) << at.failure;
+  EXPECT_GT(at.active_bound_rows, 0);
+  EXPECT_GT(at.active_reserve_rows, 0);
+  ASSERT_EQ(at.gradient.size(), c.size());
+  EXPECT_GT(at.gradient.norm(), 1.0);  // N s per rad: the path matters
+  const double h = 1e-4;
+  for (Eigen::Index i = 0; i < c.size(); ++i) {
+    auto V = [&](double step) {
+      Eigen::VectorXd moved = c;
+      moved[i] += step;
+      const fpd::PathValue v = value(p, times, moved, at.theta);
+      EXPECT_TRUE(v.ok) << v.failure;
+      return v.cost_N_s;
+    };
+    const double d1 = (V(h) - V(-h)) / (2 * h), d2 = (V(2 * h) - V(-2 * h)) / (4 * h);
+    // Truncation estimated from the two steps; the SLP's convergence (1e-9 of V) over the step.
+    const double tolerance = 10.0 * (std::abs(d2 - d1) / 3.0 + 1e-9 * at.cost_N_s / h) + 1e-3;
+    EXPECT_NEAR(at.gradient[i], d1, tolerance) << "coefficient " << i;
+  }
+}
+
+TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost) {
+  o.free_path.enabled = true;
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  ASSERT_TRUE(plan.free_path.optimized);
+  std::cout << "[ measure  ] free path: " << plan.free_path.prescribed_cost_N_s << " -> " << plan.sos.cost_N_s
+            << " N s (at its points " << plan.free_path.cost_at_points_N_s << "), " << plan.free_path.path_iterations
+            << " steps, " << plan.free_path.evaluations << " evaluations, " << plan.free_path.rounds << " rounds, "
+            << plan.free_path.seconds << " s\n";
+  EXPECT_LT(plan.sos.cost_N_s, 0.8 * plan.free_path.prescribed_cost_N_s);
+  // The certified plan along the path costs what the path optimization found at its points.
+  EXPECT_NEAR(plan.sos.cost_N_s, plan.free_path.cost_at_points_N_s, 1e-3 * plan.sos.cost_N_s);
+  auto ws = arm.flat.makeWorkspace();
+  const fpl::PlanCheck dense = fpl::check_plan(arm.flat, ws, plan.path, *plan.Y, o.reserves_N, 3001, 1e-6);
+  EXPECT_EQ(dense.points_outside_domain, 0) << dense.limiting_violation;
+  EXPECT_GE(dense.min_excitation, -1e-6);
+  EXPECT_LE(dense.max_excitation, 1.0 + 1e-6);
+  EXPECT_GT(dense.min_activation, 0.0);
+  EXPECT_LE(dense.max_activation, 1.0 + 1e-6);
+  EXPECT_GE(dense.min_reserve_margin_N, -1e-6);
+  EXPECT_TRUE(plan.sos.certified);
+  // Local optimality on an independent point set (10 per span): no move of 0.01 rad in a random
+  // direction lowers V by more than the point sets' difference.
+  const Problem p = problem();
+  const Eigen::VectorXd c = fpd::path_coefficients(*p.setup, plan.path, p.initial_q_jet, o.target_q_rad, o.free_path);
+  const std::vector<double> times = uniform_times(kDuration_s, 10 * kSpans);
+  const fpd::PathValue at = value(p, times, c, fpd::theta_of(*p.setup, *plan.Y));
+  ASSERT_TRUE(at.ok) << at.failure;
+  EXPECT_NEAR(at.cost_N_s, plan.sos.cost_N_s, 2e-3 * plan.sos.cost_N_s);  // measured 0.16 %: other points
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  double lowest = at.cost_N_s;
+  for (int k = 0; k < 8; ++k) {
+    Eigen::VectorXd d(c.size());
+    for (Eigen::Index i = 0; i < d.size(); ++i) d[i] = normal(rng);
+    const fpd::PathValue moved = value(p, times, c + 0.01 * d.normalized(), at.theta);
+    if (moved.ok) lowest = std::min(lowest, moved.cost_N_s);
+  }
+  EXPECT_GE(lowest, at.cost_N_s * (1.0 - 1e-4));
+}
+
+TEST_F(FreePath, BadOptionsAreNamed) {
+  o.free_path.enabled = true;
+  auto rejects = [&](fpl::OpenLoopOptions bad, const std::string& field) {
+    try {
+      fpl::plan_open_loop(arm.flat, s0, bad);
+      ADD_FAILURE() << "accepted bad " << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  auto bad = o;
+  bad.free_path.degree = 4;
+  rejects(bad, "free_path.degree");
+  bad = o;
+  bad.free_path.spans = 1;
+  rejects(bad, "free_path.spans");
+  bad = o;
+  bad.sos.bounds.enforce = false;
+  rejects(bad, "bounds");
+  bad = o;
+  bad.free_path.relative_tolerance = 0.0;
+  rejects(bad, "free_path.relative_tolerance");
+}
