@@ -42,6 +42,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--flat-output-spans", options.sos.flat_output_spans, "uniform knot spans of the flat outputs' B-splines")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  int free_path_spans = 0;
+  app.add_option("--free-path-spans", free_path_spans,
+                 "optimize the joint path too: a degree-8 B-spline on this many spans through the same boundary "
+                 "conditions (0: the prescribed degree-8 polynomial)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   bool no_bounds = false;
   app.add_flag("--no-bounds", no_bounds,
                "plan with the reserves only: excitations outside [0, 1] or activations above 1 then make the plan "
@@ -60,6 +65,8 @@ int main(int argc, char** argv) {
     const int m = model->numMuscles();
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "open_loop", given, 3.0, 10.0);
     options.sos.bounds.enforce = !no_bounds;
+    options.free_path.enabled = free_path_spans > 0;
+    if (free_path_spans > 0) options.free_path.spans = free_path_spans;
     options.duration_s = in.duration_s;
     options.target_q_rad = in.target_q_rad;
     options.reserves_N = in.reserves_N;

@@ -119,12 +119,35 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::Mus
                             {"max_excess_on_check_grid", s.max_bound_excess},
                             {"seconds", s.bounds_seconds}};
   nlohmann::json qc = nlohmann::json::object();
-  for (std::size_t i = 0; i < plan.path.q.size(); ++i) {
-    const auto& c = plan.path.q[i].coefficients();
-    qc[model.description().joints[i].name] = std::vector<double>(c.data(), c.data() + c.size());
+  if (plan.path.spline) {
+    // An optimized path: clamped B-spline coefficients, as the flat outputs'.
+    for (int i = 0; i < plan.path.numJoints(); ++i) {
+      const Eigen::VectorXd c = plan.path.spline->coefficients().row(i).transpose();
+      qc[model.description().joints[static_cast<std::size_t>(i)].name] = std::vector<double>(c.data(), c.data() + c.size());
+    }
+    const planner::BSplineBasis& basis = plan.path.spline->basis();
+    j["q_coefficient_convention"] = "clamped B-spline, uniform knots on [0, T], rad; degree " +
+                                    std::to_string(basis.degree()) + ", " + std::to_string(basis.spans()) + " spans";
+  } else {
+    for (std::size_t i = 0; i < plan.path.q.size(); ++i) {
+      const auto& c = plan.path.q[i].coefficients();
+      qc[model.description().joints[i].name] = std::vector<double>(c.data(), c.data() + c.size());
+    }
+    j["q_coefficient_convention"] = "ascending powers of t in seconds, rad";
   }
   j["q_coeffs"] = qc;
-  j["q_coefficient_convention"] = "ascending powers of t in seconds, rad";
+  const planner::FreePathReport& f = plan.free_path;
+  if (f.optimized || !f.prescribed_status.empty())
+    j["free_path"] = {{"optimized", f.optimized},
+                      {"prescribed_path_status", f.prescribed_status},
+                      {"prescribed_path_cost_Ns", f.prescribed_cost_N_s},
+                      {"cost_at_points_Ns", f.cost_at_points_N_s},
+                      {"rounds", f.rounds},
+                      {"points", f.points},
+                      {"quasi_newton_steps", f.path_iterations},
+                      {"evaluations", f.evaluations},
+                      {"sequential_lp_iterations", f.slp_iterations},
+                      {"seconds", f.seconds}};
   if (plan.Y) {
     const planner::BSplineBasis& basis = plan.Y->basis();
     nlohmann::json yc = nlohmann::json::object();
