@@ -6,6 +6,7 @@
 // reserves-only optimum deactivates faster than the muscles can is bounded too.
 #include <gtest/gtest.h>
 
+#include "../planner/executable_plan.hpp"
 #include "../planner/scenario_fixture.hpp"
 #include "open_loop_replay.hpp"
 
@@ -19,19 +20,6 @@ class BoundedPlans : public ::testing::Test {
  protected:
   flatsos::test::ArmPlanning arm;
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
-
-  // Every bound on a 3001-point grid, to 1e-6, and every reserve.
-  void expect_executable(const fpl::OpenLoopPlan& plan, const fpl::OpenLoopOptions& o) const {
-    auto ws = arm.flat.makeWorkspace();
-    const fpl::PlanCheck dense = fpl::check_plan(arm.flat, ws, plan.path, *plan.Y, o.reserves_N, 3001, 1e-6);
-    EXPECT_EQ(dense.points_outside_domain, 0) << dense.limiting_violation;
-    EXPECT_GE(dense.min_excitation, -1e-6);
-    EXPECT_LE(dense.max_excitation, 1.0 + 1e-6);
-    EXPECT_GT(dense.min_activation, 0.0);
-    EXPECT_LE(dense.max_activation, 1.0 + 1e-6);
-    EXPECT_GE(dense.min_reserve_margin_N, -1e-6);
-    EXPECT_TRUE(plan.sos.certified) << plan.sos.certified_pieces << " of " << plan.sos.near_active_pieces;
-  }
 };
 
 }  // namespace
@@ -59,7 +47,7 @@ TEST_F(BoundedPlans, TheQuarticAtOneAndAHalfSecondsIsBoundedAtAHigherCost) {
   EXPECT_TRUE(plan.sos.bounds_imposed);
   EXPECT_GT(plan.sos.cost_N_s, free.sos.cost_N_s * 1.05);
   EXPECT_LE(plan.sos.max_bound_excess, 1e-6);
-  expect_executable(plan, o);
+  flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
   EXPECT_GT(plan.check.max_excitation, 0.999);  // the bound is what limits it
 }
 
@@ -100,7 +88,7 @@ TEST_F(BoundedPlans, ARichBasisThatDeactivatesTooFastIsBounded) {
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   EXPECT_TRUE(plan.sos.bounds_imposed);
   EXPECT_GE(plan.sos.cost_N_s, free.sos.cost_N_s);
-  expect_executable(plan, o);
+  flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
   const auto quartic = fpl::plan_open_loop(arm.flat, s0, open_loop_options(1.5));
   EXPECT_LT(plan.sos.cost_N_s, 0.25 * quartic.sos.cost_N_s);
 }
@@ -113,7 +101,7 @@ TEST_F(BoundedPlans, ALowEffortPlansReplayErrorFollowsTheMotionsOwnGrowthRate) {
   const auto o = open_loop_options(3.0, 3, 48);
   const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
-  expect_executable(plan, o);
+  flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
   const auto nominal = flatsos::test::replay_open_loop(arm.flat, s0, plan, 1e-11, 0.15);
   auto shifted = s0;
   shifted.q_rad[1] += 1e-9;

@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "executable_plan.hpp"
 #include "path/free_path.hpp"
 #include "scenario_fixture.hpp"
 #include "sos/bound_rows.hpp"
@@ -112,15 +113,7 @@ TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost)
   EXPECT_LT(plan.sos.cost_N_s, 0.8 * plan.free_path.prescribed_cost_N_s);
   // The certified plan along the path costs what the path optimization found at its points.
   EXPECT_NEAR(plan.sos.cost_N_s, plan.free_path.cost_at_points_N_s, 1e-3 * plan.sos.cost_N_s);
-  auto ws = arm.flat.makeWorkspace();
-  const fpl::PlanCheck dense = fpl::check_plan(arm.flat, ws, plan.path, *plan.Y, o.reserves_N, 3001, 1e-6);
-  EXPECT_EQ(dense.points_outside_domain, 0) << dense.limiting_violation;
-  EXPECT_GE(dense.min_excitation, -1e-6);
-  EXPECT_LE(dense.max_excitation, 1.0 + 1e-6);
-  EXPECT_GT(dense.min_activation, 0.0);
-  EXPECT_LE(dense.max_activation, 1.0 + 1e-6);
-  EXPECT_GE(dense.min_reserve_margin_N, -1e-6);
-  EXPECT_TRUE(plan.sos.certified);
+  flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
   // Local optimality on an independent point set (10 per span): no move of 0.01 rad in a random
   // direction lowers V by more than the point sets' difference.
   const Problem p = problem();
