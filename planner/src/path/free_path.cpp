@@ -310,12 +310,11 @@ struct Evaluation {
 
 class ValueFunction {
  public:
-  ValueFunction(const SosSetup& setup, const FlatOutputMap& flat, const std::vector<PathPoint>& points,
-                const PathParameterization& P, const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
-                int max_slp_iterations)
-      : setup_(setup), flat_(flat), points_(points), P_(P), reserves_(reserves), a_min_(a_min), max_slp_(max_slp_iterations) {
+  ValueFunction(const SosSetup& setup, const FlatOutputMap& flat, const std::vector<PathPoint>& points, int path_coefficients,
+                const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, int max_slp_iterations)
+      : setup_(setup), flat_(flat), points_(points), reserves_(reserves), a_min_(a_min), max_slp_(max_slp_iterations) {
     v_.thetas = setup.free_coefficients;
-    v_.paths = P.free;
+    v_.paths = path_coefficients;
   }
 
   int evaluations = 0, slp_iterations = 0;
@@ -384,7 +383,6 @@ class ValueFunction {
   const SosSetup& setup_;
   const FlatOutputMap& flat_;
   const std::vector<PathPoint>& points_;
-  const PathParameterization& P_;
   const Eigen::VectorXd& reserves_;
   const Eigen::VectorXd& a_min_;
   const int max_slp_;
@@ -467,7 +465,7 @@ FreePathOutcome optimize_joint_path(const SosSetup& setup, const FlatOutputMap& 
   const int uniform = o.points_per_span * setup.basis.spans();
   for (int i = 0; i <= uniform; ++i) add_point(T * i / uniform);
 
-  ValueFunction V(setup, flat, points, P, reserves, a_min, o.max_slp_iterations);
+  ValueFunction V(setup, flat, points, P.free, reserves, a_min, o.max_slp_iterations);
   Evaluation start;
   start.theta = theta_start;
   start.radius = 0.1 * (1.0 + theta_start.cwiseAbs().maxCoeff());
@@ -529,7 +527,7 @@ PathValue path_value(const SosSetup& setup, const FlatOutputMap& flat, const Eig
   if (c.size() != P.free) throw std::invalid_argument("path value: c has " + std::to_string(c.size()) + " entries, the path " + std::to_string(P.free));
   std::vector<PathPoint> points;
   for (double t : times) points.push_back(make_path_point(setup, flat, P, t));
-  ValueFunction V(setup, flat, points, P, reserves, a_min, o.max_slp_iterations);
+  ValueFunction V(setup, flat, points, P.free, reserves, a_min, o.max_slp_iterations);
   Evaluation start;
   start.theta = theta_start;
   start.radius = 0.1 * (1.0 + theta_start.cwiseAbs().maxCoeff());
