@@ -2,9 +2,11 @@
 // path: its mesh converges (cost to 0.1 %), its solution obeys the model's laws at every point when
 // they are evaluated independently of the transcription (joint torques by Simbody, fibre
 // velocities by the forward model), the flatness plans are never cheaper (each is feasible for the
-// same problem) and with a rich basis they come within 1 % of it.
+// same problem) and with a rich basis they come within 1 % of it. The same with the joint path
+// free: converged, the laws at the optimized path, never above the prescribed path's optimum.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <tuple>
@@ -31,11 +33,14 @@ class CollocationReference : public ::testing::Test {
     return fpl::plan_open_loop(arm.flat, s0, o).path;
   }
 
-  fpl::CollocationResult collocate(const fpl::JointPath& p, int intervals) const {
+  // Along the path, or (free) with the path free between its ends.
+  fpl::CollocationResult collocate(const fpl::JointPath& p, int intervals, bool free = false) const {
     auto ws = arm.flat.makeWorkspace();
     fpl::CollocationOptions co;
     co.mesh_intervals = intervals;
-    return fpl::solve_collocation_along_path(arm.flat, ws, p, s0, open_loop_options(p.duration_s).reserves_N, co);
+    const Eigen::VectorXd reserves = open_loop_options(p.duration_s).reserves_N;
+    return free ? fpl::solve_collocation_free_path(arm.flat, ws, p, s0, reserves, co)
+                : fpl::solve_collocation_along_path(arm.flat, ws, p, s0, reserves, co);
   }
 };
 
@@ -134,6 +139,12 @@ TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReported
   c[2] += 1.0;
   shifted.q[0].setCoefficients(c);
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, shifted, s0, reserves); }, "accelerations");
+  // A free path ends at rest: a start path that does not is named.
+  auto moving = p;
+  c = moving.q[1].coefficients();
+  c[1] += 1.0;
+  moving.q[1].setCoefficients(c);
+  expect_error([&] { fpl::solve_collocation_free_path(arm.flat, ws, moving, s0, reserves); }, "rest");
 
   // 90 degrees in 0.3 s is far beyond the muscles (the bounded flatness plans give up below about
   // 0.6 s): the reference must not report a solution.
@@ -143,4 +154,63 @@ TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReported
   const auto r = fpl::solve_collocation_along_path(arm.flat, ws, path(0.3), s0, reserves, co);
   EXPECT_NE(r.status, fpl::SolveStatus::Solved) << r.cost_N_s;
   EXPECT_FALSE(r.message.empty());
+}
+
+TEST_F(CollocationReference, WithTheJointPathFreeItConvergesObeysTheLawsAndBeatsThePrescribedPath) {
+  const fpl::JointPath p = path(3.0);
+  const auto reserves = open_loop_options(3.0).reserves_N;
+  const auto r = collocate(p, 100, true), fine = collocate(p, 150, true), along = collocate(p, 100);
+  ASSERT_EQ(r.status, fpl::SolveStatus::Solved) << r.message;
+  ASSERT_EQ(fine.status, fpl::SolveStatus::Solved) << fine.message;
+  ASSERT_EQ(along.status, fpl::SolveStatus::Solved) << along.message;
+  EXPECT_NEAR(r.cost_N_s, fine.cost_N_s, 1e-3 * fine.cost_N_s);
+  // The prescribed path is one of the free problem's paths (up to the mesh's error).
+  EXPECT_LE(r.cost_N_s, along.cost_N_s * (1.0 + 1e-3));
+  std::printf("T = 3.0 s: collocation along the path %.3f N s (K = 100, %.2f s), free path %.3f N s (K = 100, %d iterations, "
+              "%.2f s), %.3f N s (K = 150, %.2f s)\n",
+              along.cost_N_s, along.setup_seconds + along.solve_seconds, r.cost_N_s, r.iterations,
+              r.setup_seconds + r.solve_seconds, fine.cost_N_s, fine.setup_seconds + fine.solve_seconds);
+
+  // The path keeps its ends: the start's angles and speeds, rest at the target.
+  const int last = static_cast<int>(r.time_s.size()) - 1;
+  const fpl::Jet start = p.jet(0.0, 2), end = p.jet(3.0, 2);
+  EXPECT_LT((r.joint_angle_rad.col(0) - start.col(0)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((r.joint_speed_rad_per_s.col(0) - start.col(1)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((r.joint_angle_rad.col(last) - end.col(0)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT(r.joint_speed_rad_per_s.col(last).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT(r.joint_acceleration_rad_per_s2.col(last).cwiseAbs().maxCoeff(), 1e-12);
+  // It moves: the optimized path is not the prescribed one.
+  double largest_move = 0.0;
+  for (int i = 0; i <= last; ++i)
+    largest_move = std::max(largest_move, (r.joint_angle_rad.col(i) - p.jet(r.time_s[i], 1).col(0)).cwiseAbs().maxCoeff());
+  EXPECT_GT(largest_move, 0.05);
+
+  // The laws, evaluated independently of the transcription at the optimized path: joint torques
+  // by Simbody's inverse dynamics, musculotendon lengths by the model, fibre velocities by the
+  // forward model.
+  auto ws = arm.flat.makeWorkspace();
+  for (int i = 0; i <= last; ++i) {
+    const Eigen::VectorXd q = r.joint_angle_rad.col(i);
+    const Eigen::VectorXd tau = arm.flat.torque(ws, q, r.joint_speed_rad_per_s.col(i), r.joint_acceleration_rad_per_s2.col(i));
+    EXPECT_LT((arm.flat.A() * r.tendon_force_N.col(i) - tau).cwiseAbs().maxCoeff(), 1e-6) << "t = " << r.time_s[i];
+    for (int j = 0; j < 6; ++j) {
+      const auto& mp = arm.model->muscle(j).getParameters();
+      EXPECT_GE(r.tendon_force_N(j, i), reserves[j] - 1e-6);
+      EXPECT_GE(r.excitation(j, i), -1e-8);
+      EXPECT_LE(r.excitation(j, i), 1.0 + 1e-8);
+      EXPECT_LE(r.activation(j, i), 1.0 + 1e-8);
+      const double L = arm.model->musculotendonLength(j, q);
+      const double u = fm::fiber_shortening_velocity(mp, r.tendon_force_N(j, i), r.activation(j, i), L - r.tendon_length_m(j, i));
+      EXPECT_NEAR(u, r.shortening_velocity_m_per_s(j, i), 1e-6 * mp.max_shortening_velocity_m_per_s()) << mp.name << " at " << r.time_s[i];
+    }
+  }
+  // Angles and speeds agree with each other: central differences of q against qd, to the
+  // differences' own O(dt^2) error.
+  const double dt = r.time_s[1] - r.time_s[0];
+  for (int i = 1; i < last; ++i) {
+    const Eigen::VectorXd slope = (r.joint_angle_rad.col(i + 1) - r.joint_angle_rad.col(i - 1)) / (2 * dt);
+    const double third = (r.joint_acceleration_rad_per_s2.col(i + 1) - 2.0 * r.joint_acceleration_rad_per_s2.col(i) +
+                          r.joint_acceleration_rad_per_s2.col(i - 1)).cwiseAbs().maxCoeff() / (dt * dt);
+    EXPECT_LT((slope - r.joint_speed_rad_per_s.col(i)).cwiseAbs().maxCoeff(), dt * dt * (third + 1.0)) << "t = " << r.time_s[i];
+  }
 }

@@ -1,17 +1,19 @@
 // The Hermite-Simpson transcription's exact derivatives against finite-difference twins: the
 // objective's gradient, every Jacobian entry (and no nonzero outside the declared pattern), and
 // the Hessian of the Lagrangian with random multipliers, on the paper's arm at a random point
-// away from the laws' kinks (slack tendon, u = 0).
+// away from the laws' kinks (slack tendon, u = 0): along a prescribed joint path and with the
+// path free (joint unknowns, inverse dynamics, lengths of q).
 #include <gtest/gtest.h>
 
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 #include <utility>
 
 #include "collocation/hermite_simpson.hpp"
-#include "flatsos/planner/collocation.hpp"
 #include "finite_difference.hpp"
+#include "flatsos/planner/collocation.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -25,14 +27,16 @@ class CollocationDerivatives : public ::testing::Test {
   flatsos::test::ArmPlanning arm;
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
 
-  fpd::HermiteSimpsonProblem problem() {
+  fpd::HermiteSimpsonProblem problem(bool free) {
     auto o = flatsos::test::open_loop_options();
     o.sos.bounds.enforce = false;
     const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
     auto ws = arm.flat.makeWorkspace();
     const Eigen::VectorXd w = fpl::flat_output_effort_weights(arm.flat);
+    std::optional<fpd::FreeJoints> joints;
+    if (free) joints = fpd::free_joints(arm.flat, plan.path);
     return fpd::HermiteSimpsonProblem(fpd::collocation_muscles(arm.flat, s0, o.reserves_N, w, 0.0),
-                                      fpd::sample_path(arm.flat, ws, plan.path, 2));
+                                      fpd::sample_path(arm.flat, ws, plan.path, 2), joints);
   }
 
   // The start, moved randomly: stretches by a few percent, activations and excitations inside
@@ -50,14 +54,24 @@ class CollocationDerivatives : public ::testing::Test {
         x[p.index(i, j, H::kExcitation)] = 0.05 + 0.9 * unit(rng);
         x[p.index(i, j, H::kVelocity)] = (unit(rng) < 0.5 ? -1.0 : 1.0) * (0.05 + 0.2 * unit(rng));
       }
+    if (p.freePath())  // angles within a few degrees of the path, speeds and accelerations of any
+                       // sign
+      for (int i = 0; i < p.points(); ++i)
+        for (int r = 0; r < p.joints(); ++r) {
+          x[p.jointIndex(i, r, H::kAngle)] += 0.1 * (unit(rng) - 0.5);
+          x[p.jointIndex(i, r, H::kSpeed)] += 2.0 * (unit(rng) - 0.5);
+          x[p.jointIndex(i, r, H::kAcceleration)] += 10.0 * (unit(rng) - 0.5);
+        }
     return x;
   }
 
-  static std::map<std::pair<int, int>, double> jacobian(const fpd::HermiteSimpsonProblem& p, const std::vector<double>& x) {
+  static std::map<std::pair<int, int>, double> jacobian(const fpd::HermiteSimpsonProblem& p,
+                                                        const std::vector<double>& x) {
     std::vector<double> values(p.jacobianNonzeros());
     p.jacobianValues(x.data(), values.data());
     std::map<std::pair<int, int>, double> J;
-    for (std::size_t k = 0; k < values.size(); ++k) J[{p.jacobianRows()[k], p.jacobianColumns()[k]}] = values[k];
+    for (std::size_t k = 0; k < values.size(); ++k)
+      J[{p.jacobianRows()[k], p.jacobianColumns()[k]}] = values[k];
     return J;
   }
 };
@@ -65,105 +79,132 @@ class CollocationDerivatives : public ::testing::Test {
 }  // namespace
 
 TEST_F(CollocationDerivatives, ThePatternsHaveNoDuplicatesAndTheHessianIsLowerTriangular) {
-  const auto p = problem();
-  std::set<std::pair<int, int>> jac, hess;
-  for (int k = 0; k < p.jacobianNonzeros(); ++k) {
-    EXPECT_TRUE(jac.insert({p.jacobianRows()[k], p.jacobianColumns()[k]}).second) << "duplicate Jacobian entry " << k;
-    EXPECT_LT(p.jacobianRows()[k], p.constraints());
-    EXPECT_LT(p.jacobianColumns()[k], p.variables());
+  for (bool free : {false, true}) {
+    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
+    const auto p = problem(free);
+    std::set<std::pair<int, int>> jac, hess;
+    for (int k = 0; k < p.jacobianNonzeros(); ++k) {
+      EXPECT_TRUE(jac.insert({p.jacobianRows()[k], p.jacobianColumns()[k]}).second)
+          << "duplicate Jacobian entry " << k;
+      EXPECT_LT(p.jacobianRows()[k], p.constraints());
+      EXPECT_LT(p.jacobianColumns()[k], p.variables());
+    }
+    for (int k = 0; k < p.hessianNonzeros(); ++k) {
+      EXPECT_TRUE(hess.insert({p.hessianRows()[k], p.hessianColumns()[k]}).second)
+          << "duplicate Hessian entry " << k;
+      EXPECT_GE(p.hessianRows()[k], p.hessianColumns()[k]);
+    }
+    if (!free) {
+      // 5 points x 6 muscles x 4 unknowns; 30 equilibrium rows, 4 x 2 torque rows (not at t = 0),
+      // 2 intervals x 6 muscles x 4 defects, 6 rest rows.
+      EXPECT_EQ(p.variables(), 120);
+      EXPECT_EQ(p.constraints(), 30 + 8 + 48 + 6);
+    } else {
+      // and 5 points x 2 joints x 3 unknowns; torque rows at all 5 points, 2 intervals x 2 joints
+      // x 4 joint defects.
+      EXPECT_EQ(p.variables(), 120 + 30);
+      EXPECT_EQ(p.constraints(), 30 + 10 + 48 + 16 + 6);
+    }
   }
-  for (int k = 0; k < p.hessianNonzeros(); ++k) {
-    EXPECT_TRUE(hess.insert({p.hessianRows()[k], p.hessianColumns()[k]}).second) << "duplicate Hessian entry " << k;
-    EXPECT_GE(p.hessianRows()[k], p.hessianColumns()[k]);
-  }
-  // 5 points x 6 muscles x 4 unknowns; 30 equilibrium rows, 4 x 2 torque rows (not at t = 0),
-  // 2 intervals x 6 muscles x 4 defects, 6 rest rows.
-  EXPECT_EQ(p.variables(), 120);
-  EXPECT_EQ(p.constraints(), 30 + 8 + 48 + 6);
 }
 
 TEST_F(CollocationDerivatives, TheObjectiveGradientMatchesFiniteDifferences) {
-  const auto p = problem();
-  std::vector<double> x = random_point(p, 1);
-  std::vector<double> grad(p.variables());
-  p.objectiveGradient(x.data(), grad.data());
-  for (int v = 0; v < p.variables(); ++v) {
-    auto f = [&](double xv) {
-      std::vector<double> y = x;
-      y[v] = xv;
-      return p.objective(y.data());
-    };
-    const auto fd = central_difference(f, x[v], 1e-5);
-    EXPECT_NEAR(grad[v], fd.estimate, fd.tolerance + 1e-9) << "variable " << v;
+  for (bool free : {false, true}) {
+    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
+    const auto p = problem(free);
+    std::vector<double> x = random_point(p, 1);
+    std::vector<double> grad(p.variables());
+    p.objectiveGradient(x.data(), grad.data());
+    for (int v = 0; v < p.variables(); ++v) {
+      auto f = [&](double xv) {
+        std::vector<double> y = x;
+        y[v] = xv;
+        return p.objective(y.data());
+      };
+      const auto fd = central_difference(f, x[v], 1e-5);
+      EXPECT_NEAR(grad[v], fd.estimate, fd.tolerance + 1e-9) << "variable " << v;
+    }
   }
 }
 
 TEST_F(CollocationDerivatives, EveryJacobianEntryMatchesFiniteDifferences) {
-  const auto p = problem();
-  for (unsigned seed : {2u, 3u}) {
-    std::vector<double> x = random_point(p, seed);
-    const auto J = jacobian(p, x);
-    std::vector<double> gp(p.constraints()), gm(p.constraints()), gp2(p.constraints()), gm2(p.constraints());
-    int checked = 0;
-    for (int v = 0; v < p.variables(); ++v) {
-      const double h = 1e-6;
-      std::vector<double> y = x;
-      y[v] = x[v] + h, p.constraintValues(y.data(), gp.data());
-      y[v] = x[v] - h, p.constraintValues(y.data(), gm.data());
-      y[v] = x[v] + 2 * h, p.constraintValues(y.data(), gp2.data());
-      y[v] = x[v] - 2 * h, p.constraintValues(y.data(), gm2.data());
-      for (int r = 0; r < p.constraints(); ++r) {
-        const double d1 = (gp[r] - gm[r]) / (2 * h), d2 = (gp2[r] - gm2[r]) / (4 * h);
-        const double tol = 10.0 * (std::abs(d2 - d1) / 3.0 + 1e-16 * (std::abs(gp[r]) + 1.0) / h) + 1e-8;
-        const auto it = J.find({r, v});
-        const double analytic = it == J.end() ? 0.0 : it->second;
-        EXPECT_NEAR(analytic, d1, tol) << "row " << r << ", variable " << v
-                                       << (it == J.end() ? " (outside the pattern)" : "");
-        checked += it != J.end();
+  for (bool free : {false, true}) {
+    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
+    const auto p = problem(free);
+    for (unsigned seed : {2u, 3u}) {
+      std::vector<double> x = random_point(p, seed);
+      const auto J = jacobian(p, x);
+      std::vector<double> gp(p.constraints()), gm(p.constraints()), gp2(p.constraints()),
+          gm2(p.constraints());
+      int checked = 0;
+      for (int v = 0; v < p.variables(); ++v) {
+        const double h = 1e-6;
+        std::vector<double> y = x;
+        y[v] = x[v] + h, p.constraintValues(y.data(), gp.data());
+        y[v] = x[v] - h, p.constraintValues(y.data(), gm.data());
+        y[v] = x[v] + 2 * h, p.constraintValues(y.data(), gp2.data());
+        y[v] = x[v] - 2 * h, p.constraintValues(y.data(), gm2.data());
+        for (int r = 0; r < p.constraints(); ++r) {
+          const double d1 = (gp[r] - gm[r]) / (2 * h), d2 = (gp2[r] - gm2[r]) / (4 * h);
+          const double tol =
+              10.0 * (std::abs(d2 - d1) / 3.0 + 1e-16 * (std::abs(gp[r]) + 1.0) / h) + 1e-8;
+          const auto it = J.find({r, v});
+          const double analytic = it == J.end() ? 0.0 : it->second;
+          EXPECT_NEAR(analytic, d1, tol) << "row " << r << ", variable " << v
+                                         << (it == J.end() ? " (outside the pattern)" : "");
+          checked += it != J.end();
+        }
       }
+      EXPECT_EQ(checked, p.jacobianNonzeros());
     }
-    EXPECT_EQ(checked, p.jacobianNonzeros());
   }
 }
 
 TEST_F(CollocationDerivatives, TheHessianOfTheLagrangianMatchesFiniteDifferencesOfTheGradients) {
-  const auto p = problem();
-  std::vector<double> x = random_point(p, 4);
-  std::mt19937 rng(5);
-  std::normal_distribution<double> normal;
-  std::vector<double> lambda(p.constraints());
-  for (double& l : lambda) l = normal(rng);
-  const double sigma = 0.7;
-  // The Lagrangian's gradient from the analytic first derivatives.
-  auto lagrangian_gradient = [&](const std::vector<double>& y) {
-    std::vector<double> grad(p.variables());
-    p.objectiveGradient(y.data(), grad.data());
-    for (double& g : grad) g *= sigma;
-    std::vector<double> values(p.jacobianNonzeros());
-    p.jacobianValues(y.data(), values.data());
-    for (int k = 0; k < p.jacobianNonzeros(); ++k) grad[p.jacobianColumns()[k]] += lambda[p.jacobianRows()[k]] * values[k];
-    return grad;
-  };
-  std::vector<double> values(p.hessianNonzeros());
-  p.hessianValues(x.data(), sigma, lambda.data(), values.data());
-  std::map<std::pair<int, int>, double> H;
-  for (int k = 0; k < p.hessianNonzeros(); ++k) H[{p.hessianRows()[k], p.hessianColumns()[k]}] = values[k];
-  for (int v = 0; v < p.variables(); ++v) {
-    const double h = 1e-6;
-    std::vector<double> y = x;
-    y[v] = x[v] + h;
-    const auto gp = lagrangian_gradient(y);
-    y[v] = x[v] - h;
-    const auto gm = lagrangian_gradient(y);
-    y[v] = x[v] + 2 * h;
-    const auto gp2 = lagrangian_gradient(y);
-    y[v] = x[v] - 2 * h;
-    const auto gm2 = lagrangian_gradient(y);
-    for (int w = 0; w < p.variables(); ++w) {
-      const double d1 = (gp[w] - gm[w]) / (2 * h), d2 = (gp2[w] - gm2[w]) / (4 * h);
-      const double tol = 10.0 * (std::abs(d2 - d1) / 3.0 + 1e-16 * (std::abs(gp[w]) + 1.0) / h) + 1e-7;
-      const auto it = H.find({std::max(v, w), std::min(v, w)});
-      EXPECT_NEAR(it == H.end() ? 0.0 : it->second, d1, tol) << "entry (" << w << ", " << v << ")";
+  for (bool free : {false, true}) {
+    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
+    const auto p = problem(free);
+    std::vector<double> x = random_point(p, 4);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> normal;
+    std::vector<double> lambda(p.constraints());
+    for (double& l : lambda) l = normal(rng);
+    const double sigma = 0.7;
+    // The Lagrangian's gradient from the analytic first derivatives.
+    auto lagrangian_gradient = [&](const std::vector<double>& y) {
+      std::vector<double> grad(p.variables());
+      p.objectiveGradient(y.data(), grad.data());
+      for (double& g : grad) g *= sigma;
+      std::vector<double> values(p.jacobianNonzeros());
+      p.jacobianValues(y.data(), values.data());
+      for (int k = 0; k < p.jacobianNonzeros(); ++k)
+        grad[p.jacobianColumns()[k]] += lambda[p.jacobianRows()[k]] * values[k];
+      return grad;
+    };
+    std::vector<double> values(p.hessianNonzeros());
+    p.hessianValues(x.data(), sigma, lambda.data(), values.data());
+    std::map<std::pair<int, int>, double> H;
+    for (int k = 0; k < p.hessianNonzeros(); ++k)
+      H[{p.hessianRows()[k], p.hessianColumns()[k]}] = values[k];
+    for (int v = 0; v < p.variables(); ++v) {
+      const double h = 1e-6;
+      std::vector<double> y = x;
+      y[v] = x[v] + h;
+      const auto gp = lagrangian_gradient(y);
+      y[v] = x[v] - h;
+      const auto gm = lagrangian_gradient(y);
+      y[v] = x[v] + 2 * h;
+      const auto gp2 = lagrangian_gradient(y);
+      y[v] = x[v] - 2 * h;
+      const auto gm2 = lagrangian_gradient(y);
+      for (int w = 0; w < p.variables(); ++w) {
+        const double d1 = (gp[w] - gm[w]) / (2 * h), d2 = (gp2[w] - gm2[w]) / (4 * h);
+        const double tol =
+            10.0 * (std::abs(d2 - d1) / 3.0 + 1e-16 * (std::abs(gp[w]) + 1.0) / h) + 1e-7;
+        const auto it = H.find({std::max(v, w), std::min(v, w)});
+        EXPECT_NEAR(it == H.end() ? 0.0 : it->second, d1, tol)
+            << "entry (" << w << ", " << v << ")";
+      }
     }
   }
 }

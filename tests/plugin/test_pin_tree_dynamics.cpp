@@ -4,7 +4,8 @@
 // direction, joint locations off the parent's origin, mass centres off the joint, products of
 // inertia, gravity in any direction. Simbody is what simulates the plant, so this is the
 // agreement the planner's plans rely on. The exact torque jets (dual numbers) against differences
-// in time along the motion, and their gradients against finite differences.
+// in time along the motion, and their gradients against finite differences, as are the
+// derivatives of inverse dynamics with respect to (q, qd, qdd).
 
 #include <cmath>
 #include <random>
@@ -238,6 +239,58 @@ TEST(PinTreeDynamics, TorqueJetGradientMatchesFiniteDifferences) {
         EXPECT_EQ(gradient(3 * i + 1, 5 * r + 4), 0.0);
       }
   }
+}
+
+TEST(PinTreeDynamics, InverseDynamicsJacobianAndHessianMatchFiniteDifferences) {
+  std::mt19937 rng(29);
+  std::srand(31);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int n = 1 + trial % 4;
+    const fp::MusculoskeletalModel model(random_tree(rng, n));
+    const fp::PinTreeDynamics& tree = model.pinTree();
+    const Eigen::VectorXd x = (Eigen::VectorXd(3 * n) << Eigen::VectorXd::Random(n), 3.0 * Eigen::VectorXd::Random(n),
+                               10.0 * Eigen::VectorXd::Random(n)).finished();
+    const Eigen::VectorXd w = Eigen::VectorXd::Random(n);
+    auto tau_at = [&](const Eigen::VectorXd& y) {
+      return model.inverseDynamics(y.head(n), y.segment(n, n), y.tail(n));
+    };
+    auto jacobian_at = [&](const Eigen::VectorXd& y) {
+      Eigen::MatrixXd J;
+      const Eigen::VectorXd tau = tree.inverseDynamicsJacobian(y.head(n), y.segment(n, n), y.tail(n), J);
+      EXPECT_LT((tau - tau_at(y)).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + tau.cwiseAbs().maxCoeff()));
+      return J;
+    };
+    const Eigen::MatrixXd J = jacobian_at(x);
+    const Eigen::MatrixXd H = tree.inverseDynamicsHessian(x.head(n), x.segment(n, n), x.tail(n), w);
+    ASSERT_EQ(J.rows(), n);
+    ASSERT_EQ(J.cols(), 3 * n);
+    ASSERT_EQ(H.rows(), 3 * n);
+    ASSERT_EQ(H.cols(), 3 * n);
+    const double scale = 1.0 + tau_at(x).cwiseAbs().maxCoeff();
+    for (int c = 0; c < 3 * n; ++c) {
+      const double h = 1e-6 * (1.0 + std::abs(x[c]));
+      Eigen::VectorXd plus = x, minus = x;
+      plus[c] += h;
+      minus[c] -= h;
+      // First derivatives from the torques, second ones from the exact Jacobian's differences.
+      const Eigen::VectorXd d_tau = (tau_at(plus) - tau_at(minus)) / (2 * h);
+      const Eigen::VectorXd d_wJ = (w.transpose() * (jacobian_at(plus) - jacobian_at(minus))).transpose() / (2 * h);
+      for (int i = 0; i < n; ++i)
+        EXPECT_NEAR(J(i, c), d_tau[i], 1e-7 * scale) << "d tau" << i << " / d x" << c << ", trial " << trial;
+      for (int b = 0; b < 3 * n; ++b)
+        EXPECT_NEAR(H(b, c), d_wJ[b], 1e-6 * scale) << "d2 (w tau) / d x" << b << " d x" << c << ", trial " << trial;
+    }
+    EXPECT_TRUE(H.isApprox(H.transpose(), 0.0));
+  }
+}
+
+TEST(PinTreeDynamics, InverseDynamicsDerivativesRejectWrongSizes) {
+  std::mt19937 rng(37);
+  const fp::MusculoskeletalModel model(random_tree(rng, 2));
+  Eigen::MatrixXd J;
+  const Eigen::VectorXd two = Eigen::VectorXd::Zero(2), three = Eigen::VectorXd::Zero(3);
+  EXPECT_THROW(model.pinTree().inverseDynamicsJacobian(two, three, two, J), std::invalid_argument);
+  EXPECT_THROW(model.pinTree().inverseDynamicsHessian(two, two, two, three), std::invalid_argument);
 }
 
 TEST(PinTreeDynamics, TorqueJetRejectsAJetOfTheWrongShape) {

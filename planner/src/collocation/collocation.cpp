@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -174,8 +175,14 @@ PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& works
   samples.lengthening_rate_m_per_s.resize(m, P);
   samples.torque_N_m.resize(flat.numJoints(), P);
   samples.moment_arms_m = flat.A();
+  samples.q_rad.resize(flat.numJoints(), P);
+  samples.qd_rad_per_s.resize(flat.numJoints(), P);
+  samples.qdd_rad_per_s2.resize(flat.numJoints(), P);
   for (int i = 0; i < P; ++i) {
     const Jet q = path.jet(samples.time_s[i], 3);
+    samples.q_rad.col(i) = q.col(0);
+    samples.qd_rad_per_s.col(i) = q.col(1);
+    samples.qdd_rad_per_s2.col(i) = q.col(2);
     samples.torque_N_m.col(i) = flat.torque(workspace, q.col(0), q.col(1), q.col(2));
     for (int j = 0; j < m; ++j) {
       const muscles::SecondOrderJet L = flat.pathLengthJet(j, q);
@@ -184,6 +191,22 @@ PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& works
     }
   }
   return samples;
+}
+
+FreeJoints free_joints(const FlatOutputMap& flat, const JointPath& path) {
+  const Jet start = path.jet(0.0, 3), end = path.jet(path.duration_s, 3);
+  if (end.rightCols(2).cwiseAbs().maxCoeff() > 1e-9)
+    throw std::invalid_argument("collocation: a free joint path ends at rest, but the given path ends with joint speeds or "
+                                "accelerations up to " + std::to_string(end.rightCols(2).cwiseAbs().maxCoeff()));
+  FreeJoints fj;
+  fj.dynamics = &flat.model().pinTree();
+  fj.length_at_zero_angles_m.resize(flat.numMuscles());
+  for (int j = 0; j < flat.numMuscles(); ++j)
+    fj.length_at_zero_angles_m[j] = flat.model().musculotendonLength(j, Eigen::VectorXd::Zero(flat.numJoints()));
+  fj.start_q_rad = start.col(0);
+  fj.start_qd_rad_per_s = start.col(1);
+  fj.end_q_rad = end.col(0);
+  return fj;
 }
 
 std::vector<CollocationMuscle> collocation_muscles(const FlatOutputMap& flat, const MuscleState& initial,
@@ -209,31 +232,39 @@ Eigen::VectorXd flat_output_effort_weights(const FlatOutputMap& flat) {
   return flat.E().transpose() * Eigen::VectorXd::Ones(flat.numFlatOutputs());
 }
 
-CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
-                                               const JointPath& path, const MuscleState& initial,
-                                               const Eigen::VectorXd& reserves_N, const CollocationOptions& o) {
+namespace {
+
+// Both problems: along the path, or (free) with the path free between its ends.
+CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                                    const MuscleState& initial, const Eigen::VectorXd& reserves_N,
+                                    const CollocationOptions& o, bool free) {
   validate(flat, path, initial, reserves_N, o);
   const Stopwatch setup;
-  const int m = flat.numMuscles();
+  const int m = flat.numMuscles(), N = flat.numJoints();
   const Eigen::VectorXd weights = o.effort_weights.size() > 0 ? o.effort_weights : flat_output_effort_weights(flat);
   detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
   std::vector<detail::CollocationMuscle> muscles =
       detail::collocation_muscles(flat, initial, reserves_N, weights, o.min_activation);
 
-  // The initial state fixes every tendon force at t = 0; the path must start with the joint
-  // accelerations they produce, or no plan exists along it.
-  Eigen::VectorXd F0(m);
-  for (int j = 0; j < m; ++j)
-    F0[j] = muscles::tendon_force(flat.model().muscle(j).getParameters(), initial.tendon_length_m[j]);
-  const Eigen::VectorXd torque_gap = flat.A() * F0 - samples.torque_N_m.col(0);
-  if (torque_gap.cwiseAbs().maxCoeff() > 1e-6 * (1.0 + samples.torque_N_m.col(0).cwiseAbs().maxCoeff())) {
-    std::ostringstream why;
-    why << "collocation: the joint path does not start with the accelerations of the initial state (the muscles' torques "
-           "differ from the path's inverse dynamics at t = 0 by up to "
-        << torque_gap.cwiseAbs().maxCoeff() << " N m)";
-    throw std::invalid_argument(why.str());
+  std::optional<detail::FreeJoints> free_path;
+  if (free) {
+    free_path = detail::free_joints(flat, path);
+  } else {
+    // The initial state fixes every tendon force at t = 0; the path must start with the joint
+    // accelerations they produce, or no plan exists along it.
+    Eigen::VectorXd F0(m);
+    for (int j = 0; j < m; ++j)
+      F0[j] = muscles::tendon_force(flat.model().muscle(j).getParameters(), initial.tendon_length_m[j]);
+    const Eigen::VectorXd torque_gap = flat.A() * F0 - samples.torque_N_m.col(0);
+    if (torque_gap.cwiseAbs().maxCoeff() > 1e-6 * (1.0 + samples.torque_N_m.col(0).cwiseAbs().maxCoeff())) {
+      std::ostringstream why;
+      why << "collocation: the joint path does not start with the accelerations of the initial state (the muscles' "
+             "torques differ from the path's inverse dynamics at t = 0 by up to "
+          << torque_gap.cwiseAbs().maxCoeff() << " N m)";
+      throw std::invalid_argument(why.str());
+    }
   }
-  const detail::HermiteSimpsonProblem problem(std::move(muscles), std::move(samples));
+  const detail::HermiteSimpsonProblem problem(std::move(muscles), std::move(samples), std::move(free_path));
 
   CollocationResult result;
   result.mesh_intervals = o.mesh_intervals;
@@ -247,16 +278,17 @@ CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin
   result.solve_seconds = solve.seconds();
   result.solver_status = outcome.solver_status;
   result.iterations = outcome.iterations;
+  const std::string what = free ? "with a free joint path" : "along this joint path";
   if (outcome.solved) {
     result.status = SolveStatus::Solved;
   } else if (outcome.infeasible) {
     result.status = SolveStatus::Infeasible;
-    result.message = "collocation: no excitations along this joint path meet the reserves and bounds (Ipopt: " +
+    result.message = "collocation: no excitations " + what + " meet the reserves and bounds (Ipopt: " +
                      result.solver_status + ")";
     return result;
   } else {
     result.status = SolveStatus::Failed;
-    result.message = "collocation: Ipopt did not converge (" + result.solver_status + ")";
+    result.message = "collocation " + what + ": Ipopt did not converge (" + result.solver_status + ")";
     return result;
   }
   const double* x = outcome.x.data();
@@ -269,8 +301,11 @@ CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin
   result.excitation.resize(m, P);
   result.shortening_velocity_m_per_s.resize(m, P);
   result.activation_rate_per_s.resize(m, P);
+  result.joint_angle_rad.resize(N, P);
+  result.joint_speed_rad_per_s.resize(N, P);
+  result.joint_acceleration_rad_per_s2.resize(N, P);
   using H = detail::HermiteSimpsonProblem;
-  for (int i = 0; i < P; ++i)
+  for (int i = 0; i < P; ++i) {
     for (int j = 0; j < m; ++j) {
       result.tendon_force_N(j, i) = problem.tendonForce(x, i, j);
       result.tendon_length_m(j, i) = problem.tendonLength(x, i, j);
@@ -279,7 +314,27 @@ CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin
       result.activation_rate_per_s(j, i) = problem.activationRate(x, i, j);
       result.shortening_velocity_m_per_s(j, i) = problem.shorteningVelocity(x, i, j);
     }
+    for (int r = 0; r < N; ++r) {
+      result.joint_angle_rad(r, i) = problem.joint(x, i, r, H::kAngle);
+      result.joint_speed_rad_per_s(r, i) = problem.joint(x, i, r, H::kSpeed);
+      result.joint_acceleration_rad_per_s2(r, i) = problem.joint(x, i, r, H::kAcceleration);
+    }
+  }
   return result;
+}
+
+}  // namespace
+
+CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const JointPath& path, const MuscleState& initial,
+                                               const Eigen::VectorXd& reserves_N, const CollocationOptions& o) {
+  return solve_collocation(flat, workspace, path, initial, reserves_N, o, false);
+}
+
+CollocationResult solve_collocation_free_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                              const JointPath& start_path, const MuscleState& initial,
+                                              const Eigen::VectorXd& reserves_N, const CollocationOptions& o) {
+  return solve_collocation(flat, workspace, start_path, initial, reserves_N, o, true);
 }
 
 }  // namespace flatsos::planner

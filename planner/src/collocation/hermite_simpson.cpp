@@ -42,17 +42,25 @@ struct HermiteSimpsonProblem::MuscleAt {
   double s, a, n, v;
   double F, F_s, F_ss;  // N
   double f, f_s, f_ss;
+  double f_L, f_LL;  // with respect to the fibre length (a free path moves it through q)
   double g, g_v, g_vv;
 };
 
-HermiteSimpsonProblem::HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples)
-    : muscles_(std::move(muscles)), samples_(std::move(samples)) {
+HermiteSimpsonProblem::HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples,
+                                             std::optional<FreeJoints> free)
+    : muscles_(std::move(muscles)), samples_(std::move(samples)), free_(std::move(free)) {
   const int P = points(), m = this->muscles(), N = joints();
   if (P < 3 || P % 2 == 0) throw std::invalid_argument("Hermite-Simpson: need 2K + 1 >= 3 points");
   if (samples_.musculotendon_length_m.rows() != m || samples_.musculotendon_length_m.cols() != P ||
       samples_.lengthening_rate_m_per_s.rows() != m || samples_.lengthening_rate_m_per_s.cols() != P ||
       samples_.torque_N_m.cols() != P || samples_.moment_arms_m.rows() != N || samples_.moment_arms_m.cols() != m)
     throw std::invalid_argument("Hermite-Simpson: path samples of inconsistent sizes");
+  if (samples_.q_rad.rows() != N || samples_.q_rad.cols() != P || samples_.qd_rad_per_s.rows() != N ||
+      samples_.qd_rad_per_s.cols() != P || samples_.qdd_rad_per_s2.rows() != N || samples_.qdd_rad_per_s2.cols() != P)
+    throw std::invalid_argument("Hermite-Simpson: joint path samples of inconsistent sizes");
+  if (free_ && (!free_->dynamics || free_->dynamics->numJoints() != N || free_->length_at_zero_angles_m.size() != m ||
+                free_->start_q_rad.size() != N || free_->start_qd_rad_per_s.size() != N || free_->end_q_rad.size() != N))
+    throw std::invalid_argument("Hermite-Simpson: free joints of inconsistent sizes");
   for (const auto& mu : muscles_)
     stretch_scale_m_.push_back(mu.parameters.tendon_strain_at_max_force * mu.parameters.tendon_slack_length_m);
   // The structure, recorded once at the start (any point gives the same pattern).
@@ -84,10 +92,12 @@ HermiteSimpsonProblem::MuscleAt HermiteSimpsonProblem::evaluate(const double* x,
   e.F = muscles::tendon_force(p, tendon_length);
   e.F_s = muscles::tendon_force_derivative(p, tendon_length) * lambda;
   e.F_ss = muscles::tendon_force_second_derivative(p, tendon_length) * lambda * lambda;
-  const double fiber_length = samples_.musculotendon_length_m(j, i) - tendon_length;
+  const double fiber_length = musculotendonLength(x, i, j) - tendon_length;
   e.f = muscles::force_length(p, fiber_length);
   e.f_s = -muscles::force_length_derivative(p, fiber_length) * lambda;
-  e.f_ss = muscles::force_length_second_derivative(p, fiber_length) * lambda * lambda;
+  e.f_L = muscles::force_length_derivative(p, fiber_length);
+  e.f_LL = muscles::force_length_second_derivative(p, fiber_length);
+  e.f_ss = e.f_LL * lambda * lambda;
   const double u = vmax * e.v;
   e.g = muscles::force_velocity(p, u);
   e.g_v = muscles::force_velocity_derivative(p, u) * vmax;
@@ -106,6 +116,32 @@ double HermiteSimpsonProblem::shorteningVelocity(const double* x, int i, int j) 
 }
 double HermiteSimpsonProblem::activationRate(const double* x, int i, int j) const {
   return activation_rate(muscles_[j].parameters, x[index(i, j, kExcitation)], x[index(i, j, kActivation)]).value;
+}
+double HermiteSimpsonProblem::joint(const double* x, int i, int r, JointUnknown k) const {
+  if (free_) return x[jointIndex(i, r, k)];
+  const Eigen::MatrixXd& path = k == kAngle ? samples_.q_rad : k == kSpeed ? samples_.qd_rad_per_s : samples_.qdd_rad_per_s2;
+  return path(r, i);
+}
+Eigen::VectorXd HermiteSimpsonProblem::jointVector(const double* x, int i, JointUnknown k) const {
+  Eigen::VectorXd v(joints());
+  for (int r = 0; r < joints(); ++r) v[r] = joint(x, i, r, k);
+  return v;
+}
+double HermiteSimpsonProblem::musculotendonLength(const double* x, int i, int j) const {
+  if (!free_) return samples_.musculotendon_length_m(j, i);
+  return free_->length_at_zero_angles_m[j] - samples_.moment_arms_m.col(j).dot(jointVector(x, i, kAngle));
+}
+double HermiteSimpsonProblem::lengtheningRate(const double* x, int i, int j) const {
+  if (!free_) return samples_.lengthening_rate_m_per_s(j, i);
+  return -samples_.moment_arms_m.col(j).dot(jointVector(x, i, kSpeed));
+}
+Eigen::VectorXd HermiteSimpsonProblem::torque(const double* x, int i) const {
+  if (!free_) return samples_.torque_N_m.col(i);
+  plugin::PinTreeDynamics::Scratch scratch = free_->dynamics->makeScratch();
+  Eigen::VectorXd tau(joints());
+  free_->dynamics->inverseDynamics(scratch, jointVector(x, i, kAngle), jointVector(x, i, kSpeed),
+                                   jointVector(x, i, kAcceleration), tau);
+  return tau;
 }
 
 void HermiteSimpsonProblem::bounds(double* xl, double* xu, double* gl, double* gu) const {
@@ -132,11 +168,21 @@ void HermiteSimpsonProblem::bounds(double* xl, double* xu, double* gl, double* g
         xl[index(i, j, kStretch)] = xu[index(i, j, kStretch)] = mu.initial_stretch;
         xl[index(i, j, kActivation)] = xu[index(i, j, kActivation)] = mu.initial_activation;
       }
-      if (i == P - 1) {  // rest at T: dL_S/dt = u + dL/dt = 0
+      if (i == P - 1) {  // rest at T: dL_S/dt = u + dL/dt = 0 (a free path ends with qd = 0)
         xl[index(i, j, kVelocity)] = xu[index(i, j, kVelocity)] =
-            -samples_.lengthening_rate_m_per_s(j, i) / p.max_shortening_velocity_m_per_s();
+            free_ ? 0.0 : -samples_.lengthening_rate_m_per_s(j, i) / p.max_shortening_velocity_m_per_s();
       }
     }
+  if (free_)
+    for (int i = 0; i < P; ++i)
+      for (int r = 0; r < joints(); ++r)
+        for (JointUnknown k : {kAngle, kSpeed, kAcceleration}) {
+          double lower = -kInfinity, upper = kInfinity;
+          if (i == 0 && k == kAngle) lower = upper = free_->start_q_rad[r];
+          if (i == 0 && k == kSpeed) lower = upper = free_->start_qd_rad_per_s[r];
+          if (i == P - 1) lower = upper = k == kAngle ? free_->end_q_rad[r] : 0.0;
+          xl[jointIndex(i, r, k)] = lower, xu[jointIndex(i, r, k)] = upper;
+        }
   std::fill(gl, gl + constraints(), 0.0);
   std::fill(gu, gu + constraints(), 0.0);
 }
@@ -177,8 +223,23 @@ void HermiteSimpsonProblem::startingPoint(double* x) const {
     const double u = muscles::fiber_shortening_velocity(p, muscles::tendon_force(p, tendon_length), x[index(0, j, kActivation)],
                                                         samples_.musculotendon_length_m(j, 0) - tendon_length);
     x[index(0, j, kVelocity)] = std::min(u / p.max_shortening_velocity_m_per_s(), 0.99);
-    x[index(P - 1, j, kVelocity)] = -samples_.lengthening_rate_m_per_s(j, P - 1) / p.max_shortening_velocity_m_per_s();
+    x[index(P - 1, j, kVelocity)] =
+        free_ ? 0.0 : -samples_.lengthening_rate_m_per_s(j, P - 1) / p.max_shortening_velocity_m_per_s();
   }
+  if (free_)  // the sampled path, its ends replaced by the problem's
+    for (int i = 0; i < P; ++i)
+      for (int r = 0; r < joints(); ++r) {
+        x[jointIndex(i, r, kAngle)] = samples_.q_rad(r, i);
+        x[jointIndex(i, r, kSpeed)] = samples_.qd_rad_per_s(r, i);
+        x[jointIndex(i, r, kAcceleration)] = samples_.qdd_rad_per_s2(r, i);
+      }
+  if (free_)
+    for (int r = 0; r < joints(); ++r) {
+      x[jointIndex(0, r, kAngle)] = free_->start_q_rad[r];
+      x[jointIndex(0, r, kSpeed)] = free_->start_qd_rad_per_s[r];
+      x[jointIndex(P - 1, r, kAngle)] = free_->end_q_rad[r];
+      x[jointIndex(P - 1, r, kSpeed)] = x[jointIndex(P - 1, r, kAcceleration)] = 0.0;
+    }
 }
 
 double HermiteSimpsonProblem::objective(const double* x) const {
@@ -208,8 +269,10 @@ void HermiteSimpsonProblem::constraintValues(const double* x, double* g) const {
       F[j] = e.F;
       g[equilibriumRow(i, j)] = e.F / muscles_[j].parameters.max_isometric_force_N - e.a * e.f * e.g;
     }
-    if (i > 0)
-      for (int r = 0; r < N; ++r) g[torqueRow(i, r)] = A.row(r).dot(F) - samples_.torque_N_m(r, i);
+    if (i >= firstTorquePoint()) {
+      const Eigen::VectorXd tau = torque(x, i);
+      for (int r = 0; r < N; ++r) g[torqueRow(i, r)] = A.row(r).dot(F) - tau[r];
+    }
   }
   for (int k = 0; k < intervals(); ++k) {
     const double h = intervalLength();
@@ -220,7 +283,7 @@ void HermiteSimpsonProblem::constraintValues(const double* x, double* g) const {
       for (int c = 0; c < 3; ++c) {
         const int i = 2 * k + c;
         const double s = x[index(i, j, kStretch)], a = x[index(i, j, kActivation)];
-        const double rate_s = (vmax * x[index(i, j, kVelocity)] + samples_.lengthening_rate_m_per_s(j, i)) / stretch_scale_m_[j];
+        const double rate_s = (vmax * x[index(i, j, kVelocity)] + lengtheningRate(x, i, j)) / stretch_scale_m_[j];
         const double rate_a = activation_rate(p, x[index(i, j, kExcitation)], a).value;
         sim_s += kSimpsonState[c] * s + h * kSimpsonRate[c] * rate_s;
         int_s += kInterpolationState[c] * s + h * kInterpolationRate[c] * rate_s;
@@ -233,6 +296,18 @@ void HermiteSimpsonProblem::constraintValues(const double* x, double* g) const {
       g[defectRow(k, j, 3)] = int_a;
     }
   }
+  if (free_)
+    for (int k = 0; k < intervals(); ++k)
+      for (int r = 0; r < N; ++r)
+        for (int which = 0; which < 4; ++which) {
+          const auto& state = which % 2 == 0 ? kSimpsonState : kInterpolationState;
+          const auto& rate = which % 2 == 0 ? kSimpsonRate : kInterpolationRate;
+          const JointUnknown y = which < 2 ? kAngle : kSpeed, dy = which < 2 ? kSpeed : kAcceleration;
+          double defect = 0.0;
+          for (int c = 0; c < 3; ++c)
+            defect += state[c] * x[jointIndex(2 * k + c, r, y)] + intervalLength() * rate[c] * x[jointIndex(2 * k + c, r, dy)];
+          g[jointDefectRow(k, r, which)] = defect;
+        }
   for (int j = 0; j < m; ++j)
     g[restRow(j)] = x[index(P - 1, j, kExcitation)] - x[index(P - 1, j, kActivation)];
 }
@@ -248,14 +323,26 @@ void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
       sink(row, index(i, j, kStretch), e.F_s / muscles_[j].parameters.max_isometric_force_N - e.a * e.f_s * e.g);
       sink(row, index(i, j, kActivation), -e.f * e.g);
       sink(row, index(i, j, kVelocity), -e.a * e.f * e.g_v);
+      if (free_)  // d(-a f g)/dq_r = -a g f_L dL/dq_r, dL/dq_r = -A_rj
+        for (int r = 0; r < N; ++r)
+          if (A(r, j) != 0.0) sink(row, jointIndex(i, r, kAngle), e.a * e.g * e.f_L * A(r, j));
     }
-  for (int i = 1; i < P; ++i)
-    for (int r = 0; r < N; ++r)
+  Eigen::MatrixXd torque_jacobian;  // d tau / d(q, qd, qdd) at a point, free path
+  for (int i = firstTorquePoint(); i < P; ++i) {
+    if (free_)
+      free_->dynamics->inverseDynamicsJacobian(jointVector(x, i, kAngle), jointVector(x, i, kSpeed),
+                                               jointVector(x, i, kAcceleration), torque_jacobian);
+    for (int r = 0; r < N; ++r) {
       for (int j = 0; j < m; ++j)
         if (A(r, j) != 0.0)
           sink(torqueRow(i, r), index(i, j, kStretch),
                A(r, j) * muscles::tendon_force_derivative(muscles_[j].parameters, tendonLength(x, i, j)) *
                    stretch_scale_m_[j]);
+      if (free_)
+        for (int c = 0; c < 3 * N; ++c)
+          sink(torqueRow(i, r), jointIndex(i, c % N, static_cast<JointUnknown>(c / N)), -torque_jacobian(r, c));
+    }
+  }
   for (int k = 0; k < intervals(); ++k) {
     const double h = intervalLength();
     for (int j = 0; j < m; ++j) {
@@ -269,6 +356,10 @@ void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
           const int i = 2 * k + c;
           if (state[c] != 0.0) sink(defectRow(k, j, which), index(i, j, kStretch), state[c]);
           if (rate[c] != 0.0) sink(defectRow(k, j, which), index(i, j, kVelocity), h * rate[c] * rate_s_v);
+          if (free_ && rate[c] != 0.0)  // dL/dt = -A_j^T qd
+            for (int r = 0; r < N; ++r)
+              if (A(r, j) != 0.0)
+                sink(defectRow(k, j, which), jointIndex(i, r, kSpeed), -h * rate[c] * A(r, j) / stretch_scale_m_[j]);
         }
       }
       // Activation defects: the state's own coefficient and the rate's partials share an entry.
@@ -286,6 +377,18 @@ void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
       }
     }
   }
+  if (free_)
+    for (int k = 0; k < intervals(); ++k)
+      for (int r = 0; r < N; ++r)
+        for (int which = 0; which < 4; ++which) {
+          const auto& state = which % 2 == 0 ? kSimpsonState : kInterpolationState;
+          const auto& rate = which % 2 == 0 ? kSimpsonRate : kInterpolationRate;
+          const JointUnknown y = which < 2 ? kAngle : kSpeed, dy = which < 2 ? kSpeed : kAcceleration;
+          for (int c = 0; c < 3; ++c) {
+            if (state[c] != 0.0) sink(jointDefectRow(k, r, which), jointIndex(2 * k + c, r, y), state[c]);
+            if (rate[c] != 0.0) sink(jointDefectRow(k, r, which), jointIndex(2 * k + c, r, dy), intervalLength() * rate[c]);
+          }
+        }
   for (int j = 0; j < m; ++j) {
     sink(restRow(j), index(P - 1, j, kActivation), -1.0);
     sink(restRow(j), index(P - 1, j, kExcitation), 1.0);
@@ -301,13 +404,15 @@ template <class Sink>
 void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const double* lambda, Sink&& sink) const {
   const int P = points(), m = muscles(), N = joints();
   const Eigen::MatrixXd& A = samples_.moment_arms_m;
-  for (int i = 0; i < P; ++i)
+  Eigen::MatrixXd joint_block;  // free path: the point's 3N x 3N joint block, stacked by kind
+  for (int i = 0; i < P; ++i) {
+    if (free_) joint_block = Eigen::MatrixXd::Zero(3 * N, 3 * N);
     for (int j = 0; j < m; ++j) {
       const auto& p = muscles_[j].parameters;
       const MuscleAt e = evaluate(x, i, j);
       // Second derivative of everything that depends on F(s): cost and torques.
       double F_weight = sigma * quadratureWeight(i) * muscles_[j].effort_weight;
-      if (i > 0)
+      if (i >= firstTorquePoint())
         for (int r = 0; r < N; ++r) F_weight += lambda[torqueRow(i, r)] * A(r, j);
       // The equilibrium row's F / Fmax - a f g.
       const double le = lambda[equilibriumRow(i, j)];
@@ -336,7 +441,28 @@ void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const do
       sink(index(i, j, kVelocity), index(i, j, kVelocity), vv);
       sink(index(i, j, kExcitation), index(i, j, kExcitation), fa_weight * fa.d_nn);
       sink(index(i, j, kExcitation), index(i, j, kActivation), fa_weight * fa.d_na);
+      if (free_)  // -a f(L(q) - L_S(s)) g(v) with dL/dq_r = -A_rj, dL_S/ds = lambda_s
+        for (int r = 0; r < N; ++r) {
+          if (A(r, j) == 0.0) continue;
+          sink(jointIndex(i, r, kAngle), index(i, j, kStretch), -le * e.a * e.g * e.f_LL * A(r, j) * stretch_scale_m_[j]);
+          sink(jointIndex(i, r, kAngle), index(i, j, kActivation), le * e.g * e.f_L * A(r, j));
+          sink(jointIndex(i, r, kAngle), index(i, j, kVelocity), le * e.a * e.g_v * e.f_L * A(r, j));
+          for (int r2 = 0; r2 < N; ++r2) joint_block(r, r2) -= le * e.a * e.g * e.f_LL * A(r, j) * A(r2, j);
+        }
     }
+    if (!free_) continue;
+    // The torque rows -tau(q, qd, qdd): minus inverse dynamics' Hessian weighted by their multipliers.
+    Eigen::VectorXd torque_multipliers(N);
+    for (int r = 0; r < N; ++r) torque_multipliers[r] = lambda[torqueRow(i, r)];
+    joint_block -= free_->dynamics->inverseDynamicsHessian(jointVector(x, i, kAngle), jointVector(x, i, kSpeed),
+                                                           jointVector(x, i, kAcceleration), torque_multipliers);
+    for (int a = 0; a < 3 * N; ++a)
+      for (int b = 0; b <= a; ++b) {
+        if (a >= 2 * N && b >= N) continue;  // tau is linear in qdd
+        sink(jointIndex(i, a % N, static_cast<JointUnknown>(a / N)), jointIndex(i, b % N, static_cast<JointUnknown>(b / N)),
+             joint_block(a, b));
+      }
+  }
 }
 
 void HermiteSimpsonProblem::hessianValues(const double* x, double sigma, const double* lambda, double* values) const {

@@ -17,12 +17,19 @@
 //   per interval and muscle: Simpson and interpolation defects of s and a   4 K m rows
 //   rest at T          n - a = 0 at the last point                  m rows
 // (dL_S/dt = 0 at T fixes v there, the initial state fixes s and a at t = 0: bounds.)
+// With a free joint path (FreeJoints given), each point also has 3N unknowns q, qd, qdd (index
+// 4 m + kind N + r after the muscles), the torque rows hold at t = 0 too (they set qdd(0)), the
+// tau are the model's inverse dynamics of the unknowns, the musculotendon lengths and rates
+// functions of q and qd, and per interval and joint four more defects (Simpson and interpolation
+// of q with rate qd and of qd with rate qdd) come before the rest rows; q and qd are fixed at
+// t = 0 and q, qd = 0, qdd = 0 at T.
 // Hermite-Simpson represents each state by a C1 piecewise cubic whose slopes at the three
 // points of an interval are the dynamics there; the excitation between points is the one those
 // cubics imply (the inverse activation dynamics of a and da/dt), not an interpolation of n.
 // (Interpolating n instead is not the same trajectory: the optimal n alternates between mesh
 // points and midpoints, near 0.4 and 0.05 on the paper's problem.)
 
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -30,6 +37,7 @@
 #include "flatsos/muscles/muscle_parameters.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/plugin/model/pin_tree_dynamics.hpp"
 
 namespace flatsos::planner::detail {
 
@@ -50,11 +58,25 @@ struct PathSamples {
   Eigen::MatrixXd lengthening_rate_m_per_s;  ///< m x P
   Eigen::MatrixXd torque_N_m;             ///< N x P, inverse dynamics along the path
   Eigen::MatrixXd moment_arms_m;          ///< N x m
+  Eigen::MatrixXd q_rad, qd_rad_per_s, qdd_rad_per_s2;  ///< N x P, the joint path itself
+};
+
+/// What makes the joint path free: the model's inverse dynamics, the muscles' lengths as
+/// functions of q, and the path's ends. (Constant moment arms: L_j(q) = L_j(0) - A_j^T q, so
+/// dL_j/dt = -A_j^T qd and neither has curvature; posture-dependent paths add their Hessians.)
+struct FreeJoints {
+  const plugin::PinTreeDynamics* dynamics = nullptr;  ///< the model's; outlives the problem
+  Eigen::VectorXd length_at_zero_angles_m;            ///< L_j(0), m entries
+  Eigen::VectorXd start_q_rad, start_qd_rad_per_s;    ///< at t = 0
+  Eigen::VectorXd end_q_rad;                          ///< at T, at rest (qd = qdd = 0)
 };
 
 /// The path at the 2K + 1 points of K uniform intervals (inverse dynamics by Simbody).
 PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
                         int intervals);
+/// The free-path data of the model, with the path's ends (it must end at rest; throws
+/// std::invalid_argument otherwise).
+FreeJoints free_joints(const FlatOutputMap& flat, const JointPath& path);
 /// The model's muscles with the problem's weights, reserves, activation floor (0: each
 /// muscle's own) and initial state.
 std::vector<CollocationMuscle> collocation_muscles(const FlatOutputMap& flat, const MuscleState& initial,
@@ -65,18 +87,27 @@ class HermiteSimpsonProblem {
  public:
   static constexpr int kPerMuscle = 4;
   enum Unknown { kStretch = 0, kActivation = 1, kExcitation = 2, kVelocity = 3 };
+  enum JointUnknown { kAngle = 0, kSpeed = 1, kAcceleration = 2 };
 
-  HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples);
+  /// Along the sampled joint path, or (free given) with the path free between its ends; the
+  /// samples' path is then only the start.
+  HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples,
+                        std::optional<FreeJoints> free = std::nullopt);
 
   int points() const { return static_cast<int>(samples_.time_s.size()); }
   int intervals() const { return (points() - 1) / 2; }
   int muscles() const { return static_cast<int>(muscles_.size()); }
   int joints() const { return static_cast<int>(samples_.torque_N_m.rows()); }
-  int variables() const { return points() * muscles() * kPerMuscle; }
+  bool freePath() const { return free_.has_value(); }
+  int variables() const { return points() * stride(); }
   int constraints() const;
   int jacobianNonzeros() const { return static_cast<int>(jac_rows_.size()); }
   int hessianNonzeros() const { return static_cast<int>(hess_rows_.size()); }
-  int index(int point, int muscle, Unknown k) const { return (point * muscles() + muscle) * kPerMuscle + k; }
+  int index(int point, int muscle, Unknown k) const { return point * stride() + muscle * kPerMuscle + k; }
+  /// Free path only.
+  int jointIndex(int point, int joint, JointUnknown k) const {
+    return point * stride() + muscles() * kPerMuscle + k * joints() + joint;
+  }
 
   const PathSamples& samples() const { return samples_; }
   const CollocationMuscle& muscle(int j) const { return muscles_[j]; }
@@ -95,7 +126,8 @@ class HermiteSimpsonProblem {
   const std::vector<int>& jacobianColumns() const { return jac_cols_; }
   void jacobianValues(const double* x, double* values) const;
   /// Lower triangle (row >= column) of objective_factor * Hess(objective) + sum_r
-  /// multipliers_r Hess(g_r): one 4 x 4 block per point and muscle.
+  /// multipliers_r Hess(g_r): one 4 x 4 block per point and muscle (free path: and each muscle's
+  /// q rows, and the 3N x 3N joint block of each point).
   const std::vector<int>& hessianRows() const { return hess_rows_; }
   const std::vector<int>& hessianColumns() const { return hess_cols_; }
   void hessianValues(const double* x, double objective_factor, const double* multipliers, double* values) const;
@@ -105,6 +137,10 @@ class HermiteSimpsonProblem {
   double tendonLength(const double* x, int point, int muscle) const;
   double shorteningVelocity(const double* x, int point, int muscle) const;
   double activationRate(const double* x, int point, int muscle) const;  ///< sigma(n) (n - a), 1/s
+  /// The joint path at a point (the unknowns, or the samples along a prescribed path).
+  double joint(const double* x, int point, int joint, JointUnknown k) const;
+  double musculotendonLength(const double* x, int point, int muscle) const;
+  double lengtheningRate(const double* x, int point, int muscle) const;  ///< dL/dt, m/s
 
  private:
   // Every Jacobian (Hessian) entry in its fixed order: sink(row, column, value). One routine for
@@ -116,18 +152,33 @@ class HermiteSimpsonProblem {
   struct MuscleAt;  // the laws and their derivatives with respect to the scaled unknowns
   MuscleAt evaluate(const double* x, int point, int muscle) const;
 
+  int stride() const { return muscles() * kPerMuscle + (freePath() ? 3 * joints() : 0); }
+  int firstTorquePoint() const { return freePath() ? 0 : 1; }
   int equilibriumRow(int point, int muscle) const { return point * muscles() + muscle; }
-  // Point 0 has no torque rows: the initial state fixes every tendon force there.
-  int torqueRow(int point, int joint) const { return points() * muscles() + (point - 1) * joints() + joint; }
-  int defectRow(int interval, int muscle, int which) const {
-    return points() * muscles() + (points() - 1) * joints() + (interval * muscles() + muscle) * 4 + which;
+  // Along a prescribed path point 0 has no torque rows: the initial state fixes every tendon
+  // force there. With a free path they set qdd(0).
+  int torqueRow(int point, int joint) const {
+    return points() * muscles() + (point - firstTorquePoint()) * joints() + joint;
   }
-  int restRow(int muscle) const { return defectRow(intervals(), 0, 0) + muscle; }
+  int defectRow(int interval, int muscle, int which) const {
+    return torqueRow(points(), 0) + (interval * muscles() + muscle) * 4 + which;
+  }
+  // Free path: 0, 1 Simpson and interpolation of q (rate qd); 2, 3 of qd (rate qdd).
+  int jointDefectRow(int interval, int joint, int which) const {
+    return defectRow(intervals(), 0, 0) + (interval * joints() + joint) * 4 + which;
+  }
+  int restRow(int muscle) const {
+    return (freePath() ? jointDefectRow(intervals(), 0, 0) : defectRow(intervals(), 0, 0)) + muscle;
+  }
+  // tau at a point (free path: inverse dynamics of the unknowns).
+  Eigen::VectorXd torque(const double* x, int point) const;
+  Eigen::VectorXd jointVector(const double* x, int point, JointUnknown k) const;
   double quadratureWeight(int point) const;  // Simpson's weight of the point, s
   double intervalLength() const { return samples_.time_s[2] - samples_.time_s[0]; }  // uniform mesh
 
   std::vector<CollocationMuscle> muscles_;
   PathSamples samples_;
+  std::optional<FreeJoints> free_;
   std::vector<double> stretch_scale_m_;  // eps L_slack
   std::vector<int> jac_rows_, jac_cols_, hess_rows_, hess_cols_;
 };

@@ -181,6 +181,70 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
   return out;
 }
 
+namespace {
+void require_state(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                   const Eigen::Ref<const Eigen::VectorXd>& qd, const Eigen::Ref<const Eigen::VectorXd>& qdd) {
+  const int n = tree.numJoints();
+  if (q.size() != n || qd.size() != n || qdd.size() != n)
+    throw std::invalid_argument("inverse dynamics derivatives: q, qd and qdd must have " + std::to_string(n) +
+                                " entries, not " + std::to_string(q.size()) + ", " + std::to_string(qd.size()) +
+                                " and " + std::to_string(qdd.size()));
+}
+// x = (q, qd, qdd) stacked by kind.
+double stacked(const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& qd,
+               const Eigen::Ref<const Eigen::VectorXd>& qdd, int k) {
+  const int n = static_cast<int>(q.size());
+  return k < n ? q[k] : k < 2 * n ? qd[k - n] : qdd[k - 2 * n];
+}
+}  // namespace
+
+Eigen::VectorXd PinTreeDynamics::inverseDynamicsJacobian(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                                         const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                                         const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                                         Eigen::MatrixXd& jacobian) const {
+  require_state(*this, q, qd, qdd);
+  using D = Dual<double>;
+  const int n = numJoints();
+  std::vector<D> x(static_cast<std::size_t>(3 * n)), tau(static_cast<std::size_t>(n));
+  ScratchOf<D> scratch;
+  jacobian.resize(n, 3 * n);
+  Eigen::VectorXd out(n);
+  for (int c = 0; c < 3 * n; ++c) {  // one pass per entry of x, its infinitesimal on that entry
+    for (int k = 0; k < 3 * n; ++k) x[static_cast<std::size_t>(k)] = D(stacked(q, qd, qdd, k), k == c ? 1.0 : 0.0);
+    inverseDynamicsOf<D>(scratch, x.data(), x.data() + n, x.data() + 2 * n, tau.data());
+    for (int i = 0; i < n; ++i) jacobian(i, c) = tau[static_cast<std::size_t>(i)].derivative;
+  }
+  for (int i = 0; i < n; ++i) out[i] = tau[static_cast<std::size_t>(i)].value;
+  return out;
+}
+
+Eigen::MatrixXd PinTreeDynamics::inverseDynamicsHessian(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                                        const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                                        const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                                        const Eigen::Ref<const Eigen::VectorXd>& w) const {
+  require_state(*this, q, qd, qdd);
+  const int n = numJoints();
+  if (w.size() != n)
+    throw std::invalid_argument("inverse dynamics Hessian: the weights must have " + std::to_string(n) + " entries");
+  using H = Dual<Dual<double>>;
+  std::vector<H> x(static_cast<std::size_t>(3 * n)), tau(static_cast<std::size_t>(n));
+  ScratchOf<H> scratch;
+  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (int a = 0; a < 3 * n; ++a)
+    for (int b = 0; b <= a; ++b) {
+      if (a >= 2 * n && b >= n) continue;  // qdd-qd and qdd-qdd: tau is linear in qdd
+      // x + e1 delta_a + e2 delta_b: the e1 e2 coefficient of tau is d2 tau / dx_a dx_b.
+      for (int k = 0; k < 3 * n; ++k)
+        x[static_cast<std::size_t>(k)] = H(Dual<double>(stacked(q, qd, qdd, k), k == a ? 1.0 : 0.0),
+                                           Dual<double>(k == b ? 1.0 : 0.0, 0.0));
+      inverseDynamicsOf<H>(scratch, x.data(), x.data() + n, x.data() + 2 * n, tau.data());
+      double sum = 0.0;
+      for (int i = 0; i < n; ++i) sum += w[i] * tau[static_cast<std::size_t>(i)].derivative.derivative;
+      hessian(a, b) = hessian(b, a) = sum;
+    }
+  return hessian;
+}
+
 template void PinTreeDynamics::inverseDynamicsOf<double>(ScratchOf<double>&, const double*, const double*, const double*,
                                                          double*) const;
 template void PinTreeDynamics::inverseDynamicsOf<Dual<double>>(ScratchOf<Dual<double>>&, const Dual<double>*,

@@ -51,6 +51,8 @@ struct CollocationResult {
   /// excitation is the one that cubic implies.
   Eigen::MatrixXd tendon_force_N, tendon_length_m, activation, excitation, shortening_velocity_m_per_s;
   Eigen::MatrixXd activation_rate_per_s;  ///< da/dt = sigma(n) (n - a)
+  /// N x (2K + 1): the joint path at the points (the prescribed one, or the optimized one).
+  Eigen::MatrixXd joint_angle_rad, joint_speed_rad_per_s, joint_acceleration_rad_per_s2;
 };
 
 /// The weights of the flat outputs' cost: integral sum_l Y_l = integral (E^T 1)^T F.
@@ -65,5 +67,15 @@ Eigen::VectorXd flat_output_effort_weights(const FlatOutputMap& flat);
 CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                                const JointPath& path, const MuscleState& initial,
                                                const Eigen::VectorXd& reserves_N, const CollocationOptions& options = {});
+
+/// The same problem with the joint path free too (the predictive problem): q, qd and qdd become
+/// unknowns at every point, joined by Hermite-Simpson's defects (q' = qd, qd' = qdd), the
+/// torques the model's inverse dynamics of them, the muscles' lengths functions of q. The path
+/// keeps its ends: start_path's q and qd at t = 0, and its q at the end with rest (qd = qdd = 0;
+/// start_path must end at rest). start_path is also the start of the solve. Same errors and
+/// statuses as solve_collocation_along_path.
+CollocationResult solve_collocation_free_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                              const JointPath& start_path, const MuscleState& initial,
+                                              const Eigen::VectorXd& reserves_N, const CollocationOptions& options = {});
 
 }  // namespace flatsos::planner

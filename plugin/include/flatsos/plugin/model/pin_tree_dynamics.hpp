@@ -58,6 +58,21 @@ class PinTreeDynamics {
   void inverseDynamicsOf(ScratchOf<S>& scratch, const S* q_rad, const S* qd_rad_per_s, const S* qdd_rad_per_s2,
                          S* tau_N_m) const;
 
+  /// tau at (q, qd, qdd) and its Jacobian with respect to x = (q, qd, qdd), exactly (dual
+  /// numbers): N x 3N, columns ordered by kind [q_1..q_N | qd_1..qd_N | qdd_1..qdd_N]. What an
+  /// optimizer over joint trajectories (direct collocation with a free joint path) needs.
+  Eigen::VectorXd inverseDynamicsJacobian(const Eigen::Ref<const Eigen::VectorXd>& q_rad,
+                                          const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
+                                          const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2,
+                                          Eigen::MatrixXd& jacobian) const;
+  /// sum_i w_i d2 tau_i / dx2 for the same x (3N x 3N, symmetric), exactly (second-order dual
+  /// numbers, one pass per pair of entries). tau = M(q) qdd + C(q, qd) qd + g(q) is linear in
+  /// qdd, so the qd-qdd and qdd-qdd blocks are zero and not evaluated.
+  Eigen::MatrixXd inverseDynamicsHessian(const Eigen::Ref<const Eigen::VectorXd>& q_rad,
+                                         const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
+                                         const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2,
+                                         const Eigen::Ref<const Eigen::VectorXd>& weights) const;
+
   /// tau and its first two time derivatives along a motion with joint jet `q_jet` (N x 5: q and
   /// its first four time derivatives), exactly (second-order dual numbers along the motion, no
   /// differences in time): N x 3.
