@@ -80,6 +80,8 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
        {"inertia_about_mass_center_kg_m2", "dimension"}},
       {"mass centre far out", [](json& j) { j["bodies"][0]["mass_center_m"] = {0.1, -1e38, 0.0}; },
        {"bodies[0].mass_center_m", "within 100 m"}},
+      {"mass that swamps the inertia", [](json& j) { j["bodies"][0]["mass_kg"] = 7.8e98; },
+       {"bodies[0].mass_kg", "swamps"}},
       {"inertia triangle", [](json& j) { j["bodies"][0]["inertia_about_mass_center_kg_m2"] = {0.01, 0.01, 0.05}; },
        {"inertia_about_mass_center_kg_m2", "triangle"}},
       {"typo key in body", [](json& j) { j["bodies"][0]["mass"] = 2.0; }, {"bodies[0].mass", "unknown key"}},

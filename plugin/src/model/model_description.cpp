@@ -4,10 +4,26 @@
 #include <set>
 #include <string>
 
+#include <SimTKcommon.h>
+
 namespace flatsos::plugin {
 
 namespace {
 std::string indexed(const std::string& list, std::size_t i) { return list + "[" + std::to_string(i) + "]"; }
+// Simbody's round trip of a body's inertia: about the mass centre -> about the body origin ->
+// back, each checked by SimTK::Inertia as Simbody checks it.
+bool central_inertia_survives_shift(const BodyDescription& b) {
+  try {
+    const Eigen::Vector3d& c = b.mass_center_m;
+    const SimTK::Vec3 com(c[0], c[1], c[2]);
+    const SimTK::Inertia about_com(SimTK::Vec3(b.principal_inertia_kg_m2[0], b.principal_inertia_kg_m2[1], b.principal_inertia_kg_m2[2]),
+                                   SimTK::Vec3(b.product_inertia_kg_m2[0], b.product_inertia_kg_m2[1], b.product_inertia_kg_m2[2]));
+    (void)SimTK::MassProperties(b.mass_kg, com, about_com.shiftFromMassCenter(com, b.mass_kg)).calcCentralInertia();
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
 }  // namespace
 
 void validate(const ModelDescription& model, const std::string& source) {
@@ -42,6 +58,13 @@ void validate(const ModelDescription& model, const std::string& source) {
         2.0 * std::abs(P[2]) > I[0] + slack)
       fail(indexed("bodies", i) + ".product_inertia_kg_m2",
            "products of inertia too large for a physical body (need |2 Ixy| <= Izz, |2 Ixz| <= Iyy, |2 Iyz| <= Ixx)");
+    // Simbody keeps the inertia about the body origin and shifts it back to the mass centre while
+    // it builds the system, where its complaint cannot be caught (it aborts the program). A mass
+    // large enough (found by the fuzzer: 8e98 kg) swamps the central inertia in that round trip's
+    // rounding: the same round trip here names the field instead.
+    if (!central_inertia_survives_shift(b))
+      fail(indexed("bodies", i) + ".mass_kg", "too large for the body's inertia: its moment about the joint swamps "
+                                              "the inertia about the mass centre in rounding");
   }
   // Joints: parents first, every body attached exactly once (a tree rooted at ground).
   std::set<std::string> attached = {"ground"}, joint_names;
