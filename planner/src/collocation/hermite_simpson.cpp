@@ -242,6 +242,17 @@ void HermiteSimpsonProblem::startingPoint(double* x) const {
     }
 }
 
+template <class Term>
+void HermiteSimpsonProblem::visitJointDefect(int k, int r, int which, Term&& term) const {
+  const auto& state = which % 2 == 0 ? kSimpsonState : kInterpolationState;
+  const auto& rate = which % 2 == 0 ? kSimpsonRate : kInterpolationRate;
+  const JointUnknown y = which < 2 ? kAngle : kSpeed, dy = which < 2 ? kSpeed : kAcceleration;
+  for (int c = 0; c < 3; ++c) {
+    if (state[c] != 0.0) term(jointIndex(2 * k + c, r, y), state[c]);
+    if (rate[c] != 0.0) term(jointIndex(2 * k + c, r, dy), intervalLength() * rate[c]);
+  }
+}
+
 double HermiteSimpsonProblem::objective(const double* x) const {
   double sum = 0.0;
   for (int i = 0; i < points(); ++i)
@@ -300,12 +311,8 @@ void HermiteSimpsonProblem::constraintValues(const double* x, double* g) const {
     for (int k = 0; k < intervals(); ++k)
       for (int r = 0; r < N; ++r)
         for (int which = 0; which < 4; ++which) {
-          const auto& state = which % 2 == 0 ? kSimpsonState : kInterpolationState;
-          const auto& rate = which % 2 == 0 ? kSimpsonRate : kInterpolationRate;
-          const JointUnknown y = which < 2 ? kAngle : kSpeed, dy = which < 2 ? kSpeed : kAcceleration;
           double defect = 0.0;
-          for (int c = 0; c < 3; ++c)
-            defect += state[c] * x[jointIndex(2 * k + c, r, y)] + intervalLength() * rate[c] * x[jointIndex(2 * k + c, r, dy)];
+          visitJointDefect(k, r, which, [&](int column, double coefficient) { defect += coefficient * x[column]; });
           g[jointDefectRow(k, r, which)] = defect;
         }
   for (int j = 0; j < m; ++j)
@@ -380,15 +387,9 @@ void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
   if (free_)
     for (int k = 0; k < intervals(); ++k)
       for (int r = 0; r < N; ++r)
-        for (int which = 0; which < 4; ++which) {
-          const auto& state = which % 2 == 0 ? kSimpsonState : kInterpolationState;
-          const auto& rate = which % 2 == 0 ? kSimpsonRate : kInterpolationRate;
-          const JointUnknown y = which < 2 ? kAngle : kSpeed, dy = which < 2 ? kSpeed : kAcceleration;
-          for (int c = 0; c < 3; ++c) {
-            if (state[c] != 0.0) sink(jointDefectRow(k, r, which), jointIndex(2 * k + c, r, y), state[c]);
-            if (rate[c] != 0.0) sink(jointDefectRow(k, r, which), jointIndex(2 * k + c, r, dy), intervalLength() * rate[c]);
-          }
-        }
+        for (int which = 0; which < 4; ++which)
+          visitJointDefect(k, r, which,
+                           [&](int column, double coefficient) { sink(jointDefectRow(k, r, which), column, coefficient); });
   for (int j = 0; j < m; ++j) {
     sink(restRow(j), index(P - 1, j, kActivation), -1.0);
     sink(restRow(j), index(P - 1, j, kExcitation), 1.0);

@@ -149,6 +149,10 @@ class HermiteSimpsonProblem {
   void visitJacobian(const double* x, Sink&& sink) const;
   template <class Sink>
   void visitHessian(const double* x, double objective_factor, const double* multipliers, Sink&& sink) const;
+  // The joint defects are linear: term(column, coefficient) for each unknown of row `which`
+  // (0, 1: Simpson, interpolation of q; 2, 3: of qd) of interval k and joint r.
+  template <class Term>
+  void visitJointDefect(int interval, int joint, int which, Term&& term) const;
   struct MuscleAt;  // the laws and their derivatives with respect to the scaled unknowns
   MuscleAt evaluate(const double* x, int point, int muscle) const;
 
