@@ -147,51 +147,154 @@ double fiber_velocity_from_force_ratio_derivative(const MuscleParameters& p, dou
   return inverse_derivative_unchecked(p, std::min(z, z_hi));
 }
 
+// ---------------------------------------------------------------- passive fibre force
+namespace {
+// Shape constant of the passive curve (Thelen 2003's kPE).
+constexpr double kPassiveShape = 4.0;
+// exp(y) - sum_{n < first} y^n / n!, by its series for small y (no cancellation; terms to
+// y^(first + 10), below round-off for |y| < 0.1) and by expm1 above.
+double exp_tail(double y, int first) {
+  if (std::abs(y) < 0.1) {
+    double term = 1.0;
+    for (int n = 1; n <= first; ++n) term *= y / n;
+    double sum = 0.0;
+    for (int n = first; n <= first + 10; ++n) {
+      sum += term;
+      term *= y / (n + 1);
+    }
+    return sum;
+  }
+  double sum = std::expm1(y), term = y;
+  for (int n = 1; n < first; ++n) {
+    sum -= term;
+    term *= y / (n + 1);
+  }
+  return sum;
+}
+double exp_tail3(double y) { return exp_tail(y, 3); }
+double exp_tail2(double y) { return exp_tail(y, 2); }
+// Normalized passive force and its first two derivatives in y = kPE (L_M / Lopt - 1) / e0.
+struct PassiveShape {
+  double y = 0.0, scale = 0.0, dy_dlength = 0.0;
+};
+PassiveShape passive_shape(const MuscleParameters& p, double fiber_length_m) {
+  PassiveShape s;
+  const double e0 = p.passive_fiber_strain_at_one_norm_force;
+  if (!(e0 > 0.0)) return s;
+  s.dy_dlength = kPassiveShape / (e0 * p.optimal_fiber_length_m);
+  s.y = (fiber_length_m - p.optimal_fiber_length_m) * s.dy_dlength;
+  s.scale = p.max_isometric_force_N / exp_tail3(kPassiveShape);
+  return s;
+}
+}  // namespace
+
+double passive_fiber_force(const MuscleParameters& p, double fiber_length_m) {
+  const PassiveShape s = passive_shape(p, fiber_length_m);
+  return s.y > 0.0 ? s.scale * exp_tail3(s.y) : 0.0;
+}
+
+double passive_fiber_force_derivative(const MuscleParameters& p, double fiber_length_m) {
+  const PassiveShape s = passive_shape(p, fiber_length_m);
+  return s.y > 0.0 ? s.scale * exp_tail2(s.y) * s.dy_dlength : 0.0;
+}
+
+double passive_fiber_force_second_derivative(const MuscleParameters& p, double fiber_length_m) {
+  const PassiveShape s = passive_shape(p, fiber_length_m);
+  return s.y > 0.0 ? s.scale * std::expm1(s.y) * s.dy_dlength * s.dy_dlength : 0.0;
+}
+
+// ---------------------------------------------------------------- pennation
+FiberGeometry fiber_geometry(const MuscleParameters& p, double along_tendon_m) {
+  FiberGeometry g;
+  const double h = p.pennation_angle_at_optimal_rad != 0.0 ? p.fiber_thickness_m() : 0.0;
+  if (h == 0.0) {  // fibres along the tendon: exactly the unpennated model
+    g.length_m = along_tendon_m;
+    g.cos_pennation = 1.0;
+    g.length_d_along = 1.0;
+    return g;
+  }
+  g.length_m = std::hypot(along_tendon_m, h);
+  g.cos_pennation = along_tendon_m / g.length_m;
+  g.length_d_along = g.cos_pennation;
+  g.cos_pennation_d_along = h * h / (g.length_m * g.length_m * g.length_m);
+  return g;
+}
+
 // ---------------------------------------------------------------- contraction dynamics
+namespace {
+// Smallest cos(pennation) the forward model divides by (pennation up to 89.4 degrees): a fibre
+// squeezed to its thickness holds no tendon force, and this keeps the model finite there.
+constexpr double kMinCosPennation = 1e-2;
+
+// z = (F / cos - Phi_P(L_M)) / (max(a, floor) Fmax f(L_M)) and what its partials need.
+struct ForceRatioParts {
+  FiberGeometry geometry;
+  double cos_pennation = 1.0;  // floored
+  bool cos_floored = false;
+  double f = 1.0;              // floored
+  bool f_floored = false;
+  double passive = 0.0;
+  double denominator = 1.0;    // a_eff Fmax f
+  double z = 0.0;
+};
+ForceRatioParts force_ratio_parts(const MuscleParameters& p, double tendon_force_N, double activation,
+                                  double along_tendon_m) {
+  ForceRatioParts r;
+  r.geometry = fiber_geometry(p, along_tendon_m);
+  r.cos_floored = r.geometry.cos_pennation < kMinCosPennation;
+  r.cos_pennation = r.cos_floored ? kMinCosPennation : r.geometry.cos_pennation;
+  const double f_raw = force_length(p, r.geometry.length_m);
+  r.f_floored = !(f_raw >= kForceLengthFloor);
+  r.f = r.f_floored ? kForceLengthFloor : f_raw;
+  r.passive = p.hasPassiveFiberForce() ? passive_fiber_force(p, r.geometry.length_m) : 0.0;
+  r.denominator = effective_activation(p, activation) * p.max_isometric_force_N * r.f;
+  r.z = (tendon_force_N / r.cos_pennation - r.passive) / r.denominator;
+  return r;
+}
+}  // namespace
+
 double effective_activation(const MuscleParameters& p, double activation) {
   return std::max(activation, p.activation_floor);
 }
 
-double force_ratio(const MuscleParameters& p, double tendon_force_N, double activation,
-                   double fiber_length_m) {
-  const double f = std::max(force_length(p, fiber_length_m), kForceLengthFloor);
-  return tendon_force_N / (effective_activation(p, activation) * p.max_isometric_force_N * f);
+double force_ratio(const MuscleParameters& p, double tendon_force_N, double activation, double along_tendon_m) {
+  return force_ratio_parts(p, tendon_force_N, activation, along_tendon_m).z;
 }
 
-double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N,
-                                 double activation, double fiber_length_m) {
-  return fiber_velocity_from_force_ratio(p,
-                                         force_ratio(p, tendon_force_N, activation, fiber_length_m));
+double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N, double activation,
+                                 double along_tendon_m) {
+  return fiber_velocity_from_force_ratio(p, force_ratio(p, tendon_force_N, activation, along_tendon_m));
 }
 
-double tendon_length_derivative(const MuscleParameters& p, double tendon_length_m,
-                                double activation, double musculotendon_length_m,
-                                double musculotendon_lengthening_rate_m_per_s) {
-  const double u = fiber_shortening_velocity(p, tendon_force(p, tendon_length_m), activation,
-                                             musculotendon_length_m - tendon_length_m);
-  // L_C = L - L_S, u = -dL_C/dt  =>  dL_S/dt = dL/dt + u.
-  return u + musculotendon_lengthening_rate_m_per_s;
+double tendon_length_derivative(const MuscleParameters& p, double tendon_length_m, double activation,
+                                double musculotendon_length_m, double musculotendon_lengthening_rate_m_per_s) {
+  const ForceRatioParts r =
+      force_ratio_parts(p, tendon_force(p, tendon_length_m), activation, musculotendon_length_m - tendon_length_m);
+  // The fibre shortens at u along itself, so the muscle along the tendon, x = L - L_S, shortens
+  // at u / cos: dL_S/dt = dL/dt + u / cos.
+  return fiber_velocity_from_force_ratio(p, r.z) / r.cos_pennation + musculotendon_lengthening_rate_m_per_s;
 }
 
-TendonLengthDerivativePartials tendon_length_derivative_partials(const MuscleParameters& p,
-                                                                 double tendon_length_m,
-                                                                 double activation,
-                                                                 double musculotendon_length_m) {
-  // dL_S/dt = g^-1(z) + dL/dt with z = Phi_S(L_S) / (a_eff Fmax f(L - L_S)).
-  const double fiber_length = musculotendon_length_m - tendon_length_m;
-  const double f_raw = force_length(p, fiber_length);
-  const bool f_floored = f_raw < kForceLengthFloor;  // force_ratio floors f: its slope is 0 there
-  const double f = f_floored ? kForceLengthFloor : f_raw;
-  const double df_dfiber = f_floored ? 0.0 : force_length_derivative(p, fiber_length);
+TendonLengthDerivativePartials tendon_length_derivative_partials(const MuscleParameters& p, double tendon_length_m,
+                                                                 double activation, double musculotendon_length_m) {
+  // dL_S/dt = w + dL/dt, w = g^-1(z) / cos(x), x = L - L_S, z as in force_ratio_parts.
+  const double force = tendon_force(p, tendon_length_m);
+  const ForceRatioParts r = force_ratio_parts(p, force, activation, musculotendon_length_m - tendon_length_m);
+  const double c = r.cos_pennation;
+  const double dc_dx = r.cos_floored ? 0.0 : r.geometry.cos_pennation_d_along;
+  const double dlength_dx = r.geometry.length_d_along;
+  const double df_dx = r.f_floored ? 0.0 : force_length_derivative(p, r.geometry.length_m) * dlength_dx;
+  const double dpassive_dx =
+      p.hasPassiveFiberForce() ? passive_fiber_force_derivative(p, r.geometry.length_m) * dlength_dx : 0.0;
+  const double dz_dx = (-force * dc_dx / (c * c) - dpassive_dx) / r.denominator - r.z * df_dx / r.f;
+  const double dz_dtendon_direct = tendon_force_derivative(p, tendon_length_m) / (c * r.denominator);
   const double a_eff = effective_activation(p, activation);
-  const double den = a_eff * p.max_isometric_force_N * f;
-  const double z = tendon_force(p, tendon_length_m) / den;
-  const double dg_inv = fiber_velocity_from_force_ratio_derivative(p, z);
-  // dL_C/dL_S = -1, so d(1/f)/dL_S = f'/f^2.
-  const double dz_dtendon = tendon_force_derivative(p, tendon_length_m) / den + z * df_dfiber / f;
-  const double dz_dactivation = activation > p.activation_floor ? -z / a_eff : 0.0;
-  const double dz_dpath = -z * df_dfiber / f;  // dL_C/dL = 1
-  return {dg_inv * dz_dtendon, dg_inv * dz_dactivation, dg_inv * dz_dpath};
+  const double dz_dactivation = activation > p.activation_floor ? -r.z / a_eff : 0.0;
+  const double du_dz = fiber_velocity_from_force_ratio_derivative(p, r.z);
+  double dw_dx = du_dz * dz_dx / c;
+  if (dc_dx != 0.0) dw_dx -= fiber_velocity_from_force_ratio(p, r.z) * dc_dx / (c * c);
+  // dx/dL_S = -1, dx/dL = 1.
+  return {du_dz * dz_dtendon_direct / c - dw_dx, du_dz * dz_dactivation / c, dw_dx};
 }
 
 // ---------------------------------------------------------------- activation dynamics

@@ -7,91 +7,176 @@
 namespace flatsos::muscles {
 
 namespace {
-// Gradients are with respect to x = (F, dF, ddF).
-using Grad = TendonForceJetGradient;
-Grad operator*(double s, const Grad& g) { return {s * g[0], s * g[1], s * g[2]}; }
-Grad operator+(const Grad& a, const Grad& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Grad operator-(const Grad& a, const Grad& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+
+// A value with its gradient with respect to the K seeds (F, dF, ddF, L, dL, ddL) carried along
+// in forward mode: the inverse's gradients follow every line of the inverse exactly, and with
+// K = 0 (no gradients asked for) the same lines compute only values.
+template <int K>
+struct Dual {
+  double v = 0.0;
+  std::array<double, K> g{};
+};
+template <int K>
+Dual<K> operator+(const Dual<K>& a, const Dual<K>& b) {
+  Dual<K> r{a.v + b.v, {}};
+  for (int i = 0; i < K; ++i) r.g[i] = a.g[i] + b.g[i];
+  return r;
+}
+template <int K>
+Dual<K> operator-(const Dual<K>& a, const Dual<K>& b) {
+  Dual<K> r{a.v - b.v, {}};
+  for (int i = 0; i < K; ++i) r.g[i] = a.g[i] - b.g[i];
+  return r;
+}
+template <int K>
+Dual<K> operator-(const Dual<K>& a) {
+  Dual<K> r{-a.v, {}};
+  for (int i = 0; i < K; ++i) r.g[i] = -a.g[i];
+  return r;
+}
+template <int K>
+Dual<K> operator*(const Dual<K>& a, const Dual<K>& b) {
+  Dual<K> r{a.v * b.v, {}};
+  for (int i = 0; i < K; ++i) r.g[i] = a.g[i] * b.v + a.v * b.g[i];
+  return r;
+}
+template <int K>
+Dual<K> operator*(double s, const Dual<K>& a) {
+  Dual<K> r{s * a.v, {}};
+  for (int i = 0; i < K; ++i) r.g[i] = s * a.g[i];
+  return r;
+}
+template <int K>
+Dual<K> operator/(const Dual<K>& a, const Dual<K>& b) {
+  Dual<K> r{a.v / b.v, {}};
+  for (int i = 0; i < K; ++i) r.g[i] = (a.g[i] - r.v * b.g[i]) / b.v;
+  return r;
+}
+// phi(x) from phi(x.v) and phi'(x.v).
+template <int K>
+Dual<K> lift(double value, double slope, const Dual<K>& x) {
+  Dual<K> r{value, {}};
+  for (int i = 0; i < K; ++i) r.g[i] = slope * x.g[i];
+  return r;
+}
+template <int K>
+Dual<K> seed(double value, int index) {
+  Dual<K> r{value, {}};
+  if (index < K) r.g[index] = 1.0;
+  return r;
+}
+
+template <int K>
+MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, const SecondOrderJet& path) {
+  using D = Dual<K>;
+  MuscleInverse out;
+  if (!(force.value > 0.0)) {
+    out.stage = MuscleInverse::Stage::SlackTendon;
+    return out;
+  }
+  const D F = seed<K>(force.value, 0), dF = seed<K>(force.rate, 1), ddF = seed<K>(force.acceleration, 2);
+  const D L = seed<K>(path.value, 3), dL = seed<K>(path.rate, 4), ddL = seed<K>(path.acceleration, 5);
+  // Tendon: L_S = Phi_S^-1(F), dL_S = dF / Phi_S', ddL_S = (ddF - Phi_S'' dL_S^2) / Phi_S';
+  // the tendon law is quadratic, so Phi_S'' is constant above slack.
+  const double ls_v = tendon_length_from_force(p, F.v);
+  const double d1_v = tendon_force_derivative(p, ls_v), d2 = tendon_force_second_derivative(p, ls_v);
+  const D ls = lift(ls_v, 1.0 / d1_v, F);
+  const D d1 = lift(d1_v, d2, ls);
+  const D dls = dF / d1;
+  const D ddls = (ddF - d2 * (dls * dls)) / d1;
+  out.tendon_length_m = ls.v;
+  out.tendon_length_rate_m_per_s = dls.v;
+  // The muscle along the tendon, x = L - L_S, and the fibre: L_M = sqrt(x^2 + h^2),
+  // cos = x / L_M, dL_M = cos dx, d cos = h^2 / L_M^3 dx.
+  const D x = L - ls, dx = dL - dls, ddx = ddL - ddls;
+  const double h = p.pennation_angle_at_optimal_rad != 0.0 ? p.fiber_thickness_m() : 0.0;
+  // A pennated fibre needs x > 0 (cos > 0). Without pennation the laws stay defined for any x,
+  // as in the paper's model (the Gaussian force-length curve is positive everywhere).
+  if (h != 0.0 && !(x.v > 0.0)) {
+    out.stage = MuscleInverse::Stage::FiberCollapsed;
+    out.fiber_length_m = x.v;
+    return out;
+  }
+  D lm = x, c{1.0, {}}, dc{}, dlm = dx, ddlm = ddx;
+  if (h != 0.0) {
+    const double lm_v = std::hypot(x.v, h);
+    lm = lift(lm_v, x.v / lm_v, x);
+    c = x / lm;
+    const D lm3 = lm * lm * lm;
+    dc = (h * h) * (dx / lm3);
+    dlm = c * dx;
+    ddlm = dc * dx + c * ddx;
+  }
+  const D u = -dlm, du = -ddlm;  // shortening velocity along the fibre and its rate
+  // Second derivatives of the laws only feed gradients: skipped without them (K = 0).
+  const double f_v = force_length(p, lm.v), f1_v = force_length_derivative(p, lm.v);
+  const double f2_v = K > 0 ? force_length_second_derivative(p, lm.v) : 0.0;
+  const D f = lift(f_v, f1_v, lm);
+  const D f1 = lift(f1_v, f2_v, lm);
+  const D df = f1 * dlm;
+  const double g_v = force_velocity(p, u.v), g1_v = force_velocity_derivative(p, u.v);
+  const double g2_v = K > 0 ? force_velocity_second_derivative(p, u.v) : 0.0;
+  const D g = lift(g_v, g1_v, u);
+  const D g1 = lift(g1_v, g2_v, u);
+  const D dg = g1 * du;
+  out.fiber_length_m = lm.v;
+  out.cos_pennation = c.v;
+  out.shortening_velocity_m_per_s = u.v;
+  out.force_ratio = g.v;
+  if (!(g.v > 0.0)) {
+    out.stage = MuscleInverse::Stage::NoForceCapacity;
+    return out;
+  }
+  // Active fibre force F / cos - Phi_P(L_M) = a Fmax f g, and its rate.
+  D passive{}, passive1{};
+  if (p.hasPassiveFiberForce()) {
+    const double p1_v = passive_fiber_force_derivative(p, lm.v);
+    passive = lift(passive_fiber_force(p, lm.v), p1_v, lm);
+    passive1 = lift(p1_v, K > 0 ? passive_fiber_force_second_derivative(p, lm.v) : 0.0, lm);
+  }
+  D active = F - passive, dactive = dF - passive1 * dlm;
+  if (h != 0.0) {
+    active = F / c - passive;
+    dactive = dF / c - F * dc / (c * c) - passive1 * dlm;
+  }
+  const double fmax = p.max_isometric_force_N;
+  const D capacity = fmax * (f * g);
+  const D dcapacity = fmax * (df * g + f * dg);
+  const D a = active / capacity;
+  const D da = (dactive - a * dcapacity) / capacity;
+  out.activation = a.v;
+  out.activation_rate_per_s = da.v;
+  const ExcitationFromActivation n = excitation_from_activation(p, a.v, da.v);
+  out.excitation = n.excitation;
+  out.excitation_real = n.real_root;
+  if constexpr (K == 6) {
+    for (int i = 0; i < 3; ++i) {
+      out.activation_gradient[i] = a.g[i];
+      out.activation_rate_gradient[i] = da.g[i];
+      out.path_activation_gradient[i] = a.g[3 + i];
+      out.path_activation_rate_gradient[i] = da.g[3 + i];
+    }
+    if (n.real_root) {
+      // Q(n, a, da) = (1 - beta) n^2 + (beta - (1 - beta) a) n - beta a - T_act da = 0.
+      const double beta = p.activation_beta();
+      const double nn = n.excitation;
+      const double Q_n = 2.0 * (1.0 - beta) * nn + beta - (1.0 - beta) * a.v;
+      const double Q_a = -(1.0 - beta) * nn - beta;
+      const double Q_da = -p.activation_time_constant_s;
+      for (int i = 0; i < 3; ++i) {
+        out.excitation_gradient[i] = -(Q_a * a.g[i] + Q_da * da.g[i]) / Q_n;
+        out.path_excitation_gradient[i] = -(Q_a * a.g[3 + i] + Q_da * da.g[3 + i]) / Q_n;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& force, const SecondOrderJet& path,
                             bool with_gradients) {
-  MuscleInverse out;
-  const double F = force.value, dF = force.rate, ddF = force.acceleration;
-  if (!(F > 0.0)) {
-    out.stage = MuscleInverse::Stage::SlackTendon;
-    return out;
-  }
-  const double ls = tendon_length_from_force(p, F);
-  const double d1 = tendon_force_derivative(p, ls);
-  const double d2 = tendon_force_second_derivative(p, ls);
-  const double dls = dF / d1;
-  const double ddls = (ddF - d2 * dls * dls) / d1;
-  const double u = dls - path.rate;
-  const double du = ddls - path.acceleration;
-  const double lc = path.value - ls;
-  const double f = force_length(p, lc);
-  const double f1 = force_length_derivative(p, lc);
-  const double df = f1 * (-u);  // dL_C/dt = dL/dt - dL_S/dt = -u
-  const double g = force_velocity(p, u);
-  const double g1 = force_velocity_derivative(p, u);
-  const double dg = g1 * du;
-  out.tendon_length_m = ls;
-  out.tendon_length_rate_m_per_s = dls;
-  out.fiber_length_m = lc;
-  out.shortening_velocity_m_per_s = u;
-  out.force_ratio = g;
-  if (!(g > 0.0)) {
-    out.stage = MuscleInverse::Stage::NoForceCapacity;
-    return out;
-  }
-  const double a = F / (p.max_isometric_force_N * f * g);
-  const double r = dF / F - df / f - dg / g;
-  const double da = a * r;
-  out.activation = a;
-  out.activation_rate_per_s = da;
-  const ExcitationFromActivation n = excitation_from_activation(p, a, da);
-  out.excitation = n.excitation;
-  out.excitation_real = n.real_root;
-  if (!with_gradients) return out;
-
-  // The chain rule through every line above (Phi_S''' = 0: the tendon law is quadratic), once
-  // for the tendon-force jet and once for the path's jet: the same lines, other seeds.
-  const double f2 = force_length_second_derivative(p, lc);
-  const double g2 = force_velocity_second_derivative(p, u);
-  struct Seeds {
-    Grad F, dF, ddF, L, dL, ddL;
-  };
-  auto chain = [&](const Seeds& x, Grad& a_x, Grad& da_x) {
-    const Grad ls_x = (1.0 / d1) * x.F;
-    const Grad d1_x = d2 * ls_x;
-    const Grad dls_x = (1.0 / d1) * x.dF - (dls / d1) * d1_x;
-    const Grad ddls_x = (1.0 / d1) * x.ddF - (2.0 * d2 * dls / d1) * dls_x - (ddls / d1) * d1_x;
-    const Grad u_x = dls_x - x.dL, du_x = ddls_x - x.ddL, lc_x = x.L - ls_x;
-    const Grad f_x = f1 * lc_x, f1_x = f2 * lc_x;
-    const Grad g_x = g1 * u_x, g1_x = g2 * u_x;
-    const Grad df_x = (-u) * f1_x - f1 * u_x;
-    const Grad dg_x = du * g1_x + g1 * du_x;
-    a_x = a * ((1.0 / F) * x.F - (1.0 / f) * f_x - (1.0 / g) * g_x);
-    const Grad r_x = (1.0 / F) * x.dF - (dF / (F * F)) * x.F - (1.0 / f) * df_x + (df / (f * f)) * f_x -
-                     (1.0 / g) * dg_x + (dg / (g * g)) * g_x;
-    da_x = r * a_x + a * r_x;
-  };
-  const Grad zero{0.0, 0.0, 0.0}, e0{1.0, 0.0, 0.0}, e1{0.0, 1.0, 0.0}, e2{0.0, 0.0, 1.0};
-  chain({e0, e1, e2, zero, zero, zero}, out.activation_gradient, out.activation_rate_gradient);
-  chain({zero, zero, zero, e0, e1, e2}, out.path_activation_gradient, out.path_activation_rate_gradient);
-  if (n.real_root) {
-    // Q(n, a, da) = (1 - beta) n^2 + (beta - (1 - beta) a) n - beta a - T_act da = 0.
-    const double beta = p.activation_beta();
-    const double nn = n.excitation;
-    const double Q_n = 2.0 * (1.0 - beta) * nn + beta - (1.0 - beta) * a;
-    const double Q_a = -(1.0 - beta) * nn - beta;
-    const double Q_da = -p.activation_time_constant_s;
-    out.excitation_gradient = (-1.0 / Q_n) * (Q_a * out.activation_gradient + Q_da * out.activation_rate_gradient);
-    out.path_excitation_gradient =
-        (-1.0 / Q_n) * (Q_a * out.path_activation_gradient + Q_da * out.path_activation_rate_gradient);
-  }
-  return out;
+  return with_gradients ? invert<6>(p, force, path) : invert<0>(p, force, path);
 }
 
 }  // namespace flatsos::muscles

@@ -43,6 +43,12 @@ void validate(const MuscleParameters& p) {
   if (!std::isfinite(p.activation_floor) || p.activation_floor <= 0.0 || p.activation_floor >= 1.0)
     reject(p, "activation_floor", p.activation_floor,
            "must be in (0, 1): the contraction dynamics divide by the activation");
+  const double phi0 = p.pennation_angle_at_optimal_rad;
+  if (!std::isfinite(phi0) || phi0 < 0.0 || phi0 >= 1.5707963267948966)
+    reject(p, "pennation_angle_at_optimal_rad", phi0, "must be in [0, pi/2) rad");
+  const double e0 = p.passive_fiber_strain_at_one_norm_force;
+  if (!std::isfinite(e0) || e0 < 0.0)
+    reject(p, "passive_fiber_strain_at_one_norm_force", e0, "must be > 0, or 0 for no passive force");
 }
 
 }  // namespace flatsos::muscles

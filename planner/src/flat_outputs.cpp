@@ -56,7 +56,8 @@ double DomainViolation::excess() const {
   if (!std::isfinite(value)) return std::numeric_limits<double>::infinity();
   switch (kind) {
     case Kind::None: return 0.0;
-    case Kind::SlackTendon: return -value;
+    case Kind::SlackTendon:
+    case Kind::FiberCollapsed: return -value;
     case Kind::NoForceCapacity:
     case Kind::ForceRatioBeyondExactRange: return value - limit;
     case Kind::ActivationOutsideUnitInterval:
@@ -72,6 +73,9 @@ std::string DomainViolation::describe() const {
   switch (kind) {
     case Kind::None: return "";
     case Kind::SlackTendon: why << "slack tendon (planned tendon force " << value << " N <= 0)"; break;
+    case Kind::FiberCollapsed:
+      why << "collapsed fibre (the muscle along the tendon is " << value << " m: the tendon is longer than the unit)";
+      break;
     case Kind::NoForceCapacity: why << "shortening velocity " << value << " m/s >= Vmax (no force capacity)"; break;
     case Kind::ForceRatioBeyondExactRange:
       why << "force ratio z = " << value << " beyond the forward model's exact range (" << limit << ")";
@@ -225,6 +229,10 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
     }
     p.tendon_length_m[j] = inv.tendon_length_m;
     p.tendon_length_rate_m_per_s[j] = inv.tendon_length_rate_m_per_s;
+    if (inv.stage == fm::MuscleInverse::Stage::FiberCollapsed) {
+      why = {Kind::FiberCollapsed, inv.fiber_length_m, 0.0};
+      continue;
+    }
     p.fiber_length_m[j] = inv.fiber_length_m;
     p.shortening_velocity_m_per_s[j] = inv.shortening_velocity_m_per_s;
     p.force_ratio[j] = inv.force_ratio;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/muscles/static_equilibrium.hpp"
 
 namespace fm = flatsos::muscles;
 
@@ -22,6 +23,15 @@ fm::MuscleParameters biceps() {
   p.optimal_fiber_length_m = 0.1422;
   p.tendon_slack_length_m = 0.2298;
   return p;
+}
+
+// The same muscle with pennation (0.4 rad) and passive fibre force (e0 = 0.5).
+std::vector<fm::MuscleParameters> variants() {
+  fm::MuscleParameters pennated = biceps();
+  pennated.name = "biceps, pennated with passive force";
+  pennated.pennation_angle_at_optimal_rad = 0.4;
+  pennated.passive_fiber_strain_at_one_norm_force = 0.5;
+  return {biceps(), pennated};
 }
 
 using flatsos::test::central_difference;
@@ -178,49 +188,53 @@ TEST(ContractionDynamics, IsometricAtForceEqualToActiveCapacity) {
 }
 
 TEST(ContractionDynamics, NeverNaNOrInfOverAWideSweep) {
-  const auto p = biceps();
-  const double ls_slack = p.tendon_slack_length_m;
-  for (double a : {0.0, 1e-12, 1e-6, p.activation_floor, 0.01, 0.5, 1.0})
-    for (double ls : linspace(0.5 * ls_slack, 1.2 * ls_slack, 71))
-      for (double L : linspace(0.0, 1.0, 41))
-        for (double dL : {-10.0, 0.0, 10.0}) {
-          const double d = fm::tendon_length_derivative(p, ls, a, L, dL);
-          ASSERT_TRUE(std::isfinite(d)) << a << " " << ls << " " << L << " " << dL;
-        }
+  for (const auto& p : variants()) {
+    SCOPED_TRACE(p.name);
+    const double ls_slack = p.tendon_slack_length_m;
+    for (double a : {0.0, 1e-12, 1e-6, p.activation_floor, 0.01, 0.5, 1.0})
+      for (double ls : linspace(0.5 * ls_slack, 1.2 * ls_slack, 71))
+        for (double L : linspace(0.0, 1.0, 41))
+          for (double dL : {-10.0, 0.0, 10.0}) {
+            const double d = fm::tendon_length_derivative(p, ls, a, L, dL);
+            ASSERT_TRUE(std::isfinite(d)) << a << " " << ls << " " << L << " " << dL;
+          }
+  }
 }
 
 TEST(ContractionDynamics, TendonOdePartialsMatchFiniteDifferences) {
   // Over the forward model's whole range (the grid avoids the slack length itself, where the
   // tendon force has a second-derivative kink): concentric, eccentric, the extension beyond
   // z_hi, slack tendons, activations below and above the floor.
-  const auto p = biceps();
-  int checked = 0;
-  for (double a : {0.0, 5e-5, 2e-4, 1e-3, 0.05, 0.4, 1.0})
-    for (double ls : linspace(p.tendon_slack_length_m - 0.0015, p.tendon_slack_length_m + 0.0125, 15))
-      for (double L : linspace(0.3, 0.45, 7)) {
-        const auto d = fm::tendon_length_derivative_partials(p, ls, a, L);
-        auto ode = [&](double x, double y) { return fm::tendon_length_derivative(p, x, y, L, 0.0); };
-        // Lengths on the scale of the tendon's stretch at Fmax (0.04 L_slack, ~9 mm), which the
-        // samples keep away from slack; activations on their own scale.
-        const double hl = default_step(0.0, 1e-3 * p.tendon_slack_length_m), ha = default_step(0.0, 1e-2 * std::max(a, 1e-3));
-        if (std::abs(ls - p.tendon_slack_length_m) > 3 * hl) {  // slack is a kink
-          EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_tendon_length_per_s, central_difference([&](double x) { return ode(x, a); }, ls, hl))
-              << a << " " << ls << " " << L;
-          EXPECT_MATCHES_FINITE_DIFFERENCE(
-              d.d_musculotendon_length_per_s,
-              central_difference([&](double x) { return fm::tendon_length_derivative(p, ls, a, x, 0.0); }, L, hl))
-              << a << " " << ls << " " << L;
+  for (const auto& p : variants()) {
+    SCOPED_TRACE(p.name);
+    int checked = 0;
+    for (double a : {0.0, 5e-5, 2e-4, 1e-3, 0.05, 0.4, 1.0})
+      for (double ls : linspace(p.tendon_slack_length_m - 0.0015, p.tendon_slack_length_m + 0.0125, 15))
+        for (double L : linspace(0.3, 0.45, 7)) {
+          const auto d = fm::tendon_length_derivative_partials(p, ls, a, L);
+          auto ode = [&](double x, double y) { return fm::tendon_length_derivative(p, x, y, L, 0.0); };
+          // Lengths on the scale of the tendon's stretch at Fmax (0.04 L_slack, ~9 mm), which the
+          // samples keep away from slack; activations on their own scale.
+          const double hl = default_step(0.0, 1e-3 * p.tendon_slack_length_m), ha = default_step(0.0, 1e-2 * std::max(a, 1e-3));
+          if (std::abs(ls - p.tendon_slack_length_m) > 3 * hl) {  // slack is a kink
+            EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_tendon_length_per_s, central_difference([&](double x) { return ode(x, a); }, ls, hl))
+                << a << " " << ls << " " << L;
+            EXPECT_MATCHES_FINITE_DIFFERENCE(
+                d.d_musculotendon_length_per_s,
+                central_difference([&](double x) { return fm::tendon_length_derivative(p, ls, a, x, 0.0); }, L, hl))
+                << a << " " << ls << " " << L;
+          }
+          if (std::abs(a - p.activation_floor) > 3.0 * ha) {  // the floor is a kink
+            EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_activation_m_per_s, central_difference([&](double y) { return ode(ls, y); }, a, ha))
+                << a << " " << ls << " " << L;
+          }
+          ++checked;
         }
-        if (std::abs(a - p.activation_floor) > 3.0 * ha) {  // the floor is a kink
-          EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_activation_m_per_s, central_difference([&](double y) { return ode(ls, y); }, a, ha))
-              << a << " " << ls << " " << L;
-        }
-        ++checked;
-      }
-  EXPECT_EQ(checked, 7 * 15 * 7);
-  // The stiff direction: lengthening the tendon at a tiny activation must slow it strongly.
-  const auto low = fm::tendon_length_derivative_partials(p, p.tendon_slack_length_m + 0.005, 1e-3, 0.37);
-  EXPECT_LT(low.d_tendon_length_per_s, -1e3);
+    EXPECT_EQ(checked, 7 * 15 * 7);
+    // The stiff direction: lengthening the tendon at a tiny activation must slow it strongly.
+    const auto low = fm::tendon_length_derivative_partials(p, p.tendon_slack_length_m + 0.005, 1e-3, 0.37);
+    EXPECT_LT(low.d_tendon_length_per_s, -1e3);
+  }
 }
 
 TEST(ContractionDynamics, ActivationFloorBoundsTheForceRatio) {
@@ -280,4 +294,91 @@ TEST(ActivationDynamics, UnattainableRateIsFlagged) {
   EXPECT_TRUE(high.real_root);
   EXPECT_GT(high.excitation, 1.0);
   EXPECT_FALSE(high.in_unit_interval());
+}
+
+TEST(PassiveFiberForce, ZeroUpToOptimalFmaxAtItsStrainC2AndIncreasing) {
+  auto p = biceps();
+  const double lopt = p.optimal_fiber_length_m;
+  for (double l : linspace(0.2 * lopt, 2.0 * lopt, 50)) EXPECT_EQ(fm::passive_fiber_force(p, l), 0.0);  // off
+  p.passive_fiber_strain_at_one_norm_force = 0.6;
+  EXPECT_NEAR(fm::passive_fiber_force(p, 1.6 * lopt), p.max_isometric_force_N, 1e-9 * p.max_isometric_force_N);
+  EXPECT_EQ(fm::passive_fiber_force(p, lopt), 0.0);
+  EXPECT_EQ(fm::passive_fiber_force(p, 0.7 * lopt), 0.0);
+  // C2 at the optimal length: value, slope and curvature go to 0 from above.
+  const double just_above = lopt * (1.0 + 1e-6);
+  EXPECT_LT(fm::passive_fiber_force(p, just_above), 1e-12);
+  EXPECT_LT(fm::passive_fiber_force_derivative(p, just_above), 1e-6);
+  EXPECT_LT(fm::passive_fiber_force_second_derivative(p, just_above), 1.0);
+  double previous = 0.0;
+  for (double l : linspace(lopt * 1.001, 2.0 * lopt, 60)) {
+    const double force = fm::passive_fiber_force(p, l);
+    EXPECT_GT(force, previous);
+    previous = force;
+    const double h = default_step(l, lopt);
+    EXPECT_MATCHES_FINITE_DIFFERENCE(fm::passive_fiber_force_derivative(p, l),
+                                     central_difference([&](double x) { return fm::passive_fiber_force(p, x); }, l, h));
+    EXPECT_MATCHES_FINITE_DIFFERENCE(
+        fm::passive_fiber_force_second_derivative(p, l),
+        central_difference([&](double x) { return fm::passive_fiber_force_derivative(p, x); }, l, h));
+  }
+  // Across the series/exp switch of the implementation (y = 0.1) the curve is smooth.
+  const double switch_length = lopt * (1.0 + 0.1 * 0.6 / 4.0);
+  EXPECT_NEAR(fm::passive_fiber_force(p, switch_length * (1 - 1e-12)), fm::passive_fiber_force(p, switch_length * (1 + 1e-12)),
+              1e-9 * fm::passive_fiber_force(p, switch_length));
+}
+
+TEST(Pennation, ConstantThicknessGeometryAndItsDerivatives) {
+  auto p = biceps();
+  const auto straight = fm::fiber_geometry(p, 0.123);
+  EXPECT_EQ(straight.length_m, 0.123);
+  EXPECT_EQ(straight.cos_pennation, 1.0);
+  p.pennation_angle_at_optimal_rad = 0.4;
+  const double lopt = p.optimal_fiber_length_m;
+  // At the optimal fibre length the angle is phi0.
+  const auto at_opt = fm::fiber_geometry(p, lopt * std::cos(0.4));
+  EXPECT_NEAR(at_opt.length_m, lopt, 1e-15);
+  EXPECT_NEAR(at_opt.cos_pennation, std::cos(0.4), 1e-15);
+  for (double x : linspace(0.2 * lopt, 1.8 * lopt, 30)) {
+    const auto g = fm::fiber_geometry(p, x);
+    EXPECT_NEAR(g.length_m * std::sqrt(1.0 - g.cos_pennation * g.cos_pennation), p.fiber_thickness_m(), 1e-15);
+    const double h = default_step(x, lopt);
+    EXPECT_MATCHES_FINITE_DIFFERENCE(g.length_d_along,
+                                     central_difference([&](double y) { return fm::fiber_geometry(p, y).length_m; }, x, h));
+    EXPECT_MATCHES_FINITE_DIFFERENCE(
+        g.cos_pennation_d_along, central_difference([&](double y) { return fm::fiber_geometry(p, y).cos_pennation; }, x, h));
+  }
+}
+
+TEST(ContractionDynamics, PennatedPassiveMuscleIsIsometricWhenTheTendonCarriesTheProjectedFibreForce) {
+  const auto p = variants()[1];
+  for (double x : {0.1, 0.14, 0.19})
+    for (double a : {0.05, 0.4, 1.0}) {
+      const auto g = fm::fiber_geometry(p, x);
+      const double fibre = a * p.max_isometric_force_N * fm::force_length(p, g.length_m) + fm::passive_fiber_force(p, g.length_m);
+      const double tendon = fibre * g.cos_pennation;
+      EXPECT_NEAR(fm::force_ratio(p, tendon, a, x), 1.0, 1e-14);
+      EXPECT_NEAR(fm::fiber_shortening_velocity(p, tendon, a, x), 0.0, 1e-14);
+      EXPECT_GT(fm::fiber_shortening_velocity(p, 0.9 * tendon, a, x), 0.0);  // concentric
+      // The unit along the tendon shortens faster than the fibre: by 1 / cos.
+      const double ls = fm::tendon_length_from_force(p, 0.9 * tendon);
+      const double u = fm::fiber_shortening_velocity(p, 0.9 * tendon, a, x);
+      EXPECT_NEAR(fm::tendon_length_derivative(p, ls, a, ls + x, 0.0), u / g.cos_pennation, 1e-12);
+    }
+}
+
+TEST(StaticEquilibrium, PennatedPassiveMuscleRestsThere) {
+  const auto p = variants()[1];
+  // From a short unit to one whose fibres are stretched far into the passive range.
+  for (double L : linspace(p.tendon_slack_length_m + 0.06, p.tendon_slack_length_m + 0.26, 9))
+    for (double a : {0.0, 0.02, 0.3, 1.0}) {
+      const double ls = fm::static_equilibrium_tendon_length(p, L, a);
+      EXPECT_NEAR(fm::tendon_length_derivative(p, ls, a, L, 0.0), 0.0, 1e-9) << L << " " << a;
+      EXPECT_GT(ls, p.tendon_slack_length_m);
+    }
+  // Passive force alone holds the tendon taut once the fibres are beyond optimal length.
+  const double long_unit = p.tendon_slack_length_m + 1.5 * p.optimal_fiber_length_m;
+  const double ls_passive = fm::static_equilibrium_tendon_length(p, long_unit, 0.0);
+  auto no_passive = p;
+  no_passive.passive_fiber_strain_at_one_norm_force = 0.0;
+  EXPECT_GT(fm::tendon_force(p, ls_passive), 10.0 * fm::tendon_force(no_passive, fm::static_equilibrium_tendon_length(no_passive, long_unit, 0.0)));
 }

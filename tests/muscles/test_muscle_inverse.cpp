@@ -27,6 +27,15 @@ fm::MuscleParameters triceps() {
   return p;
 }
 
+// The same muscle with pennation (0.35 rad) and passive fibre force (e0 = 0.6).
+std::vector<fm::MuscleParameters> variants() {
+  fm::MuscleParameters pennated = triceps();
+  pennated.name = "triceps, pennated with passive force";
+  pennated.pennation_angle_at_optimal_rad = 0.35;
+  pennated.passive_fiber_strain_at_one_norm_force = 0.6;
+  return {triceps(), pennated};
+}
+
 struct Sample {
   fm::SecondOrderJet force, path;
 };
@@ -71,76 +80,82 @@ TEST(MuscleLawSecondDerivatives, MatchFiniteDifferences) {
 }
 
 TEST(MuscleInverse, GradientsMatchFiniteDifferences) {
-  const auto p = triceps();
-  for (const Sample& s : samples(p, 60)) {
-    const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, true);
-    const double scales[3] = {1.0, 10.0, 100.0};
-    for (int k = 0; k < 3; ++k) {
-      auto vary = [&](double x, int which) {
-        fm::SecondOrderJet f = s.force;
-        (k == 0 ? f.value : k == 1 ? f.rate : f.acceleration) = x;
-        const fm::MuscleInverse v = fm::invert_muscle(p, f, s.path, false);
-        return which == 0 ? v.activation : which == 1 ? v.activation_rate_per_s : v.excitation;
-      };
-      const double x0 = k == 0 ? s.force.value : k == 1 ? s.force.rate : s.force.acceleration;
-      const double h = default_step(x0, scales[k]);
-      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_gradient[k], central_difference([&](double x) { return vary(x, 0); }, x0, h))
-          << "d a / d x" << k;
-      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_rate_gradient[k], central_difference([&](double x) { return vary(x, 1); }, x0, h))
-          << "d da/dt / d x" << k;
-      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.excitation_gradient[k], central_difference([&](double x) { return vary(x, 2); }, x0, h))
-          << "d n / d x" << k;
+  for (const auto& p : variants()) {
+    SCOPED_TRACE(p.name);
+    for (const Sample& s : samples(p, 60)) {
+      const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, true);
+      const double scales[3] = {1.0, 10.0, 100.0};
+      for (int k = 0; k < 3; ++k) {
+        auto vary = [&](double x, int which) {
+          fm::SecondOrderJet f = s.force;
+          (k == 0 ? f.value : k == 1 ? f.rate : f.acceleration) = x;
+          const fm::MuscleInverse v = fm::invert_muscle(p, f, s.path, false);
+          return which == 0 ? v.activation : which == 1 ? v.activation_rate_per_s : v.excitation;
+        };
+        const double x0 = k == 0 ? s.force.value : k == 1 ? s.force.rate : s.force.acceleration;
+        const double h = default_step(x0, scales[k]);
+        EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_gradient[k], central_difference([&](double x) { return vary(x, 0); }, x0, h))
+            << "d a / d x" << k;
+        EXPECT_MATCHES_FINITE_DIFFERENCE(inv.activation_rate_gradient[k], central_difference([&](double x) { return vary(x, 1); }, x0, h))
+            << "d da/dt / d x" << k;
+        EXPECT_MATCHES_FINITE_DIFFERENCE(inv.excitation_gradient[k], central_difference([&](double x) { return vary(x, 2); }, x0, h))
+            << "d n / d x" << k;
+      }
     }
   }
 }
 
 TEST(MuscleInverse, PathGradientsMatchFiniteDifferences) {
-  const auto p = triceps();
-  int checked = 0;
-  for (const Sample& s : samples(p, 60)) {
-    const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, true);
-    if (inv.stage != fm::MuscleInverse::Stage::Complete) continue;
-    const double scales[3] = {p.optimal_fiber_length_m, 0.1, 1.0};  // m, m/s, m/s^2
-    for (int k = 0; k < 3; ++k) {
-      auto vary = [&](double x, int which) {
-        fm::SecondOrderJet path = s.path;
-        (k == 0 ? path.value : k == 1 ? path.rate : path.acceleration) = x;
-        const fm::MuscleInverse v = fm::invert_muscle(p, s.force, path, false);
-        return which == 0 ? v.activation : which == 1 ? v.activation_rate_per_s : v.excitation;
-      };
-      const double x0 = k == 0 ? s.path.value : k == 1 ? s.path.rate : s.path.acceleration;
-      const double h = default_step(x0, 1e-3 * scales[k]);
-      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_activation_gradient[k], central_difference([&](double x) { return vary(x, 0); }, x0, h))
-          << "d a / d L" << k;
-      EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_activation_rate_gradient[k],
-                                       central_difference([&](double x) { return vary(x, 1); }, x0, h))
-          << "d da/dt / d L" << k;
-      if (inv.excitation_real) {
-        EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_excitation_gradient[k],
-                                         central_difference([&](double x) { return vary(x, 2); }, x0, h))
-            << "d n / d L" << k;
+  for (const auto& p : variants()) {
+    SCOPED_TRACE(p.name);
+    int checked = 0;
+    for (const Sample& s : samples(p, 60)) {
+      const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, true);
+      if (inv.stage != fm::MuscleInverse::Stage::Complete) continue;
+      const double scales[3] = {p.optimal_fiber_length_m, 0.1, 1.0};  // m, m/s, m/s^2
+      for (int k = 0; k < 3; ++k) {
+        auto vary = [&](double x, int which) {
+          fm::SecondOrderJet path = s.path;
+          (k == 0 ? path.value : k == 1 ? path.rate : path.acceleration) = x;
+          const fm::MuscleInverse v = fm::invert_muscle(p, s.force, path, false);
+          return which == 0 ? v.activation : which == 1 ? v.activation_rate_per_s : v.excitation;
+        };
+        const double x0 = k == 0 ? s.path.value : k == 1 ? s.path.rate : s.path.acceleration;
+        const double h = default_step(x0, 1e-3 * scales[k]);
+        EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_activation_gradient[k], central_difference([&](double x) { return vary(x, 0); }, x0, h))
+            << "d a / d L" << k;
+        EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_activation_rate_gradient[k],
+                                         central_difference([&](double x) { return vary(x, 1); }, x0, h))
+            << "d da/dt / d L" << k;
+        if (inv.excitation_real) {
+          EXPECT_MATCHES_FINITE_DIFFERENCE(inv.path_excitation_gradient[k],
+                                           central_difference([&](double x) { return vary(x, 2); }, x0, h))
+              << "d n / d L" << k;
+        }
       }
+      // The length moves a and da/dt (through f and g): the gradients are not trivially zero.
+      EXPECT_NE(inv.path_activation_gradient[0], 0.0);
+      EXPECT_NE(inv.path_activation_rate_gradient[2], 0.0);
+      ++checked;
     }
-    // The length moves a and da/dt (through f and g): the gradients are not trivially zero.
-    EXPECT_NE(inv.path_activation_gradient[0], 0.0);
-    EXPECT_NE(inv.path_activation_rate_gradient[2], 0.0);
-    ++checked;
+    EXPECT_GE(checked, 30);
   }
-  EXPECT_GE(checked, 30);
 }
 
 TEST(MuscleInverse, ForwardLawsReproduceTheInverse) {
-  const auto p = triceps();
-  for (const Sample& s : samples(p, 60)) {
-    const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, false);
-    EXPECT_NEAR(fm::tendon_force(p, inv.tendon_length_m), s.force.value, 1e-10 * s.force.value);
-    // The contraction dynamics with this activation give the tendon's planned rate ...
-    const double dls = fm::tendon_length_derivative(p, inv.tendon_length_m, inv.activation, s.path.value, s.path.rate);
-    EXPECT_NEAR(dls, inv.tendon_length_rate_m_per_s, 1e-9 * (1.0 + std::abs(dls)));
-    EXPECT_NEAR(fm::tendon_force_derivative(p, inv.tendon_length_m) * dls, s.force.rate, 1e-7 * (1.0 + std::abs(s.force.rate)));
-    // ... and the activation dynamics with this excitation the planned activation rate.
-    EXPECT_NEAR(fm::activation_derivative(p, inv.excitation, inv.activation), inv.activation_rate_per_s,
-                1e-9 * (1.0 + std::abs(inv.activation_rate_per_s)));
+  for (const auto& p : variants()) {
+    SCOPED_TRACE(p.name);
+    for (const Sample& s : samples(p, 60)) {
+      const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, false);
+      EXPECT_NEAR(fm::tendon_force(p, inv.tendon_length_m), s.force.value, 1e-10 * s.force.value);
+      // The contraction dynamics with this activation give the tendon's planned rate ...
+      const double dls = fm::tendon_length_derivative(p, inv.tendon_length_m, inv.activation, s.path.value, s.path.rate);
+      EXPECT_NEAR(dls, inv.tendon_length_rate_m_per_s, 1e-9 * (1.0 + std::abs(dls)));
+      EXPECT_NEAR(fm::tendon_force_derivative(p, inv.tendon_length_m) * dls, s.force.rate, 1e-7 * (1.0 + std::abs(s.force.rate)));
+      // ... and the activation dynamics with this excitation the planned activation rate.
+      EXPECT_NEAR(fm::activation_derivative(p, inv.excitation, inv.activation), inv.activation_rate_per_s,
+                  1e-9 * (1.0 + std::abs(inv.activation_rate_per_s)));
+    }
   }
 }
 

@@ -151,6 +151,14 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
                                 " joint polynomials, the model " + std::to_string(flat.numJoints()) + " joints");
   detail::require_initial_muscle_state(flat, initial);
   detail::require_reserves(reserves, m);
+  // The transcription's derivatives are written for fibres along the tendon without passive
+  // force: refuse the others rather than solve a different problem.
+  for (const auto& muscle : flat.model().description().muscles) {
+    const muscles::MuscleParameters& p = muscle.parameters;
+    if (p.pennation_angle_at_optimal_rad != 0.0 || p.hasPassiveFiberForce())
+      throw std::invalid_argument("collocation: muscle '" + p.name +
+                                  "' has pennation or passive fibre force, which the collocation reference does not model");
+  }
   if (o.effort_weights.size() > 0) {
     detail::require(o.effort_weights, m, "collocation: effort_weights");
     if (o.effort_weights.minCoeff() < 0.0) throw std::invalid_argument("collocation: effort_weights must be >= 0");

@@ -4,7 +4,7 @@
 // trajectories share one set of laws. SI units: lengths m, velocities m/s, forces N, time s.
 //
 // Sign conventions: u is the fiber *shortening* velocity (u > 0 concentric), z the force ratio
-// (tendon force) / (a Fmax f(L_C)); g(u) = z is the force-velocity law.
+// (active fibre force) / (a Fmax f(L_M)); g(u) = z is the force-velocity law.
 
 #include "flatsos/muscles/muscle_parameters.hpp"
 
@@ -18,7 +18,7 @@ double tendon_force_second_derivative(const MuscleParameters& p, double tendon_l
 /// Throws std::domain_error for F <= 0 or non-finite F (a slack tendon has no unique length).
 double tendon_length_from_force(const MuscleParameters& p, double tendon_force_N);
 
-// ---- Force-length: f(L_C) = exp(-((L_C - Lopt) / (W Lopt))^2), in (0, 1]. ----
+// ---- Force-length: f(L_M) = exp(-((L_M - Lopt) / (W Lopt))^2), in (0, 1], L_M the fibre length. ----
 double force_length(const MuscleParameters& p, double fiber_length_m);
 double force_length_derivative(const MuscleParameters& p, double fiber_length_m);  ///< 1/m
 double force_length_second_derivative(const MuscleParameters& p, double fiber_length_m);  ///< 1/m^2
@@ -44,21 +44,51 @@ double force_ratio_exact_upper_bound(const MuscleParameters& p);
 double fiber_velocity_from_force_ratio(const MuscleParameters& p, double force_ratio);
 double fiber_velocity_from_force_ratio_derivative(const MuscleParameters& p, double force_ratio);
 
+// ---- Passive fibre force (only when p.hasPassiveFiberForce()): with y = kPE (L_M/Lopt - 1)/e0,
+// kPE = 4 and e0 = passive_fiber_strain_at_one_norm_force,
+//   Phi_P(L_M) = Fmax (e^y - 1 - y - y^2/2) / (e^kPE - 1 - kPE - kPE^2/2) for y > 0, 0 below:
+// Fmax at strain e0 and Thelen's (2003) exponential growth, but C2 at the optimal length (value,
+// slope and curvature 0 there) where Thelen's curve has a kink: the planner's inverse map takes
+// its second derivative. 0 for every length when the passive force is off.
+double passive_fiber_force(const MuscleParameters& p, double fiber_length_m);
+double passive_fiber_force_derivative(const MuscleParameters& p, double fiber_length_m);         ///< N/m
+double passive_fiber_force_second_derivative(const MuscleParameters& p, double fiber_length_m);  ///< N/m^2
+
+// ---- Pennation at constant fibre thickness h = Lopt sin(phi0) (p.fiber_thickness_m()). ----
+/// The fibre from the muscle's length along the tendon x = L - L_S: L_M = sqrt(x^2 + h^2),
+/// cos(phi) = x / L_M, with dL_M/dx = cos(phi) and d cos(phi)/dx = h^2 / L_M^3. Without
+/// pennation (h = 0) exactly L_M = x and cos(phi) = 1.
+struct FiberGeometry {
+  double length_m = 0.0;             ///< L_M
+  double cos_pennation = 1.0;        ///< x / L_M
+  double length_d_along = 1.0;       ///< dL_M/dx
+  double cos_pennation_d_along = 0.0;  ///< d cos(phi)/dx, 1/m
+};
+FiberGeometry fiber_geometry(const MuscleParameters& p, double along_tendon_m);
+
 // ---- Contraction dynamics. ----
+// The tendon carries the fibre's force projected on its line:
+//   Phi_S(L_S) = (a Fmax f(L_M) g(u) + Phi_P(L_M)) cos(phi),
+// with L_M, phi from x = L - L_S (fiber_geometry) and u the fibre's shortening velocity along
+// itself, so x shortens at u / cos(phi). Without pennation and passive force this is the
+// paper's Phi_S = a Fmax f(L_C) g(u), L_C = x.
+
 /// The activation the contraction dynamics use: max(a, activation_floor).
 double effective_activation(const MuscleParameters& p, double activation);
 
-/// z = F_S / (max(a, floor) Fmax f(L_C)). Finite for every finite input: f is floored at
-/// 1e-12 so that an absurd fiber length (exp underflow) cannot divide by zero.
+/// z = (F_S / cos(phi) - Phi_P(L_M)) / (max(a, floor) Fmax f(L_M)) at the muscle length along
+/// the tendon x = L - L_S. Finite for every finite input: f is floored at 1e-12 (an absurd fibre
+/// length underflows exp), cos(phi) at 1e-2 (a fibre squeezed to its thickness).
 double force_ratio(const MuscleParameters& p, double tendon_force_N, double activation,
-                   double fiber_length_m);
+                   double along_tendon_m);
 
-/// Fiber shortening velocity u = g^-1(z) of the forward model (safe extension included).
+/// Fibre shortening velocity u = g^-1(z) along the fibre, of the forward model (safe
+/// extension included).
 double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N,
-                                 double activation, double fiber_length_m);
+                                 double activation, double along_tendon_m);
 
-/// Time derivative of the tendon length: dL_S/dt = u + dL/dt, where dL/dt is the
-/// muscle-tendon unit's lengthening rate (-(A^T qd)_j for constant moment arms).
+/// Time derivative of the tendon length: dL_S/dt = u / cos(phi) + dL/dt, where dL/dt is the
+/// muscle-tendon unit's lengthening rate (-r(q)^T qd).
 double tendon_length_derivative(const MuscleParameters& p, double tendon_length_m,
                                 double activation, double musculotendon_length_m,
                                 double musculotendon_lengthening_rate_m_per_s);

@@ -7,10 +7,12 @@
 // tendon-force jet, and on the joint path when it is free) share it.
 //
 //   L_S = Phi_S^-1(F), dL_S = dF / Phi_S', ddL_S = (ddF - Phi_S'' dL_S^2) / Phi_S'
-//   u = dL_S - dL (shortening), L_C = L - L_S, f = f(L_C), g = g(u)
-//   a = F / (Fmax f g), da/dt = a (dF / F - df/dt / f - dg/dt / g)
+//   x = L - L_S (the muscle along the tendon), L_M = sqrt(x^2 + h^2), cos = x / L_M (pennation
+//   at constant thickness h; h = 0: L_M = x, cos = 1), u = -dL_M/dt = -cos dx/dt (shortening)
+//   f = f(L_M), g = g(u), a = (F / cos - Phi_P(L_M)) / (Fmax f g), da/dt by the chain rule
 //   n: the larger root of sigma(n) (n - a) = da/dt.
-// The tendon law is quadratic above slack, so Phi_S''' = 0 (used by the gradients).
+// The gradients are carried through every line in forward mode (the tendon law is quadratic
+// above slack, so Phi_S''' = 0).
 
 #include <array>
 
@@ -32,11 +34,14 @@ struct MuscleInverse {
   enum class Stage {
     Complete,         ///< every field below is set
     SlackTendon,      ///< F <= 0: nothing past the tendon force is defined
+    FiberCollapsed,   ///< pennated and x = L - L_S <= 0: the tendon is longer than the whole
+                      ///< unit; only the tendon fields and fiber_length_m (= x) are set
     NoForceCapacity,  ///< g(u) <= 0 (u >= Vmax): the fibre state is set, a and n are not
   };
   Stage stage = Stage::Complete;
   double tendon_length_m = 0.0, tendon_length_rate_m_per_s = 0.0;
-  double fiber_length_m = 0.0, shortening_velocity_m_per_s = 0.0;
+  double fiber_length_m = 0.0, shortening_velocity_m_per_s = 0.0;  ///< L_M and u along the fibre
+  double cos_pennation = 1.0;
   double force_ratio = 0.0;  ///< g(u)
   double activation = 0.0, activation_rate_per_s = 0.0;
   double excitation = 0.0;

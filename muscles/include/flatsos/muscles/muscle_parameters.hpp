@@ -1,6 +1,7 @@
 #pragma once
 // Parameters of one Hill-type muscle-tendon unit (docs/method/flatness.md). SI units throughout.
 
+#include <cmath>
 #include <string>
 
 namespace flatsos::muscles {
@@ -23,6 +24,13 @@ struct MuscleParameters {
   /// activations in the receding-horizon scenario go down to about 1e-3, and a floor of 1e-2
   /// (OpenSim's) drifts the closed loop by degrees, so the default is 1e-4 (measured with the RH scenario).
   double activation_floor = 1e-4;
+  /// Pennation angle phi0 at optimal fibre length (rad, in [0, pi/2)). The fibres keep a
+  /// constant thickness h = Lopt sin(phi0): at fibre length L_M the angle is asin(h / L_M). 0:
+  /// fibres along the tendon (the paper's muscles).
+  double pennation_angle_at_optimal_rad = 0.0;
+  /// Passive fibre strain e0 at which the passive force reaches Fmax; 0: no passive force (the
+  /// paper's muscles). See passive_fiber_force.
+  double passive_fiber_strain_at_one_norm_force = 0.0;
 
   /// Vmax in m/s.
   double max_shortening_velocity_m_per_s() const {
@@ -34,6 +42,9 @@ struct MuscleParameters {
     const double stretch_at_fmax = tendon_strain_at_max_force * tendon_slack_length_m;
     return max_isometric_force_N / (stretch_at_fmax * stretch_at_fmax);
   }
+  /// h = Lopt sin(phi0), m: the fibres' constant thickness (0 without pennation).
+  double fiber_thickness_m() const { return optimal_fiber_length_m * std::sin(pennation_angle_at_optimal_rad); }
+  bool hasPassiveFiberForce() const { return passive_fiber_strain_at_one_norm_force > 0.0; }
   /// beta = T_act / T_deact of the activation dynamics.
   double activation_beta() const {
     return activation_time_constant_s / deactivation_time_constant_s;
@@ -42,7 +53,7 @@ struct MuscleParameters {
 
 /// Throws std::invalid_argument naming the muscle and the field when a parameter is
 /// non-finite or non-physical (non-positive force, lengths, time constants; gmax <= 1;
-/// T_act > T_deact; floor outside (0, 1)).
+/// T_act > T_deact; floor outside (0, 1); pennation outside [0, pi/2); passive strain < 0).
 void validate(const MuscleParameters& p);
 
 }  // namespace flatsos::muscles

@@ -1,7 +1,7 @@
 #pragma once
 // Rest: the tendon length at which a muscle of activation a, held at a fixed musculotendon
 // length, is in static equilibrium (fiber isometric, u = 0, so g = 1):
-//   Phi_S(L_S) = max(a, floor) Fmax f(L - L_S).
+//   Phi_S(L_S) = (max(a, floor) Fmax f(L_M) + Phi_P(L_M)) cos(phi), L_M and phi from L - L_S.
 // The floor is the forward model's (effective_activation), so a simulation started there stays
 // there. A pure law (no Eigen, no Simbody): usable in any file, `using namespace SimTK;` or not.
 

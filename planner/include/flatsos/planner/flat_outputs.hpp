@@ -54,6 +54,7 @@ struct DomainViolation {
   enum class Kind {
     None,
     SlackTendon,                    ///< value: the planned tendon force, N (<= 0)
+    FiberCollapsed,                 ///< value: a pennated muscle's length along the tendon, m (<= 0)
     NoForceCapacity,                ///< value: the shortening velocity, m/s (>= Vmax)
     ForceRatioBeyondExactRange,     ///< value: the force ratio z; limit: the exact range's end
     ActivationOutsideUnitInterval,  ///< value: the activation
@@ -80,7 +81,7 @@ struct MusclePoint {
   Eigen::VectorXd force_ratio;  ///< z = g(u)
   Eigen::VectorXd activation, activation_rate_per_s;
   Eigen::VectorXd excitation;   ///< larger root of the inverse activation dynamics
-  /// Per muscle: inside the valid domain, or why not (slack tendon, u >= Vmax, z beyond the
+  /// Per muscle: inside the valid domain, or why not (slack tendon, collapsed fibre, u >= Vmax, z beyond the
   /// exact force-velocity range, a outside (0, 1] or below the floor, n outside [0, 1] or
   /// unattainable).
   std::vector<DomainViolation> domain_violation;
