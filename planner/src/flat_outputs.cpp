@@ -132,6 +132,11 @@ void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::Matr
 namespace {
 const plugin::MusculoskeletalModel& require_model(const std::shared_ptr<const plugin::MusculoskeletalModel>& model) {
   if (!model) throw std::invalid_argument("flat-output map: no model (null pointer)");
+  // C(q) = [R(q); E] is the next step of the planner; until then refuse such a model by name.
+  if (!model->hasConstantMomentArms())
+    throw FlatnessError("model '" + model->description().name +
+                        "': the planner needs constant moment arms; muscle paths that depend on posture are simulated "
+                        "but not yet planned");
   return *model;
 }
 }  // namespace

@@ -280,3 +280,26 @@ TEST(OpenLoopWarnings, ATargetBeyondOneTurnThatIsPossibleIsPlannedWithAWarning) 
   o.target_q_rad = Eigen::Vector2d(1.0, 0.0);
   EXPECT_TRUE(fpl::plan_open_loop(flat, flatsos::test::open_loop_initial_state(*model), o).warnings.empty());
 }
+
+TEST_F(OpenLoopScenario, ThePapersArmWithOrderOnePolynomialPathsGivesTheSamePlan) {
+  // Every muscle's constant moment arms rewritten as OpenSim's order-1 polynomial of
+  // (shoulder, elbow), coefficients 1, elbow, shoulder.
+  auto description = flatsos::plugin::load_model_file(flatsos::test::arm_model_path());
+  for (auto& m : description.muscles) {
+    m.polynomial_path = flatsos::plugin::PolynomialPathDescription{
+        {"shoulder", "elbow"}, 1, {m.length_at_zero_angles_m, -m.moment_arms_m[1], -m.moment_arms_m[0]}, {}};
+    m.length_at_zero_angles_m = 0.0;
+    m.moment_arms_m.resize(0);
+  }
+  const auto model = std::make_shared<const flatsos::plugin::MusculoskeletalModel>(description);
+  const fpl::FlatOutputMap flat(model);
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, options);
+  const auto same = fpl::plan_open_loop(flat, s0, options);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  ASSERT_EQ(same.status, fpl::SolveStatus::Solved) << same.message;
+  EXPECT_NEAR(same.sos.cost_N_s, plan.sos.cost_N_s, 1e-9 * plan.sos.cost_N_s);
+  for (double t : {0.0, 0.7, 1.9, 3.0}) {
+    const fpl::Jet y = plan.flatOutputJet(t);
+    EXPECT_LE((same.flatOutputJet(t) - y).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + y.cwiseAbs().maxCoeff())) << t;
+  }
+}

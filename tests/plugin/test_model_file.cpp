@@ -65,6 +65,14 @@ TEST(ModelFile, ScenariosAreReadInDegreesAndKeptInRadians) {
   EXPECT_EQ(d.scenario("walking"), nullptr);
 }
 
+// Muscle j's constant moment arms replaced by a polynomial path over (shoulder, elbow).
+static void as_path(json& j, int muscle, int order, const std::vector<double>& coefficients) {
+  json& m = j["muscles"][muscle];
+  m.erase("length_at_zero_angles_m");
+  m.erase("moment_arms_m");
+  m["path"] = {{"coordinates", {"shoulder", "elbow"}}, {"order", order}, {"coefficients", coefficients}};
+}
+
 TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
   const std::vector<BadModel> cases = {
       {"missing bodies", [](json& j) { j.erase("bodies"); }, {"bodies", "missing"}},
@@ -129,6 +137,39 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
        {"joints[1].coordinate", "without '/'"}},
       {"crosses no joint", [](json& j) { j["muscles"][4]["moment_arms_m"] = {{"elbow", 0.0}}; },
        {"muscles[4].moment_arms_m", "crosses no joint"}},
+      {"path and moment arms both",
+       [](json& j) { j["muscles"][2]["path"] = {{"coordinates", {"shoulder", "elbow"}}, {"order", 1}, {"coefficients", {0.43, -0.03, -0.03}}}; },
+       {"muscles[2]", "not both"}},
+      {"path with the wrong coefficient count",
+       [](json& j) { as_path(j, 2, 2, {0.43, -0.03, 0.0, -0.03, 0.0}); },
+       {"muscles[2].path", "need 6 coefficients, got 5"}},
+      {"path order not an integer", [](json& j) { as_path(j, 2, 1, {0.43, -0.03, -0.03}); j["muscles"][2]["path"]["order"] = 1.5; },
+       {"muscles[2].path.order", "integer"}},
+      {"path over an unknown coordinate",
+       [](json& j) { as_path(j, 2, 1, {0.43, -0.03, -0.03}); j["muscles"][2]["path"]["coordinates"][1] = "wrist"; },
+       {"muscles[2].path.coordinates[1]", "unknown coordinate 'wrist'"}},
+      {"held coordinate that is a joint",
+       [](json& j) { as_path(j, 2, 1, {0.43, -0.03, -0.03}); j["muscles"][2]["path"]["held_coordinates"] = {{"elbow", 0.1}}; },
+       {"muscles[2].path.held_coordinates.elbow", "cannot also be held"}},
+      {"held coordinate the path does not use",
+       [](json& j) { as_path(j, 2, 1, {0.43, -0.03, -0.03}); j["muscles"][2]["path"]["held_coordinates"] = {{"wrist", 0.1}}; },
+       {"muscles[2].path.held_coordinates.wrist", "not one of the path's coordinates"}},
+      {"posture-dependent path without a range", [](json& j) { as_path(j, 2, 2, {0.43, -0.03, -0.001, -0.03, 0.0, -0.001}); },
+       {"joints[0].range_rad", "required", "biceps"}},
+      {"range with lower above upper", [](json& j) { j["joints"][0]["range_rad"] = {1.0, 0.5}; },
+       {"joints[0].range_rad", "below upper"}},
+      {"range of one number", [](json& j) { j["joints"][0]["range_rad"] = {1.0}; }, {"joints[0].range_rad", "2 numbers"}},
+      {"tendon slack inside the range",
+       [](json& j) {
+         j["joints"][0]["range_rad"] = {0.0, 1.0};
+         j["joints"][1]["range_rad"] = {0.0, 2.5};
+         as_path(j, 2, 2, {0.43, -0.03, -0.02, -0.03, 0.0, 0.0});
+       },
+       {"muscles[2].path", "does not exceed the tendon slack length", "shoulder = ", "elbow = ", "would be slack"}},
+      {"pennation of 90 degrees", [](json& j) { j["muscles"][1]["pennation_angle_at_optimal_rad"] = 1.6; },
+       {"muscles[1]", "pennation_angle_at_optimal_rad"}},
+      {"negative passive strain", [](json& j) { j["muscle_defaults"]["passive_fiber_strain_at_one_norm_force"] = -0.1; },
+       {"muscles[0]", "passive_fiber_strain_at_one_norm_force"}},
       {"duplicate muscle", [](json& j) { j["muscles"][1]["name"] = "anterior_deltoid"; }, {"duplicate muscle"}},
       {"E wrong shape", [](json& j) { j["flat_outputs"].erase(3); }, {"flat_outputs", "m - N = 4 rows"}},
       {"E unknown muscle", [](json& j) { j["flat_outputs"][0]["weights"]["deltoid"] = 1.0; },

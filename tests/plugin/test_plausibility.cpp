@@ -27,6 +27,13 @@ TEST(Plausibility, EachValueInTheWrongUnitGivesOneWarningNamingItsField) {
   const std::vector<Case> cases = {
       {[](auto& d) { d.muscles[2].moment_arms_m[1] = 3.0; }, "muscles[2] 'biceps'.moment_arms_m.elbow: 3 m is above 0.2 m"},
       {[](auto& d) { d.muscles[0].moment_arms_m[0] = -5.0; }, "muscles[0] 'anterior_deltoid'.moment_arms_m.shoulder: 5 m"},
+      {[](auto& d) {
+         // The same in a polynomial path (OpenSim's order: 1, elbow, shoulder).
+         d.muscles[2].moment_arms_m.resize(0);
+         d.muscles[2].length_at_zero_angles_m = 0.0;
+         d.muscles[2].polynomial_path = fp::PolynomialPathDescription{{"shoulder", "elbow"}, 1, {0.43, -3.0, -0.03}, {}};
+       },
+       "muscles[2] 'biceps'.path: moment arm about elbow at mid-range: 3 m is above 0.2 m"},
       {[](auto& d) { d.muscles[5].parameters.optimal_fiber_length_m = 102.8; }, "muscles[5] 'brachialis'.optimal_fiber_length_m: 102.8 m"},
       {[](auto& d) { d.muscles[3].parameters.tendon_slack_length_m = 190.5; }, "muscles[3] 'triceps_long'.tendon_slack_length_m"},
       {[](auto& d) { d.muscles[1].length_at_zero_angles_m = 105.5; }, "muscles[1] 'posterior_deltoid'.length_at_zero_angles_m"},

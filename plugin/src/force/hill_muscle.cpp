@@ -18,7 +18,9 @@ using SignalPtr = std::shared_ptr<const ExcitationSignal>;
 class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
  public:
   HillMuscleImpl(SimTK::SubsystemIndex forces, fm::MuscleParameters p, MusclePath path)
-      : forces_(forces), p_(std::move(p)), path_(std::move(path)) {}
+      : forces_(forces), p_(std::move(p)), path_(std::move(path)) {
+    for (int k = 0; k < path_.length_m.dimension(); ++k) gradient_.push_back(path_.length_m.derivative(k));
+  }
 
   const fm::MuscleParameters& parameters() const { return p_; }
   const MusclePath& path() const { return path_; }
@@ -65,14 +67,31 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   }
 
   // ---- kinematics of the path ----
+  // The polynomial's arguments at the state (held ones at their values); allocation-free.
+  void arguments(const SimTK::State& s, double* x) const {
+    for (std::size_t k = 0; k < path_.arguments.size(); ++k) {
+      const PathArgument& arg = path_.arguments[k];
+      x[k] = arg.mobilizer.isEmptyHandle() ? arg.held_value_rad : arg.mobilizer.getOneQ(s, 0);
+    }
+  }
   double length(const SimTK::State& s) const {
-    double l = path_.length_at_zero_angles_m;
-    for (const auto& arm : path_.moment_arms) l -= arm.moment_arm_m * arm.mobilizer.getOneQ(s, 0);
-    return l;
+    double x[fm::LengthPolynomial::kMaxDimension];
+    arguments(s, x);
+    return path_.length_m.value(x);
+  }
+  double momentArm(const SimTK::State& s, int k) const {
+    if (path_.arguments[static_cast<std::size_t>(k)].mobilizer.isEmptyHandle()) return 0.0;
+    double x[fm::LengthPolynomial::kMaxDimension];
+    arguments(s, x);
+    return -gradient_[static_cast<std::size_t>(k)].value(x);
   }
   double lengtheningRate(const SimTK::State& s) const {
+    double x[fm::LengthPolynomial::kMaxDimension];
+    arguments(s, x);
     double ldot = 0.0;
-    for (const auto& arm : path_.moment_arms) ldot -= arm.moment_arm_m * arm.mobilizer.getOneU(s, 0);
+    for (std::size_t k = 0; k < path_.arguments.size(); ++k)
+      if (!path_.arguments[k].mobilizer.isEmptyHandle())
+        ldot += gradient_[k].value(x) * path_.arguments[k].mobilizer.getOneU(s, 0);
     return ldot;
   }
 
@@ -98,8 +117,11 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>&,
                  SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector& mobility_forces) const override {
     const double f = fm::tendon_force(p_, tendonLength(s));
-    for (const auto& arm : path_.moment_arms)
-      arm.mobilizer.applyOneMobilityForce(s, 0, arm.moment_arm_m * f, mobility_forces);
+    double x[fm::LengthPolynomial::kMaxDimension];
+    arguments(s, x);
+    for (std::size_t k = 0; k < path_.arguments.size(); ++k)
+      if (!path_.arguments[k].mobilizer.isEmptyHandle())
+        path_.arguments[k].mobilizer.applyOneMobilityForce(s, 0, -gradient_[k].value(x) * f, mobility_forces);
   }
   // The tendon stores energy, but the muscle-tendon unit is dissipative and its states are
   // first-order: no potential energy is reported to the multibody system.
@@ -117,6 +139,7 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   SimTK::SubsystemIndex forces_;
   fm::MuscleParameters p_;
   MusclePath path_;
+  std::vector<fm::LengthPolynomial> gradient_;  // dL/dx_k per argument
   mutable SimTK::ZIndex first_z_;
   mutable SimTK::DiscreteVariableIndex held_excitation_;
   mutable SimTK::DiscreteVariableIndex signal_;
@@ -126,17 +149,34 @@ namespace {
 HillMuscleImpl* make_impl(SimTK::GeneralForceSubsystem& forces, const fm::MuscleParameters& p,
                           MusclePath path) {
   fm::validate(p);
-  if (!std::isfinite(path.length_at_zero_angles_m))
-    throw std::invalid_argument("muscle '" + p.name + "': path length_at_zero_angles_m is not finite");
-  for (const auto& arm : path.moment_arms) {
-    if (!std::isfinite(arm.moment_arm_m))
-      throw std::invalid_argument("muscle '" + p.name + "': a moment arm is not finite");
-    if (arm.mobilizer.isEmptyHandle())
-      throw std::invalid_argument("muscle '" + p.name + "': a moment arm has no mobilizer");
+  if (static_cast<int>(path.arguments.size()) != path.length_m.dimension())
+    throw std::invalid_argument("muscle '" + p.name + "': the path has " + std::to_string(path.arguments.size()) +
+                                " arguments for a length polynomial of dimension " +
+                                std::to_string(path.length_m.dimension()));
+  for (std::size_t k = 0; k < path.arguments.size(); ++k) {
+    const PathArgument& arg = path.arguments[k];
+    if (arg.mobilizer.isEmptyHandle() && !std::isfinite(arg.held_value_rad))
+      throw std::invalid_argument("muscle '" + p.name + "': path argument " + std::to_string(k) + " is held at a value that is not finite");
   }
   return new HillMuscleImpl(forces.getMySubsystemIndex(), p, std::move(path));
 }
 }  // namespace
+
+MusclePath MusclePath::constantMomentArms(double length_at_zero_angles_m, const std::vector<MomentArm>& moment_arms) {
+  for (const auto& arm : moment_arms) {
+    if (!std::isfinite(arm.moment_arm_m)) throw std::invalid_argument("muscle path: a moment arm is not finite");
+    if (arm.mobilizer.isEmptyHandle()) throw std::invalid_argument("muscle path: a moment arm has no mobilizer");
+  }
+  if (!std::isfinite(length_at_zero_angles_m))
+    throw std::invalid_argument("muscle path: length_at_zero_angles_m is not finite");
+  // Order 1 in OpenSim's order: the constant, then the last argument's term, ..., the first's.
+  MusclePath path;
+  std::vector<double> c{length_at_zero_angles_m};
+  for (auto it = moment_arms.rbegin(); it != moment_arms.rend(); ++it) c.push_back(-it->moment_arm_m);
+  path.length_m = fm::LengthPolynomial(static_cast<int>(moment_arms.size()), 1, std::move(c));
+  for (const auto& arm : moment_arms) path.arguments.push_back({arm.mobilizer, 0.0});
+  return path;
+}
 
 HillMuscle::HillMuscle(SimTK::GeneralForceSubsystem& forces, const fm::MuscleParameters& parameters,
                        MusclePath path)
@@ -185,19 +225,24 @@ double HillMuscle::getUnclampedExcitation(const SimTK::State& s) const {
   return impl().unclampedExcitation(s);
 }
 
+double HillMuscle::getMomentArm(const SimTK::State& s, int argument) const {
+  if (argument < 0 || argument >= static_cast<int>(getPath().arguments.size()))
+    throw std::out_of_range("muscle '" + getParameters().name + "': no path argument " + std::to_string(argument));
+  return impl().momentArm(s, argument);
+}
 double HillMuscle::getMusculotendonLength(const SimTK::State& s) const { return impl().length(s); }
 double HillMuscle::getMusculotendonLengtheningRate(const SimTK::State& s) const {
   return impl().lengtheningRate(s);
 }
 double HillMuscle::getFiberLength(const SimTK::State& s) const {
-  return impl().length(s) - impl().tendonLength(s);
+  return fm::fiber_geometry(getParameters(), impl().length(s) - impl().tendonLength(s)).length_m;
 }
 double HillMuscle::getTendonForce(const SimTK::State& s) const {
   return fm::tendon_force(getParameters(), impl().tendonLength(s));
 }
 double HillMuscle::getFiberShorteningVelocity(const SimTK::State& s) const {
   return fm::fiber_shortening_velocity(getParameters(), getTendonForce(s), getActivation(s),
-                                       getFiberLength(s));
+                                       impl().length(s) - impl().tendonLength(s));
 }
 double HillMuscle::getTendonLengthDerivative(const SimTK::State& s) const {
   return impl().tendonLengthDerivative(s);

@@ -78,14 +78,17 @@ void MuscleRosenbrockIntegrator::initialize(const SimTK::State& s) {
     if (slot.tendon_index < 0 || slot.tendon_index + 1 >= ny)
       throw std::invalid_argument("muscle Rosenbrock integrator: a muscle is not part of this system");
     slot.path.clear();
-    for (const auto& arm : slot.muscle.getPath().moment_arms) {
-      const SimTK::SubsystemIndex matter = arm.mobilizer.getMatterSubsystem().getMySubsystemIndex();
+    const auto& arguments = slot.muscle.getPath().arguments;
+    for (std::size_t k = 0; k < arguments.size(); ++k) {
+      const SimTK::MobilizedBody& mobilizer = arguments[k].mobilizer;
+      if (mobilizer.isEmptyHandle()) continue;  // a held coordinate
+      const SimTK::SubsystemIndex matter = mobilizer.getMatterSubsystem().getMySubsystemIndex();
       PathCoupling c;
+      c.argument = static_cast<int>(k);
       c.q_index = static_cast<int>(state_.getQStart()) + static_cast<int>(state_.getQStart(matter)) +
-                  static_cast<int>(arm.mobilizer.getFirstQIndex(state_));
+                  static_cast<int>(mobilizer.getFirstQIndex(state_));
       c.u_index = static_cast<int>(state_.getUStart()) + static_cast<int>(state_.getUStart(matter)) +
-                  static_cast<int>(arm.mobilizer.getFirstUIndex(state_));
-      c.moment_arm_m = arm.moment_arm_m;
+                  static_cast<int>(mobilizer.getFirstUIndex(state_));
       slot.path.push_back(c);
     }
   }
@@ -121,6 +124,10 @@ bool MuscleRosenbrockIntegrator::evaluate(SimTK::State& s, double t, const SimTK
       j_la_[j] = d.d_activation_m_per_s;
       j_lpath_[j] = d.d_musculotendon_length_per_s;
       j_aa_[j] = slots_[j].muscle.getActivationDerivativePartial(s);
+      // Moment arms at this posture. Their change with posture (the second derivative of the
+      // length) is left out of the matrix: a W-method keeps its order with any matrix, and the
+      // stiff part is the tendon's own row.
+      for (auto& arm : slots_[j].path) arm.moment_arm_m = slots_[j].muscle.getMomentArm(s, arm.argument);
     }
   return finite(ydot);
 }
@@ -130,7 +137,7 @@ void MuscleRosenbrockIntegrator::multiplyJacobian(const SimTK::Vector& v, SimTK:
   for (std::size_t j = 0; j < slots_.size(); ++j) {
     const int i = slots_[j].tendon_index;
     double path = 0.0;
-    for (const auto& arm : slots_[j].path)  // L = l0 - sum d q: dL/dq = -d; dL_S/dt = u_f + dL/dt
+    for (const auto& arm : slots_[j].path)  // dL/dq = -r(q); dL_S/dt = u_f + dL/dt
       path -= arm.moment_arm_m * (j_lpath_[j] * v[arm.q_index] + v[arm.u_index]);
     out[i] = j_ll_[j] * v[i] + j_la_[j] * v[i + 1] + path;
     out[i + 1] = j_aa_[j] * v[i + 1];

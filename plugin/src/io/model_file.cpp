@@ -152,6 +152,13 @@ JointDescription read_joint(const json& j, const std::string& path, const std::s
     d.axis.normalize();
   }
   if (r.has("coordinate")) d.coordinate = r.string("coordinate");
+  if (r.has("range_rad")) {
+    const Eigen::VectorXd range = r.numbers("range_rad");
+    if (range.size() != 2) r.fail(r.at("range_rad"), "must be [lower, upper] (2 numbers)");
+    if (!(range[0] < range[1]))
+      r.fail(r.at("range_rad"), "lower " + std::to_string(range[0]) + " must be below upper " + std::to_string(range[1]));
+    d.range_rad = {range[0], range[1]};
+  }
   r.reject_unknown_keys();
   return d;
 }
@@ -170,6 +177,9 @@ const std::map<std::string, ParameterSetter>& optional_muscle_fields() {
       {"deactivation_time_constant_s",
        [](auto& p, double v) { p.deactivation_time_constant_s = v; }},
       {"activation_floor", [](auto& p, double v) { p.activation_floor = v; }},
+      {"pennation_angle_at_optimal_rad", [](auto& p, double v) { p.pennation_angle_at_optimal_rad = v; }},
+      {"passive_fiber_strain_at_one_norm_force",
+       [](auto& p, double v) { p.passive_fiber_strain_at_one_norm_force = v; }},
   };
   return fields;
 }
@@ -177,6 +187,33 @@ const std::map<std::string, ParameterSetter>& optional_muscle_fields() {
 void read_optional_muscle_fields(ObjectReader& r, muscles::MuscleParameters& p) {
   for (const auto& [key, set] : optional_muscle_fields())
     if (const json* v = r.find(key)) set(p, r.number(*v, r.at(key)));
+}
+
+// {"coordinates": [names], "order": k, "coefficients": [...], "held_coordinates": {name: rad}};
+// the names are resolved against the joints in validate().
+PolynomialPathDescription read_polynomial_path(const json& j, const std::string& path, const std::string& source) {
+  ObjectReader r(j, path, source);
+  PolynomialPathDescription d;
+  const json& names = r.get("coordinates");
+  if (!names.is_array()) r.fail(r.at("coordinates"), "must be an array of coordinate names");
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    if (!names[k].is_string() || names[k].get<std::string>().empty())
+      r.fail(indexed(r.at("coordinates"), k), "must be a non-empty string");
+    d.coordinates.push_back(names[k].get<std::string>());
+  }
+  const json& order = r.get("order");
+  if (!order.is_number_integer() || order.get<long long>() < 0 || order.get<long long>() > 20)
+    r.fail(r.at("order"), "must be an integer in [0, 20]");
+  d.order = static_cast<int>(order.get<long long>());
+  const Eigen::VectorXd c = r.numbers("coefficients");
+  d.coefficients.assign(c.data(), c.data() + c.size());
+  if (const json* held = r.find("held_coordinates")) {
+    if (!held->is_object()) r.fail(r.at("held_coordinates"), "must be an object {coordinate: value_rad}");
+    for (const auto& item : held->items())
+      d.held_coordinates_rad[item.key()] = r.number(item.value(), r.at("held_coordinates") + "." + item.key());
+  }
+  r.reject_unknown_keys();
+  return d;
 }
 
 MuscleDescription read_muscle(const json& j, const std::string& path, const std::string& source,
@@ -194,6 +231,13 @@ MuscleDescription read_muscle(const json& j, const std::string& path, const std:
     muscles::validate(m.parameters);
   } catch (const std::invalid_argument& e) {
     r.fail(path, e.what());
+  }
+  if (r.has("path")) {
+    if (r.has("length_at_zero_angles_m") || r.has("moment_arms_m"))
+      r.fail(path, "give either \"path\" or \"length_at_zero_angles_m\" with \"moment_arms_m\", not both");
+    m.polynomial_path = read_polynomial_path(r.get("path"), r.at("path"), source);
+    r.reject_unknown_keys();
+    return m;
   }
   m.length_at_zero_angles_m = r.positive("length_at_zero_angles_m");
 

@@ -1,7 +1,10 @@
 #include "flatsos/plugin/model/model_description.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
+#include <vector>
 #include <string>
 
 #include <SimTKcommon.h>
@@ -24,6 +27,99 @@ bool central_inertia_survives_shift(const BodyDescription& b) {
     return false;
   }
 }
+}  // namespace
+
+namespace {
+
+constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+
+// The posture grid over the ranges of `joints` (every other joint at 0): about `budget` points
+// in all, at least 3 per joint, the range ends included. Calls visit(q) for each.
+template <class Visit>
+void for_each_posture(const ModelDescription& model, const std::vector<int>& joints, long budget, const Visit& visit) {
+  const int k = static_cast<int>(joints.size());
+  const int per_joint = std::max(3, static_cast<int>(std::floor(std::pow(static_cast<double>(budget), 1.0 / std::max(k, 1)))));
+  std::vector<int> index(static_cast<std::size_t>(k), 0);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(model.numJoints());
+  while (true) {
+    for (int d = 0; d < k; ++d) {
+      const auto& r = model.joints[static_cast<std::size_t>(joints[d])].range_rad;
+      q[joints[d]] = r[0] + (r[1] - r[0]) * index[d] / (per_joint - 1);
+    }
+    visit(q);
+    int d = 0;
+    while (d < k && ++index[d] == per_joint) index[d++] = 0;
+    if (d == k) return;
+  }
+}
+
+std::string describe_posture(const ModelDescription& model, const std::vector<int>& joints, const Eigen::VectorXd& q) {
+  std::string out;
+  for (int i : joints) {
+    if (!out.empty()) out += ", ";
+    out += model.joints[static_cast<std::size_t>(i)].name + " = " + std::to_string(q[i] * kDegPerRad) + " deg";
+  }
+  return out;
+}
+
+int joint_by_name(const ModelDescription& model, const std::string& name) {
+  for (int i = 0; i < model.numJoints(); ++i)
+    if (model.joints[static_cast<std::size_t>(i)].name == name || model.joints[static_cast<std::size_t>(i)].coordinateName() == name)
+      return i;
+  return -1;
+}
+
+// The path of a muscle, or ModelFileError naming the field (`source` for the message).
+muscles::MusculotendonPath build_path(const ModelDescription& model, int j, const std::string& source) {
+  const MuscleDescription& m = model.muscles[static_cast<std::size_t>(j)];
+  const std::string at = indexed("muscles", static_cast<std::size_t>(j));
+  auto fail = [&](const std::string& where, const std::string& what) -> void {
+    throw ModelFileError("model file '" + source + "': " + where + ": " + what);
+  };
+  if (!m.polynomial_path) {
+    if (m.moment_arms_m.size() != model.numJoints())
+      fail(at + ".moment_arms_m", "must have one entry per joint (the moment-arm matrix must be N x m)");
+    if (!m.moment_arms_m.allFinite()) fail(at + ".moment_arms_m", "must be finite");
+    if (!(m.length_at_zero_angles_m > 0.0) || !std::isfinite(m.length_at_zero_angles_m))
+      fail(at + ".length_at_zero_angles_m", "must be > 0");
+    if (m.moment_arms_m.cwiseAbs().maxCoeff() == 0.0)
+      fail(at + ".moment_arms_m", "the muscle crosses no joint (all moment arms are 0)");
+    return muscles::MusculotendonPath::constantMomentArms(
+        m.length_at_zero_angles_m, std::vector<double>(m.moment_arms_m.data(), m.moment_arms_m.data() + m.moment_arms_m.size()));
+  }
+  const PolynomialPathDescription& pd = *m.polynomial_path;
+  const std::string pat = at + ".path";
+  if (m.moment_arms_m.size() != 0 || m.length_at_zero_angles_m != 0.0)
+    fail(at, "give either \"path\" or \"length_at_zero_angles_m\" with \"moment_arms_m\", not both");
+  std::vector<muscles::PathCoordinate> coordinates;
+  std::set<std::string> seen;
+  for (std::size_t k = 0; k < pd.coordinates.size(); ++k) {
+    const std::string& name = pd.coordinates[k];
+    const std::string where = pat + ".coordinates[" + std::to_string(k) + "]";
+    if (!seen.insert(name).second) fail(where, "coordinate '" + name + "' is listed twice");
+    const int joint = joint_by_name(model, name);
+    const auto held = pd.held_coordinates_rad.find(name);
+    if (joint >= 0 && held != pd.held_coordinates_rad.end())
+      fail(pat + ".held_coordinates." + name, "'" + name + "' is a joint of the model: it cannot also be held");
+    if (joint < 0 && held == pd.held_coordinates_rad.end())
+      fail(where, "unknown coordinate '" + name + "': neither a joint of the model nor listed in held_coordinates");
+    if (held != pd.held_coordinates_rad.end() && !std::isfinite(held->second))
+      fail(pat + ".held_coordinates." + name, "must be finite");
+    coordinates.push_back(joint >= 0 ? muscles::PathCoordinate{joint, 0.0} : muscles::PathCoordinate{-1, held->second});
+  }
+  for (const auto& [name, value] : pd.held_coordinates_rad)
+    if (!seen.count(name)) fail(pat + ".held_coordinates." + name, "'" + name + "' is not one of the path's coordinates");
+  muscles::LengthPolynomial polynomial;
+  try {
+    polynomial = muscles::LengthPolynomial(static_cast<int>(pd.coordinates.size()), pd.order, pd.coefficients);
+  } catch (const std::invalid_argument& e) {
+    fail(pat, std::string("coefficients: ") + e.what());
+  }
+  muscles::MusculotendonPath path(std::move(polynomial), std::move(coordinates), model.numJoints());
+  if (path.crossedJoints().empty()) fail(pat, "the muscle crosses no joint (its length depends on no joint of the model)");
+  return path;
+}
+
 }  // namespace
 
 void validate(const ModelDescription& model, const std::string& source) {
@@ -83,6 +179,13 @@ void validate(const ModelDescription& model, const std::string& source) {
   }
   for (const auto& b : model.bodies)
     if (!attached.count(b.name)) fail("bodies", "body '" + b.name + "' has no joint");
+  for (std::size_t i = 0; i < model.joints.size(); ++i) {
+    const auto& r = model.joints[i].range_rad;
+    const bool unbounded = r[0] == -std::numeric_limits<double>::infinity() && r[1] == std::numeric_limits<double>::infinity();
+    if (!unbounded && !(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] < r[1]))
+      fail(indexed("joints", i) + ".range_rad", "must be [lower, upper] with finite lower < upper (got [" +
+                                                    std::to_string(r[0]) + ", " + std::to_string(r[1]) + "])");
+  }
 
   std::set<std::string> muscle_names;
   for (std::size_t j = 0; j < model.muscles.size(); ++j) {
@@ -95,11 +198,27 @@ void validate(const ModelDescription& model, const std::string& source) {
     } catch (const std::invalid_argument& e) {
       fail(at, e.what());
     }
-    if (m.moment_arms_m.size() != model.numJoints())
-      fail(at + ".moment_arms_m", "must have one entry per joint (the moment-arm matrix must be N x m)");
-    if (!m.moment_arms_m.allFinite()) fail(at + ".moment_arms_m", "must be finite");
-    if (!(m.length_at_zero_angles_m > 0.0) || !std::isfinite(m.length_at_zero_angles_m))
-      fail(at + ".length_at_zero_angles_m", "must be > 0");
+    const muscles::MusculotendonPath path = build_path(model, static_cast<int>(j), source);
+    const std::vector<int>& crossed = path.crossedJoints();
+    bool ranged = true;
+    for (int i : crossed) ranged = ranged && model.joints[static_cast<std::size_t>(i)].hasRange();
+    if (!path.hasConstantMomentArms())
+      for (int i : crossed)
+        if (!model.joints[static_cast<std::size_t>(i)].hasRange())
+          fail(indexed("joints", static_cast<std::size_t>(i)) + ".range_rad",
+               "required: muscle '" + m.parameters.name + "' has a path that depends on posture over this joint (a polynomial "
+               "is trusted only over a stated range)");
+    // Over the range of motion the unit must stay longer than its slack tendon: otherwise the
+    // tendon goes slack (no force, no flatness) or the length is not even positive.
+    if (ranged)
+      for_each_posture(model, crossed, 20000, [&](const Eigen::VectorXd& q) {
+        const double length = path.length(q.data());
+        if (!(length > m.parameters.tendon_slack_length_m))
+          fail(at + (m.polynomial_path ? ".path" : ".length_at_zero_angles_m"),
+               "the musculotendon length " + std::to_string(length) + " m at " + describe_posture(model, crossed, q) +
+                   " does not exceed the tendon slack length " + std::to_string(m.parameters.tendon_slack_length_m) +
+                   " m: the tendon would be slack there");
+      });
   }
   for (const auto& [name, sc] : model.scenarios) {
     const std::string at = "scenarios." + name;
@@ -138,9 +257,29 @@ void validate(const ModelDescription& model, const std::string& source) {
   }
 }
 
+muscles::MusculotendonPath ModelDescription::musclePath(int j) const {
+  if (j < 0 || j >= numMuscles()) throw std::out_of_range("muscle index " + std::to_string(j) + " out of range");
+  return build_path(*this, j, name.empty() ? "model" : name);
+}
+
+bool ModelDescription::hasConstantMomentArms() const {
+  for (const auto& m : muscles)
+    if (m.polynomial_path && m.polynomial_path->order > 1) return false;
+  return true;
+}
+
 Eigen::MatrixXd ModelDescription::momentArmMatrix() const {
-  Eigen::MatrixXd a(numJoints(), numMuscles());
-  for (int j = 0; j < numMuscles(); ++j) a.col(j) = muscles[j].moment_arms_m;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(numJoints(), numMuscles());
+  std::vector<double> r(static_cast<std::size_t>(numJoints()));
+  const std::vector<double> q(static_cast<std::size_t>(numJoints()), 0.0);
+  for (int j = 0; j < numMuscles(); ++j) {
+    const muscles::MusculotendonPath path = musclePath(j);
+    if (!path.hasConstantMomentArms())
+      throw std::logic_error("muscle '" + muscles[static_cast<std::size_t>(j)].parameters.name +
+                             "': its moment arms depend on posture, so the model has no constant moment-arm matrix");
+    path.momentArms(q.data(), r.data());
+    for (int i = 0; i < numJoints(); ++i) a(i, j) = r[static_cast<std::size_t>(i)];
+  }
   return a;
 }
 

@@ -71,16 +71,16 @@ MusculoskeletalModel::MusculoskeletalModel(ModelDescription description, std::ve
     joints_.push_back(pin);
   }
 
-  moment_arms_ = description_.momentArmMatrix();
-  zero_angle_lengths_.resize(numMuscles());
+  if (description_.hasConstantMomentArms()) moment_arms_ = description_.momentArmMatrix();
   for (int j = 0; j < numMuscles(); ++j) {
-    const auto& md = description_.muscles[j];
-    zero_angle_lengths_[j] = md.length_at_zero_angles_m;
+    paths_.push_back(description_.musclePath(j));
+    const muscles::MusculotendonPath& mp = paths_.back();
     MusclePath path;
-    path.length_at_zero_angles_m = md.length_at_zero_angles_m;
-    for (int i = 0; i < numJoints(); ++i)
-      if (md.moment_arms_m[i] != 0.0) path.moment_arms.push_back({joints_[i], md.moment_arms_m[i]});
-    muscles_.emplace_back(forces_, md.parameters, std::move(path));
+    path.length_m = mp.lengthPolynomial();
+    for (const muscles::PathCoordinate& c : mp.coordinates())
+      path.arguments.push_back(c.held() ? PathArgument{SimTK::MobilizedBody(), c.held_value_rad}
+                                        : PathArgument{joints_[static_cast<std::size_t>(c.joint)], 0.0});
+    muscles_.emplace_back(forces_, description_.muscles[j].parameters, std::move(path));
   }
   for (auto& e : external)
     SimTK::Force::Custom(forces_, new JointTorqueImpl(joints_[static_cast<std::size_t>(e.joint)], std::move(e.torque_N_m)));
@@ -164,7 +164,30 @@ void MusculoskeletalModel::setExcitations(SimTK::State& s, const Eigen::VectorXd
 
 Eigen::VectorXd MusculoskeletalModel::musculotendonLengths(const Eigen::VectorXd& q) const {
   checkSize(q, numJoints(), "joint angles");
-  return zero_angle_lengths_ - moment_arms_.transpose() * q;
+  Eigen::VectorXd L(numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) L[j] = paths_[static_cast<std::size_t>(j)].length(q.data());
+  return L;
+}
+
+const Eigen::MatrixXd& MusculoskeletalModel::momentArmMatrix() const {
+  if (moment_arms_.size() == 0)
+    throw std::logic_error("model '" + description_.name +
+                           "': its moment arms depend on posture, so it has no constant moment-arm matrix (use "
+                           "momentArmMatrix(q))");
+  return moment_arms_;
+}
+
+Eigen::MatrixXd MusculoskeletalModel::momentArmMatrix(const Eigen::VectorXd& q) const {
+  checkSize(q, numJoints(), "joint angles");
+  Eigen::MatrixXd R(numJoints(), numMuscles());
+  for (int j = 0; j < numMuscles(); ++j) paths_[static_cast<std::size_t>(j)].momentArms(q.data(), R.col(j).data());
+  return R;
+}
+
+const muscles::MusculotendonPath& MusculoskeletalModel::musclePath(int j) const {
+  if (j < 0 || j >= numMuscles())
+    throw std::out_of_range("muscle path: no muscle " + std::to_string(j) + " (the model has " + std::to_string(numMuscles()) + ")");
+  return paths_[static_cast<std::size_t>(j)];
 }
 
 double MusculoskeletalModel::musculotendonLength(int j, const Eigen::Ref<const Eigen::VectorXd>& q) const {
@@ -174,12 +197,17 @@ double MusculoskeletalModel::musculotendonLength(int j, const Eigen::Ref<const E
   if (q.size() != numJoints())
     throw std::invalid_argument("joint angles: expected " + std::to_string(numJoints()) + " values, got " +
                                 std::to_string(q.size()));
-  return zero_angle_lengths_[j] - moment_arms_.col(j).dot(q);
+  return paths_[static_cast<std::size_t>(j)].length(q.data());
 }
 
 Eigen::VectorXd MusculoskeletalModel::muscleTorques(const Eigen::VectorXd& f) const {
   checkSize(f, numMuscles(), "tendon forces");
-  return moment_arms_ * f;
+  return momentArmMatrix() * f;
+}
+
+Eigen::VectorXd MusculoskeletalModel::muscleTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& f) const {
+  checkSize(f, numMuscles(), "tendon forces");
+  return momentArmMatrix(q) * f;
 }
 
 const SimTK::State& MusculoskeletalModel::realizeVelocity(ModelWorkspace& ws, const Eigen::VectorXd& q,

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <vector>
 
 namespace flatsos::plugin {
 
@@ -41,6 +42,22 @@ std::vector<std::string> plausibility_warnings(const ModelDescription& model, co
       if (std::abs(m.moment_arms_m[i]) > limits.moment_arm_m)
         warnings.push_back(above(at + ".moment_arms_m." + model.joints[static_cast<std::size_t>(i)].name,
                                  std::abs(m.moment_arms_m[i]), limits.moment_arm_m, "m", "centimetres given as metres?"));
+    if (m.polynomial_path) {
+      // A path that depends on posture: judged at the middle of the joints' ranges.
+      const muscles::MusculotendonPath path = model.musclePath(static_cast<int>(j));
+      std::vector<double> q(static_cast<std::size_t>(model.numJoints()), 0.0), r(q.size());
+      for (std::size_t i = 0; i < q.size(); ++i)
+        if (model.joints[i].hasRange()) q[i] = 0.5 * (model.joints[i].range_rad[0] + model.joints[i].range_rad[1]);
+      path.momentArms(q.data(), r.data());
+      for (std::size_t i = 0; i < r.size(); ++i)
+        if (std::abs(r[i]) > limits.moment_arm_m)
+          warnings.push_back(above(at + ".path: moment arm about " + model.joints[i].name + " at mid-range", std::abs(r[i]),
+                                   limits.moment_arm_m, "m", "centimetres given as metres?"));
+      const double length = path.length(q.data());
+      if (length > limits.musculotendon_length_m)
+        warnings.push_back(above(at + ".path: length at mid-range", length, limits.musculotendon_length_m, "m",
+                                 "millimetres or centimetres given as metres?"));
+    }
     if (p.optimal_fiber_length_m > limits.optimal_fiber_length_m)
       warnings.push_back(above(at + ".optimal_fiber_length_m", p.optimal_fiber_length_m, limits.optimal_fiber_length_m,
                                "m", "millimetres or centimetres given as metres?"));

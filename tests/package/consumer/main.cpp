@@ -2,6 +2,7 @@
 // file that says `using namespace SimTK;` before the muscle headers (they include no Eigen).
 #include <cmath>
 #include <iostream>
+#include <vector>
 
 #include <Simbody.h>
 using namespace SimTK;
@@ -27,12 +28,12 @@ int main() {
   p.max_isometric_force_N = 500;
   p.optimal_fiber_length_m = 0.1;
   p.tendon_slack_length_m = 0.2;
-  flatsos::plugin::HillMuscle muscle(forces, p, {0.3, {{link, 0.03}}});
+  flatsos::plugin::HillMuscle muscle(forces, p, flatsos::plugin::MusclePath::constantMomentArms(0.3, {{link, 0.03}}));
   system.realizeTopology();
   State s = system.getDefaultState();
   muscle.setActivation(s, 0.5);
   muscle.setExcitation(s, 0.5);
-  const double L = muscle.getPath().length_at_zero_angles_m;  // at q = 0
+  const double L = muscle.getPath().length_m.value(std::vector<double>{0.0}.data());  // at q = 0
   muscle.setTendonLength(s, flatsos::muscles::static_equilibrium_tendon_length(p, L, 0.5));
   RungeKuttaMersonIntegrator integ(system);
   integ.initialize(s);

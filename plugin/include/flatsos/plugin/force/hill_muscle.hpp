@@ -6,11 +6,14 @@
 // piece held by value (a constant, or a controller's plan for one period: no allocation) or an
 // ExcitationSignal of time (shared, any shape), which takes precedence while set; n is clamped
 // to [0, 1] when read.
-// Path: constant moment arms, L(q) = l0 - sum_i d_i q_i; the tendon force F = Phi_S(L_S) acts
-// as the mobility force d_i F on each crossed joint (positive d_i: the muscle drives q_i up).
+// Path: the musculotendon length L as a polynomial of joint coordinates (OpenSim's
+// MultivariatePolynomialFunction convention, muscles/length_polynomial.hpp); coordinates the
+// system does not have are held at fixed values. Moment arms r_i(q) = -dL/dq_i; the tendon force
+// F = Phi_S(L_S) acts as the mobility force r_i(q) F on each crossed joint (positive r_i: the
+// muscle drives q_i up). Constant moment arms, L(q) = l0 - sum_i d_i q_i, are the order-1 case.
 //
 // Usage with your own Simbody system (any Pin mobilizers):
-//   flatsos::plugin::HillMuscle biceps(forces, params, path);
+//   flatsos::plugin::HillMuscle biceps(forces, params, MusclePath::constantMomentArms(0.43, {{elbow, 0.03}}));
 //   ... system.realizeTopology(); State s = system.getDefaultState();
 //   biceps.setActivation(s, 0.4); biceps.setTendonLength(s, 0.2347); biceps.setExcitation(s, 0.4);
 
@@ -22,6 +25,7 @@
 #include <Simbody.h>
 
 #include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/muscles/length_polynomial.hpp"
 #include "flatsos/muscles/muscle_parameters.hpp"
 #include "flatsos/plugin/force/excitation_signal.hpp"
 
@@ -33,10 +37,19 @@ struct MomentArm {
   double moment_arm_m = 0.0;       ///< d_i; positive: shortening the muscle increases q_i
 };
 
-/// Constant-moment-arm path: musculotendon length L(q) = l0 - sum_i d_i q_i.
+/// One argument of a path's length polynomial: a mobilizer with one generalized coordinate
+/// (Pin), or, without a mobilizer, a coordinate held at a fixed value.
+struct PathArgument {
+  SimTK::MobilizedBody mobilizer;  ///< empty handle: held
+  double held_value_rad = 0.0;     ///< used when the mobilizer is empty
+};
+
+/// The musculotendon length as a polynomial of its arguments.
 struct MusclePath {
-  double length_at_zero_angles_m = 0.0;  ///< l0
-  std::vector<MomentArm> moment_arms;
+  muscles::LengthPolynomial length_m;  ///< dimension = arguments.size()
+  std::vector<PathArgument> arguments;
+  /// L(q) = l0 - sum_i d_i q_i (an order-1 polynomial).
+  static MusclePath constantMomentArms(double length_at_zero_angles_m, const std::vector<MomentArm>& moment_arms);
 };
 
 class HillMuscleImpl;
@@ -75,13 +88,16 @@ class HillMuscle : public SimTK::Force::Custom {
   // --- outputs ---
   double getMusculotendonLength(const SimTK::State& s) const;          ///< L(q), Stage::Position
   double getMusculotendonLengtheningRate(const SimTK::State& s) const; ///< dL/dt, Stage::Velocity
-  double getFiberLength(const SimTK::State& s) const;                  ///< L_C = L - L_S
+  double getFiberLength(const SimTK::State& s) const;                  ///< L_M (L - L_S without pennation)
   double getTendonForce(const SimTK::State& s) const;                  ///< Phi_S(L_S), N
-  /// u = -dL_C/dt from the contraction dynamics (Stage::Velocity).
+  /// u = -dL_M/dt along the fibre, from the contraction dynamics (Stage::Velocity).
   double getFiberShorteningVelocity(const SimTK::State& s) const;
   /// dL_S/dt and da/dt (Stage::Velocity; the excitation is read at the state's time).
   double getTendonLengthDerivative(const SimTK::State& s) const;
   double getActivationDerivative(const SimTK::State& s) const;
+
+  /// r_k = -dL/dx_k about path argument k at the state's posture (0 for a held argument; Stage::Position).
+  double getMomentArm(const SimTK::State& s, int argument) const;
 
   // --- for integrators (Stage::Velocity) ---
   /// Position of L_S in State::getY(); the activation is the next entry.

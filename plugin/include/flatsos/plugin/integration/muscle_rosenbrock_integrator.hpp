@@ -55,8 +55,9 @@ class MuscleRosenbrockIntegrator final : public Stepper {
  private:
   static constexpr int kStages = 4;
   struct PathCoupling {
+    int argument = -1;               // of the muscle's path
     int q_index = -1, u_index = -1;  // in Y
-    double moment_arm_m = 0.0;       // dL/dq = -moment_arm
+    double moment_arm_m = 0.0;       // dL/dq = -moment_arm, at the last Jacobian's posture
   };
   struct MuscleSlot {
     HillMuscle muscle;

@@ -12,12 +12,21 @@
 //               "length_m" (optional, for drawing and chains)}],
 //   "joints": [{"name", "type": "pin", "parent": "ground" | body, "child": body,
 //               "location_in_parent_m": [x,y,z], "axis": [0,0,1] (optional),
-//               "coordinate": "elbow_flexion" (optional; default: the joint's name)}],
+//               "coordinate": "elbow_flexion" (optional; default: the joint's name),
+//               "range_rad": [lower, upper] (optional; required for the joints of a muscle
+//               whose moment arms change with posture)}],
 //   "muscle_defaults": {any MuscleParameters field except the three below} (optional),
 //   "muscles": [{"name", "max_isometric_force_N", "optimal_fiber_length_m",
-//                "tendon_slack_length_m", "length_at_zero_angles_m",
-//                "moment_arms_m": {"<joint>": d, ...} | [d per joint, in joint order],
-//                ...optional overrides of muscle_defaults}],
+//                "tendon_slack_length_m",
+//                either constant moment arms:
+//                  "length_at_zero_angles_m",
+//                  "moment_arms_m": {"<joint>": d, ...} | [d per joint, in joint order],
+//                or a path that depends on posture (OpenSim's MultivariatePolynomialFunction):
+//                  "path": {"coordinates": [joint or coordinate names, and held ones],
+//                           "order": k, "coefficients": [...],
+//                           "held_coordinates": {"<name>": value_rad} (optional)},
+//                ...optional overrides of muscle_defaults, among them
+//                "pennation_angle_at_optimal_rad" and "passive_fiber_strain_at_one_norm_force"}],
 //   "flat_outputs": [{"name", "weights": {"<muscle>": w, ...}}]   (optional; m - N rows)
 //   "scenarios": {"<name>": {"q0_deg": [per joint], "qd0_deg_per_s": [per joint],
 //                            "activations": [per muscle], "target_deg": [per joint],
@@ -29,7 +38,11 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <array>
+#include <cmath>
+#include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,6 +50,7 @@
 #include <Eigen/Core>
 
 #include "flatsos/muscles/muscle_parameters.hpp"
+#include "flatsos/muscles/musculotendon_path.hpp"
 
 namespace flatsos::plugin {
 
@@ -61,13 +75,30 @@ struct JointDescription {
   Eigen::Vector3d location_in_parent_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit vector, parent frame
   std::string coordinate;  ///< its coordinate's name (OpenSim's /jointset/<joint>/<coordinate>); empty: `name`
+  /// The range of motion [lower, upper] (rad); unbounded when not given.
+  std::array<double, 2> range_rad{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   const std::string& coordinateName() const { return coordinate.empty() ? name : coordinate; }
+  bool hasRange() const { return std::isfinite(range_rad[0]) && std::isfinite(range_rad[1]); }
+};
+
+/// A muscle path as a polynomial of coordinates, as written in the file (OpenSim's
+/// MultivariatePolynomialFunction convention: see muscles/length_polynomial.hpp).
+struct PolynomialPathDescription {
+  /// The polynomial's arguments in order: a joint's name or its coordinate's name, or a name
+  /// listed in held_coordinates_rad.
+  std::vector<std::string> coordinates;
+  int order = 0;
+  std::vector<double> coefficients;
+  std::map<std::string, double> held_coordinates_rad;  ///< arguments the model does not have
 };
 
 struct MuscleDescription {
   muscles::MuscleParameters parameters;
-  double length_at_zero_angles_m = 0.0;  ///< l0 of L(q) = l0 - sum_i d_i q_i
+  /// Constant moment arms, L(q) = l0 - sum_i d_i q_i (when polynomial_path is not given).
+  double length_at_zero_angles_m = 0.0;  ///< l0
   Eigen::VectorXd moment_arms_m;         ///< d_i per joint (joint order), N entries
+  /// A path that depends on posture (instead of the two fields above, which stay 0 and empty).
+  std::optional<PolynomialPathDescription> polynomial_path;
 };
 
 struct FlatOutputDescription {
@@ -96,7 +127,13 @@ struct ModelDescription {
 
   int numJoints() const { return static_cast<int>(joints.size()); }
   int numMuscles() const { return static_cast<int>(muscles.size()); }
-  /// A (N x m): A(i, j) = d_ij, moment arm of muscle j about joint i.
+  /// Muscle j's path over the joints (constant moment arms: an order-1 polynomial). Throws
+  /// ModelFileError naming the field when the muscle's path is invalid.
+  muscles::MusculotendonPath musclePath(int j) const;
+  /// True when every muscle's moment arms are the same in every posture.
+  bool hasConstantMomentArms() const;
+  /// A (N x m): A(i, j) = d_ij, moment arm of muscle j about joint i. Throws std::logic_error
+  /// when a muscle's moment arms depend on posture (see musclePath).
   Eigen::MatrixXd momentArmMatrix() const;
   /// E (p x m) from flat_outputs.
   Eigen::MatrixXd flatOutputMatrix() const;

@@ -77,14 +77,23 @@ class MusculoskeletalModel {
   void setExcitations(SimTK::State& s, const Eigen::VectorXd& n) const;  ///< held values
 
   // --- model quantities ---
-  const Eigen::MatrixXd& momentArmMatrix() const { return moment_arms_; }  ///< A, N x m
-  /// Musculotendon lengths L(q) = l0 - A^T q.
+  /// True when every muscle's moment arms are the same in every posture.
+  bool hasConstantMomentArms() const { return description_.hasConstantMomentArms(); }
+  /// A (N x m) of a model with constant moment arms; throws std::logic_error otherwise.
+  const Eigen::MatrixXd& momentArmMatrix() const;
+  /// R(q) (N x m): R(i, j) = r_ij(q) = -dL_j/dq_i, moment arm of muscle j about joint i.
+  Eigen::MatrixXd momentArmMatrix(const Eigen::VectorXd& q_rad) const;
+  /// Muscle j's path: L(q), moment arms, their Jacobians and time jets.
+  const muscles::MusculotendonPath& musclePath(int muscle) const;
+  /// Musculotendon lengths L(q).
   Eigen::VectorXd musculotendonLengths(const Eigen::VectorXd& q_rad) const;
   /// One muscle's L(q) (allocates nothing). Throws std::out_of_range for a muscle that does not
   /// exist, std::invalid_argument for a q of the wrong size.
   double musculotendonLength(int muscle, const Eigen::Ref<const Eigen::VectorXd>& q_rad) const;
-  /// Joint torques tau = A F of the given tendon forces.
+  /// Joint torques tau = A F of the given tendon forces (constant moment arms only).
   Eigen::VectorXd muscleTorques(const Eigen::VectorXd& tendon_forces_N) const;
+  /// Joint torques tau = R(q) F.
+  Eigen::VectorXd muscleTorques(const Eigen::VectorXd& q_rad, const Eigen::VectorXd& tendon_forces_N) const;
   /// Mass matrix M(q) from Simbody.
   Eigen::MatrixXd massMatrix(ModelWorkspace& workspace, const Eigen::VectorXd& q_rad) const;
   Eigen::MatrixXd massMatrix(const Eigen::VectorXd& q_rad) const;
@@ -116,8 +125,8 @@ class MusculoskeletalModel {
   SimTK::Force::Gravity gravity_;
   std::vector<SimTK::MobilizedBody> joints_;
   std::vector<HillMuscle> muscles_;
-  Eigen::MatrixXd moment_arms_;
-  Eigen::VectorXd zero_angle_lengths_;
+  Eigen::MatrixXd moment_arms_;  ///< empty when a muscle's moment arms depend on posture
+  std::vector<muscles::MusculotendonPath> paths_;
   PinTreeDynamics tree_;
 };
 
