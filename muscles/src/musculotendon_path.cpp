@@ -7,6 +7,14 @@
 
 namespace flatsos::muscles {
 
+namespace {
+void require_jet_count(int count) {
+  if (count < 1 || count > LengthPolynomial::kMaxJetCount)
+    throw std::invalid_argument("muscle path: jet count " + std::to_string(count) + " is outside [1, " +
+                                std::to_string(LengthPolynomial::kMaxJetCount) + "]");
+}
+}  // namespace
+
 MusculotendonPath::MusculotendonPath(LengthPolynomial length_m, std::vector<PathCoordinate> coordinates,
                                      int num_joints)
     : length_(std::move(length_m)), coordinates_(std::move(coordinates)), num_joints_(num_joints) {
@@ -86,18 +94,14 @@ void MusculotendonPath::momentArmJacobian(const double* q_rad, double* out) cons
 }
 
 void MusculotendonPath::lengthJet(const double* q_jet, int count, double* out) const {
-  if (count < 1 || count > LengthPolynomial::kMaxJetCount)
-    throw std::invalid_argument("muscle path: jet count " + std::to_string(count) + " is outside [1, " +
-                                std::to_string(LengthPolynomial::kMaxJetCount) + "]");
+  require_jet_count(count);
   double x[LengthPolynomial::kMaxDimension * LengthPolynomial::kMaxJetCount];
   arguments(q_jet, count, x);
   length_.timeDerivatives(x, count, out);
 }
 
 void MusculotendonPath::momentArmJets(const double* q_jet, int count, double* out) const {
-  if (count < 1 || count > LengthPolynomial::kMaxJetCount)
-    throw std::invalid_argument("muscle path: jet count " + std::to_string(count) + " is outside [1, " +
-                                std::to_string(LengthPolynomial::kMaxJetCount) + "]");
+  require_jet_count(count);
   double x[LengthPolynomial::kMaxDimension * LengthPolynomial::kMaxJetCount];
   arguments(q_jet, count, x);
   std::fill(out, out + count * num_joints_, 0.0);

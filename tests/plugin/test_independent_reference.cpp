@@ -28,10 +28,12 @@
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
+#include "state_table_column.hpp"
 
 namespace {
 
 namespace fp = flatsos::plugin;
+using flatsos::test::column;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double deg(double d) { return d * kPi / 180.0; }
@@ -264,14 +266,6 @@ Eigen::VectorXd paper_a0() {
   return a;
 }
 
-// Column of the state table, checked to exist.
-std::vector<double> column(const fp::StoTable& table, const std::string& label) {
-  const int c = table.columnIndex(label);
-  EXPECT_GE(c, 0) << "missing column " << label;
-  std::vector<double> out;
-  for (const auto& row : table.rows) out.push_back(c >= 0 ? row.at(c) : NAN);
-  return out;
-}
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

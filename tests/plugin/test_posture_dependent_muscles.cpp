@@ -25,10 +25,12 @@
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
+#include "state_table_column.hpp"
 
 namespace {
 
 namespace fp = flatsos::plugin;
+using flatsos::test::column;
 using nlohmann::json;
 
 constexpr double kPi = 3.14159265358979323846;
@@ -151,14 +153,6 @@ class Sinusoid final : public fp::ExcitationSignal {
  private:
   double mean_, amplitude_, f_;
 };
-
-std::vector<double> column(const fp::StoTable& table, const std::string& label) {
-  const int c = table.columnIndex(label);
-  EXPECT_GE(c, 0) << "missing column " << label;
-  std::vector<double> out;
-  for (const auto& row : table.rows) out.push_back(c >= 0 ? row.at(c) : NAN);
-  return out;
-}
 
 }  // namespace
 
