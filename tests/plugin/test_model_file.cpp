@@ -148,6 +148,13 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
       {"path over an unknown coordinate",
        [](json& j) { as_path(j, 2, 1, {0.43, -0.03, -0.03}); j["muscles"][2]["path"]["coordinates"][1] = "wrist"; },
        {"muscles[2].path.coordinates[1]", "unknown coordinate 'wrist'"}},
+      {"one joint under its name and its coordinate's",
+       [](json& j) {
+         j["joints"][1]["coordinate"] = "elbow_flexion";
+         as_path(j, 2, 1, {0.43, -0.03, -0.03});
+         j["muscles"][2]["path"]["coordinates"] = {"elbow", "elbow_flexion"};
+       },
+       {"muscles[2].path.coordinates", "joint 1 is given twice"}},
       {"held coordinate that is a joint",
        [](json& j) { as_path(j, 2, 1, {0.43, -0.03, -0.03}); j["muscles"][2]["path"]["held_coordinates"] = {{"elbow", 0.1}}; },
        {"muscles[2].path.held_coordinates.elbow", "cannot also be held"}},

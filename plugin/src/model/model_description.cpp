@@ -84,8 +84,12 @@ muscles::MusculotendonPath build_path(const ModelDescription& model, int j, cons
       fail(at + ".length_at_zero_angles_m", "must be > 0");
     if (m.moment_arms_m.cwiseAbs().maxCoeff() == 0.0)
       fail(at + ".moment_arms_m", "the muscle crosses no joint (all moment arms are 0)");
-    return muscles::MusculotendonPath::constantMomentArms(
-        m.length_at_zero_angles_m, std::vector<double>(m.moment_arms_m.data(), m.moment_arms_m.data() + m.moment_arms_m.size()));
+    try {
+      return muscles::MusculotendonPath::constantMomentArms(
+          m.length_at_zero_angles_m, std::vector<double>(m.moment_arms_m.data(), m.moment_arms_m.data() + m.moment_arms_m.size()));
+    } catch (const std::invalid_argument& e) {
+      fail(at + ".moment_arms_m", e.what());
+    }
   }
   const PolynomialPathDescription& pd = *m.polynomial_path;
   const std::string pat = at + ".path";
@@ -115,7 +119,12 @@ muscles::MusculotendonPath build_path(const ModelDescription& model, int j, cons
   } catch (const std::invalid_argument& e) {
     fail(pat, std::string("coefficients: ") + e.what());
   }
-  muscles::MusculotendonPath path(std::move(polynomial), std::move(coordinates), model.numJoints());
+  muscles::MusculotendonPath path;
+  try {
+    path = muscles::MusculotendonPath(std::move(polynomial), std::move(coordinates), model.numJoints());
+  } catch (const std::invalid_argument& e) {  // e.g. one joint under its name and its coordinate's
+    fail(pat + ".coordinates", e.what());
+  }
   if (path.crossedJoints().empty()) fail(pat, "the muscle crosses no joint (its length depends on no joint of the model)");
   return path;
 }
