@@ -34,11 +34,11 @@ namespace {
 constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
 
 // The posture grid over the ranges of `joints` (every other joint at 0): about `budget` points
-// in all, at least 3 per joint, the range ends included. Calls visit(q) for each.
+// in all, at least the range ends of each joint (2^k points for k joints). Calls visit(q) for each.
 template <class Visit>
 void for_each_posture(const ModelDescription& model, const std::vector<int>& joints, long budget, const Visit& visit) {
   const int k = static_cast<int>(joints.size());
-  const int per_joint = std::max(3, static_cast<int>(std::floor(std::pow(static_cast<double>(budget), 1.0 / std::max(k, 1)))));
+  const int per_joint = std::max(2, static_cast<int>(std::floor(std::pow(static_cast<double>(budget), 1.0 / std::max(k, 1)))));
   std::vector<int> index(static_cast<std::size_t>(k), 0);
   Eigen::VectorXd q = Eigen::VectorXd::Zero(model.numJoints());
   while (true) {
