@@ -206,7 +206,7 @@ double passive_fiber_force_second_derivative(const MuscleParameters& p, double f
 // ---------------------------------------------------------------- pennation
 FiberGeometry fiber_geometry(const MuscleParameters& p, double along_tendon_m) {
   FiberGeometry g;
-  const double h = p.pennation_angle_at_optimal_rad != 0.0 ? p.fiber_thickness_m() : 0.0;
+  const double h = p.fiber_thickness_m();
   if (h == 0.0) {  // fibres along the tendon: exactly the unpennated model
     g.length_m = along_tendon_m;
     g.cos_pennation = 1.0;

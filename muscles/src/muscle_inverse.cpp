@@ -89,7 +89,7 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
   // The muscle along the tendon, x = L - L_S, and the fibre: L_M = sqrt(x^2 + h^2),
   // cos = x / L_M, dL_M = cos dx, d cos = h^2 / L_M^3 dx.
   const D x = L - ls, dx = dL - dls, ddx = ddL - ddls;
-  const double h = p.pennation_angle_at_optimal_rad != 0.0 ? p.fiber_thickness_m() : 0.0;
+  const double h = p.fiber_thickness_m();
   // A pennated fibre needs x > 0 (cos > 0). Without pennation the laws stay defined for any x,
   // as in the paper's model (the Gaussian force-length curve is positive everywhere).
   if (h != 0.0 && !(x.v > 0.0)) {

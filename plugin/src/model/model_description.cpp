@@ -27,9 +27,6 @@ bool central_inertia_survives_shift(const BodyDescription& b) {
     return false;
   }
 }
-}  // namespace
-
-namespace {
 
 constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
 

@@ -42,8 +42,11 @@ struct MuscleParameters {
     const double stretch_at_fmax = tendon_strain_at_max_force * tendon_slack_length_m;
     return max_isometric_force_N / (stretch_at_fmax * stretch_at_fmax);
   }
-  /// h = Lopt sin(phi0), m: the fibres' constant thickness (0 without pennation).
-  double fiber_thickness_m() const { return optimal_fiber_length_m * std::sin(pennation_angle_at_optimal_rad); }
+  /// h = Lopt sin(phi0), m: the fibres' constant thickness; exactly 0 without pennation, and then
+  /// without a call to sin (the laws ask for it at every evaluation).
+  double fiber_thickness_m() const {
+    return pennation_angle_at_optimal_rad != 0.0 ? optimal_fiber_length_m * std::sin(pennation_angle_at_optimal_rad) : 0.0;
+  }
   bool hasPassiveFiberForce() const { return passive_fiber_strain_at_one_norm_force > 0.0; }
   /// beta = T_act / T_deact of the activation dynamics.
   double activation_beta() const {
