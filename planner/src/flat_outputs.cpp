@@ -8,6 +8,7 @@
 
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
+#include "flatsos/plugin/model/posture_grid.hpp"
 
 namespace flatsos::planner {
 
@@ -88,15 +89,13 @@ std::string DomainViolation::describe() const {
   return why.str();
 }
 
-void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E) {
+namespace {
+
+// The violated conditions of Assumption 1 for moment arms A and flat outputs E of the right
+// shapes (empty: it holds).
+std::vector<std::string> assumption1_failures(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E) {
   const Eigen::Index n = A.rows(), m = A.cols();
-  std::ostringstream why;
-  if (E.rows() != m - n || E.cols() != m) {
-    why << "flat-output matrix E must be (m - N) x m = " << (m - n) << " x " << m << ", got "
-        << E.rows() << " x " << E.cols();
-    throw FlatnessError(why.str());
-  }
-  if (!A.allFinite() || !E.allFinite()) throw FlatnessError("A and E must be finite");
+  if (!A.allFinite() || !E.allFinite()) return {"A and E must be finite"};
   Eigen::MatrixXd C(m, m);
   C << A, E;
   std::vector<std::string> failures;
@@ -122,21 +121,35 @@ void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::Matr
         failures.push_back(f.str());
       }
   }
-  if (!failures.empty()) {
-    std::string msg = "Assumption 1 violated:";
-    for (const auto& f : failures) msg += " " + f + ";";
-    throw FlatnessError(msg);
+  return failures;
+}
+
+std::string join_failures(const std::vector<std::string>& failures) {
+  std::string msg = "Assumption 1 violated:";
+  for (const auto& f : failures) msg += " " + f + ";";
+  return msg;
+}
+
+void require_shape(const Eigen::MatrixXd& E, Eigen::Index n, Eigen::Index m) {
+  if (E.rows() != m - n || E.cols() != m) {
+    std::ostringstream why;
+    why << "flat-output matrix E must be (m - N) x m = " << (m - n) << " x " << m << ", got " << E.rows() << " x "
+        << E.cols();
+    throw FlatnessError(why.str());
   }
+}
+
+}  // namespace
+
+void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E) {
+  require_shape(E, A.rows(), A.cols());
+  const std::vector<std::string> failures = assumption1_failures(A, E);
+  if (!failures.empty()) throw FlatnessError(join_failures(failures));
 }
 
 namespace {
 const plugin::MusculoskeletalModel& require_model(const std::shared_ptr<const plugin::MusculoskeletalModel>& model) {
   if (!model) throw std::invalid_argument("flat-output map: no model (null pointer)");
-  // C(q) = [R(q); E] is the next step of the planner; until then refuse such a model by name.
-  if (!model->hasConstantMomentArms())
-    throw FlatnessError("model '" + model->description().name +
-                        "': the planner needs constant moment arms; muscle paths that depend on posture are simulated "
-                        "but not yet planned");
   return *model;
 }
 }  // namespace
@@ -145,14 +158,121 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
     : FlatOutputMap(model, require_model(model).description().flatOutputMatrix()) {}
 
 FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E)
-    : model_(std::move(model)), A_(require_model(model_).momentArmMatrix()), E_(std::move(E)) {
-  if (E_.rows() == 0) throw FlatnessError("the model '" + model_->description().name + "' defines no flat_outputs (E)");
+    : model_(std::move(model)), E_(std::move(E)) {
+  const plugin::MusculoskeletalModel& m = require_model(model_);
+  joints_ = m.numJoints();
+  muscles_ = m.numMuscles();
+  constant_ = m.hasConstantMomentArms();
+  if (E_.rows() == 0) throw FlatnessError("the model '" + m.description().name + "' defines no flat_outputs (E)");
+  require_shape(E_, joints_, muscles_);
+  if (!constant_) {
+    checkAssumption1OverRanges();
+    return;
+  }
+  A_ = m.momentArmMatrix();
   checkAssumption1(A_, E_);
   C_.resize(numMuscles(), numMuscles());
   C_ << A_, E_;
   const Eigen::MatrixXd Cinv = C_.fullPivLu().inverse();
   Ctau_ = Cinv.leftCols(numJoints());
   CY_ = Cinv.rightCols(numFlatOutputs());
+}
+
+void FlatOutputMap::checkAssumption1OverRanges() const {
+  const plugin::ModelDescription& d = model_->description();
+  const std::vector<int> joints = plugin::posture_dependent_joints(d);
+  // The same budget as the model's own path checks (posture_grid.hpp): the ranges' ends at least.
+  plugin::for_each_posture(d, joints, 20000, [&](const Eigen::VectorXd& q) {
+    const std::vector<std::string> failures = assumption1_failures(model_->momentArmMatrix(q), E_);
+    if (!failures.empty())
+      throw FlatnessError("model '" + d.name + "', C(q) = [R(q); E] at " + plugin::describe_posture(d, joints, q) +
+                          " (a posture in the joint ranges): " + join_failures(failures));
+  });
+}
+
+std::string FlatOutputMap::assumption1FailureAt(const Eigen::VectorXd& q) const {
+  const std::vector<std::string> failures =
+      assumption1_failures(constant_ ? A_ : model_->momentArmMatrix(q), E_);
+  if (failures.empty()) return "";
+  std::vector<int> all(static_cast<std::size_t>(numJoints()));
+  for (int i = 0; i < numJoints(); ++i) all[static_cast<std::size_t>(i)] = i;
+  return "at " + plugin::describe_posture(model_->description(), all, q) + ": " + join_failures(failures);
+}
+
+const Eigen::MatrixXd& FlatOutputMap::requireConstant(const Eigen::MatrixXd& matrix, const char* name) const {
+  if (!constant_)
+    throw std::logic_error(std::string("flat-output map: ") + name + " is constant only with constant moment arms; model '" +
+                           model_->description().name + "' has posture-dependent ones (use forceJetMap(q))");
+  return matrix;
+}
+
+const Eigen::MatrixXd& FlatOutputMap::A() const { return requireConstant(A_, "A"); }
+const Eigen::MatrixXd& FlatOutputMap::C() const { return requireConstant(C_, "C"); }
+const Eigen::MatrixXd& FlatOutputMap::Ctau() const { return requireConstant(Ctau_, "C_tau"); }
+const Eigen::MatrixXd& FlatOutputMap::CY() const { return requireConstant(CY_, "C_Y"); }
+
+Eigen::MatrixXd FlatOutputMap::momentArms(const Eigen::VectorXd& q) const {
+  return constant_ ? A_ : model_->momentArmMatrix(q);
+}
+
+void ForceJetMap::mix(Eigen::MatrixXd& v0, Eigen::MatrixXd& v1, Eigen::MatrixXd& v2) const {
+  if (!varies()) return;
+  v2 += W21 * v1 + W20 * v0;  // before v1 changes
+  v1 += W10 * v0;
+}
+
+Eigen::MatrixXd ForceJetMap::forceJet(const Eigen::MatrixXd& tau, const Eigen::MatrixXd& Y) const {
+  Eigen::MatrixXd v0 = Ctau * tau.col(0) + CY * Y.col(0);
+  Eigen::MatrixXd v1 = Ctau * tau.col(1) + CY * Y.col(1);
+  Eigen::MatrixXd v2 = Ctau * tau.col(2);
+  if (Y.cols() > 2) v2 += CY * Y.col(2);
+  mix(v0, v1, v2);
+  Eigen::MatrixXd F(Ctau.rows(), 3);
+  F << v0, v1, v2;
+  return F;
+}
+
+ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
+  const int n = numJoints(), m = numMuscles();
+  if (q_jet.rows() != n || q_jet.cols() < 1)
+    throw std::invalid_argument("force jet map: the joint jet must be N x (1..5)");
+  ForceJetMap map;
+  if (constant_) {
+    map.Ctau = Ctau_;
+    map.CY = CY_;
+    return map;
+  }
+  // R and its first two time derivatives along the motion, exact from each path's jets (the
+  // jet's column-major storage is the paths' layout: entry [k n + i] is d^k q_i / dt^k).
+  Eigen::MatrixXd jet = Eigen::MatrixXd::Zero(n, 3);
+  const Eigen::Index given = std::min<Eigen::Index>(3, q_jet.cols());
+  jet.leftCols(given) = q_jet.leftCols(given);
+  std::array<Eigen::MatrixXd, 3> R;
+  for (auto& r : R) r.resize(n, m);
+  Eigen::MatrixXd arm_jet(n, 3);
+  for (int j = 0; j < m; ++j) {
+    model_->musclePath(j).momentArmJets(jet.data(), 3, arm_jet.data());
+    for (int k = 0; k < 3; ++k) R[static_cast<std::size_t>(k)].col(j) = arm_jet.col(k);
+  }
+  Eigen::MatrixXd C(m, m);
+  C << R[0], E_;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
+  lu.setThreshold(1e-10);
+  if (!lu.isInvertible()) {
+    std::vector<int> all(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
+    throw FlatnessError("C(q) = [R(q); E] is singular at " + plugin::describe_posture(model_->description(), all, jet.col(0)) +
+                        " (rank " + std::to_string(lu.rank()) + " of " + std::to_string(m) + "): the flat outputs "
+                        "do not determine the tendon forces there");
+  }
+  const Eigen::MatrixXd Cinv = lu.inverse();
+  map.Ctau = Cinv.leftCols(n);
+  map.CY = Cinv.rightCols(numFlatOutputs());
+  const Eigen::MatrixXd K1 = map.Ctau * R[1], K2 = map.Ctau * R[2];
+  map.W10 = -K1;
+  map.W21 = -2.0 * K1;
+  map.W20 = 2.0 * K1 * K1 - K2;
+  return map;
 }
 
 Eigen::VectorXd FlatOutputMap::torque(plugin::ModelWorkspace& ws, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
@@ -210,6 +330,8 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
   if (tj.tau.rows() != numJoints() || tj.tau.cols() != 3)
     throw std::invalid_argument("torque jet must be N x 3: tau, dtau, ddtau");
   const bool has_ddY = Y_jet.cols() > 2;
+  // Posture-dependent moment arms: the force jet through C(q) and its rates (allocates).
+  const Eigen::MatrixXd varying_F = constant_ ? Eigen::MatrixXd() : forceJetMap(q_jet).forceJet(tj.tau, Y_jet);
   for (auto* v : {&p.tendon_force_N, &p.tendon_force_rate_N_per_s, &p.tendon_length_m, &p.tendon_length_rate_m_per_s,
                   &p.fiber_length_m, &p.shortening_velocity_m_per_s, &p.force_ratio, &p.activation,
                   &p.activation_rate_per_s, &p.excitation})
@@ -221,9 +343,10 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
     DomainViolation& why = p.domain_violation[static_cast<std::size_t>(j)];
     why = DomainViolation{};
     // F = C_tau tau + C_Y Y and its two time derivatives; L(q) and its derivatives along the path.
-    const double F = Ctau_.row(j).dot(tj.tau.col(0)) + CY_.row(j).dot(Y_jet.col(0));
-    const double dF = Ctau_.row(j).dot(tj.tau.col(1)) + CY_.row(j).dot(Y_jet.col(1));
-    const double ddF = Ctau_.row(j).dot(tj.tau.col(2)) + (has_ddY ? CY_.row(j).dot(Y_jet.col(2)) : 0.0);
+    const double F = constant_ ? Ctau_.row(j).dot(tj.tau.col(0)) + CY_.row(j).dot(Y_jet.col(0)) : varying_F(j, 0);
+    const double dF = constant_ ? Ctau_.row(j).dot(tj.tau.col(1)) + CY_.row(j).dot(Y_jet.col(1)) : varying_F(j, 1);
+    const double ddF = constant_ ? Ctau_.row(j).dot(tj.tau.col(2)) + (has_ddY ? CY_.row(j).dot(Y_jet.col(2)) : 0.0)
+                                 : varying_F(j, 2);
     const fm::SecondOrderJet path = pathLengthJet(j, q_jet);
     p.tendon_force_N[j] = F;
     p.tendon_force_rate_N_per_s[j] = dF;
@@ -264,13 +387,22 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
 
 muscles::SecondOrderJet FlatOutputMap::pathLengthJet(int j, const Jet& q_jet) const {
   // Constant moment arms: dL/dt = -A^T qd, d2L/dt2 = -A^T qdd.
-  return {model_->musculotendonLength(j, q_jet.col(0)), q_jet.cols() > 1 ? -A_.col(j).dot(q_jet.col(1)) : 0.0,
-          q_jet.cols() > 2 ? -A_.col(j).dot(q_jet.col(2)) : 0.0};
+  if (constant_)
+    return {model_->musculotendonLength(j, q_jet.col(0)), q_jet.cols() > 1 ? -A_.col(j).dot(q_jet.col(1)) : 0.0,
+            q_jet.cols() > 2 ? -A_.col(j).dot(q_jet.col(2)) : 0.0};
+  const int n = numJoints();
+  Eigen::MatrixXd jet = Eigen::MatrixXd::Zero(n, 3);
+  const Eigen::Index given = std::min<Eigen::Index>(3, q_jet.cols());
+  jet.leftCols(given) = q_jet.leftCols(given);
+  double L[3];
+  model_->musclePath(j).lengthJet(jet.data(), 3, L);
+  return {L[0], L[1], L[2]};
 }
 
 void FlatOutputMap::pathLengthJetGradient(int j, const Jet& q_jet, Eigen::Ref<Eigen::MatrixXd> out) const {
   if (out.rows() != 3 || out.cols() != 5 * q_jet.rows())
     throw std::invalid_argument("path-length jet gradient: the output must be 3 x 5N");
+  requireConstant(A_, "the path-length jet gradient");
   // Constant moment arms: d^k L / dt^k = -A^T q^(k) (k >= 1) and L = L(q): order k of L moves
   // only with order k of q.
   out.setZero();
@@ -296,14 +428,24 @@ FlatState FlatOutputMap::forward(plugin::ModelWorkspace& ws, const MuscleState& 
   check(s.activation, m, "activations");
   Eigen::VectorXd F(m), dF(m);
   const Eigen::VectorXd L = model_->musculotendonLengths(s.q_rad);
-  const Eigen::VectorXd dL = -A_.transpose() * s.qd_rad_per_s;
+  // R(q) and dR/dt = sum_k dR/dq_k qd_k (posture-dependent paths) or A and 0.
+  Eigen::MatrixXd R = momentArms(s.q_rad), dR = Eigen::MatrixXd::Zero(n, m);
+  if (!constant_) {
+    Eigen::MatrixXd jet(n, 2), arm_jet(n, 2);
+    jet << s.q_rad, s.qd_rad_per_s;
+    for (int j = 0; j < m; ++j) {
+      model_->musclePath(j).momentArmJets(jet.data(), 2, arm_jet.data());
+      dR.col(j) = arm_jet.col(1);
+    }
+  }
+  const Eigen::VectorXd dL = -R.transpose() * s.qd_rad_per_s;
   for (int j = 0; j < m; ++j) {
     const fm::MuscleParameters& mp = model_->muscle(j).getParameters();
     F[j] = fm::tendon_force(mp, s.tendon_length_m[j]);
     const double dls = fm::tendon_length_derivative(mp, s.tendon_length_m[j], s.activation[j], L[j], dL[j]);
     dF[j] = fm::tendon_force_derivative(mp, s.tendon_length_m[j]) * dls;
   }
-  const Eigen::VectorXd tau = A_ * F, dtau = A_ * dF;
+  const Eigen::VectorXd tau = R * F, dtau = R * dF + dR * F;
   const Eigen::MatrixXd M = model_->massMatrix(ws, s.q_rad);
   const Eigen::LDLT<Eigen::MatrixXd> Minv(M);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);

@@ -45,6 +45,20 @@ void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, co
 void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const FlatOutputBoundary& bc,
                      const OpenLoopOptions& o, OpenLoopPlan& plan) {
   const Stopwatch setup;
+  if (!flat.hasConstantMomentArms()) {
+    // C(q(t)) must satisfy Assumption 1 all along the path, not only in the ranges' grid: checked
+    // as densely as the torque model samples it.
+    const int points = o.torque.pieces * (o.torque.samples_per_piece - 1) + 1;
+    for (int i = 0; i < points; ++i) {
+      const double t = plan.path.duration_s * i / (points - 1);
+      const std::string failure = flat.assumption1FailureAt(plan.path.jet(t, 1).col(0));
+      if (failure.empty()) continue;
+      plan.status = SolveStatus::Infeasible;
+      plan.message = "the joint path leaves the postures where the flat outputs are valid, at t = " + std::to_string(t) +
+                     " s " + failure;
+      return;
+    }
+  }
   plan.torque = build_torque_model(flat, workspace, plan.path, o.torque);
   const double before_sos = setup.seconds();
   const MusclesAlongPath muscles{flat, plan.path, workspace};
@@ -83,9 +97,13 @@ void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   }
 }
 
-void require_free_path_options(const OpenLoopOptions& o) {
+void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions& o) {
   const FreeJointPathOptions& f = o.free_path;
   if (!f.enabled) return;
+  if (!flat.hasConstantMomentArms())
+    throw std::invalid_argument("open-loop plan: free_path needs constant moment arms; model '" +
+                                flat.model().description().name + "' has posture-dependent ones (plan along the "
+                                "prescribed path instead)");
   if (!o.sos.bounds.enforce)
     throw std::invalid_argument("open-loop plan: free_path needs the excitation bounds (sos.bounds.enforce): without "
                                 "them a faster path always costs less");
@@ -195,7 +213,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   require_reserves(o.reserves_N, m);
   if (o.check_points < 2) throw std::invalid_argument("open-loop plan: check_points must be >= 2");
-  require_free_path_options(o);
+  require_free_path_options(flat, o);
   detail::require_initial_muscle_state(flat, initial);
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
@@ -314,17 +332,39 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.buffers.torque_N_m.resize(n);
   step.tau_min.setConstant(n, 1e300);
   step.tau_max.setConstant(n, -1e300);
+  const bool varying = !flat.hasConstantMomentArms();
+  const int m = flat.numMuscles();
+  if (varying) {
+    step.reserve_rows.resize(o.grid_points * m, flat.numFlatOutputs());
+    step.bound_N.resize(o.grid_points * m);
+  }
   for (int i = 0; i < o.grid_points; ++i) {
     Jet& j = step.buffers.joint_jet;
     Eigen::VectorXd& tau = step.buffers.torque_N_m;
-    step.path.jetInto(o.horizon_s * i / (o.grid_points - 1), j);
+    const double t = o.horizon_s * i / (o.grid_points - 1);
+    step.path.jetInto(t, j);
     flat.model().inverseDynamics(workspace, j.col(0), j.col(1), j.col(2), tau);
     if (offset) tau -= o.torque_offset_N_m;
     step.tau_min = step.tau_min.cwiseMin(tau);
     step.tau_max = step.tau_max.cwiseMax(tau);
+    if (!varying) continue;
+    // C(q) along the cubic: Assumption 1 at each grid posture, then the rows exact there.
+    const std::string failure = flat.assumption1FailureAt(j.col(0));
+    if (!failure.empty()) {
+      step.message = "the horizon's joint path leaves the postures where the flat outputs are valid, at t = " +
+                     std::to_string(t) + " s " + failure;
+      step.wall_seconds = wall.seconds();
+      return;
+    }
+    const ForceJetMap map = flat.forceJetMap(j.leftCols(1));
+    step.reserve_rows.middleRows(i * m, m) = map.CY;
+    step.bound_N.segment(i * m, m) = o.reserves_N - map.Ctau * tau;
   }
-  slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N, step.bound_N);
-  solve_slp(flat.CY(), step.bound_N, o.solver, o.warm_start, step.buffers.slp, step.slp);
+  if (!varying) {
+    step.reserve_rows = flat.CY();  // no allocation once sized
+    slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N, step.bound_N);
+  }
+  solve_slp(step.reserve_rows, step.bound_N, o.solver, o.warm_start, step.buffers.slp, step.slp);
   step.status = step.slp.status;
   step.message = step.slp.message;
   detail::impose_period_bounds(flat, workspace, o, step);

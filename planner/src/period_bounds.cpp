@@ -65,8 +65,9 @@ std::string domain_violation(const FlatOutputMap& flat, const RecedingHorizonSte
   return "an excitation is not finite";
 }
 
-// The bound rows' data at every sample: F^(k) = C_tau tau^(k) (the offset already taken off
-// by the sampling) + C_Y alpha for k = 0 only.
+// The bound rows' data at every sample: v_k = C_tau tau^(k) (the offset already taken off by
+// the sampling) + C_Y alpha for k = 0 only, mixed by the coupling's rates where the moment arms
+// depend on posture (ForceJetMap).
 std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExcitationBounds& b,
                                       const RecedingHorizonStep& step) {
   const int m = flat.numMuscles(), p = flat.numFlatOutputs();
@@ -76,10 +77,17 @@ std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExc
     BoundPoint& bp = points[static_cast<std::size_t>(i)];
     bp.t_s = sample_spacing_s(b) * i;
     const TorqueJet& tau = step.buffers.period.torque_grid.jets[static_cast<std::size_t>(i)];
-    bp.base = flat.Ctau() * tau.tau;
-    for (int c = 0; c < p; ++c) bp.columns.push_back(c);
-    bp.slope = {flat.CY(), Eigen::MatrixXd::Zero(m, p), Eigen::MatrixXd::Zero(m, p)};
     rest_held_jet(step.path, bp.t_s, q_jet);
+    const ForceJetMap map = flat.forceJetMap(q_jet);
+    bp.base = map.Ctau * tau.tau;
+    for (int c = 0; c < p; ++c) bp.columns.push_back(c);
+    bp.slope = {map.CY, Eigen::MatrixXd::Zero(m, p), Eigen::MatrixXd::Zero(m, p)};
+    if (map.varies()) {
+      Eigen::MatrixXd b0 = bp.base.col(0), b1 = bp.base.col(1), b2 = bp.base.col(2);
+      map.mix(b0, b1, b2);
+      bp.base << b0, b1, b2;
+      map.mix(bp.slope[0], bp.slope[1], bp.slope[2]);
+    }
     for (int j = 0; j < m; ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
   }
   return points;
@@ -107,16 +115,16 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   }
 
   step.bounds_imposed = true;
-  const int m = flat.numMuscles(), p = flat.numFlatOutputs();
+  const int p = flat.numFlatOutputs();
   const std::vector<BoundPoint> points = period_points(flat, b, step);
   LinearProgram lp;
   lp.cost = Eigen::VectorXd::Ones(p);
-  lp.G = flat.CY();
+  lp.G = step.reserve_rows;
   lp.row_lower = step.bound_N;
-  lp.row_upper = Eigen::VectorXd::Constant(m, 1e19);
+  lp.row_upper = Eigen::VectorXd::Constant(step.bound_N.size(), 1e19);
   lp.x_lower = Eigen::VectorXd::Zero(p);
   lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
-  const SlpLinearPart linear{lp, {static_cast<std::size_t>(m)}, kReserveMargin_N};
+  const SlpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
   Eigen::VectorXd alpha = step.slp.alpha;
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
   SlpBasis basis;

@@ -153,6 +153,9 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
   detail::require_reserves(reserves, m);
   // The transcription's derivatives are written for fibres along the tendon without passive
   // force: refuse the others rather than solve a different problem.
+  if (!flat.hasConstantMomentArms())
+    throw std::invalid_argument("collocation: model '" + flat.model().description().name +
+                                "' has posture-dependent moment arms, which the collocation reference does not model");
   for (const auto& muscle : flat.model().description().muscles) {
     const muscles::MuscleParameters& p = muscle.parameters;
     if (p.pennation_angle_at_optimal_rad != 0.0 || p.hasPassiveFiberForce())

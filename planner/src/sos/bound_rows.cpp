@@ -18,24 +18,33 @@ Eigen::VectorXd activation_minima(const FlatOutputMap& flat, const ExcitationBou
   return a_min;
 }
 
-BoundPoint flat_output_point(const SosSetup& setup, const FlatOutputMap& flat, double t) {
-  const int m = flat.numMuscles(), p = flat.numFlatOutputs();
+namespace {
+
+// The point's tendon-force jet as base + slope theta through the coupling at this posture
+// (flat_outputs.hpp, ForceJetMap): v_k = C_tau tau^(k) + C_Y Y^(k), mixed by the W's. Without a
+// torque jet, only the flat outputs' part.
+BoundPoint point_through(const SosSetup& setup, const ForceJetMap& map, double t, const Eigen::MatrixXd* tau) {
+  const Eigen::Index m = map.CY.rows(), p = map.CY.cols();
   BoundPoint bp;
   bp.t_s = t;
-  bp.base.resize(m, 3);
-  std::array<Eigen::MatrixXd, 3> full;
+  std::array<Eigen::MatrixXd, 3> base, full;
   for (int k = 0; k < 3; ++k) {
     const Eigen::RowVectorXd row = setup.basis.derivativeRow(t, k);
     Eigen::VectorXd y_particular(p);
     Eigen::MatrixXd dY = Eigen::MatrixXd::Zero(p, setup.free_coefficients);
-    for (int l = 0; l < p; ++l) {
+    for (Eigen::Index l = 0; l < p; ++l) {
       const auto& out = setup.outputs[static_cast<std::size_t>(l)];
       y_particular[l] = row.dot(out.particular);
       if (out.nullspace.cols()) dY.block(l, out.offset, 1, out.nullspace.cols()) = row * out.nullspace;
     }
-    bp.base.col(k) = flat.CY() * y_particular;
-    full[static_cast<std::size_t>(k)] = flat.CY() * dY;
+    base[static_cast<std::size_t>(k)] = map.CY * y_particular;
+    if (tau) base[static_cast<std::size_t>(k)] += map.Ctau * tau->col(k);
+    full[static_cast<std::size_t>(k)] = map.CY * dY;
   }
+  map.mix(base[0], base[1], base[2]);
+  map.mix(full[0], full[1], full[2]);
+  bp.base.resize(m, 3);
+  for (int k = 0; k < 3; ++k) bp.base.col(k) = base[static_cast<std::size_t>(k)];
   for (int c = 0; c < setup.free_coefficients; ++c)
     if (full[0].col(c).any() || full[1].col(c).any() || full[2].col(c).any()) bp.columns.push_back(c);
   for (int k = 0; k < 3; ++k) {
@@ -46,12 +55,20 @@ BoundPoint flat_output_point(const SosSetup& setup, const FlatOutputMap& flat, d
   return bp;
 }
 
+}  // namespace
+
+BoundPoint flat_output_point(const SosSetup& setup, const FlatOutputMap& flat, double t) {
+  ForceJetMap constant;  // a free joint path: constant moment arms (FlatOutputMap::CY says so otherwise)
+  constant.Ctau = flat.Ctau();
+  constant.CY = flat.CY();
+  return point_through(setup, constant, t, nullptr);
+}
+
 BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double t) {
   const FlatOutputMap& flat = mp.flat;
   const Jet q_jet = mp.path.jet(t, 5);
   const TorqueJet tau = flat.torqueJet(mp.workspace, q_jet);
-  BoundPoint bp = flat_output_point(setup, flat, t);
-  for (int k = 0; k < 3; ++k) bp.base.col(k) += flat.Ctau() * tau.tau.col(k);
+  BoundPoint bp = point_through(setup, flat.forceJetMap(q_jet), t, &tau.tau);
   for (int j = 0; j < flat.numMuscles(); ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
   return bp;
 }

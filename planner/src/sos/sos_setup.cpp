@@ -35,6 +35,15 @@ std::vector<double> segment_breaks(const TorqueModel& torque, const BSplineBasis
   return breaks;
 }
 
+// The matrix that multiplies a polynomial's coefficients (in_size of them) by c's: column i holds
+// c shifted down by i (out_size rows, enough for the product).
+Eigen::MatrixXd product_matrix(const Eigen::VectorXd& c, Eigen::Index in_size, Eigen::Index out_size) {
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(out_size, in_size);
+  for (Eigen::Index i = 0; i < in_size; ++i)
+    for (Eigen::Index k = 0; k < c.size(); ++k) M(i + k, i) = c[k];
+  return M;
+}
+
 int piece_at(const TorqueModel& torque, double t) {
   for (std::size_t k = 0; k < torque.pieces.size(); ++k)
     if (t < torque.pieces[k].t1_s) return static_cast<int>(k);
@@ -91,14 +100,31 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
   }
 
   // --- constraint polynomials per segment, in the segment's scaled time ---
+  // With posture-dependent moment arms each tendon force is b_j + sum_l c_jl Y_l with modelled
+  // b_j and c_jl; where Y_l >= 0, c_jl Y_l >= (c_jl's polynomial - its remainder bound) Y_l: a
+  // polynomial of degree d + r, still affine in theta.
+  const bool varying = !flat.hasConstantMomentArms();
+  if (varying)
+    for (const auto& piece : torque.pieces)
+      if (piece.coupling.size() != static_cast<std::size_t>(m * p))
+        throw std::invalid_argument("SOS program: the torque model has no coupling model for this model's posture-dependent "
+                                    "moment arms (build it with this flat-output map)");
   int r = 2;  // the first piece's remainder bound is quadratic
-  for (const auto& piece : torque.pieces)
+  for (const auto& piece : torque.pieces) {
     for (const auto& poly : piece.torque) r = std::max(r, poly.degree());
-  const int D = std::max(d, r);
+    for (const auto& poly : piece.base_force) r = std::max(r, poly.degree());
+  }
+  int coupling_degree = 0;
+  for (const auto& piece : torque.pieces) {
+    if (!varying) break;
+    coupling_degree = std::max(coupling_degree, piece.remainder_order);
+    for (const auto& poly : piece.coupling) coupling_degree = std::max(coupling_degree, poly.degree());
+  }
+  const int D = std::max(d + coupling_degree, r);
   auto& constraints = setup.constraints;
-  const bool y_implied = flat.E().minCoeff() >= 0.0;
-  const Eigen::MatrixXd& Ctau = flat.Ctau();
-  const Eigen::MatrixXd& CY = flat.CY();
+  // Y = E F exactly (E C_tau = 0, E C_Y = I), so with E >= 0 entrywise and F >= reserve >= 0
+  // the constraints Y >= 0 are implied and left out; the coupling's bound needs them imposed.
+  const bool y_implied = !varying && flat.E().minCoeff() >= 0.0;
   const std::vector<double> breaks = segment_breaks(torque, basis);
   Eigen::VectorXd mean_weights(D + 1);  // integral over [0, 1] of s^j
   for (int j = 0; j <= D; ++j) mean_weights[j] = 1.0 / (j + 1);
@@ -139,26 +165,50 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
       c.muscle = j;
       c.base = Eigen::VectorXd::Zero(D + 1);
       c.G = Eigen::MatrixXd::Zero(D + 1, n_theta);
-      for (int l = 0; l < p; ++l) {
-        const auto& out = outputs[static_cast<std::size_t>(l)];
-        c.base += CY(j, l) * P * out.particular;
-        c.G.middleCols(out.offset, out.nullspace.cols()) += CY(j, l) * P * out.nullspace;
+      if (varying) {
+        // sum_l (c_jl - e_jl s^order) Y_l + b_j - e_bj s^order.
+        Eigen::VectorXd remainder_cost = piece.base_force_remainder_N[j] * remainder_shape.coefficients();
+        remainder_cost.conservativeResize(D + 1);
+        remainder_cost.tail(D + 1 - remainder_shape.coefficients().size()).setZero();
+        for (int l = 0; l < p; ++l) {
+          const auto& out = outputs[static_cast<std::size_t>(l)];
+          const std::size_t jl = static_cast<std::size_t>(j * p + l);
+          const Polynomial lower = piece.coupling[jl].composeAffine(a, b) - remainder_shape * piece.coupling_remainder[jl];
+          const Eigen::MatrixXd times_lower = product_matrix(lower.coefficients(), d + 1, D + 1);
+          const Eigen::MatrixXd Yl = P.topRows(d + 1);
+          c.base += times_lower * (Yl * out.particular);
+          c.G.middleCols(out.offset, out.nullspace.cols()) += times_lower * (Yl * out.nullspace);
+          // What the coupling's remainder costs with Y at its particular part (exact when Y is fixed).
+          remainder_cost += product_matrix(remainder_shape.coefficients() * piece.coupling_remainder[jl], d + 1, D + 1) *
+                            (Yl * out.particular);
+        }
+        const Eigen::VectorXd bc_poly = piece.base_force[static_cast<std::size_t>(j)].composeAffine(a, b).coefficients();
+        c.base.head(bc_poly.size()) += bc_poly;
+        c.base.head(remainder_shape.coefficients().size()) -=
+            piece.base_force_remainder_N[j] * remainder_shape.coefficients();
+        c.remainder_cost_N = Polynomial(remainder_cost);
+      } else {
+        const Eigen::MatrixXd& Ctau = flat.Ctau();
+        const Eigen::MatrixXd& CY = flat.CY();
+        for (int l = 0; l < p; ++l) {
+          const auto& out = outputs[static_cast<std::size_t>(l)];
+          c.base += CY(j, l) * P * out.particular;
+          c.G.middleCols(out.offset, out.nullspace.cols()) += CY(j, l) * P * out.nullspace;
+        }
+        double remainder_weight = 0.0;
+        for (int i = 0; i < n; ++i) {
+          const Eigen::VectorXd tc = piece.torque[static_cast<std::size_t>(i)].composeAffine(a, b).coefficients();
+          c.base.head(tc.size()) += Ctau(j, i) * tc;
+          remainder_weight += std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
+        }
+        c.remainder_cost_N = Polynomial(remainder_weight * remainder_shape.coefficients());
+        c.base.head(remainder_shape.coefficients().size()) -= c.remainder_cost_N.coefficients();
       }
-      double remainder_weight = 0.0;
-      for (int i = 0; i < n; ++i) {
-        const Eigen::VectorXd tc = piece.torque[static_cast<std::size_t>(i)].composeAffine(a, b).coefficients();
-        c.base.head(tc.size()) += Ctau(j, i) * tc;
-        remainder_weight += std::abs(Ctau(j, i)) * piece.remainder_N_m[i];
-      }
-      c.remainder_cost_N = Polynomial(remainder_weight * remainder_shape.coefficients());
-      c.base.head(remainder_shape.coefficients().size()) -= c.remainder_cost_N.coefficients();
       c.base[0] -= reserves[j];
       c.name = "tendon force of muscle '" + flat.model().description().muscles[static_cast<std::size_t>(j)].parameters.name + "'";
       c.reserve_N = reserves[j];
       add(std::move(c));
     }
-    // Y = E F exactly (E C_tau = 0, E C_Y = I), so with E >= 0 entrywise and F >= reserve >= 0
-    // the constraints Y >= 0 are implied and left out.
     for (int l = 0; l < p && !y_implied; ++l) {
       const auto& out = outputs[static_cast<std::size_t>(l)];
       ConstraintPolynomial c;

@@ -1,4 +1,5 @@
 #include "flatsos/plugin/model/model_description.hpp"
+#include "flatsos/plugin/model/posture_grid.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -26,37 +27,6 @@ bool central_inertia_survives_shift(const BodyDescription& b) {
   } catch (const std::exception&) {
     return false;
   }
-}
-
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-
-// The posture grid over the ranges of `joints` (every other joint at 0): about `budget` points
-// in all, at least the range ends of each joint (2^k points for k joints). Calls visit(q) for each.
-template <class Visit>
-void for_each_posture(const ModelDescription& model, const std::vector<int>& joints, long budget, const Visit& visit) {
-  const int k = static_cast<int>(joints.size());
-  const int per_joint = std::max(2, static_cast<int>(std::floor(std::pow(static_cast<double>(budget), 1.0 / std::max(k, 1)))));
-  std::vector<int> index(static_cast<std::size_t>(k), 0);
-  Eigen::VectorXd q = Eigen::VectorXd::Zero(model.numJoints());
-  while (true) {
-    for (int d = 0; d < k; ++d) {
-      const auto& r = model.joints[static_cast<std::size_t>(joints[d])].range_rad;
-      q[joints[d]] = r[0] + (r[1] - r[0]) * index[d] / (per_joint - 1);
-    }
-    visit(q);
-    int d = 0;
-    while (d < k && ++index[d] == per_joint) index[d++] = 0;
-    if (d == k) return;
-  }
-}
-
-std::string describe_posture(const ModelDescription& model, const std::vector<int>& joints, const Eigen::VectorXd& q) {
-  std::string out;
-  for (int i : joints) {
-    if (!out.empty()) out += ", ";
-    out += model.joints[static_cast<std::size_t>(i)].name + " = " + std::to_string(q[i] * kDegPerRad) + " deg";
-  }
-  return out;
 }
 
 int joint_by_name(const ModelDescription& model, const std::string& name) {

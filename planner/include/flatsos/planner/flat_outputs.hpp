@@ -7,13 +7,19 @@
 // from several threads. Inverse dynamics go through a plugin::ModelWorkspace the caller owns;
 // the overloads without one make a temporary workspace (tens of microseconds) per call.
 //
+// C(q) = [R(q); E] couples them: tau = R(q) F (R: the moment arms, N x m) and Y = E F, so
+// F = C(q)^-1 [tau; Y] = C_tau(q) tau + C_Y(q) Y. With constant moment arms C is one matrix; with
+// posture-dependent paths it follows the joint motion, and Assumption 1 must hold in every
+// posture: the map checks it on a grid over the joint ranges when it is built.
+//
 // Inverse map (flat outputs -> muscle states and excitations) at one time, from the joint jet
 // (q and its first four time derivatives) and the flat-output jet (Y, dY, ddY):
 //   tau, dtau, ddtau from the model's inverse dynamics along the joint motion (eighth-order
 //   central differences in time of tau(t) = ID(q(t), qd(t), qdd(t)) on the jet's Taylor curve);
-//   F = C_tau tau + C_Y Y; L_S = Phi_S^-1(F); dL_S = dF / Phi_S'; u = dL_S + A^T qd;
-//   L_C = L(q) - L_S; a = F / (Fmax f(L_C) g(u)); da/dt by the analytic chain rule; n from the
-//   inverse activation dynamics. No numerical differentiation of a.
+//   F and its two time derivatives from ForceJetMap; L_S = Phi_S^-1(F); dL_S = dF / Phi_S';
+//   L(q) and its time derivatives exactly from the muscle paths; a and da/dt by the analytic
+//   chain rule (muscles/muscle_inverse.hpp); n from the inverse activation dynamics. No
+//   numerical differentiation of a.
 // Forward map (state -> flat outputs and the derivatives the state determines): q, qd, qdd,
 //   q''' , Y, dY from (q, qd, L_S, a) with the same laws the Simbody force element uses.
 
@@ -21,6 +27,7 @@
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -34,7 +41,8 @@
 
 namespace flatsos::planner {
 
-/// Thrown when A and E violate Assumption 1 of the paper, or E has the wrong shape.
+/// Thrown when C = [R; E] violates Assumption 1 of the paper (in some posture), or E has the
+/// wrong shape.
 class FlatnessError : public std::invalid_argument {
  public:
   using std::invalid_argument::invalid_argument;
@@ -96,6 +104,22 @@ struct TorqueJetGrid {
   Jet joint_jet;                     ///< scratch: q, qd, qdd at one time (N x 3)
 };
 
+/// How the tendon forces' jet follows the torque and flat-output jets at one point of a joint
+/// motion. Differentiating C(q) F = [tau; Y] twice in time gives, with C^-1 = [C_tau | C_Y] and
+/// K_i = C^-1 d^iC/dt^i = C_tau d^iR/dt^i,
+///   F = v_0,  dF = v_1 + W10 v_0,  ddF = v_2 + W21 v_1 + W20 v_0,  v_i = C_tau tau^(i) + C_Y Y^(i),
+/// W10 = -K1, W21 = -2 K1, W20 = 2 K1^2 - K2. With constant moment arms every W is 0 (empty).
+struct ForceJetMap {
+  Eigen::MatrixXd Ctau, CY;       ///< m x N, m x p at this posture
+  Eigen::MatrixXd W10, W20, W21;  ///< m x m; empty when the moment arms are constant
+  bool varies() const { return W10.size() > 0; }
+  /// Replaces v_0, v_1, v_2 (m x c each) by the F-jet orders they give: the formulas above.
+  void mix(Eigen::MatrixXd& v0, Eigen::MatrixXd& v1, Eigen::MatrixXd& v2) const;
+  /// The tendon-force jet (m x 3: F, dF, ddF) from the torque jet (N x 3) and the flat-output
+  /// jet (p x 2..3; a missing ddY is 0).
+  Eigen::MatrixXd forceJet(const Eigen::MatrixXd& tau, const Eigen::MatrixXd& Y) const;
+};
+
 /// The flat outputs and derivatives that a muscle state determines.
 struct FlatState {
   Eigen::MatrixXd q;  ///< N x 4: q, qd, qdd, q''' (rad, rad/s, ...)
@@ -113,7 +137,9 @@ MuscleState muscle_state_of(const plugin::MusculoskeletalModel& model, const Sim
 class FlatOutputMap {
  public:
   /// E from the model file's flat_outputs. Throws FlatnessError naming each violated condition
-  /// of Assumption 1 (E shape, C singular, rows of E not summing to 1, 1 - C_tau s_tau > 0).
+  /// of Assumption 1 (E shape, C singular, rows of E not summing to 1, 1 - C_tau s_tau > 0);
+  /// with posture-dependent moment arms, at the first posture of a grid over the joint ranges
+  /// (plugin/model/posture_grid.hpp) where one fails, named in degrees.
   /// Throws std::invalid_argument for a null model.
   explicit FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model);
   FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E);
@@ -122,17 +148,30 @@ class FlatOutputMap {
   const std::shared_ptr<const plugin::MusculoskeletalModel>& sharedModel() const { return model_; }
   /// Scratch for the calls below that take one (one per thread).
   plugin::ModelWorkspace makeWorkspace() const { return model_->makeWorkspace(); }
-  int numJoints() const { return static_cast<int>(A_.rows()); }
-  int numMuscles() const { return static_cast<int>(A_.cols()); }
+  int numJoints() const { return joints_; }
+  int numMuscles() const { return muscles_; }
   int numFlatOutputs() const { return static_cast<int>(E_.rows()); }
-  const Eigen::MatrixXd& A() const { return A_; }
   const Eigen::MatrixXd& E() const { return E_; }
-  const Eigen::MatrixXd& C() const { return C_; }
-  const Eigen::MatrixXd& Ctau() const { return Ctau_; }  ///< m x N
-  const Eigen::MatrixXd& CY() const { return CY_; }      ///< m x p
+  /// True when C does not depend on posture (every muscle path of order <= 1).
+  bool hasConstantMomentArms() const { return constant_; }
+  /// The constant A = R, C, C_tau (m x N) and C_Y (m x p): constant moment arms only; with
+  /// posture-dependent ones they throw std::logic_error (use forceJetMap).
+  const Eigen::MatrixXd& A() const;
+  const Eigen::MatrixXd& C() const;
+  const Eigen::MatrixXd& Ctau() const;
+  const Eigen::MatrixXd& CY() const;
+  /// The moment arms R(q) (N x m) in any posture.
+  Eigen::MatrixXd momentArms(const Eigen::VectorXd& q_rad) const;
+  /// C_tau, C_Y and the W of ForceJetMap at a point of a joint motion (q_jet N x 1..5: q, qd,
+  /// qdd, ...; missing rates are 0). Throws FlatnessError, naming the posture, where C(q) is
+  /// singular.
+  ForceJetMap forceJetMap(const Jet& q_jet) const;
 
   /// Checks Assumption 1 for a pair (A, E); throws FlatnessError listing every failure.
   static void checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E);
+  /// The failures of Assumption 1 at one posture (empty when it holds), as checkAssumption1
+  /// words them, prefixed with the posture: for checks along a planned path.
+  std::string assumption1FailureAt(const Eigen::VectorXd& q_rad) const;
 
   /// tau(q, qd, qdd) from Simbody (muscles excluded).
   Eigen::VectorXd torque(plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
@@ -165,10 +204,11 @@ class FlatOutputMap {
   void inverseFromTorque(const Jet& q_jet, const TorqueJet& tau, const Jet& Y_jet, MusclePoint& out) const;
 
   /// Musculotendon length of muscle j and its first two time derivatives along a joint motion
-  /// (q_jet N x 1..5; missing rates are 0).
+  /// (q_jet N x 1..5; missing rates are 0), exact for any path polynomial.
   muscles::SecondOrderJet pathLengthJet(int muscle, const Jet& q_jet) const;
   /// Its derivatives with respect to the joint jet's entries: out(k, 5 r + l) = d (d^k L / dt^k)
-  /// / d (d^l q_r / dt^l), k = 0..2, l = 0..4 (out: 3 x 5N).
+  /// / d (d^l q_r / dt^l), k = 0..2, l = 0..4 (out: 3 x 5N). Constant moment arms only (what a
+  /// free joint path needs); std::logic_error otherwise.
   void pathLengthJetGradient(int muscle, const Jet& q_jet, Eigen::Ref<Eigen::MatrixXd> out) const;
 
   /// Forward map of a muscle state. Throws std::invalid_argument for sizes or NaN.
@@ -176,8 +216,13 @@ class FlatOutputMap {
   FlatState forward(const MuscleState& s) const;
 
  private:
+  const Eigen::MatrixXd& requireConstant(const Eigen::MatrixXd& matrix, const char* name) const;
+  void checkAssumption1OverRanges() const;
+
   std::shared_ptr<const plugin::MusculoskeletalModel> model_;
-  Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;
+  bool constant_ = true;
+  int joints_ = 0, muscles_ = 0;
+  Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;  // A_ .. CY_: constant moment arms only
 };
 
 namespace detail {

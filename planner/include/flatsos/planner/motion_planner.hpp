@@ -152,7 +152,11 @@ struct RecedingHorizonStep {
   std::string message;
   JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon
   Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
-  Eigen::VectorXd bound_N;            ///< the SLP's B (slp_bound_vector of the box and reserves)
+  /// The SLP's rows G alpha >= B. Constant moment arms: G = C_Y and B = slp_bound_vector of the
+  /// box and reserves (m rows). Posture-dependent ones: at each grid posture q_i,
+  /// C_Y(q_i) alpha >= reserves - C_tau(q_i) tau_i (grid_points x m rows, exact at the grid).
+  Eigen::MatrixXd reserve_rows;
+  Eigen::VectorXd bound_N;
   SlpResult slp;                      ///< alpha and its cost (moved inside the bounds when they were imposed)
   Eigen::VectorXd torque_offset_N_m;  ///< the options' offset the step was planned with (may be empty)
   /// The SLP's optimum left the excitation bounds on the first period and the bounds' sequential

@@ -11,6 +11,9 @@
 // p matches both and interpolates at r - 1 Chebyshev points, and the remainder bound is
 // e s^2, zero at t = 0. A constant bound there would demand slack at t = 0 that no plan can
 // create: from a rest state whose tendon force equals its reserve, no plan would be feasible.
+// With posture-dependent moment arms the tendon forces are F = C_tau(q) tau + C_Y(q) Y with
+// coefficients that follow the path: each piece then also models, the same way, each muscle's
+// torque part b_j(t) = (C_tau(q(t)) tau(t))_j and each coupling c_jl(t) = C_Y(q(t))_jl.
 // docs/method/sos_program.md, "Torque model".
 
 #include <vector>
@@ -37,6 +40,14 @@ struct TorquePiece {
   int remainder_order = 0;
   /// e_ki s^order for joint i at scaled time s in [0, 1].
   double remainderAt(int joint, double s) const;
+
+  /// Posture-dependent moment arms only (empty otherwise), with the same remainder order:
+  /// |b_j - base_force_j| <= base_force_remainder_N_j s^order and
+  /// |c_jl - coupling_{j p + l}| <= coupling_remainder_{j p + l} s^order.
+  std::vector<Polynomial> base_force;      ///< per muscle (N)
+  Eigen::VectorXd base_force_remainder_N;
+  std::vector<Polynomial> coupling;        ///< per muscle j and flat output l at j p + l (dimensionless)
+  Eigen::VectorXd coupling_remainder;
 };
 
 struct TorqueModel {

@@ -1,0 +1,33 @@
+#pragma once
+// Postures over a model's joint ranges, for checks that must hold over the whole range of motion
+// (a muscle path longer than its slack tendon; the planner's Assumption 1 with posture-dependent
+// moment arms), and the words that name one posture in an error.
+
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "flatsos/plugin/model/model_description.hpp"
+
+namespace flatsos::plugin {
+
+/// Calls visit(q) at each posture of a uniform grid over the ranges of `joints` (every other
+/// joint at 0): about `budget` postures, at least the two range ends of each joint (2^k for k
+/// joints, which exceeds the budget beyond log2(budget) joints). Every listed joint must have a
+/// range (JointDescription::hasRange).
+void for_each_posture(const ModelDescription& model, const std::vector<int>& joints, long budget,
+                      const std::function<void(const Eigen::VectorXd& q_rad)>& visit);
+
+/// "elbow = 90.000000 deg, shoulder = 10.000000 deg" for the listed joints of q.
+std::string describe_posture(const ModelDescription& model, const std::vector<int>& joints, const Eigen::VectorXd& q_rad);
+
+/// The joints crossed by some muscle whose moment arms depend on posture, ascending: where
+/// C(q) = [R(q); E] changes.
+std::vector<int> posture_dependent_joints(const ModelDescription& model);
+
+}  // namespace flatsos::plugin

@@ -1,0 +1,49 @@
+#include "flatsos/plugin/model/posture_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace flatsos::plugin {
+
+namespace {
+constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+}
+
+void for_each_posture(const ModelDescription& model, const std::vector<int>& joints, long budget,
+                      const std::function<void(const Eigen::VectorXd&)>& visit) {
+  const int k = static_cast<int>(joints.size());
+  const int per_joint = std::max(2, static_cast<int>(std::floor(std::pow(static_cast<double>(budget), 1.0 / std::max(k, 1)))));
+  std::vector<int> index(static_cast<std::size_t>(k), 0);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(model.numJoints());
+  while (true) {
+    for (int d = 0; d < k; ++d) {
+      const auto& r = model.joints[static_cast<std::size_t>(joints[static_cast<std::size_t>(d)])].range_rad;
+      q[joints[static_cast<std::size_t>(d)]] = r[0] + (r[1] - r[0]) * index[static_cast<std::size_t>(d)] / (per_joint - 1);
+    }
+    visit(q);
+    int d = 0;
+    while (d < k && ++index[static_cast<std::size_t>(d)] == per_joint) index[static_cast<std::size_t>(d++)] = 0;
+    if (d == k) return;
+  }
+}
+
+std::string describe_posture(const ModelDescription& model, const std::vector<int>& joints, const Eigen::VectorXd& q) {
+  std::string out;
+  for (int i : joints) {
+    if (!out.empty()) out += ", ";
+    out += model.joints[static_cast<std::size_t>(i)].name + " = " + std::to_string(q[i] * kDegPerRad) + " deg";
+  }
+  return out;
+}
+
+std::vector<int> posture_dependent_joints(const ModelDescription& model) {
+  std::set<int> joints;
+  for (int j = 0; j < model.numMuscles(); ++j) {
+    const muscles::MusculotendonPath path = model.musclePath(j);
+    if (!path.hasConstantMomentArms()) joints.insert(path.crossedJoints().begin(), path.crossedJoints().end());
+  }
+  return {joints.begin(), joints.end()};
+}
+
+}  // namespace flatsos::plugin
