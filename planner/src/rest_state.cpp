@@ -11,8 +11,8 @@ void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& stat
   RecedingHorizonOptions o;
   o.target_q_rad = q;
   o.reserves_N = reserves;
-  // At rest n = a: a rest outside the bounds is reported below as outside the domain, not moved.
-  o.excitation_bounds.enforce = false;
+  // The bounds of the first period keep a in [floor, 1] at rest (n = a there): with passive
+  // fibres the reserves alone can ask for less force than a stretched fibre already pulls with.
   plugin::ModelWorkspace workspace = flat.makeWorkspace();
   const RecedingHorizonStep rest = plan_receding_horizon_step(flat, workspace, q, Eigen::VectorXd::Zero(q.size()), o);
   if (rest.status != SolveStatus::Solved) throw std::runtime_error("rest state: the SLP failed: " + rest.message);

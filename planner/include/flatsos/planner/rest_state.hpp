@@ -12,7 +12,9 @@
 namespace flatsos::planner {
 
 /// Minimum-effort static equilibrium at joint angles q: the SLP with the target at q gives the
-/// constant flat outputs; the inverse map at rest gives tendon lengths and activations (u = 0).
+/// constant flat outputs (moved, when needed, until every activation is in [floor, 1]: a
+/// passive fibre may pull harder than a reserve asks); the inverse map at rest gives tendon
+/// lengths and activations (u = 0).
 /// Sets q, qd = 0, L_S, a and held excitations n = a on `state` (a State of flat.model()).
 /// Throws std::runtime_error when the SLP fails or the rest lies outside the valid domain.
 void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& state, const Eigen::VectorXd& q_rad,

@@ -1,0 +1,183 @@
+// Plans for a model whose moment arms depend on posture (the shipped elbow: biceps arm 0.02 ->
+// 0.04 m -> 0.038 m, brachialis 0.02 -> 0.044 m over 0-143 deg, a pennated triceps (-0.025 m), passive fibres
+// in all three): the open-loop plan is reproduced by Simbody; its optimum is checked against an
+// independent lower bound (an LP written here, with C(q) inverted here at a dense grid of the
+// exact path); and the receding-horizon loop settles at the target.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "../planner/scenario_fixture.hpp"
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/planner/rest_state.hpp"
+#include "open_loop_replay.hpp"
+
+namespace fp = flatsos::plugin;
+namespace fpl = flatsos::planner;
+using flatsos::test::deg;
+
+namespace {
+
+struct PostureDependentElbow {
+  std::shared_ptr<const fp::MusculoskeletalModel> model =
+      fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/elbow_posture_dependent.json");
+  fpl::FlatOutputMap flat{model};
+  Eigen::VectorXd reserves = Eigen::VectorXd::Constant(3, 10.0);
+
+  fpl::MuscleState rest(double q_deg) const {
+    SimTK::State s = model->defaultState();
+    fpl::set_minimum_effort_rest_state(flat, s, Eigen::VectorXd::Constant(1, deg(q_deg)), reserves);
+    return fpl::muscle_state_of(*model, s);
+  }
+  fpl::OpenLoopOptions options(double target_deg, double duration_s) const {
+    fpl::OpenLoopOptions o;
+    o.duration_s = duration_s;
+    o.target_q_rad = Eigen::VectorXd::Constant(1, deg(target_deg));
+    o.reserves_N = reserves;
+    return o;
+  }
+};
+
+// Lower bound on the program's optimum, independent of the coupling and torque models and of the
+// exchange: Y's quartic coefficients as variables, the boundary equalities as rows, and
+// F(t) = C(q)^-1 [tau; Y] >= reserve (C = [R(q); E] inverted here) and Y >= 0 (implied by
+// F >= 0 for this E >= 0) only at `points` grid times: a relaxation, so its optimum is <= the
+// program's.
+double dense_grid_lower_bound(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan, const fpl::MuscleState& s0,
+                              const Eigen::VectorXd& reserves, int points) {
+  const double T = plan.path.duration_s;
+  const int m = flat.numMuscles(), p = flat.numFlatOutputs(), d = 4, nv = p * (d + 1);
+  const fpl::FlatState y0 = flat.forward(s0);
+  std::vector<Eigen::RowVectorXd> rows;
+  std::vector<double> lo, hi;
+  auto add = [&](const Eigen::RowVectorXd& r, double l, double h) { rows.push_back(r), lo.push_back(l), hi.push_back(h); };
+  auto basis = [&](double t, int order) {
+    Eigen::RowVectorXd v = Eigen::RowVectorXd::Zero(d + 1);
+    for (int k = order; k <= d; ++k) {
+      double f = 1;
+      for (int i = 0; i < order; ++i) f *= k - i;
+      v[k] = f * std::pow(t, k - order);
+    }
+    return v;
+  };
+  for (int l = 0; l < p; ++l) {
+    for (int order = 0; order < 2; ++order) {
+      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
+      r.segment(l * (d + 1), d + 1) = basis(0.0, order);
+      add(r, y0.Y(l, order), y0.Y(l, order));
+    }
+    for (int order = 1; order < 3; ++order) {
+      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
+      r.segment(l * (d + 1), d + 1) = basis(T, order);
+      add(r, 0.0, 0.0);
+    }
+  }
+  const int n = flat.numJoints();
+  for (int i = 0; i < points; ++i) {
+    const double t = T * i / (points - 1);
+    const fpl::Jet j = plan.path.jet(t, 3);
+    const Eigen::VectorXd tau = flat.torque(j.col(0), j.col(1), j.col(2));
+    Eigen::MatrixXd C(m, m);
+    C << flat.model().momentArmMatrix(j.col(0)), flat.E();
+    const Eigen::MatrixXd Cinv = C.inverse();
+    for (int k = 0; k < m; ++k) {
+      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
+      for (int l = 0; l < p; ++l) r.segment(l * (d + 1), d + 1) = Cinv(k, n + l) * basis(t, 0);
+      add(r, reserves[k] - Cinv.row(k).head(n).dot(tau), 1e19);
+    }
+    for (int l = 0; l < p; ++l) {
+      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
+      r.segment(l * (d + 1), d + 1) = basis(t, 0);
+      add(r, 0.0, 1e19);
+    }
+  }
+  fpl::LinearProgram lp;
+  lp.cost = Eigen::VectorXd::Zero(nv);
+  for (int l = 0; l < p; ++l)
+    for (int k = 0; k <= d; ++k) lp.cost[l * (d + 1) + k] = std::pow(T, k + 1) / (k + 1);
+  lp.G.resize(static_cast<Eigen::Index>(rows.size()), nv);
+  for (std::size_t r = 0; r < rows.size(); ++r) lp.G.row(static_cast<Eigen::Index>(r)) = rows[r];
+  lp.row_lower = Eigen::Map<Eigen::VectorXd>(lo.data(), static_cast<Eigen::Index>(lo.size()));
+  lp.row_upper = Eigen::Map<Eigen::VectorXd>(hi.data(), static_cast<Eigen::Index>(hi.size()));
+  lp.x_lower = Eigen::VectorXd::Constant(nv, -1e19);
+  lp.x_upper = Eigen::VectorXd::Constant(nv, 1e19);
+  const auto r = fpl::solve_linear_program(lp);
+  EXPECT_EQ(r.status, fpl::SolveStatus::Solved) << r.solver_status;
+  return r.objective;
+}
+
+}  // namespace
+
+TEST(PostureDependentPlans, OpenLoopPlanIsReproducedBySimbody) {
+  const PostureDependentElbow elbow;
+  const fpl::MuscleState s0 = elbow.rest(20.0);
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(elbow.flat, s0, elbow.options(90.0, 1.5));
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_TRUE(plan.sos.certified);
+  // The rest state sits on an SLP vertex: F(0) meets some reserve to rounding.
+  EXPECT_GE(plan.check.min_reserve_margin_N, -1e-9);
+  const flatsos::test::OpenLoopReplay replay = flatsos::test::replay_open_loop(elbow.flat, s0, plan, 1e-10, 0.01);
+  ASSERT_TRUE(replay.sim.finite) << replay.sim.message;
+  EXPECT_LT(replay.max_q_error_rad, deg(1e-6));
+  EXPECT_LT(replay.max_activation_error, 1e-8);
+  EXPECT_LT(replay.max_tendon_length_error_m, 1e-9);
+  EXPECT_GE(replay.min_tendon_force_N, 10.0 - 1e-6);
+  EXPECT_NEAR(replay.sim.states.rows.back()[1], deg(90), deg(1e-6));
+}
+
+TEST(PostureDependentPlans, OptimumIsWithinOnePercentAboveAnIndependentDenseGridBound) {
+  const PostureDependentElbow elbow;
+  const fpl::MuscleState s0 = elbow.rest(20.0);
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(elbow.flat, s0, elbow.options(90.0, 1.5));
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  ASSERT_FALSE(plan.sos.bounds_imposed);  // the bound below is of the reserves-only program
+  const double bound = dense_grid_lower_bound(elbow.flat, plan, s0, elbow.reserves, 601);
+  EXPECT_GE(plan.sos.cost_N_s, bound - 1e-6 * bound);
+  EXPECT_LE(plan.sos.cost_N_s, 1.01 * bound);
+}
+
+TEST(PostureDependentPlans, RecedingHorizonSettlesAtTheTarget) {
+  const PostureDependentElbow elbow;
+  fpl::RecedingHorizonControllerOptions o;
+  o.plan.target_q_rad = Eigen::VectorXd::Constant(1, deg(80));
+  o.plan.reserves_N = Eigen::VectorXd::Constant(3, 1.0);
+  SimTK::State s = elbow.model->defaultState();
+  fpl::set_minimum_effort_rest_state(elbow.flat, s, Eigen::VectorXd::Constant(1, deg(20)), o.plan.reserves_N);
+  fpl::RecedingHorizonController controller(elbow.flat, o, elbow.model);
+  fp::ClosedLoopOptions loop;
+  loop.duration_s = 2.0;
+  loop.accuracy = 1e-8;
+  const fpl::RecedingHorizonRun run = fpl::run_receding_horizon(controller, s, loop, deg(1));
+  ASSERT_TRUE(run.loop.finite);
+  EXPECT_EQ(controller.planFailures(), 0);
+  ASSERT_GE(run.settling_time_s, 0.0) << "never settled within 1 deg";
+  EXPECT_LT(run.settling_time_s, 1.5);
+  const double final_error_deg = std::abs(elbow.model->jointAngles(run.loop.final_state)[0] - deg(80)) / deg(1);
+  EXPECT_LT(final_error_deg, 0.1);
+  // The SLP's rows are exact at each grid posture: 11 postures x 3 muscles.
+  EXPECT_EQ(controller.history().front().plan.alpha.size(), 2);
+}
+
+TEST(PostureDependentPlans, TheRestStateKeepsActivationsAboveTheFloorWhereAPassiveFibrePullsHarderThanTheReserve) {
+  // At full extension the brachialis' stretched fibre pulls about 3.5 N passively: a 1 N reserve
+  // alone would ask for less tendon force than that, i.e. a negative activation.
+  const PostureDependentElbow elbow;
+  const Eigen::VectorXd reserves = Eigen::VectorXd::Constant(3, 1.0);
+  SimTK::State s = elbow.model->defaultState();
+  fpl::set_minimum_effort_rest_state(elbow.flat, s, Eigen::VectorXd::Constant(1, 0.0), reserves);
+  const Eigen::VectorXd a = elbow.model->activations(s);
+  for (int j = 0; j < 3; ++j) EXPECT_GE(a[j], elbow.model->muscle(j).getParameters().activation_floor) << "muscle " << j;
+  // At rest: nothing moves, and every tendon force meets its reserve.
+  elbow.model->system().realize(s, SimTK::Stage::Acceleration);
+  EXPECT_LT(s.getUDot().normInf(), 1e-9);
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_NEAR(elbow.model->muscle(j).getTendonLengthDerivative(s), 0.0, 1e-12);
+    EXPECT_GE(flatsos::muscles::tendon_force(elbow.model->muscle(j).getParameters(), elbow.model->tendonLengths(s)[j]),
+              1.0 - 1e-9);
+  }
+}
