@@ -192,12 +192,15 @@ int main(int argc, char** argv) try {
   const Eigen::VectorXd q_rh = rh_in.q0_rad;
   const fpl::RecedingHorizonStep first =
       fpl::plan_receding_horizon_step(flat, ws, q_rh, Eigen::VectorXd::Zero(model->numJoints()), rh);
-  const Eigen::VectorXd B = fpl::slp_bound_vector(flat.Ctau(), first.tau_min, first.tau_max, rh.reserves_N);
-  const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(flat.CY(), B, fpl::SlpSolver::Ipopt); });
-  const auto slp_exact = repeat(reps * 20, [&] { fpl::solve_slp(flat.CY(), B, fpl::SlpSolver::VertexEnumeration); });
-  const auto slp_appendix = repeat(reps * 20, [&] { fpl::slp_appendix_solution(flat.CY(), B); });
-  const double appendix_cost = fpl::slp_appendix_solution(flat.CY(), B).sum();
-  const double optimal_cost = fpl::solve_slp(flat.CY(), B).cost_N;
+  // The step's own rows: C_Y and the torque box's B, or (posture-dependent moment arms) C_Y(q_i)
+  // and B_i at each grid posture.
+  const Eigen::MatrixXd& G = first.reserve_rows;
+  const Eigen::VectorXd& B = first.bound_N;
+  const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(G, B, fpl::SlpSolver::Ipopt); });
+  const auto slp_exact = repeat(reps * 20, [&] { fpl::solve_slp(G, B, fpl::SlpSolver::VertexEnumeration); });
+  const auto slp_appendix = repeat(reps * 20, [&] { fpl::slp_appendix_solution(G, B); });
+  const double appendix_cost = fpl::slp_appendix_solution(G, B).sum();
+  const double optimal_cost = fpl::solve_slp(G, B).cost_N;
   j["slp"] = {{"ipopt", stats(slp_ipopt, 1e3, "ms")},
               {"vertex_enumeration", stats(slp_exact, 1e3, "ms")},
               {"appendix_construction", stats(slp_appendix, 1e3, "ms")},

@@ -46,7 +46,7 @@ sed 's/"mass_kg": 1.76/"mass_kg": 10/' "$models/arm_richter_warner.json" > "$tmp
 expect 1 "never settled" -- "$rh" --model "$tmp/heavy.json" --out "$tmp/heavy"
 # A 60 kg forearm cannot even be held at the start: the error names the muscle and the quantity.
 sed 's/"mass_kg": 1.76/"mass_kg": 60/' "$models/arm_richter_warner.json" > "$tmp/heavier.json"
-expect 1 "rest state outside the model's valid domain: muscle 'anterior_deltoid': activation" -- "$rh" --model "$tmp/heavier.json" --out "$tmp/heavier"
+expect 1 "infeasible: no constant flat outputs keep every excitation in [0, 1] and activation in [floor, 1] over the first period with the reserves; closest: muscle 'anterior_deltoid' at t = 0 s: activation" -- "$rh" --model "$tmp/heavier.json" --out "$tmp/heavier"
 for f in simulation.sto simulation_controls.sto predictions/step_0000.sto predictions/step_0029.sto summary.json; do
   [[ -s "$tmp/rh/$f" ]] || { echo "FAILED: $f missing"; fail=1; }
 done
