@@ -153,7 +153,15 @@ int main(int argc, char** argv) try {
       fpl::CollocationOptions co;
       co.mesh_intervals = 100;
       fpl::CollocationResult reference;
-      const auto t = repeat(std::max(1, reps / 20), [&] { reference = fpl::solve_collocation_along_path(flat, ws, path, ms0, ol.reserves_N, co); });
+      std::vector<double> t;
+      try {
+        t = repeat(std::max(1, reps / 20), [&] { reference = fpl::solve_collocation_along_path(flat, ws, path, ms0, ol.reserves_N, co); });
+      } catch (const std::invalid_argument& e) {
+        // A model the reference does not cover (posture-dependent moment arms, pennation, passive
+        // fibres): the flatness row alone, and why.
+        versus.push_back({{"duration_s", T}, {"flatness", flatness}, {"collocation", {{"skipped", e.what()}}}});
+        continue;
+      }
       json row = {{"duration_s", T},
                   {"flatness", flatness},
                   {"collocation",
@@ -225,16 +233,20 @@ int main(int argc, char** argv) try {
   // sequential LP moves alpha (the only such step of the scenario).
   const Eigen::VectorXd qd_rest = Eigen::VectorXd::Zero(model->numJoints());
   const fpl::RecedingHorizonStep bounded_first = fpl::plan_receding_horizon_step(flat, ws, q_rh, qd_rest, exact);
-  if (!bounded_first.bounds_imposed) throw std::runtime_error("the RH scenario's first step no longer needs its bounds");
-  const auto bounded_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, ws, q_rh, qd_rest, exact); });
   j["rh_plan_step"] = {{"ipopt_cold", stats(cold_t, 1e3, "ms")},
                        {"ipopt_warm", stats(warm_t, 1e3, "ms")},
                        {"exact", stats(exact_t, 1e3, "ms")},
-                       {"exact_first_step_bounds_imposed", stats(bounded_t, 1e3, "ms")},
-                       {"first_step_bound_lp_steps", bounded_first.bound_iterations},
+                       {"first_step_bounds_imposed", bounded_first.bounds_imposed},
                        {"warm_over_cold_time", ex::median(warm_t) / ex::median(cold_t)},
                        {"cold_iterations", fpl::plan_receding_horizon_step(flat, ws, q1, qd1, rh).slp.iterations},
                        {"warm_iterations", fpl::plan_receding_horizon_step(flat, ws, q1, qd1, warm).slp.iterations}};
+  // On the paper's arm the first step is the scenario's only bounded one; other models may need
+  // no bounds there (nothing to time).
+  if (bounded_first.bounds_imposed) {
+    const auto bounded_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, ws, q_rh, qd_rest, exact); });
+    j["rh_plan_step"]["exact_first_step_bounds_imposed"] = stats(bounded_t, 1e3, "ms");
+    j["rh_plan_step"]["first_step_bound_lp_steps"] = bounded_first.bound_iterations;
+  }
 
   // ---- the closed-loop scenario ----
   SimTK::State rest = model->defaultState();
