@@ -1,7 +1,7 @@
 // Plans for a model whose moment arms depend on posture (the shipped elbow: biceps arm 0.02 ->
 // 0.04 m -> 0.038 m, brachialis 0.02 -> 0.044 m over 0-143 deg, a pennated triceps (-0.025 m), passive fibres
 // in all three): the open-loop plan is reproduced by Simbody; its optimum is checked against an
-// independent lower bound (an LP written here, with C(q) inverted here at a dense grid of the
+// independent lower bound (dense_grid_bound.hpp: an LP with C(q) inverted at a dense grid of the
 // exact path); and the receding-horizon loop settles at the target.
 #include <gtest/gtest.h>
 
@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "../planner/dense_grid_bound.hpp"
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
@@ -43,74 +44,6 @@ struct PostureDependentElbow {
   }
 };
 
-// Lower bound on the program's optimum, independent of the coupling and torque models and of the
-// exchange: Y's quartic coefficients as variables, the boundary equalities as rows, and
-// F(t) = C(q)^-1 [tau; Y] >= reserve (C = [R(q); E] inverted here) and Y >= 0 (implied by
-// F >= 0 for this E >= 0) only at `points` grid times: a relaxation, so its optimum is <= the
-// program's.
-double dense_grid_lower_bound(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan, const fpl::MuscleState& s0,
-                              const Eigen::VectorXd& reserves, int points) {
-  const double T = plan.path.duration_s;
-  const int m = flat.numMuscles(), p = flat.numFlatOutputs(), d = 4, nv = p * (d + 1);
-  const fpl::FlatState y0 = flat.forward(s0);
-  std::vector<Eigen::RowVectorXd> rows;
-  std::vector<double> lo, hi;
-  auto add = [&](const Eigen::RowVectorXd& r, double l, double h) { rows.push_back(r), lo.push_back(l), hi.push_back(h); };
-  auto basis = [&](double t, int order) {
-    Eigen::RowVectorXd v = Eigen::RowVectorXd::Zero(d + 1);
-    for (int k = order; k <= d; ++k) {
-      double f = 1;
-      for (int i = 0; i < order; ++i) f *= k - i;
-      v[k] = f * std::pow(t, k - order);
-    }
-    return v;
-  };
-  for (int l = 0; l < p; ++l) {
-    for (int order = 0; order < 2; ++order) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      r.segment(l * (d + 1), d + 1) = basis(0.0, order);
-      add(r, y0.Y(l, order), y0.Y(l, order));
-    }
-    for (int order = 1; order < 3; ++order) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      r.segment(l * (d + 1), d + 1) = basis(T, order);
-      add(r, 0.0, 0.0);
-    }
-  }
-  const int n = flat.numJoints();
-  for (int i = 0; i < points; ++i) {
-    const double t = T * i / (points - 1);
-    const fpl::Jet j = plan.path.jet(t, 3);
-    const Eigen::VectorXd tau = flat.torque(j.col(0), j.col(1), j.col(2));
-    Eigen::MatrixXd C(m, m);
-    C << flat.model().momentArmMatrix(j.col(0)), flat.E();
-    const Eigen::MatrixXd Cinv = C.inverse();
-    for (int k = 0; k < m; ++k) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      for (int l = 0; l < p; ++l) r.segment(l * (d + 1), d + 1) = Cinv(k, n + l) * basis(t, 0);
-      add(r, reserves[k] - Cinv.row(k).head(n).dot(tau), 1e19);
-    }
-    for (int l = 0; l < p; ++l) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      r.segment(l * (d + 1), d + 1) = basis(t, 0);
-      add(r, 0.0, 1e19);
-    }
-  }
-  fpl::LinearProgram lp;
-  lp.cost = Eigen::VectorXd::Zero(nv);
-  for (int l = 0; l < p; ++l)
-    for (int k = 0; k <= d; ++k) lp.cost[l * (d + 1) + k] = std::pow(T, k + 1) / (k + 1);
-  lp.G.resize(static_cast<Eigen::Index>(rows.size()), nv);
-  for (std::size_t r = 0; r < rows.size(); ++r) lp.G.row(static_cast<Eigen::Index>(r)) = rows[r];
-  lp.row_lower = Eigen::Map<Eigen::VectorXd>(lo.data(), static_cast<Eigen::Index>(lo.size()));
-  lp.row_upper = Eigen::Map<Eigen::VectorXd>(hi.data(), static_cast<Eigen::Index>(hi.size()));
-  lp.x_lower = Eigen::VectorXd::Constant(nv, -1e19);
-  lp.x_upper = Eigen::VectorXd::Constant(nv, 1e19);
-  const auto r = fpl::solve_linear_program(lp);
-  EXPECT_EQ(r.status, fpl::SolveStatus::Solved) << r.solver_status;
-  return r.objective;
-}
-
 }  // namespace
 
 TEST(PostureDependentPlans, OpenLoopPlanIsReproducedBySimbody) {
@@ -136,7 +69,7 @@ TEST(PostureDependentPlans, OptimumIsWithinOnePercentAboveAnIndependentDenseGrid
   const fpl::OpenLoopPlan plan = fpl::plan_open_loop(elbow.flat, s0, elbow.options(90.0, 1.5));
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   ASSERT_FALSE(plan.sos.bounds_imposed);  // the bound below is of the reserves-only program
-  const double bound = dense_grid_lower_bound(elbow.flat, plan, s0, elbow.reserves, 601);
+  const double bound = flatsos::test::dense_grid_lower_bound(elbow.flat, plan, s0, elbow.reserves, 601);
   EXPECT_GE(plan.sos.cost_N_s, bound - 1e-6 * bound);
   EXPECT_LE(plan.sos.cost_N_s, 1.01 * bound);
 }

@@ -1,81 +1,15 @@
 // The SOS program on the paper's open-loop scenario (the paper, section 5): solved by default with every
 // tendon force at or above its reserve on a 10x denser grid; its optimum checked against an
-// independent lower bound (an LP written here, with the exact torques at a dense grid); the
+// independent lower bound (an LP written in dense_grid_bound.hpp, with the exact torques at a dense grid); the
 // paper's single torque box reported infeasible with the reason; bad input rejected by name.
 #include <gtest/gtest.h>
 
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
+#include "dense_grid_bound.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
-
-namespace {
-
-// Lower bound on the SOP optimum, independent of the torque model and of the exchange method:
-// all quartic coefficients of Y as variables, the boundary equalities as equality rows, and the
-// constraints F_j(t) >= reserve, Y(t) >= 0 only at `points` grid times with the exact torque.
-// Fewer constraints and no torque-model margin: a relaxation, so its optimum is <= the SOP's.
-double dense_grid_lower_bound(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan, const fpl::MuscleState& s0,
-                              double reserve, int points) {
-  const double T = plan.path.duration_s;
-  const int p = 4, d = 4, nv = p * (d + 1);
-  const fpl::FlatState y0 = flat.forward(s0);
-  std::vector<Eigen::RowVectorXd> rows;
-  std::vector<double> lo, hi;
-  auto add = [&](const Eigen::RowVectorXd& r, double l, double h) { rows.push_back(r), lo.push_back(l), hi.push_back(h); };
-  auto basis = [&](double t, int order) {  // d^order/dt^order of t^k, k = 0..d
-    Eigen::RowVectorXd v = Eigen::RowVectorXd::Zero(d + 1);
-    for (int k = order; k <= d; ++k) {
-      double f = 1;
-      for (int i = 0; i < order; ++i) f *= k - i;
-      v[k] = f * std::pow(t, k - order);
-    }
-    return v;
-  };
-  for (int l = 0; l < p; ++l) {
-    for (int order = 0; order < 2; ++order) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      r.segment(l * (d + 1), d + 1) = basis(0.0, order);
-      add(r, y0.Y(l, order), y0.Y(l, order));
-    }
-    for (int order = 1; order < 3; ++order) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      r.segment(l * (d + 1), d + 1) = basis(T, order);
-      add(r, 0.0, 0.0);
-    }
-  }
-  for (int i = 0; i < points; ++i) {
-    const double t = T * i / (points - 1);
-    const fpl::Jet j = plan.path.jet(t, 3);
-    const Eigen::VectorXd tau = flat.torque(j.col(0), j.col(1), j.col(2));
-    for (int m = 0; m < 6; ++m) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      for (int l = 0; l < p; ++l) r.segment(l * (d + 1), d + 1) = flat.CY()(m, l) * basis(t, 0);
-      add(r, reserve - flat.Ctau().row(m).dot(tau), 1e19);
-    }
-    for (int l = 0; l < p; ++l) {
-      Eigen::RowVectorXd r = Eigen::RowVectorXd::Zero(nv);
-      r.segment(l * (d + 1), d + 1) = basis(t, 0);
-      add(r, 0.0, 1e19);
-    }
-  }
-  fpl::LinearProgram lp;
-  lp.cost = Eigen::VectorXd::Zero(nv);
-  for (int l = 0; l < p; ++l)
-    for (int k = 0; k <= d; ++k) lp.cost[l * (d + 1) + k] = std::pow(T, k + 1) / (k + 1);
-  lp.G.resize(static_cast<Eigen::Index>(rows.size()), nv);
-  for (std::size_t r = 0; r < rows.size(); ++r) lp.G.row(static_cast<Eigen::Index>(r)) = rows[r];
-  lp.row_lower = Eigen::Map<Eigen::VectorXd>(lo.data(), static_cast<Eigen::Index>(lo.size()));
-  lp.row_upper = Eigen::Map<Eigen::VectorXd>(hi.data(), static_cast<Eigen::Index>(hi.size()));
-  lp.x_lower = Eigen::VectorXd::Constant(nv, -1e19);
-  lp.x_upper = Eigen::VectorXd::Constant(nv, 1e19);
-  const auto r = fpl::solve_linear_program(lp);
-  EXPECT_EQ(r.status, fpl::SolveStatus::Solved) << r.solver_status;
-  return r.objective;
-}
-
-}  // namespace
 
 class OpenLoopScenario : public ::testing::Test {
  protected:
@@ -107,7 +41,7 @@ TEST_F(OpenLoopScenario, DefaultFormulationSolvesWithEveryReserveMetOnATenfoldGr
 TEST_F(OpenLoopScenario, OptimumIsWithinOnePercentAboveAnIndependentDenseGridBound) {
   const auto plan = fpl::plan_open_loop(arm.flat, s0, options);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
-  const double bound = dense_grid_lower_bound(arm.flat, plan, s0, 10.0, 601);
+  const double bound = flatsos::test::dense_grid_lower_bound(arm.flat, plan, s0, Eigen::VectorXd::Constant(6, 10.0), 601);
   EXPECT_GE(plan.sos.cost_N_s, bound - 1e-6 * bound);
   EXPECT_LE(plan.sos.cost_N_s, 1.01 * bound);
   // The conservativeness vanishes as the torque model refines: more pieces -> closer.
