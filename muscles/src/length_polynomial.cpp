@@ -86,7 +86,7 @@ double LengthPolynomial::value(const double* x) const {
   double sum = 0.0;
   for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
     double term = term_coefficient_[t];
-    const int* e = &term_exponents_[t * dimension_];
+    const int* e = term_exponents_.data() + t * dimension_;
     for (int k = 0; k < dimension_; ++k)
       for (int p = 0; p < e[k]; ++p) term *= x[k];
     sum += term;
@@ -130,7 +130,7 @@ void LengthPolynomial::timeDerivatives(const double* x_jet, int count, double* o
   for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
     term[0] = term_coefficient_[t];
     for (int j = 1; j < count; ++j) term[j] = 0.0;
-    const int* e = &term_exponents_[t * dimension_];
+    const int* e = term_exponents_.data() + t * dimension_;
     for (int k = 0; k < dimension_; ++k)
       for (int p = 0; p < e[k]; ++p) multiply_series(term, X[k], count);
     for (int j = 0; j < count; ++j) sum[j] += term[j];
