@@ -20,29 +20,6 @@ const double detail::kFirstDerivativeWeights[9] = {1.0 / 280, -4.0 / 105, 1.0 / 
 const double detail::kSecondDerivativeWeights[9] = {-1.0 / 560, 8.0 / 315, -1.0 / 5, 8.0 / 5, -205.0 / 72,
                                                     8.0 / 5,    -1.0 / 5,  8.0 / 315, -1.0 / 560};
 
-namespace {
-
-// The step of the jet's differences is in seconds: joint motions vary on time scales far above
-// it, and round-off of the second derivative stays ~1e-9 relative.
-constexpr double kJetStep_s = detail::kMaxJetStep_s;
-const double* const kD1 = detail::kFirstDerivativeWeights;
-const double* const kD2 = detail::kSecondDerivativeWeights;
-
-double factorial(int k) {
-  double f = 1.0;
-  for (int i = 2; i <= k; ++i) f *= i;
-  return f;
-}
-
-// Derivative `order` of the Taylor curve gamma(s) = sum_k jet_k s^k / k! at s.
-Eigen::VectorXd taylor(const Jet& jet, int order, double s) {
-  Eigen::VectorXd v = Eigen::VectorXd::Zero(jet.rows());
-  for (int k = order; k < jet.cols(); ++k) v += jet.col(k) * std::pow(s, k - order) / factorial(k - order);
-  return v;
-}
-
-}  // namespace
-
 MuscleState muscle_state_of(const plugin::MusculoskeletalModel& model, const SimTK::State& state) {
   return {model.jointAngles(state), model.jointSpeeds(state), model.tendonLengths(state), model.activations(state)};
 }
@@ -290,18 +267,15 @@ TorqueJet FlatOutputMap::torqueJet(const Jet& q_jet) const {
   return torqueJet(ws, q_jet);
 }
 
-TorqueJet FlatOutputMap::torqueJet(plugin::ModelWorkspace& ws, const Jet& q_jet) const {
-  if (q_jet.rows() != numJoints() || q_jet.cols() < 3)
+TorqueJet FlatOutputMap::torqueJet(plugin::ModelWorkspace&, const Jet& q_jet) const {
+  if (q_jet.rows() != numJoints() || q_jet.cols() < 3 || q_jet.cols() > 5)
     throw std::invalid_argument("joint jet must be N x (3..5): q, qd, qdd[, q''', q'''']");
+  // Exact (dual numbers through the pin tree, the limit torques included): differences in time
+  // lose digits where the motion is violent (a bounce off a joint's stop: q''' ~ 1e4 rad/s^3).
+  Jet full = Jet::Zero(numJoints(), 5);
+  full.leftCols(q_jet.cols()) = q_jet;
   TorqueJet out;
-  out.tau = Eigen::MatrixXd::Zero(numJoints(), 3);
-  for (int k = -4; k <= 4; ++k) {
-    const double s = k * kJetStep_s;
-    const Eigen::VectorXd t = torque(ws, taylor(q_jet, 0, s), taylor(q_jet, 1, s), taylor(q_jet, 2, s));
-    if (k == 0) out.tau.col(0) = t;
-    out.tau.col(1) += kD1[k + 4] / kJetStep_s * t;
-    out.tau.col(2) += kD2[k + 4] / (kJetStep_s * kJetStep_s) * t;
-  }
+  out.tau = model_->pinTree().torqueJet(full);
   return out;
 }
 

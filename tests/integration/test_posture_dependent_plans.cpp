@@ -114,3 +114,24 @@ TEST(PostureDependentPlans, TheRestStateKeepsActivationsAboveTheFloorWhereAPassi
               1.0 - 1e-9);
   }
 }
+
+TEST(PostureDependentPlans, APlanIntoTheElbowsStopIsReproducedBySimbody) {
+  // The target lies 0.05 rad beyond the range's upper end (2.5 rad), inside the limit torque's
+  // transition: on the way and at the hold the muscles must press against the stop's spring and
+  // damper, which Simbody applies as a force element. A planner that did not know the limit would
+  // be off by the limit torque (7.3 N m at the hold).
+  const PostureDependentElbow elbow;
+  const fpl::MuscleState s0 = elbow.rest(120.0);
+  const double target_rad = 2.55;
+  fpl::OpenLoopOptions o = elbow.options(target_rad / deg(1), 1.0);
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(elbow.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  Eigen::VectorXd limit(1);
+  elbow.model->pinTree().jointLimitTorques(Eigen::VectorXd::Constant(1, target_rad), Eigen::VectorXd::Zero(1), limit);
+  EXPECT_LT(limit[0], -5.0);
+  const flatsos::test::OpenLoopReplay replay = flatsos::test::replay_open_loop(elbow.flat, s0, plan, 1e-10, 0.01);
+  ASSERT_TRUE(replay.sim.finite) << replay.sim.message;
+  EXPECT_LT(replay.max_q_error_rad, deg(1e-6));
+  EXPECT_LT(replay.max_activation_error, 1e-8);
+  EXPECT_NEAR(replay.sim.states.rows.back()[1], target_rad, deg(1e-6));
+}

@@ -152,7 +152,7 @@ TEST(FlatOutputs, TorqueJetsOnAGridEqualThePointwiseJets) {
   for (const double h : {0.3, 0.005}) {
     const int count = 11;
     fp::ModelWorkspace ws = arm.flat.makeWorkspace();
-    const auto jets = arm.flat.torqueJetsOnGrid(ws, [&](double t) { return plan.path.jet(t, 3); }, 0.2, h, count);
+    const auto jets = arm.flat.torqueJetsOnGrid(ws, [&](double t) { return plan.path.jet(t, 4); }, 0.2, h, count);
     ASSERT_EQ(jets.size(), 11u);
     for (int i = 0; i < count; ++i) {
       const fpl::TorqueJet pointwise = arm.flat.torqueJet(plan.jointJet(0.2 + h * i));

@@ -5,9 +5,11 @@
 // joint ranges with the failing posture named; what needs constant moment arms refuses by name.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -228,4 +230,58 @@ TEST(PostureDependentFlatness, WhatNeedsConstantMomentArmsSaysSo) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("free_path needs constant moment arms"), std::string::npos) << e.what();
   }
+}
+
+TEST(PostureDependentFlatness, TorqueJetsThroughAJointsStopAreExact) {
+  // The elbow's limit torque is only twice continuously differentiable at the ends of its
+  // transition (2.5 and 2.6745 rad): differences in time across them would be off by the jump
+  // in its third derivative. A motion that runs through the stop: the planner's jets (pointwise
+  // and on a grid) against differences in time of tau(t) away from those ends, and against the
+  // dual-number jets of the pin tree everywhere (close to the ends too).
+  const fpl::FlatOutputMap flat(posture_dependent_elbow());
+  ASSERT_TRUE(flat.model().hasJointLimits());
+  const double c[4] = {2.2, 1.0, 0.5, -0.4};  // q(t) = sum c_k t^k: 2.5 rad at t = 0.27 s
+  auto motion = [&](double t, int order) {
+    double v = 0.0;
+    for (int k = order; k < 4; ++k) {
+      double f = 1.0;
+      for (int i = 0; i < order; ++i) f *= k - i;
+      v += c[k] * f * std::pow(t, k - order);
+    }
+    return v;
+  };
+  auto jet_at = [&](double t) {
+    fpl::Jet j(1, 5);
+    for (int k = 0; k < 5; ++k) j(0, k) = motion(t, k);
+    return j;
+  };
+  auto torque_at = [&](double t) {
+    const fpl::Jet j = jet_at(t);
+    return flat.torque(j.col(0), j.col(1), j.col(2))[0];
+  };
+  auto torque_rate_at = [&](double t) { return flat.torqueJet(jet_at(t)).tau(0, 1); };
+  const double h = 0.05;
+  fp::ModelWorkspace ws = flat.makeWorkspace();
+  const std::vector<fpl::TorqueJet> grid = flat.torqueJetsOnGrid(ws, jet_at, 0.0, h, 17);
+  double largest_limit_rate = 0.0;
+  for (int i = 1; i < 17; ++i) {
+    const double t = i * h;
+    const fpl::TorqueJet jet = flat.torqueJet(jet_at(t));
+    const Eigen::MatrixXd exact = flat.model().pinTree().torqueJet(jet_at(t));
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(jet.tau(0, k), exact(0, k), 1e-9 * (1.0 + std::abs(exact(0, k)))) << "t " << t << " order " << k;
+      EXPECT_NEAR(grid[static_cast<std::size_t>(i)].tau(0, k), exact(0, k), 1e-6 * (1.0 + std::abs(exact(0, k))))
+          << "grid t " << t << " order " << k;
+    }
+    Eigen::MatrixXd limit(1, 3);
+    flat.model().pinTree().jointLimitTorqueJet(jet_at(t), limit);
+    largest_limit_rate = std::max(largest_limit_rate, std::abs(limit(0, 2)));
+    const double q = motion(t, 0);
+    if (std::abs(q - 2.5) > 0.05 && std::abs(q - 2.6745) > 0.05) {
+      EXPECT_MATCHES_FINITE_DIFFERENCE(jet.tau(0, 1), central_difference(torque_at, t, 1e-4)) << "t " << t;
+      EXPECT_MATCHES_FINITE_DIFFERENCE(jet.tau(0, 2), central_difference(torque_rate_at, t, 1e-4)) << "t " << t;
+    }
+  }
+  // The limit's own second rate is a large part of the jet there: the comparison means something.
+  EXPECT_GT(largest_limit_rate, 1e3);
 }

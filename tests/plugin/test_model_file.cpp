@@ -173,6 +173,33 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
          as_path(j, 2, 2, {0.43, -0.03, -0.02, -0.03, 0.0, 0.0});
        },
        {"muscles[2].path", "does not exceed the tendon slack length", "shoulder = ", "elbow = ", "would be slack"}},
+      {"limit torque without a range",
+       [](json& j) { j["joints"][0]["limit_torque"] = {{"stiffness_N_m_per_rad", 100.0}, {"transition_rad", 0.1}}; },
+       {"joints[0].range_rad", "required", "limit_torque"}},
+      {"limit torque without stiffness",
+       [](json& j) {
+         j["joints"][0]["range_rad"] = {-1.0, 2.0};
+         j["joints"][0]["limit_torque"] = {{"transition_rad", 0.1}};
+       },
+       {"joints[0].limit_torque.stiffness_N_m_per_rad", "missing"}},
+      {"limit torque with a zero transition",
+       [](json& j) {
+         j["joints"][0]["range_rad"] = {-1.0, 2.0};
+         j["joints"][0]["limit_torque"] = {{"stiffness_N_m_per_rad", 100.0}, {"transition_rad", 0.0}};
+       },
+       {"joints[0].limit_torque.transition_rad", "> 0"}},
+      {"limit torque with negative damping",
+       [](json& j) {
+         j["joints"][1]["range_rad"] = {0.0, 2.5};
+         j["joints"][1]["limit_torque"] = {{"stiffness_N_m_per_rad", 100.0}, {"transition_rad", 0.1}, {"damping_N_m_s_per_rad", -1.0}};
+       },
+       {"joints[1].limit_torque.damping_N_m_s_per_rad", ">= 0"}},
+      {"limit torque with an unknown key",
+       [](json& j) {
+         j["joints"][0]["range_rad"] = {-1.0, 2.0};
+         j["joints"][0]["limit_torque"] = {{"stiffness_N_m_per_rad", 100.0}, {"transition_rad", 0.1}, {"stiffness", 5.0}};
+       },
+       {"joints[0].limit_torque.stiffness", "unknown key"}},
       {"pennation of 90 degrees", [](json& j) { j["muscles"][1]["pennation_angle_at_optimal_rad"] = 1.6; },
        {"muscles[1]", "pennation_angle_at_optimal_rad"}},
       {"negative passive strain", [](json& j) { j["muscle_defaults"]["passive_fiber_strain_at_one_norm_force"] = -0.1; },

@@ -26,7 +26,7 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
   const Eigen::VectorXd a_min = activation_minima(flat, bo);
   const double h = setup.duration_s / (bo.check_points - 1);
   const std::vector<TorqueJet> jets =
-      flat.torqueJetsOnGrid(mp.workspace, [&](double t) { return mp.path.jet(t, 3); }, 0.0, h, bo.check_points);
+      flat.torqueJetsOnGrid(mp.workspace, [&](double t) { return mp.path.jet(t, 4); }, 0.0, h, bo.check_points);
 
   GridExcess excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points);
   result.max_bound_excess = excess.worst;

@@ -159,6 +159,19 @@ JointDescription read_joint(const json& j, const std::string& path, const std::s
       r.fail(r.at("range_rad"), "lower " + std::to_string(range[0]) + " must be below upper " + std::to_string(range[1]));
     d.range_rad = {range[0], range[1]};
   }
+  if (const json* limit = r.find("limit_torque")) {
+    if (!r.has("range_rad"))
+      r.fail(r.at("range_rad"), "required: the joint has a limit_torque, which acts beyond its range");
+    ObjectReader l(*limit, r.at("limit_torque"), source);
+    d.limit.stiffness_N_m_per_rad = l.positive("stiffness_N_m_per_rad");
+    d.limit.transition_rad = l.positive("transition_rad");
+    if (l.has("damping_N_m_s_per_rad")) {
+      d.limit.damping_N_m_s_per_rad = l.number("damping_N_m_s_per_rad");
+      if (d.limit.damping_N_m_s_per_rad < 0.0)
+        l.fail(l.at("damping_N_m_s_per_rad"), "must be >= 0 (got " + std::to_string(d.limit.damping_N_m_s_per_rad) + ")");
+    }
+    l.reject_unknown_keys();
+  }
   r.reject_unknown_keys();
   return d;
 }

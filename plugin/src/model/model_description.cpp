@@ -161,6 +161,17 @@ void validate(const ModelDescription& model, const std::string& source) {
     if (!unbounded && !(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] < r[1]))
       fail(indexed("joints", i) + ".range_rad", "must be [lower, upper] with finite lower < upper (got [" +
                                                     std::to_string(r[0]) + ", " + std::to_string(r[1]) + "])");
+    const JointLimitTorque& limit = model.joints[i].limit;
+    const std::string at = indexed("joints", i) + ".limit_torque";
+    if (limit.stiffness_N_m_per_rad != 0.0 || limit.transition_rad != 0.0 || limit.damping_N_m_s_per_rad != 0.0) {
+      if (!(std::isfinite(limit.stiffness_N_m_per_rad) && limit.stiffness_N_m_per_rad > 0.0))
+        fail(at + ".stiffness_N_m_per_rad", "must be finite and > 0 (got " + std::to_string(limit.stiffness_N_m_per_rad) + ")");
+      if (!(std::isfinite(limit.transition_rad) && limit.transition_rad > 0.0))
+        fail(at + ".transition_rad", "must be finite and > 0 (got " + std::to_string(limit.transition_rad) + ")");
+      if (!(std::isfinite(limit.damping_N_m_s_per_rad) && limit.damping_N_m_s_per_rad >= 0.0))
+        fail(at + ".damping_N_m_s_per_rad", "must be finite and >= 0 (got " + std::to_string(limit.damping_N_m_s_per_rad) + ")");
+      if (!model.joints[i].hasRange()) fail(indexed("joints", i) + ".range_rad", "required: the joint has a limit torque, which acts beyond its range");
+    }
   }
 
   std::set<std::string> muscle_names;

@@ -40,6 +40,29 @@ class JointTorqueImpl : public SimTK::Force::Custom::Implementation {
   std::shared_ptr<const ExcitationSignal> torque_;
 };
 
+// A joint's passive limit torque (joint_limit.hpp), with its spring's potential energy so that
+// the system's energy accounts for it.
+class JointLimitImpl : public SimTK::Force::Custom::Implementation {
+ public:
+  JointLimitImpl(SimTK::MobilizedBody joint, JointLimitTorque limit, std::array<double, 2> range_rad)
+      : joint_(std::move(joint)), limit_(limit), range_rad_(range_rad) {}
+  void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>&, SimTK::Vector_<SimTK::Vec3>&,
+                 SimTK::Vector& mobility_forces) const override {
+    const double torque =
+        joint_limit_torque(limit_, range_rad_[0], range_rad_[1], joint_.getOneQ(s, 0), joint_.getOneU(s, 0));
+    if (torque != 0.0) joint_.applyOneMobilityForce(s, 0, torque, mobility_forces);
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State& s) const override {
+    return joint_limit_potential_energy(limit_, range_rad_[0], range_rad_[1], joint_.getOneQ(s, 0));
+  }
+  bool dependsOnlyOnPositions() const override { return false; }
+
+ private:
+  SimTK::MobilizedBody joint_;
+  JointLimitTorque limit_;
+  std::array<double, 2> range_rad_;
+};
+
 }  // namespace
 
 ModelWorkspace::ModelWorkspace(const MusculoskeletalModel& model)
@@ -81,6 +104,11 @@ MusculoskeletalModel::MusculoskeletalModel(ModelDescription description, std::ve
       path.arguments.push_back(c.held() ? PathArgument{SimTK::MobilizedBody(), c.held_value_rad}
                                         : PathArgument{joints_[static_cast<std::size_t>(c.joint)], 0.0});
     muscles_.emplace_back(forces_, description_.muscles[j].parameters, std::move(path));
+  }
+  for (int i = 0; i < numJoints(); ++i) {
+    const JointDescription& jd = description_.joints[static_cast<std::size_t>(i)];
+    if (jd.limit.enabled())
+      SimTK::Force::Custom(forces_, new JointLimitImpl(joints_[static_cast<std::size_t>(i)], jd.limit, jd.range_rad));
   }
   for (auto& e : external)
     SimTK::Force::Custom(forces_, new JointTorqueImpl(joints_[static_cast<std::size_t>(e.joint)], std::move(e.torque_N_m)));
@@ -246,6 +274,20 @@ void MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::Ref<
     throw std::invalid_argument("inverse dynamics: the torque output has " + std::to_string(tau.size()) +
                                 " entries, the model " + std::to_string(numJoints()) + " joints");
   tree_.inverseDynamics(ws.tree_, q, qd, qdd, tau);
+}
+
+void MusculoskeletalModel::rigidBodyInverseDynamics(ModelWorkspace& ws, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                                    const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                                    const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                                    Eigen::Ref<Eigen::VectorXd> tau) const {
+  checkWorkspace(ws);
+  checkSize(q, numJoints(), "joint angles");
+  checkSize(qd, numJoints(), "joint speeds");
+  checkSize(qdd, numJoints(), "joint accelerations");
+  if (tau.size() != numJoints())
+    throw std::invalid_argument("inverse dynamics: the torque output has " + std::to_string(tau.size()) +
+                                " entries, the model " + std::to_string(numJoints()) + " joints");
+  tree_.rigidBodyInverseDynamics(ws.tree_, q, qd, qdd, tau);
 }
 
 Eigen::VectorXd MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::VectorXd& q,

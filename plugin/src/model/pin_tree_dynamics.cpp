@@ -5,6 +5,7 @@
 #include <string>
 
 #include "flatsos/plugin/model/dual_number.hpp"
+#include "flatsos/plugin/model/joint_limit.hpp"
 
 namespace flatsos::plugin {
 
@@ -38,6 +39,9 @@ PinTreeDynamics::PinTreeDynamics(const ModelDescription& description)
     j.mass_kg = b.mass_kg;
     j.mass_center_m = b.mass_center_m;
     j.inertia_about_com_kg_m2 = inertia_matrix(b);
+    j.limit = jd.limit;
+    j.range_rad = jd.range_rad;
+    has_limits_ = has_limits_ || jd.limit.enabled();
     joint_of_body[jd.child] = static_cast<int>(joints_.size());
     joints_.push_back(j);
   }
@@ -56,8 +60,57 @@ void PinTreeDynamics::inverseDynamics(Scratch& scratch, const Eigen::Ref<const E
   inverseDynamicsOf<double>(scratch, q.data(), qd.data(), qdd.data(), tau.data());
 }
 
+void PinTreeDynamics::rigidBodyInverseDynamics(Scratch& scratch, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                               const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                               const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                               Eigen::Ref<Eigen::VectorXd> tau) const {
+  rigidBodyTorquesOf<double>(scratch, q.data(), qd.data(), qdd.data(), tau.data());
+}
+
+void PinTreeDynamics::jointLimitTorques(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                        const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                        Eigen::Ref<Eigen::VectorXd> tau) const {
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    const Joint& j = joints_[i];
+    const auto k = static_cast<Eigen::Index>(i);
+    tau[k] = joint_limit_torque(j.limit, j.range_rad[0], j.range_rad[1], q[k], qd[k]);
+  }
+}
+
+void PinTreeDynamics::jointLimitTorqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet,
+                                          Eigen::Ref<Eigen::MatrixXd> out) const {
+  // Second-order dual numbers along the motion, as in torque_jet_of below; q''' enters through
+  // the damper's second derivative. Jet columns not given are 0.
+  using H = Dual<Dual<double>>;
+  auto column = [&](Eigen::Index i, Eigen::Index order) { return order < q_jet.cols() ? q_jet(i, order) : 0.0; };
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    const Joint& j = joints_[i];
+    const auto k = static_cast<Eigen::Index>(i);
+    if (!j.limit.enabled()) {
+      out.row(k).setZero();
+      continue;
+    }
+    const H q(Dual<double>(column(k, 0), column(k, 1)), Dual<double>(column(k, 1), column(k, 2)));
+    const H qd(Dual<double>(column(k, 1), column(k, 2)), Dual<double>(column(k, 2), column(k, 3)));
+    const H t = joint_limit_torque(j.limit, j.range_rad[0], j.range_rad[1], q, qd);
+    out(k, 0) = t.value.value;
+    out(k, 1) = t.derivative.value;
+    out(k, 2) = t.derivative.derivative;
+  }
+}
+
 template <class S>
 void PinTreeDynamics::inverseDynamicsOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const {
+  rigidBodyTorquesOf(scratch, q, qd, qdd, tau);
+  if (!has_limits_) return;
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    const Joint& j = joints_[i];
+    tau[i] -= joint_limit_torque(j.limit, j.range_rad[0], j.range_rad[1], q[i], qd[i]);
+  }
+}
+
+template <class S>
+void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const {
   using Vec = Eigen::Matrix<S, 3, 1>;
   using Mat = Eigen::Matrix<S, 3, 3>;
   const int n = numJoints();

@@ -30,6 +30,7 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -102,6 +103,8 @@ struct TorqueJetGrid {
   std::vector<TorqueJet> jets;  ///< the result: one jet per grid time
   Eigen::MatrixXd fine_torques_N_m;  ///< scratch: inverse dynamics on the refined grid (N x points)
   Jet joint_jet;                     ///< scratch: q, qd, qdd at one time (N x 3)
+  Jet limit_joint_jet;               ///< scratch: q .. q''' at a grid time (N x 4), joint limits only
+  Eigen::MatrixXd limit_jet_N_m;     ///< scratch: the limit torques' jet there (N x 3)
 };
 
 /// How the tendon forces' jet follows the torque and flat-output jets at one point of a joint
@@ -173,24 +176,28 @@ class FlatOutputMap {
   /// words them, prefixed with the posture: for checks along a planned path.
   std::string assumption1FailureAt(const Eigen::VectorXd& q_rad) const;
 
-  /// tau(q, qd, qdd) from Simbody (muscles excluded).
+  /// tau(q, qd, qdd): the torques the muscles must supply (MusculoskeletalModel::inverseDynamics).
   Eigen::VectorXd torque(plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                          const Eigen::VectorXd& qdd) const;
   Eigen::VectorXd torque(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) const;
   /// tau and its first two time derivatives along a joint motion with the given jet
-  /// (N x 5: q .. q''''). Columns beyond those given are taken as 0.
+  /// (N x 5: q .. q''''). Columns beyond those given are taken as 0. Exact: dual numbers through
+  /// the pin tree's inverse dynamics, the joint limits' torques included.
   TorqueJet torqueJet(plugin::ModelWorkspace& workspace, const Jet& q_jet) const;
   TorqueJet torqueJet(const Jet& q_jet) const;
 
   /// Torque jets at the `count` uniform times t0 + i h along a joint motion given as a function
-  /// of time (q, qd, qdd at t: N x 3). The same eighth-order differences as torqueJet, but
-  /// neighbouring times share their inverse-dynamics calls: about one call per time instead of
-  /// nine (the grid is refined internally to a step <= 10 ms).
+  /// of time (q, qd, qdd, q''' at t: N x 4; q''' is read for a model with joint limits). The rigid
+  /// bodies' share by eighth-order differences in time of their (analytic) inverse dynamics, where
+  /// neighbouring times share their calls: about one call per time (the grid is refined
+  /// internally to a step <= 10 ms); the joint limits' share (only twice continuously
+  /// differentiable) exactly.
   template <class JointJetAt>
   std::vector<TorqueJet> torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const JointJetAt& jet_at, double t0,
                                           double h, int count) const;
-  /// The same into reusable storage; `write_jet(t, jet)` writes q, qd, qdd at t into the given
-  /// N x 3 matrix. Allocates nothing once `grid` has been used for this count.
+  /// The same into reusable storage; `write_jet(t, jet)` writes q and its derivatives at t into
+  /// every column of the given N x k matrix (k = 3, or 4 for the joint limits' jets). Allocates
+  /// nothing once `grid` has been used for this count.
   template <class WriteJointJet>
   void torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const WriteJointJet& write_jet, double t0, double h,
                         int count, TorqueJetGrid& grid) const;
@@ -245,8 +252,8 @@ void FlatOutputMap::torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const Wr
   grid.jets.resize(static_cast<std::size_t>(count));
   for (int k = 0; k < fine; ++k) {
     write_jet(t0 + (k - 4) * hf, grid.joint_jet);
-    model_->inverseDynamics(workspace, grid.joint_jet.col(0), grid.joint_jet.col(1), grid.joint_jet.col(2),
-                            grid.fine_torques_N_m.col(k));
+    model_->rigidBodyInverseDynamics(workspace, grid.joint_jet.col(0), grid.joint_jet.col(1), grid.joint_jet.col(2),
+                                     grid.fine_torques_N_m.col(k));
   }
   for (int i = 0; i < count; ++i) {
     Eigen::MatrixXd& tau = grid.jets[static_cast<std::size_t>(i)].tau;
@@ -257,6 +264,13 @@ void FlatOutputMap::torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const Wr
       tau.col(1) += detail::kFirstDerivativeWeights[k + 4] / hf * grid.fine_torques_N_m.col(c + k);
       tau.col(2) += detail::kSecondDerivativeWeights[k + 4] / (hf * hf) * grid.fine_torques_N_m.col(c + k);
     }
+    if (model_->hasJointLimits()) {
+      grid.limit_joint_jet.resize(n, 4);
+      grid.limit_jet_N_m.resize(n, 3);
+      write_jet(t0 + i * h, grid.limit_joint_jet);
+      model_->pinTree().jointLimitTorqueJet(grid.limit_joint_jet, grid.limit_jet_N_m);
+      tau -= grid.limit_jet_N_m;
+    }
   }
 }
 
@@ -264,7 +278,16 @@ template <class JointJetAt>
 std::vector<TorqueJet> FlatOutputMap::torqueJetsOnGrid(plugin::ModelWorkspace& workspace, const JointJetAt& jet_at,
                                                        double t0, double h, int count) const {
   TorqueJetGrid grid;
-  torqueJetsOnGrid(workspace, [&](double t, Jet& out) { out = jet_at(t).leftCols(3); }, t0, h, count, grid);
+  torqueJetsOnGrid(
+      workspace,
+      [&](double t, Jet& out) {
+        const Jet jet = jet_at(t);
+        if (jet.cols() < out.cols())
+          throw std::invalid_argument("torque jets on a grid: the joint jet has " + std::to_string(jet.cols()) +
+                                      " columns, " + std::to_string(out.cols()) + " are needed");
+        out = jet.leftCols(out.cols());
+      },
+      t0, h, count, grid);
   return std::move(grid.jets);
 }
 

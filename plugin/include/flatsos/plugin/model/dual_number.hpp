@@ -54,6 +54,13 @@ struct Dual {
   friend bool operator!=(const Dual& a, const Dual& b) { return !(a == b); }
 };
 
+/// The plain value of a (nested) dual number: for branches, which follow the value.
+inline double primal(double x) { return x; }
+template <class T>
+double primal(const Dual<T>& x) {
+  return primal(x.value);
+}
+
 }  // namespace flatsos::plugin
 
 namespace Eigen {

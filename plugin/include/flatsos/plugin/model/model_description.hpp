@@ -14,7 +14,10 @@
 //               "location_in_parent_m": [x,y,z], "axis": [0,0,1] (optional),
 //               "coordinate": "elbow_flexion" (optional; default: the joint's name),
 //               "range_rad": [lower, upper] (optional; required for the joints of a muscle
-//               whose moment arms change with posture)}],
+//               whose moment arms change with posture),
+//               "limit_torque": {"stiffness_N_m_per_rad", "transition_rad",
+//                                "damping_N_m_s_per_rad" (optional, 0)} (optional; needs
+//               range_rad: a passive torque beyond the range, joint_limit.hpp)}],
 //   "muscle_defaults": {any MuscleParameters field except the three below} (optional),
 //   "muscles": [{"name", "max_isometric_force_N", "optimal_fiber_length_m",
 //                "tendon_slack_length_m",
@@ -51,6 +54,7 @@
 
 #include "flatsos/muscles/muscle_parameters.hpp"
 #include "flatsos/muscles/musculotendon_path.hpp"
+#include "flatsos/plugin/model/joint_limit.hpp"
 
 namespace flatsos::plugin {
 
@@ -77,6 +81,9 @@ struct JointDescription {
   std::string coordinate;  ///< its coordinate's name (OpenSim's /jointset/<joint>/<coordinate>); empty: `name`
   /// The range of motion [lower, upper] (rad); unbounded when not given.
   std::array<double, 2> range_rad{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  /// A passive torque beyond the range (joint_limit.hpp); off unless its stiffness is > 0, and
+  /// then the range must be given.
+  JointLimitTorque limit;
   const std::string& coordinateName() const { return coordinate.empty() ? name : coordinate; }
   bool hasRange() const { return std::isfinite(range_rad[0]) && std::isfinite(range_rad[1]); }
 };

@@ -1,5 +1,6 @@
 #pragma once
-// A Simbody system built from a ModelDescription: a tree of Pin mobilizers with gravity and one
+// A Simbody system built from a ModelDescription: a tree of Pin mobilizers with gravity, the
+// joints' limit torques (where the description gives them) and one
 // HillMuscle per muscle. Vectors are in the description's order (joints = generalized
 // coordinates, muscles). Not copyable: Simbody subsystems refer to each other.
 //
@@ -97,9 +98,10 @@ class MusculoskeletalModel {
   /// Mass matrix M(q) from Simbody.
   Eigen::MatrixXd massMatrix(ModelWorkspace& workspace, const Eigen::VectorXd& q_rad) const;
   Eigen::MatrixXd massMatrix(const Eigen::VectorXd& q_rad) const;
-  /// Inverse dynamics without muscles (external torques excluded too):
-  /// tau = M(q) qdd + C(q, qd) qd + g(q), by recursive Newton-Euler on the pin tree
-  /// (pin_tree_dynamics.hpp; agrees with Simbody's to round-off). Allocates nothing.
+  /// Inverse dynamics: the joint torques the muscles must supply (external torques excluded),
+  /// tau = M(q) qdd + C(q, qd) qd + g(q) - tau_limit(q, qd), by recursive Newton-Euler on the pin
+  /// tree (pin_tree_dynamics.hpp; agrees with Simbody's to round-off); tau_limit are the joints'
+  /// limit torques (joint_limit.hpp), zero inside every range. Allocates nothing.
   void inverseDynamics(ModelWorkspace& workspace, const Eigen::Ref<const Eigen::VectorXd>& q_rad,
                        const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
                        const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2, Eigen::Ref<Eigen::VectorXd> tau_N_m) const;
@@ -108,7 +110,17 @@ class MusculoskeletalModel {
   Eigen::VectorXd inverseDynamics(const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                   const Eigen::VectorXd& qdd_rad_per_s2) const;
 
-  /// Total mechanical energy of the multibody system (kinetic + gravitational), J.
+  /// The rigid bodies' share alone, M(q) qdd + C(q, qd) qd + g(q) (no limit torques): analytic
+  /// in (q, qd, qdd), so differences in time may be taken of it. Allocates nothing.
+  void rigidBodyInverseDynamics(ModelWorkspace& workspace, const Eigen::Ref<const Eigen::VectorXd>& q_rad,
+                                const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
+                                const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2,
+                                Eigen::Ref<Eigen::VectorXd> tau_N_m) const;
+  /// True when some joint has a limit torque.
+  bool hasJointLimits() const { return tree_.hasJointLimits(); }
+
+  /// Total mechanical energy of the multibody system (kinetic + gravitational + the joint limits'
+  /// springs), J.
   double mechanicalEnergy(const SimTK::State& s) const;
 
  private:

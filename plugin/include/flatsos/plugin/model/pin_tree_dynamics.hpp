@@ -14,11 +14,13 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "flatsos/plugin/model/joint_limit.hpp"
 #include "flatsos/plugin/model/model_description.hpp"
 
 namespace flatsos::plugin {
@@ -45,13 +47,30 @@ class PinTreeDynamics {
   int numJoints() const { return static_cast<int>(joints_.size()); }
   Scratch makeScratch() const;
 
-  /// tau = M(q) qdd + C(q, qd) qd + g(q): the joint torques that produce qdd at (q, qd) under
-  /// gravity alone. Sizes must equal numJoints() and scratch come from makeScratch() (checked
-  /// by the caller, MusculoskeletalModel).
+  /// tau = M(q) qdd + C(q, qd) qd + g(q) - tau_limit(q, qd): the joint torques the muscles must
+  /// supply for qdd at (q, qd), under gravity and the joints' limit torques (joint_limit.hpp; zero
+  /// inside every range). Sizes must equal numJoints() and scratch come from makeScratch()
+  /// (checked by the caller, MusculoskeletalModel).
   void inverseDynamics(Scratch& scratch, const Eigen::Ref<const Eigen::VectorXd>& q_rad,
                        const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
                        const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2,
                        Eigen::Ref<Eigen::VectorXd> tau_N_m) const;
+  /// The rigid bodies' share alone, M(q) qdd + C(q, qd) qd + g(q): smooth (analytic) in its
+  /// arguments, unlike the limit torques, so differences in time may be taken of it.
+  void rigidBodyInverseDynamics(Scratch& scratch, const Eigen::Ref<const Eigen::VectorXd>& q_rad,
+                                const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s,
+                                const Eigen::Ref<const Eigen::VectorXd>& qdd_rad_per_s2,
+                                Eigen::Ref<Eigen::VectorXd> tau_N_m) const;
+  /// True when some joint has a limit torque.
+  bool hasJointLimits() const { return has_limits_; }
+  /// The limit torques tau_limit(q, qd) (N entries; 0 for joints without a limit).
+  void jointLimitTorques(const Eigen::Ref<const Eigen::VectorXd>& q_rad,
+                         const Eigen::Ref<const Eigen::VectorXd>& qd_rad_per_s, Eigen::Ref<Eigen::VectorXd> tau_N_m) const;
+  /// The limit torques and their first two time derivatives along a motion with joint jet q_jet
+  /// (N x k, q and its derivatives; columns beyond k are 0, and k >= 4 makes it exact: the
+  /// damper's second derivative needs q'''), exactly (dual numbers): into out (N x 3). Allocates
+  /// nothing.
+  void jointLimitTorqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet, Eigen::Ref<Eigen::MatrixXd> out) const;
   /// The same in another scalar type (instantiated for double and nested dual numbers,
   /// dual_number.hpp); q, qd, qdd and tau have numJoints() entries, scratch is resized.
   template <class S>
@@ -90,7 +109,12 @@ class PinTreeDynamics {
     double mass_kg = 0.0;
     Eigen::Vector3d mass_center_m;         ///< child body frame
     Eigen::Matrix3d inertia_about_com_kg_m2;  ///< child body frame
+    JointLimitTorque limit;
+    std::array<double, 2> range_rad{};
   };
+  template <class S>
+  void rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const;
+  bool has_limits_ = false;
   std::vector<Joint> joints_;
   Eigen::Vector3d gravity_m_per_s2_;
 };
