@@ -142,6 +142,15 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
   constant_ = m.hasConstantMomentArms();
   if (E_.rows() == 0) throw FlatnessError("the model '" + m.description().name + "' defines no flat_outputs (E)");
   require_shape(E_, joints_, muscles_);
+  const plugin::EffortWeights& weights = m.description().effort_weights;
+  switch (weights.kind) {
+    case plugin::EffortWeights::Kind::FlatOutputs: effort_weights_ = E_.transpose() * Eigen::VectorXd::Ones(E_.rows()); break;
+    case plugin::EffortWeights::Kind::NormalizedTendonForce:
+      effort_weights_.resize(muscles_);
+      for (int j = 0; j < muscles_; ++j) effort_weights_[j] = 1.0 / m.muscle(j).getParameters().max_isometric_force_N;
+      break;
+    case plugin::EffortWeights::Kind::PerMuscle: effort_weights_ = weights.per_muscle; break;
+  }
   if (!constant_) {
     checkAssumption1OverRanges();
     return;
@@ -250,6 +259,16 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   map.W21 = -2.0 * K1;
   map.W20 = 2.0 * K1 * K1 - K2;
   return map;
+}
+
+bool FlatOutputMap::effortIsFlatOutputSum() const {
+  return model_->description().effort_weights.kind == plugin::EffortWeights::Kind::FlatOutputs;
+}
+
+EffortSplit FlatOutputMap::effortSplit(const Eigen::VectorXd& q_rad) const {
+  if (constant_) return {CY_.transpose() * effort_weights_, Ctau_.transpose() * effort_weights_};
+  const ForceJetMap map = forceJetMap(q_rad);
+  return {map.CY.transpose() * effort_weights_, map.Ctau.transpose() * effort_weights_};
 }
 
 Eigen::VectorXd FlatOutputMap::torque(plugin::ModelWorkspace& ws, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,

@@ -104,6 +104,10 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
     throw std::invalid_argument("open-loop plan: free_path needs constant moment arms; model '" +
                                 flat.model().description().name + "' has posture-dependent ones (plan along the "
                                 "prescribed path instead)");
+  if (!flat.effortIsFlatOutputSum())
+    throw std::invalid_argument("open-loop plan: free_path minimizes the sum of the flat outputs; model '" +
+                                flat.model().description().name + "' weighs its effort otherwise (effort_weights), whose "
+                                "torque part w^T C_tau tau changes with the path (plan along the prescribed path instead)");
   if (!o.sos.bounds.enforce)
     throw std::invalid_argument("open-loop plan: free_path needs the excitation bounds (sos.bounds.enforce): without "
                                 "them a faster path always costs less");
@@ -334,6 +338,11 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.tau_max.setConstant(n, -1e300);
   const bool varying = !flat.hasConstantMomentArms();
   const int m = flat.numMuscles();
+  // The paper's cost (sum of the flat outputs) is the SLP's default; other effort weights give
+  // the cost c = C_Y^T w of the constant flat outputs.
+  const bool flat_output_sum = flat.effortIsFlatOutputSum();
+  if (flat_output_sum) step.buffers.slp.cost.resize(0);
+  else step.buffers.slp.cost.setZero(flat.numFlatOutputs());
   if (varying) {
     step.reserve_rows.resize(o.grid_points * m, flat.numFlatOutputs());
     step.bound_N.resize(o.grid_points * m);
@@ -359,10 +368,13 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
     const ForceJetMap map = flat.forceJetMap(j.leftCols(1));
     step.reserve_rows.middleRows(i * m, m) = map.CY;
     step.bound_N.segment(i * m, m) = o.reserves_N - map.Ctau * tau;
+    // The effort's flat-output part, C_Y(q)^T w, averaged over the horizon's grid.
+    if (!flat_output_sum) step.buffers.slp.cost.noalias() += map.CY.transpose() * flat.effortWeights() / o.grid_points;
   }
   if (!varying) {
     step.reserve_rows = flat.CY();  // no allocation once sized
     slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N, step.bound_N);
+    if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortWeights();
   }
   solve_slp(step.reserve_rows, step.bound_N, o.solver, o.warm_start, step.buffers.slp, step.slp);
   step.status = step.slp.status;

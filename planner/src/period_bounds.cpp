@@ -118,7 +118,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   const int p = flat.numFlatOutputs();
   const std::vector<BoundPoint> points = period_points(flat, b, step);
   LinearProgram lp;
-  lp.cost = Eigen::VectorXd::Ones(p);
+  lp.cost = step.buffers.slp.cost.size() ? step.buffers.slp.cost : Eigen::VectorXd::Ones(p);  // SlpWorkspace::cost
   lp.G = step.reserve_rows;
   lp.row_lower = step.bound_N;
   lp.row_upper = Eigen::VectorXd::Constant(step.bound_N.size(), 1e19);
@@ -133,7 +133,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
       radius, basis, b.max_iterations);
   step.bound_iterations = slp.iterations;
   step.slp.alpha = alpha;
-  step.slp.cost_N = alpha.sum();
+  step.slp.cost_N = lp.cost.dot(alpha);
   if (!slp.converged) {
     step.status = SolveStatus::Failed;
     step.message = "the excitation bounds on the first period were not met: " + slp.failure;

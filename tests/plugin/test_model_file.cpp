@@ -200,6 +200,35 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
          j["joints"][0]["limit_torque"] = {{"stiffness_N_m_per_rad", 100.0}, {"transition_rad", 0.1}, {"stiffness", 5.0}};
        },
        {"joints[0].limit_torque.stiffness", "unknown key"}},
+      {"effort weights of an unknown kind", [](json& j) { j["effort_weights"] = "metabolic"; },
+       {"effort_weights", "unknown kind 'metabolic'"}},
+      {"effort weights without a muscle",
+       [](json& j) {
+         j["effort_weights"] = json::object();
+         for (const auto& m : j["muscles"]) j["effort_weights"][m["name"].get<std::string>()] = 1.0;
+         j["effort_weights"].erase("biceps");
+       },
+       {"effort_weights.biceps", "missing"}},
+      {"effort weights of an unknown muscle",
+       [](json& j) {
+         j["effort_weights"] = json::object();
+         for (const auto& m : j["muscles"]) j["effort_weights"][m["name"].get<std::string>()] = 1.0;
+         j["effort_weights"]["deltoid"] = 1.0;
+       },
+       {"effort_weights.deltoid", "unknown key"}},
+      {"negative effort weight",
+       [](json& j) {
+         j["effort_weights"] = json::object();
+         for (const auto& m : j["muscles"]) j["effort_weights"][m["name"].get<std::string>()] = 1.0;
+         j["effort_weights"]["biceps"] = -1.0;
+       },
+       {"effort_weights.biceps", ">= 0"}},
+      {"effort weights all zero",
+       [](json& j) {
+         j["effort_weights"] = json::object();
+         for (const auto& m : j["muscles"]) j["effort_weights"][m["name"].get<std::string>()] = 0.0;
+       },
+       {"effort_weights", "nothing to minimize"}},
       {"pennation of 90 degrees", [](json& j) { j["muscles"][1]["pennation_angle_at_optimal_rad"] = 1.6; },
        {"muscles[1]", "pennation_angle_at_optimal_rad"}},
       {"negative passive strain", [](json& j) { j["muscle_defaults"]["passive_fiber_strain_at_one_norm_force"] = -0.1; },
@@ -265,4 +294,23 @@ TEST(ModelFile, ThreeLinkChainFromAFileBuildsAndHasTheRightMassMatrixSize) {
   EXPECT_EQ(model.numJoints(), 3);
   EXPECT_EQ(model.massMatrix(Eigen::Vector3d(0.1, 0.2, 0.3)).rows(), 3);
   EXPECT_EQ(model.momentArmMatrix()(2, 6), 0.01);
+}
+
+TEST(ModelFile, EffortWeightsAndJointLimitsAreRead) {
+  json j = arm_json();
+  EXPECT_EQ(fp::parse_model_json(j.dump(), "a.json").effort_weights.kind, fp::EffortWeights::Kind::FlatOutputs);
+  j["effort_weights"] = "normalized_tendon_force";
+  EXPECT_EQ(fp::parse_model_json(j.dump(), "a.json").effort_weights.kind, fp::EffortWeights::Kind::NormalizedTendonForce);
+  j["effort_weights"] = json::object();
+  double w = 1.0;
+  for (const auto& m : j["muscles"]) j["effort_weights"][m["name"].get<std::string>()] = w++;
+  j["joints"][1]["range_rad"] = {0.0, 2.5};
+  j["joints"][1]["limit_torque"] = {{"stiffness_N_m_per_rad", 300.0}, {"transition_rad", 0.1}};
+  const fp::ModelDescription d = fp::parse_model_json(j.dump(), "a.json");
+  ASSERT_EQ(d.effort_weights.kind, fp::EffortWeights::Kind::PerMuscle);
+  for (int k = 0; k < d.numMuscles(); ++k) EXPECT_EQ(d.effort_weights.per_muscle[k], k + 1.0);
+  EXPECT_EQ(d.joints[1].limit.stiffness_N_m_per_rad, 300.0);
+  EXPECT_EQ(d.joints[1].limit.transition_rad, 0.1);
+  EXPECT_EQ(d.joints[1].limit.damping_N_m_s_per_rad, 0.0);
+  EXPECT_FALSE(d.joints[0].limit.enabled());
 }

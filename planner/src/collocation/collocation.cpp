@@ -252,7 +252,7 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   validate(flat, path, initial, reserves_N, o);
   const Stopwatch setup;
   const int m = flat.numMuscles(), N = flat.numJoints();
-  const Eigen::VectorXd weights = o.effort_weights.size() > 0 ? o.effort_weights : flat_output_effort_weights(flat);
+  const Eigen::VectorXd weights = o.effort_weights.size() > 0 ? o.effort_weights : flat.effortWeights();
   detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
   std::vector<detail::CollocationMuscle> muscles =
       detail::collocation_muscles(flat, initial, reserves_N, weights, o.min_activation);

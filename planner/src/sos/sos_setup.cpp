@@ -130,6 +130,10 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
   for (int j = 0; j <= D; ++j) mean_weights[j] = 1.0 / (j + 1);
   LinearProgram& lp = setup.lp;
   lp.cost = Eigen::VectorXd::Zero(n_theta);
+  const bool flat_output_sum = flat.effortIsFlatOutputSum();
+  const Eigen::VectorXd& weights_w = flat.effortWeights();
+  const EffortSplit constant_split =
+      varying || flat_output_sum ? EffortSplit{} : flat.effortSplit(Eigen::VectorXd::Zero(n));
   for (std::size_t seg = 0; seg + 1 < breaks.size(); ++seg) {
     const double t0 = breaks[seg], t1 = breaks[seg + 1], mid = 0.5 * (t0 + t1);
     const int k = piece_at(torque, mid);
@@ -219,12 +223,40 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
       c.G.middleCols(out.offset, out.nullspace.cols()) = P * out.nullspace;
       add(std::move(c));
     }
-    // --- cost: integral of sum_l Y_l over the segment ---
-    const Eigen::RowVectorXd weights = (t1 - t0) * mean_weights.transpose() * P;
-    for (const auto& out : outputs) {
+    // --- cost: the integral of w^T F = w^T C_tau tau + sum_l (C_Y^T w)_l Y_l over the segment ---
+    // The paper's weights (E^T 1) give exactly sum_l Y_l. Others: constants with constant moment
+    // arms; with posture-dependent ones this piece's modelled base force and coupling polynomials
+    // (each within its remainder bound of the exact C(q(t))^-1).
+    const double piece_length = piece.t1_s - piece.t0_s;
+    for (int l = 0; l < p; ++l) {
+      Eigen::RowVectorXd row;
+      if (flat_output_sum) {
+        row = mean_weights.transpose();
+      } else if (!varying) {
+        row = constant_split.flat_outputs[l] * mean_weights.transpose();
+      } else {
+        Eigen::VectorXd c_l = Eigen::VectorXd::Zero(1);
+        for (int j = 0; j < m; ++j) {
+          const Eigen::VectorXd cj = weights_w[j] * piece.coupling[static_cast<std::size_t>(j * p + l)].composeAffine(a, b).coefficients();
+          if (cj.size() > c_l.size()) c_l.conservativeResizeLike(Eigen::VectorXd::Zero(cj.size()));
+          c_l.head(cj.size()) += cj;
+        }
+        // integral over [0, 1] of c_l(s) s^k
+        row = Eigen::RowVectorXd::Zero(D + 1);
+        for (int power = 0; power <= D; ++power)
+          for (Eigen::Index i = 0; i < c_l.size(); ++i) row[power] += c_l[i] / static_cast<double>(i + power + 1);
+      }
+      const Eigen::RowVectorXd weights = (t1 - t0) * row * P;
+      const auto& out = outputs[static_cast<std::size_t>(l)];
       setup.cost_constant += weights.dot(out.particular);
       if (out.nullspace.cols()) lp.cost.segment(out.offset, out.nullspace.cols()) += (weights * out.nullspace).transpose();
     }
+    if (!flat_output_sum)
+      for (int i = 0; i < (varying ? m : n); ++i) {
+        const double weight = varying ? weights_w[i] : constant_split.torques[i];
+        const Polynomial& signal = varying ? piece.base_force[static_cast<std::size_t>(i)] : piece.torque[static_cast<std::size_t>(i)];
+        setup.cost_constant += weight * piece_length * signal.integral(a, a + b);
+      }
   }
   lp.x_lower = Eigen::VectorXd::Constant(n_theta, -o.study.coefficient_bound_N);
   lp.x_upper = Eigen::VectorXd::Constant(n_theta, o.study.coefficient_bound_N);

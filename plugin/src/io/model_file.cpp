@@ -304,6 +304,32 @@ FlatOutputDescription read_flat_output(const json& j, const std::string& path,
 
 }  // namespace
 
+EffortWeights read_effort_weights(const json& j, const std::string& source, const std::vector<MuscleDescription>& muscles) {
+  EffortWeights w;
+  const std::string at = "effort_weights";
+  if (j.is_string()) {
+    const std::string kind = j.get<std::string>();
+    if (kind == "flat_outputs") w.kind = EffortWeights::Kind::FlatOutputs;
+    else if (kind == "normalized_tendon_force") w.kind = EffortWeights::Kind::NormalizedTendonForce;
+    else
+      throw ModelFileError("model file '" + source + "': " + at + ": unknown kind '" + kind +
+                           "' (\"flat_outputs\", \"normalized_tendon_force\" or {\"<muscle>\": w, ...})");
+    return w;
+  }
+  ObjectReader r(j, at, source);
+  w.kind = EffortWeights::Kind::PerMuscle;
+  w.per_muscle.resize(static_cast<Eigen::Index>(muscles.size()));
+  for (std::size_t i = 0; i < muscles.size(); ++i) {
+    const std::string& name = muscles[i].parameters.name;
+    const double v = r.number(name);
+    if (v < 0.0) r.fail(r.at(name), "must be >= 0 (got " + std::to_string(v) + ")");
+    w.per_muscle[static_cast<Eigen::Index>(i)] = v;
+  }
+  r.reject_unknown_keys();  // a muscle the model does not have
+  if (!(w.per_muscle.maxCoeff() > 0.0)) r.fail(at, "every weight is 0: nothing to minimize");
+  return w;
+}
+
 // Angles in the file are in degrees (people write postures that way); radians inside.
 ScenarioDescription read_scenario(const json& j, const std::string& path, const std::string& source) {
   constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
@@ -359,6 +385,8 @@ ModelDescription parse_model_json(const std::string& json_text, const std::strin
   const json& flat = array_of_objects(top, "flat_outputs", false);
   for (std::size_t i = 0; i < flat.size(); ++i)
     model.flat_outputs.push_back(read_flat_output(flat[i], indexed("flat_outputs", i), source, model.muscles));
+  if (const json* weights = top.find("effort_weights"))
+    model.effort_weights = read_effort_weights(*weights, source, model.muscles);
   if (const json* scenarios = top.find("scenarios")) {
     if (!scenarios->is_object()) top.fail("scenarios", "must be an object of named scenarios");
     for (const auto& item : scenarios->items())

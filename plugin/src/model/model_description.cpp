@@ -174,6 +174,17 @@ void validate(const ModelDescription& model, const std::string& source) {
     }
   }
 
+  if (model.effort_weights.kind == EffortWeights::Kind::PerMuscle) {
+    const Eigen::VectorXd& w = model.effort_weights.per_muscle;
+    if (w.size() != static_cast<Eigen::Index>(model.muscles.size()))
+      fail("effort_weights", "needs one weight per muscle (" + std::to_string(model.muscles.size()) + "), got " +
+                                 std::to_string(w.size()));
+    for (Eigen::Index j = 0; j < w.size(); ++j)
+      if (!(std::isfinite(w[j]) && w[j] >= 0.0))
+        fail("effort_weights." + model.muscles[static_cast<std::size_t>(j)].parameters.name,
+             "must be finite and >= 0 (got " + std::to_string(w[j]) + ")");
+    if (!(w.size() > 0 && w.maxCoeff() > 0.0)) fail("effort_weights", "every weight is 0: nothing to minimize");
+  }
   std::set<std::string> muscle_names;
   for (std::size_t j = 0; j < model.muscles.size(); ++j) {
     const auto& m = model.muscles[j];

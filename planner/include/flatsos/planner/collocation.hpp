@@ -27,8 +27,8 @@ namespace flatsos::planner {
 
 struct CollocationOptions {
   int mesh_intervals = 100;          ///< K uniform intervals: 2K + 1 collocation points
-  /// Cost weights w (one per muscle): empty means the flat outputs' cost sum_l Y_l = (E^T 1)^T F,
-  /// the effort the flatness planner minimizes.
+  /// Cost weights w (one per muscle): empty means the flatness planner's own
+  /// (FlatOutputMap::effortWeights: the model's effort_weights, by default (E^T 1)^T F).
   Eigen::VectorXd effort_weights;
   double min_activation = 0.0;       ///< a >= this; 0: each muscle's own activation floor
   double tolerance = 1e-9;           ///< Ipopt's tol (scaled NLP error)

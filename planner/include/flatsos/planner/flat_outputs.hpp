@@ -137,6 +137,12 @@ struct MuscleState {
 /// The muscle state of a Simbody State of `model` (q, qd, tendon lengths, activations).
 MuscleState muscle_state_of(const plugin::MusculoskeletalModel& model, const SimTK::State& state);
 
+/// The effort w^T F = w^T C_tau(q) tau + w^T C_Y(q) Y split at one posture: the flat outputs'
+/// weights C_Y^T w (p) and the torques' C_tau^T w (N).
+struct EffortSplit {
+  Eigen::VectorXd flat_outputs, torques;
+};
+
 class FlatOutputMap {
  public:
   /// E from the model file's flat_outputs. Throws FlatnessError naming each violated condition
@@ -163,6 +169,13 @@ class FlatOutputMap {
   const Eigen::MatrixXd& C() const;
   const Eigen::MatrixXd& Ctau() const;
   const Eigen::MatrixXd& CY() const;
+  /// The effort weights w (m): the cost is the integral of w^T F (the model's effort_weights;
+  /// by default E^T 1, the sum of the flat outputs, whose torque part is 0 since E C_tau = 0).
+  const Eigen::VectorXd& effortWeights() const { return effort_weights_; }
+  /// True for the paper's weights E^T 1: then w^T F is exactly the sum of the flat outputs.
+  bool effortIsFlatOutputSum() const;
+  /// w^T F split into its flat-output and torque parts at posture q (constant with constant arms).
+  EffortSplit effortSplit(const Eigen::VectorXd& q_rad) const;
   /// The moment arms R(q) (N x m) in any posture.
   Eigen::MatrixXd momentArms(const Eigen::VectorXd& q_rad) const;
   /// C_tau, C_Y and the W of ForceJetMap at a point of a joint motion (q_jet N x 1..5: q, qd,
@@ -230,6 +243,7 @@ class FlatOutputMap {
   bool constant_ = true;
   int joints_ = 0, muscles_ = 0;
   Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;  // A_ .. CY_: constant moment arms only
+  Eigen::VectorXd effort_weights_;
 };
 
 namespace detail {

@@ -45,7 +45,7 @@ struct SlpResult {
   SolveStatus status = SolveStatus::Failed;
   std::string message;
   Eigen::VectorXd alpha;       ///< the constant flat outputs, N
-  double cost_N = 0.0;         ///< sum(alpha)
+  double cost_N = 0.0;         ///< c . alpha (SlpWorkspace::cost; sum(alpha) by default)
   bool used_fallback = false;  ///< the solver failed and the appendix construction was used
   int iterations = 0;
   double wall_seconds = 0.0;
@@ -57,6 +57,9 @@ struct SlpWorkspace {
   Eigen::MatrixXd rows, active;       ///< [C_Y; I] and the p active rows of one vertex
   Eigen::VectorXd rhs, active_rhs, permuted, vertex, slack, row_sums, start;
   std::vector<Eigen::Index> pick;     ///< indices of the active rows
+  /// The cost c of alpha (p entries); empty: sum(alpha), the paper's. Set by the caller (the
+  /// receding-horizon step: the effort weights' flat-output part, c = C_Y^T w).
+  Eigen::VectorXd cost;
   Eigen::FullPivLU<Eigen::MatrixXd> lu;
 };
 

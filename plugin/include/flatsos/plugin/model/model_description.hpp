@@ -31,6 +31,8 @@
 //                ...optional overrides of muscle_defaults, among them
 //                "pennation_angle_at_optimal_rad" and "passive_fiber_strain_at_one_norm_force"}],
 //   "flat_outputs": [{"name", "weights": {"<muscle>": w, ...}}]   (optional; m - N rows)
+//   "effort_weights": "flat_outputs" (default) | "normalized_tendon_force" | {"<muscle>": w, ...}
+//                     (optional; every muscle listed, w >= 0, not all 0)
 //   "scenarios": {"<name>": {"q0_deg": [per joint], "qd0_deg_per_s": [per joint],
 //                            "activations": [per muscle], "target_deg": [per joint],
 //                            "duration_s", "reserves_N": one | [per muscle]}}  (optional; every
@@ -113,6 +115,17 @@ struct FlatOutputDescription {
   Eigen::VectorXd weights;  ///< one per muscle (muscle order)
 };
 
+/// What "minimum effort" weighs: the cost is the integral of sum_j w_j F_j (tendon forces).
+struct EffortWeights {
+  enum class Kind {
+    FlatOutputs,            ///< w = E^T 1: the sum of the flat outputs (the paper's; depends on E)
+    NormalizedTendonForce,  ///< w_j = 1 / Fmax_j: the sum of normalized tendon forces
+    PerMuscle,              ///< w as given (per_muscle)
+  };
+  Kind kind = Kind::FlatOutputs;
+  Eigen::VectorXd per_muscle;  ///< m entries >= 0, not all 0 (PerMuscle only)
+};
+
 /// Where an example motion of the model starts and ends: the programs' defaults for this model
 /// (a command-line option overrides each). Empty vectors and 0 mean "not given".
 struct ScenarioDescription {
@@ -131,6 +144,7 @@ struct ModelDescription {
   std::vector<MuscleDescription> muscles;
   std::vector<FlatOutputDescription> flat_outputs;  ///< empty when the file has none
   std::map<std::string, ScenarioDescription> scenarios;  ///< by name; empty when the file has none
+  EffortWeights effort_weights;  ///< the file's "effort_weights"; default: the flat outputs' sum
 
   int numJoints() const { return static_cast<int>(joints.size()); }
   int numMuscles() const { return static_cast<int>(muscles.size()); }
