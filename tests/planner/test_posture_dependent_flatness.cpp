@@ -34,8 +34,8 @@ std::shared_ptr<const fp::MusculoskeletalModel> posture_dependent_elbow() {
 }
 
 // A joint motion, torques and flat outputs as polynomials of time (any smooth signals will do).
-double q_of(double t, int order) {
-  const double c[4] = {0.6, 0.9, 0.7, -0.5};
+// d^order/dt^order of sum_k c_k t^k (cubic).
+double cubic_derivative(const double (&c)[4], double t, int order) {
   double v = 0.0;
   for (int k = order; k < 4; ++k) {
     double f = 1.0;
@@ -43,6 +43,10 @@ double q_of(double t, int order) {
     v += c[k] * f * std::pow(t, k - order);
   }
   return v;
+}
+double q_of(double t, int order) {
+  static const double c[4] = {0.6, 0.9, 0.7, -0.5};
+  return cubic_derivative(c, t, order);
 }
 Eigen::Vector3d tau_jet(double t) { return {4.0 + 3.0 * t - 2.0 * t * t, 3.0 - 4.0 * t, -4.0}; }
 Eigen::Matrix<double, 2, 3> y_jet(double t) {
@@ -241,15 +245,7 @@ TEST(PostureDependentFlatness, TorqueJetsThroughAJointsStopAreExact) {
   const fpl::FlatOutputMap flat(posture_dependent_elbow());
   ASSERT_TRUE(flat.model().hasJointLimits());
   const double c[4] = {2.2, 1.0, 0.5, -0.4};  // q(t) = sum c_k t^k: 2.5 rad at t = 0.27 s
-  auto motion = [&](double t, int order) {
-    double v = 0.0;
-    for (int k = order; k < 4; ++k) {
-      double f = 1.0;
-      for (int i = 0; i < order; ++i) f *= k - i;
-      v += c[k] * f * std::pow(t, k - order);
-    }
-    return v;
-  };
+  auto motion = [&](double t, int order) { return cubic_derivative(c, t, order); };
   auto jet_at = [&](double t) {
     fpl::Jet j(1, 5);
     for (int k = 0; k < 5; ++k) j(0, k) = motion(t, k);

@@ -262,10 +262,10 @@ Eigen::MatrixXd MusculoskeletalModel::massMatrix(const Eigen::VectorXd& q) const
   return massMatrix(ws, q);
 }
 
-void MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::Ref<const Eigen::VectorXd>& q,
-                                           const Eigen::Ref<const Eigen::VectorXd>& qd,
-                                           const Eigen::Ref<const Eigen::VectorXd>& qdd,
-                                           Eigen::Ref<Eigen::VectorXd> tau) const {
+void MusculoskeletalModel::checkInverseDynamics(const ModelWorkspace& ws, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                                const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                                const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                                const Eigen::Ref<Eigen::VectorXd>& tau) const {
   checkWorkspace(ws);
   checkSize(q, numJoints(), "joint angles");
   checkSize(qd, numJoints(), "joint speeds");
@@ -273,6 +273,13 @@ void MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::Ref<
   if (tau.size() != numJoints())
     throw std::invalid_argument("inverse dynamics: the torque output has " + std::to_string(tau.size()) +
                                 " entries, the model " + std::to_string(numJoints()) + " joints");
+}
+
+void MusculoskeletalModel::inverseDynamics(ModelWorkspace& ws, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                           const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                           const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                           Eigen::Ref<Eigen::VectorXd> tau) const {
+  checkInverseDynamics(ws, q, qd, qdd, tau);
   tree_.inverseDynamics(ws.tree_, q, qd, qdd, tau);
 }
 
@@ -280,13 +287,7 @@ void MusculoskeletalModel::rigidBodyInverseDynamics(ModelWorkspace& ws, const Ei
                                                     const Eigen::Ref<const Eigen::VectorXd>& qd,
                                                     const Eigen::Ref<const Eigen::VectorXd>& qdd,
                                                     Eigen::Ref<Eigen::VectorXd> tau) const {
-  checkWorkspace(ws);
-  checkSize(q, numJoints(), "joint angles");
-  checkSize(qd, numJoints(), "joint speeds");
-  checkSize(qdd, numJoints(), "joint accelerations");
-  if (tau.size() != numJoints())
-    throw std::invalid_argument("inverse dynamics: the torque output has " + std::to_string(tau.size()) +
-                                " entries, the model " + std::to_string(numJoints()) + " joints");
+  checkInverseDynamics(ws, q, qd, qdd, tau);
   tree_.rigidBodyInverseDynamics(ws.tree_, q, qd, qdd, tau);
 }
 

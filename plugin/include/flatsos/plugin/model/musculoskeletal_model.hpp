@@ -126,6 +126,9 @@ class MusculoskeletalModel {
  private:
   void checkSize(const Eigen::Ref<const Eigen::VectorXd>& v, int n, const char* what) const;
   void checkWorkspace(const ModelWorkspace& workspace) const;
+  void checkInverseDynamics(const ModelWorkspace& workspace, const Eigen::Ref<const Eigen::VectorXd>& q,
+                            const Eigen::Ref<const Eigen::VectorXd>& qd, const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                            const Eigen::Ref<Eigen::VectorXd>& tau) const;
   const SimTK::State& realizeVelocity(ModelWorkspace& workspace, const Eigen::VectorXd& q,
                                       const Eigen::VectorXd& qd) const;
 
