@@ -77,8 +77,9 @@ int main(int argc, char** argv) {
 
     const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, s0, options);
     std::filesystem::create_directories(out_dir);
-    nlohmann::json summary = ex::plan_summary(plan, *model);
+    nlohmann::json summary = ex::plan_summary(plan, flat);
     summary["model_file"] = model_path;
+    summary["problem"] = ex::problem_summary(flat);
     summary["inputs"] = in.describe();
     summary["warnings"] = ex::print_warnings("arm_open_loop", model->warnings(), plan.warnings);
     std::cout << "arm_open_loop: plan " << fpl::to_string(plan.status) << (plan.message.empty() ? "" : ": " + plan.message)

@@ -121,6 +121,7 @@ int main(int argc, char** argv) {
     summary["target_q_deg"] = std::vector<double>(n);
     for (int i = 0; i < n; ++i) summary["target_q_deg"][i] = target[i] / ex::kRadPerDeg;
     summary["model_file"] = model_path;
+    summary["problem"] = ex::problem_summary(flat);
     summary["inputs"] = in.describe();
     summary["warnings"] = warnings;
     summary["settling_time_s"] = settling >= 0.0 ? nlohmann::json(settling) : nlohmann::json(nullptr);

@@ -92,7 +92,49 @@ Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTab
   return e;
 }
 
-nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::MusculoskeletalModel& model) {
+nlohmann::json problem_summary(const planner::FlatOutputMap& flat) {
+  const plugin::ModelDescription& d = flat.model().description();
+  const planner::FlatOutputChoice& y = flat.flatOutputs();
+  nlohmann::json rows = nlohmann::json::array();
+  for (int l = 0; l < flat.numFlatOutputs(); ++l) {
+    nlohmann::json weights = nlohmann::json::object();
+    for (int j = 0; j < flat.numMuscles(); ++j)
+      if (y.E(l, j) != 0.0) weights[d.muscles[static_cast<std::size_t>(j)].parameters.name] = y.E(l, j);
+    rows.push_back({{"name", y.names[static_cast<std::size_t>(l)]}, {"weights", weights}});
+  }
+  nlohmann::json margin = {{"value", y.margin.margin}, {"condition_number", y.margin.condition_number}};
+  if (y.margin.posture_rad.size() > 0) {
+    nlohmann::json posture = nlohmann::json::object();
+    for (int i = 0; i < flat.numJoints(); ++i)
+      posture[d.joints[static_cast<std::size_t>(i)].name] = y.margin.posture_rad[i] / kRadPerDeg;
+    margin["posture_deg"] = posture;
+  }
+  if (y.margin.muscle >= 0) margin["muscle"] = d.muscles[static_cast<std::size_t>(y.margin.muscle)].parameters.name;
+  nlohmann::json effort = nlohmann::json::object();
+  for (int j = 0; j < flat.numMuscles(); ++j)
+    effort[d.muscles[static_cast<std::size_t>(j)].parameters.name] = flat.effortWeights()[j];
+  const char* kind = "per_muscle";
+  switch (flat.effortKind()) {
+    case plugin::EffortWeights::Kind::Default:  // resolved by the map; never seen here
+    case plugin::EffortWeights::Kind::FlatOutputs: kind = "flat_outputs"; break;
+    case plugin::EffortWeights::Kind::NormalizedTendonForce: kind = "normalized_tendon_force"; break;
+    case plugin::EffortWeights::Kind::PerMuscle: break;
+  }
+  nlohmann::json limits = nlohmann::json::object();
+  for (const auto& joint : d.joints)
+    if (joint.limit.enabled())
+      limits[joint.name] = {{"range_deg", {joint.range_rad[0] / kRadPerDeg, joint.range_rad[1] / kRadPerDeg}},
+                            {"stiffness_N_m_per_rad", joint.limit.stiffness_N_m_per_rad},
+                            {"transition_rad", joint.limit.transition_rad},
+                            {"damping_N_m_s_per_rad", joint.limit.damping_N_m_s_per_rad}};
+  return {{"flat_outputs",
+           {{"chosen_by", y.automatic ? "library" : "model"}, {"rows", rows}, {"assumption1_margin", margin}}},
+          {"effort_weights", {{"kind", kind}, {"per_muscle", effort}}},
+          {"joint_limits", limits}};
+}
+
+nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::FlatOutputMap& flat) {
+  const plugin::MusculoskeletalModel& model = flat.model();
   nlohmann::json j;
   j["status"] = planner::to_string(plan.status);
   j["success"] = plan.status == planner::SolveStatus::Solved;
@@ -153,7 +195,7 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::Mus
     nlohmann::json yc = nlohmann::json::object();
     for (int l = 0; l < plan.Y->signals(); ++l) {
       const Eigen::VectorXd c = plan.Y->coefficients().row(l).transpose();
-      yc[model.description().flat_outputs[static_cast<std::size_t>(l)].name] = std::vector<double>(c.data(), c.data() + c.size());
+      yc[flat.flatOutputs().names[static_cast<std::size_t>(l)]] = std::vector<double>(c.data(), c.data() + c.size());
     }
     j["flat_outputs"] = {{"basis", "clamped B-spline, uniform knots on [0, T]"},
                          {"degree", basis.degree()},

@@ -45,7 +45,12 @@ struct Tracking {
 Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTable& a, const plugin::StoTable& b);
 
 /// status, cost, timings, iterations, coefficients and the a-posteriori check of a plan.
-nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const plugin::MusculoskeletalModel& model);
+nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::FlatOutputMap& flat);
+
+/// What the planner minimizes and in which coordinates: the flat outputs E (row names, who chose
+/// them, Assumption 1's margin over the joint ranges, where it is smallest, the condition
+/// number), the effort weights per muscle, and the joints' limit torques.
+nlohmann::json problem_summary(const planner::FlatOutputMap& flat);
 
 /// Prints every warning as "<program>: warning: <text>" on stderr and returns them all, for the
 /// summary's "warnings".

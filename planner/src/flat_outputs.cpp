@@ -131,11 +131,37 @@ const plugin::MusculoskeletalModel& require_model(const std::shared_ptr<const pl
 }
 }  // namespace
 
+namespace {
+// The model's own flat outputs, or the library's choice when it gives none.
+FlatOutputChoice flat_outputs_of(const plugin::MusculoskeletalModel& model) {
+  const plugin::ModelDescription& d = model.description();
+  if (d.flat_outputs.empty()) return choose_flat_outputs(model);
+  FlatOutputChoice given;
+  given.E = d.flatOutputMatrix();
+  for (const auto& y : d.flat_outputs) given.names.push_back(y.name);
+  return given;
+}
+
+FlatOutputChoice given_flat_outputs(Eigen::MatrixXd E) {
+  FlatOutputChoice given;
+  for (Eigen::Index k = 0; k < E.rows(); ++k) given.names.push_back("y" + std::to_string(k));
+  given.E = std::move(E);
+  return given;
+}
+
+// Postures of the load-time Assumption 1 check (the same budget as the model's own path checks,
+// posture_grid.hpp: the ranges' ends at least).
+constexpr long kCheckedPostures = 20000;
+}  // namespace
+
 FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model)
-    : FlatOutputMap(model, require_model(model).description().flatOutputMatrix()) {}
+    : FlatOutputMap(model, flat_outputs_of(require_model(model))) {}
 
 FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E)
-    : model_(std::move(model)), E_(std::move(E)) {
+    : FlatOutputMap(std::move(model), given_flat_outputs(std::move(E))) {}
+
+FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, FlatOutputChoice flat_outputs)
+    : model_(std::move(model)), flat_outputs_(std::move(flat_outputs)), E_(flat_outputs_.E) {
   const plugin::MusculoskeletalModel& m = require_model(model_);
   joints_ = m.numJoints();
   muscles_ = m.numMuscles();
@@ -143,7 +169,12 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
   if (E_.rows() == 0) throw FlatnessError("the model '" + m.description().name + "' defines no flat_outputs (E)");
   require_shape(E_, joints_, muscles_);
   const plugin::EffortWeights& weights = m.description().effort_weights;
-  switch (weights.kind) {
+  effort_kind_ = weights.kind;
+  if (effort_kind_ == plugin::EffortWeights::Kind::Default)
+    effort_kind_ = flat_outputs_.automatic ? plugin::EffortWeights::Kind::NormalizedTendonForce
+                                           : plugin::EffortWeights::Kind::FlatOutputs;
+  switch (effort_kind_) {
+    case plugin::EffortWeights::Kind::Default:
     case plugin::EffortWeights::Kind::FlatOutputs: effort_weights_ = E_.transpose() * Eigen::VectorXd::Ones(E_.rows()); break;
     case plugin::EffortWeights::Kind::NormalizedTendonForce:
       effort_weights_.resize(muscles_);
@@ -152,11 +183,20 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
     case plugin::EffortWeights::Kind::PerMuscle: effort_weights_ = weights.per_muscle; break;
   }
   if (!constant_) {
-    checkAssumption1OverRanges();
+    // One pass for the margin; a second one only to name the first failing posture.
+    if (!flat_outputs_.automatic) flat_outputs_.margin = flat_output_margin(m, E_, kCheckedPostures);
+    const FlatOutputMargin& margin = flat_outputs_.margin;
+    if (!margin.holds() || !assumption1_failures(m.momentArmMatrix(margin.posture_rad), E_).empty()) {
+      checkAssumption1OverRanges();
+      // Not reached unless the two passes disagree at round-off: still a failure, said so.
+      throw FlatnessError("model '" + m.description().name + "': Assumption 1 fails: the smallest entry of C_Y(q) 1 is " +
+                          std::to_string(margin.margin) + " " + assumption1FailureAt(margin.posture_rad));
+    }
     return;
   }
   A_ = m.momentArmMatrix();
   checkAssumption1(A_, E_);
+  if (!flat_outputs_.automatic) flat_outputs_.margin = flat_output_margin(m, E_, 1);
   C_.resize(numMuscles(), numMuscles());
   C_ << A_, E_;
   const Eigen::MatrixXd Cinv = C_.fullPivLu().inverse();
@@ -167,8 +207,7 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
 void FlatOutputMap::checkAssumption1OverRanges() const {
   const plugin::ModelDescription& d = model_->description();
   const std::vector<int> joints = plugin::posture_dependent_joints(d);
-  // The same budget as the model's own path checks (posture_grid.hpp): the ranges' ends at least.
-  plugin::for_each_posture(d, joints, 20000, [&](const Eigen::VectorXd& q) {
+  plugin::for_each_posture(d, joints, kCheckedPostures, [&](const Eigen::VectorXd& q) {
     const std::vector<std::string> failures = assumption1_failures(model_->momentArmMatrix(q), E_);
     if (!failures.empty())
       throw FlatnessError("model '" + d.name + "', C(q) = [R(q); E] at " + plugin::describe_posture(d, joints, q) +
@@ -262,7 +301,7 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
 }
 
 bool FlatOutputMap::effortIsFlatOutputSum() const {
-  return model_->description().effort_weights.kind == plugin::EffortWeights::Kind::FlatOutputs;
+  return effort_kind_ == plugin::EffortWeights::Kind::FlatOutputs;
 }
 
 EffortSplit FlatOutputMap::effortSplit(const Eigen::VectorXd& q_rad) const {

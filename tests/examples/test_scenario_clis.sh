@@ -75,6 +75,20 @@ expect 0 "simulated open loop 3 s" -- "$ol" --model "$tmp/bare.json" --out "$tmp
 grep -q '"a0": "minimum-effort rest state"' "$tmp/bare_ol/summary.json" || { echo "FAILED: bare model did not start at rest"; fail=1; }
 expect 0 "settling" -- "$rh" --model "$tmp/bare.json" --out "$tmp/bare_rh"
 expect 2 "--q0-deg: expects 1 comma-separated values" -- "$ol" --model "$tmp/bare.json" --q0-deg 0,10 --out "$tmp/o"
+# A model without flat_outputs: the library chooses E, says which and with what margin, and the
+# effort is the sum of normalized tendon forces (3 joints, 8 muscles, posture-dependent paths).
+expect 0 "simulated open loop 1.5 s" -- "$ol" --model "$models/arm_wrist_8_muscles.json" --flat-output-spans 8 --out "$tmp/arm8_ol"
+python3 - "$tmp/arm8_ol/summary.json" <<'PY' || { echo "FAILED: the summary lacks the library's flat outputs"; fail=1; }
+import json, sys
+p = json.load(open(sys.argv[1]))["problem"]
+assert p["flat_outputs"]["chosen_by"] == "library", p
+assert len(p["flat_outputs"]["rows"]) == 5, p
+assert 0 < p["flat_outputs"]["assumption1_margin"]["value"] <= 1, p
+assert p["effort_weights"]["kind"] == "normalized_tendon_force", p
+assert set(p["joint_limits"]) == {"shoulder", "elbow", "wrist"}, p
+PY
+expect 0 "settling" -- "$rh" --model "$models/arm_wrist_8_muscles.json" --out "$tmp/arm8_rh"
+grep -q '"chosen_by": "library"' "$tmp/arm8_rh/summary.json" || { echo "FAILED: the RH summary lacks the flat outputs"; fail=1; }
 # Units: an implausible value is planned with a warning naming the field, kept in the summary; an
 # impossible target (no tendon can be taut there) is an error naming the muscle.
 sed 's/"length_m": 0.32/"length_m": 32/' "$models/elbow_1dof.json" > "$tmp/long.json"

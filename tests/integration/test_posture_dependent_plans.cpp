@@ -135,3 +135,32 @@ TEST(PostureDependentPlans, APlanIntoTheElbowsStopIsReproducedBySimbody) {
   EXPECT_LT(replay.max_activation_error, 1e-8);
   EXPECT_NEAR(replay.sim.states.rows.back()[1], target_rad, deg(1e-6));
 }
+
+TEST(PostureDependentPlans, AThreeJointArmWhoseFlatOutputsTheLibraryChoseIsPlannedAndReproducedBySimbody) {
+  // Shoulder, elbow and wrist; 8 muscles, four with polynomial paths (two of them over two
+  // joints); the model gives no flat_outputs, so the library chooses E and the effort is the sum
+  // of normalized tendon forces. Plan, certify, and let Simbody execute it open loop.
+  const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/arm_wrist_8_muscles.json");
+  const fpl::FlatOutputMap flat(model);
+  ASSERT_TRUE(flat.flatOutputs().automatic);
+  ASSERT_EQ(flat.effortKind(), fp::EffortWeights::Kind::NormalizedTendonForce);
+  const Eigen::VectorXd reserves = Eigen::VectorXd::Constant(8, 10.0);
+  SimTK::State s = model->defaultState();
+  fpl::set_minimum_effort_rest_state(flat, s, Eigen::Vector3d(0.0, deg(20), 0.0), reserves);
+  const fpl::MuscleState s0 = fpl::muscle_state_of(*model, s);
+  fpl::OpenLoopOptions o;
+  o.duration_s = 1.5;
+  o.target_q_rad = Eigen::Vector3d(deg(30), deg(80), deg(20));
+  o.reserves_N = reserves;
+  o.sos.flat_output_spans = 8;
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_TRUE(plan.sos.certified);
+  EXPECT_GE(plan.check.min_excitation, 0.0);
+  EXPECT_LE(plan.check.max_excitation, 1.0);
+  const flatsos::test::OpenLoopReplay replay = flatsos::test::replay_open_loop(flat, s0, plan, 1e-10, 0.01);
+  ASSERT_TRUE(replay.sim.finite) << replay.sim.message;
+  EXPECT_LT(replay.max_q_error_rad, deg(1e-6));
+  EXPECT_LT(replay.max_activation_error, 1e-8);
+  EXPECT_GE(replay.min_tendon_force_N, 10.0 - 1e-6);
+}

@@ -298,7 +298,7 @@ TEST(ModelFile, ThreeLinkChainFromAFileBuildsAndHasTheRightMassMatrixSize) {
 
 TEST(ModelFile, EffortWeightsAndJointLimitsAreRead) {
   json j = arm_json();
-  EXPECT_EQ(fp::parse_model_json(j.dump(), "a.json").effort_weights.kind, fp::EffortWeights::Kind::FlatOutputs);
+  EXPECT_EQ(fp::parse_model_json(j.dump(), "a.json").effort_weights.kind, fp::EffortWeights::Kind::Default);
   j["effort_weights"] = "normalized_tendon_force";
   EXPECT_EQ(fp::parse_model_json(j.dump(), "a.json").effort_weights.kind, fp::EffortWeights::Kind::NormalizedTendonForce);
   j["effort_weights"] = json::object();

@@ -12,7 +12,8 @@
 namespace fp = flatsos::plugin;
 
 TEST(Plausibility, TheShippedModelsInSiUnitsHaveNoWarnings) {
-  for (const char* file : {"arm_richter_warner.json", "elbow_1dof.json", "elbow_posture_dependent.json"}) {
+  for (const char* file :
+       {"arm_richter_warner.json", "elbow_1dof.json", "elbow_posture_dependent.json", "arm_wrist_8_muscles.json"}) {
     const auto d = fp::load_model_file(std::string(FLATSOS_SOURCE_DIR) + "/models/" + file);
     EXPECT_TRUE(fp::plausibility_warnings(d).empty()) << file << ": " << fp::plausibility_warnings(d).front();
     EXPECT_TRUE(fp::MusculoskeletalModel(d).warnings().empty());

@@ -217,7 +217,7 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
       const auto& out = outputs[static_cast<std::size_t>(l)];
       ConstraintPolynomial c;
       c.flat_output = l;
-      c.name = "flat output '" + flat.model().description().flat_outputs[static_cast<std::size_t>(l)].name + "' >= 0";
+      c.name = "flat output '" + flat.flatOutputs().names[static_cast<std::size_t>(l)] + "' >= 0";
       c.base = P * out.particular;
       c.G = Eigen::MatrixXd::Zero(D + 1, n_theta);
       c.G.middleCols(out.offset, out.nullspace.cols()) = P * out.nullspace;

@@ -38,6 +38,7 @@
 
 #include "flatsos/plugin/model/model_workspace.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
+#include "flatsos/planner/flat_output_choice.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::planner {
@@ -145,12 +146,14 @@ struct EffortSplit {
 
 class FlatOutputMap {
  public:
-  /// E from the model file's flat_outputs. Throws FlatnessError naming each violated condition
-  /// of Assumption 1 (E shape, C singular, rows of E not summing to 1, 1 - C_tau s_tau > 0);
-  /// with posture-dependent moment arms, at the first posture of a grid over the joint ranges
+  /// E from the model file's flat_outputs, or, when it gives none, the E choose_flat_outputs
+  /// finds (flat_output_choice.hpp). Throws FlatnessError naming each violated condition of
+  /// Assumption 1 (E shape, C singular, rows of E not summing to 1, 1 - C_tau s_tau > 0); with
+  /// posture-dependent moment arms, at the first posture of a grid over the joint ranges
   /// (plugin/model/posture_grid.hpp) where one fails, named in degrees.
   /// Throws std::invalid_argument for a null model.
   explicit FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model);
+  /// The given E (the model's flat_outputs ignored), checked as above.
   FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E);
 
   const plugin::MusculoskeletalModel& model() const { return *model_; }
@@ -161,6 +164,8 @@ class FlatOutputMap {
   int numMuscles() const { return muscles_; }
   int numFlatOutputs() const { return static_cast<int>(E_.rows()); }
   const Eigen::MatrixXd& E() const { return E_; }
+  /// E with its row names, whether the library chose it, and its margin over the joint ranges.
+  const FlatOutputChoice& flatOutputs() const { return flat_outputs_; }
   /// True when C does not depend on posture (every muscle path of order <= 1).
   bool hasConstantMomentArms() const { return constant_; }
   /// The constant A = R, C, C_tau (m x N) and C_Y (m x p): constant moment arms only; with
@@ -169,9 +174,12 @@ class FlatOutputMap {
   const Eigen::MatrixXd& C() const;
   const Eigen::MatrixXd& Ctau() const;
   const Eigen::MatrixXd& CY() const;
-  /// The effort weights w (m): the cost is the integral of w^T F (the model's effort_weights;
-  /// by default E^T 1, the sum of the flat outputs, whose torque part is 0 since E C_tau = 0).
+  /// The effort weights w (m): the cost is the integral of w^T F (the model's effort_weights).
+  /// By default E^T 1, the sum of the flat outputs (whose torque part is 0 since E C_tau = 0),
+  /// when E was given; 1 / Fmax, the sum of normalized tendon forces, when the library chose E.
   const Eigen::VectorXd& effortWeights() const { return effort_weights_; }
+  /// How the weights were set: never EffortWeights::Kind::Default (resolved as above).
+  plugin::EffortWeights::Kind effortKind() const { return effort_kind_; }
   /// True for the paper's weights E^T 1: then w^T F is exactly the sum of the flat outputs.
   bool effortIsFlatOutputSum() const;
   /// w^T F split into its flat-output and torque parts at posture q (constant with constant arms).
@@ -236,13 +244,16 @@ class FlatOutputMap {
   FlatState forward(const MuscleState& s) const;
 
  private:
+  FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, FlatOutputChoice flat_outputs);
   const Eigen::MatrixXd& requireConstant(const Eigen::MatrixXd& matrix, const char* name) const;
   void checkAssumption1OverRanges() const;
 
   std::shared_ptr<const plugin::MusculoskeletalModel> model_;
   bool constant_ = true;
   int joints_ = 0, muscles_ = 0;
+  FlatOutputChoice flat_outputs_;
   Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;  // A_ .. CY_: constant moment arms only
+  plugin::EffortWeights::Kind effort_kind_ = plugin::EffortWeights::Kind::FlatOutputs;
   Eigen::VectorXd effort_weights_;
 };
 

@@ -118,11 +118,12 @@ struct FlatOutputDescription {
 /// What "minimum effort" weighs: the cost is the integral of sum_j w_j F_j (tendon forces).
 struct EffortWeights {
   enum class Kind {
+    Default,                ///< FlatOutputs when the model gives E, NormalizedTendonForce otherwise
     FlatOutputs,            ///< w = E^T 1: the sum of the flat outputs (the paper's; depends on E)
     NormalizedTendonForce,  ///< w_j = 1 / Fmax_j: the sum of normalized tendon forces
     PerMuscle,              ///< w as given (per_muscle)
   };
-  Kind kind = Kind::FlatOutputs;
+  Kind kind = Kind::Default;
   Eigen::VectorXd per_muscle;  ///< m entries >= 0, not all 0 (PerMuscle only)
 };
 
@@ -144,7 +145,7 @@ struct ModelDescription {
   std::vector<MuscleDescription> muscles;
   std::vector<FlatOutputDescription> flat_outputs;  ///< empty when the file has none
   std::map<std::string, ScenarioDescription> scenarios;  ///< by name; empty when the file has none
-  EffortWeights effort_weights;  ///< the file's "effort_weights"; default: the flat outputs' sum
+  EffortWeights effort_weights;  ///< the file's "effort_weights" (Default when it has none)
 
   int numJoints() const { return static_cast<int>(joints.size()); }
   int numMuscles() const { return static_cast<int>(muscles.size()); }
