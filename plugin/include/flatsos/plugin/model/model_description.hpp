@@ -30,8 +30,10 @@
 //                           "held_coordinates": {"<name>": value_rad} (optional)},
 //                ...optional overrides of muscle_defaults, among them
 //                "pennation_angle_at_optimal_rad" and "passive_fiber_strain_at_one_norm_force"}],
-//   "flat_outputs": [{"name", "weights": {"<muscle>": w, ...}}]   (optional; m - N rows)
-//   "effort_weights": "flat_outputs" (default) | "normalized_tendon_force" | {"<muscle>": w, ...}
+//   "flat_outputs": [{"name", "weights": {"<muscle>": w, ...}}]   (optional; m - N rows; without
+//                   it the planner chooses E: planner/flat_output_choice.hpp)
+//   "effort_weights": "flat_outputs" | "normalized_tendon_force" | {"<muscle>": w, ...}   (optional;
+//                   default: "flat_outputs" with the model's E, "normalized_tendon_force" without)
 //                     (optional; every muscle listed, w >= 0, not all 0)
 //   "scenarios": {"<name>": {"q0_deg": [per joint], "qd0_deg_per_s": [per joint],
 //                            "activations": [per muscle], "target_deg": [per joint],
