@@ -165,8 +165,9 @@ TEST_F(OpenLoopScenario, SosProgramRejectsBoundaryConditionsOfTheWrongSizeAndBad
 
 TEST(OpenLoopFromRest, TheLibrarysOwnMinimumEffortRestStateIsAFeasibleStartWithTheSameReserves) {
   // The rest state meets some reserves exactly (the SLP's active constraints); the plan from it
-  // with the same reserves must still be feasible, on the arm and on a 1-joint elbow.
-  for (const char* file : {"arm_richter_warner.json", "elbow_1dof.json"}) {
+  // with the same reserves must still be feasible, on the arm, on a 1-joint elbow and on the
+  // elbow with posture-dependent paths (from 0 deg with 1 N its plan needs the excitation bounds).
+  for (const char* file : {"arm_richter_warner.json", "elbow_1dof.json", "elbow_posture_dependent.json"}) {
     const auto model = flatsos::plugin::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/" + file);
     const fpl::FlatOutputMap flat(model);
     const int n = model->numJoints(), m = model->numMuscles();
