@@ -64,7 +64,17 @@ int main(int argc, char** argv) try {
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
   app.add_option("--repetitions", reps, "repetitions per timed stage")->capture_default_str()->check(CLI::Range(1, 10000));
   app.add_option("--out", out_path, "also write the JSON here");
+  bool open_loop_only = false;
+  app.add_flag("--open-loop-only", open_loop_only,
+               "time only the open-loop SOP of the model's scenario (default options), its a-posteriori check, one "
+               "inverse-map evaluation and one inverse-dynamics call: for comparing models or builds "
+               "(bench/compare_paths.sh)");
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
+  auto emit = [&](const json& result) {
+    const std::string text = result.dump(2);
+    std::cout << text << "\n";
+    if (!out_path.empty()) fp::write_file_atomically(out_path, text + "\n");
+  };
 
   const auto model = fp::MusculoskeletalModel::fromFile(model_path);
   const fpl::FlatOutputMap flat(model);
@@ -72,6 +82,8 @@ int main(int argc, char** argv) try {
   json j;
   j["machine"] = {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}};
   j["repetitions"] = reps;
+  j["model"] = model->description().name;
+  j["constant_moment_arms"] = model->hasConstantMomentArms();
 
   // ---- open loop: the model's scenario "open_loop" (the paper's on the arm) ----
   const ex::ScenarioInputs ol_in = ex::resolve_scenario(*model, "open_loop", {}, 3.0, 10.0);
@@ -115,6 +127,21 @@ int main(int argc, char** argv) try {
   };
   const auto [sop, sop_median] = time_plan(ol, reps);
   j["open_loop_sop"] = sop;
+  auto time_check_and_inverse_map = [&] {
+    const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, ms0, ol);
+    if (plan.status != fpl::SolveStatus::Solved) throw std::runtime_error("the open-loop scenario was not planned: " + plan.message);
+    j["open_loop_check_301_points"] =
+        stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, ws, plan.path, *plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
+    const double t = std::min(1.3, 0.5 * ol.duration_s);  // 1.3 s on the paper's 3 s transfer
+    const fpl::Jet qj = plan.jointJet(t), yj = plan.flatOutputJet(t);
+    j["inverse_map_one_time"] = stats(repeat(reps * 20, [&] { flat.inverse(ws, qj, yj); }), 1e6, "us");
+    j["inverse_dynamics_one_call"] = stats(repeat(reps * 50, [&] { flat.torque(ws, qj.col(0), qj.col(1), qj.col(2)); }), 1e6, "us");
+  };
+  if (open_loop_only) {
+    time_check_and_inverse_map();
+    emit(j);
+    return 0;
+  }
   fpl::OpenLoopOptions box = ol;
   box.torque.pieces = 1;
   box.torque.degree = 0;
@@ -181,15 +208,7 @@ int main(int argc, char** argv) try {
     }
     j["open_loop_flatness_vs_collocation"] = versus;
   }
-  {
-    const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, ms0, ol);
-    if (plan.status != fpl::SolveStatus::Solved) throw std::runtime_error("the open-loop scenario was not planned: " + plan.message);
-    j["open_loop_check_301_points"] =
-        stats(repeat(std::max(3, reps / 3), [&] { fpl::check_plan(flat, ws, plan.path, *plan.Y, ol.reserves_N, 301); }), 1e3, "ms");
-    const fpl::Jet qj = plan.jointJet(1.3), yj = plan.flatOutputJet(1.3);
-    j["inverse_map_one_time"] = stats(repeat(reps * 20, [&] { flat.inverse(ws, qj, yj); }), 1e6, "us");
-    j["inverse_dynamics_one_call"] = stats(repeat(reps * 50, [&] { flat.torque(ws, qj.col(0), qj.col(1), qj.col(2)); }), 1e6, "us");
-  }
+  time_check_and_inverse_map();
 
   // ---- SLP and one RH step, at the first step of the RH scenario ----
   const ex::ScenarioInputs rh_in = ex::resolve_scenario(*model, "receding_horizon", {}, 2.0, 1.0);
@@ -388,9 +407,7 @@ int main(int argc, char** argv) try {
                   {"rh_step_ms", {{"median", rh_step_ms}, {"target", 1.0}, {"met", rh_step_ms <= 1.0}}},
                   {"closed_loop_real_time_factor",
                    {{"median", rtf}, {"target", 50.0}, {"met", rtf >= 50.0}, {"integrator", "rosenbrock at 1e-5"}}}};
-  const std::string text = j.dump(2);
-  std::cout << text << "\n";
-  if (!out_path.empty()) fp::write_file_atomically(out_path, text + "\n");
+  emit(j);
   return 0;
 } catch (const std::exception& e) {
   std::cerr << "flatsos_bench: error: " << e.what() << "\n";

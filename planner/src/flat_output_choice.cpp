@@ -17,10 +17,12 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kMarginTie = 1e-9;  // margins this close are equal; the condition number decides
 
 // The postures a score visits, with their moment arms: about `budget` of them over the joints
-// whose moment arms vary, or the single posture 0 for constant moment arms.
+// whose moment arms vary, or the single posture 0 for constant moment arms. R's rows are scaled
+// to unit length (v = C_Y 1 does not change: R v = 0 either way) so that the condition number
+// compares metres with weights.
 struct PostureSet {
   std::vector<Eigen::VectorXd> q_rad;
-  std::vector<Eigen::MatrixXd> R;  // N x m moment arms there
+  std::vector<Eigen::MatrixXd> R_unit;  // N x m
 };
 
 PostureSet posture_set(const plugin::MusculoskeletalModel& model, long budget) {
@@ -28,7 +30,10 @@ PostureSet posture_set(const plugin::MusculoskeletalModel& model, long budget) {
   const plugin::ModelDescription& d = model.description();
   auto add = [&](const Eigen::VectorXd& q) {
     set.q_rad.push_back(q);
-    set.R.push_back(model.momentArmMatrix(q));
+    Eigen::MatrixXd R = model.momentArmMatrix(q);
+    for (Eigen::Index i = 0; i < R.rows(); ++i)
+      if (R.row(i).norm() > 0.0) R.row(i) /= R.row(i).norm();
+    set.R_unit.push_back(std::move(R));
   };
   if (model.hasConstantMomentArms())
     add(Eigen::VectorXd::Zero(model.numJoints()));
@@ -37,8 +42,9 @@ PostureSet posture_set(const plugin::MusculoskeletalModel& model, long budget) {
   return set;
 }
 
-// The score of E at one posture: C = [R; E] inverted as the flat-output map inverts it (same
-// singularity threshold), v = C_Y 1, and the condition number with R's rows at unit length.
+// The score of E at one posture: v = C_Y 1 from one LU of C = [R; E] (R's rows at unit length)
+// and the factorization's estimate of its 1-norm condition number; singular where that exceeds
+// 1e12.
 struct PostureScore {
   bool singular = true;
   double margin = -kInf;
@@ -46,47 +52,46 @@ struct PostureScore {
   double condition_number = kInf;
 };
 
-PostureScore score_at(const Eigen::MatrixXd& R, const Eigen::MatrixXd& E, Eigen::MatrixXd& C) {
-  const Eigen::Index n = R.rows(), m = R.cols();
+PostureScore score_at(const Eigen::MatrixXd& R_unit, const Eigen::MatrixXd& E, Eigen::MatrixXd& C, Eigen::VectorXd& rhs) {
+  const Eigen::Index n = R_unit.rows(), m = R_unit.cols();
   C.resize(m, m);
-  C << R, E;
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
-  lu.setThreshold(1e-10);
+  C << R_unit, E;
+  rhs.setZero(m);
+  rhs.tail(m - n).setOnes();
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(C);
   PostureScore s;
-  if (!lu.isInvertible()) return s;
-  Eigen::MatrixXd Cinv = lu.inverse();
-  if (!Cinv.allFinite()) return s;
+  const double rcond = lu.rcond();
+  if (!(rcond > 1e-12)) return s;
+  const Eigen::VectorXd v = lu.solve(rhs);
+  if (!v.allFinite()) return s;
   s.singular = false;
-  const Eigen::VectorXd v = Cinv.rightCols(m - n).rowwise().sum();
   Eigen::Index j = 0;
   s.margin = v.minCoeff(&j);
   s.muscle = static_cast<int>(j);
-  // D C with D scaling each row of R to unit length has inverse C^-1 D^-1.
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double length = R.row(i).norm();
-    if (length > 0.0) {
-      C.row(i) /= length;
-      Cinv.col(i) *= length;
-    }
-  }
-  s.condition_number = C.cwiseAbs().colwise().sum().maxCoeff() * Cinv.cwiseAbs().colwise().sum().maxCoeff();
+  s.condition_number = 1.0 / rcond;
   return s;
 }
 
-// The margin of E over a posture set. Stops early once the margin is below `bar` (a score that
-// cannot beat it need not be finished).
-FlatOutputMargin score_over(const PostureSet& set, const Eigen::MatrixXd& E, double bar = -kInf) {
+// The margin of E over a posture set, visiting the postures in `order`. Stops early once the
+// margin is below `bar` (a score that cannot beat it need not be finished) and then moves the
+// posture that stopped it to the front of `order`: the postures that bind are few, so the next
+// score meets them first.
+FlatOutputMargin score_over(const PostureSet& set, const Eigen::MatrixXd& E, std::vector<std::size_t>& order,
+                            double bar = -kInf) {
   FlatOutputMargin out;
   out.margin = kInf;
   out.condition_number = 0.0;
   Eigen::MatrixXd C;
-  for (std::size_t k = 0; k < set.R.size(); ++k) {
-    const PostureScore s = score_at(set.R[k], E, C);
+  Eigen::VectorXd rhs;
+  for (std::size_t at = 0; at < order.size(); ++at) {
+    const std::size_t k = order[at];
+    const PostureScore s = score_at(set.R_unit[k], E, C, rhs);
     if (s.singular) {
       out.margin = -kInf;
       out.muscle = -1;
       out.condition_number = kInf;
       out.posture_rad = set.q_rad[k];
+      std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(at), order.begin() + static_cast<std::ptrdiff_t>(at) + 1);
       return out;
     }
     if (s.margin < out.margin) {
@@ -95,9 +100,18 @@ FlatOutputMargin score_over(const PostureSet& set, const Eigen::MatrixXd& E, dou
       out.posture_rad = set.q_rad[k];
     }
     out.condition_number = std::max(out.condition_number, s.condition_number);
-    if (out.margin < bar - kMarginTie) return out;
+    if (out.margin < bar - kMarginTie) {
+      std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(at), order.begin() + static_cast<std::ptrdiff_t>(at) + 1);
+      return out;
+    }
   }
   return out;
+}
+
+std::vector<std::size_t> in_grid_order(const PostureSet& set) {
+  std::vector<std::size_t> order(set.R_unit.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  return order;
 }
 
 // The order of scores: the larger margin; between equal margins, the smaller condition number.
@@ -115,15 +129,15 @@ Eigen::MatrixXd rows_of(const FlatOutputCandidates& c, const std::vector<int>& p
 
 FlatOutputCandidates candidates_over(const plugin::MusculoskeletalModel& model, const PostureSet& set) {
   const int n = model.numJoints(), m = model.numMuscles();
-  constexpr double kArm_m = 1e-9;  // smaller moment arms do not pull either way
+  constexpr double kArm = 1e-9;  // smaller (relative) moment arms do not pull either way
   FlatOutputCandidates out;
   std::vector<Eigen::RowVectorXd> rows;
   for (int a = 0; a < m; ++a)
     for (int b = a + 1; b < m; ++b) {
       bool opposed = false;
-      for (const Eigen::MatrixXd& R : set.R)
+      for (const Eigen::MatrixXd& R : set.R_unit)
         for (int i = 0; i < n && !opposed; ++i)
-          opposed = (R(i, a) > kArm_m && R(i, b) < -kArm_m) || (R(i, a) < -kArm_m && R(i, b) > kArm_m);
+          opposed = (R(i, a) > kArm && R(i, b) < -kArm) || (R(i, a) < -kArm && R(i, b) > kArm);
       if (!opposed) continue;
       Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(m);
       row[a] = row[b] = 0.5;
@@ -148,17 +162,20 @@ double combinations(int n, int k, double cap) {
 }
 
 struct Search {
-  Search(const PostureSet& s, const FlatOutputCandidates& c, int p) : set(s), candidates(c), rows(p) {}
+  Search(const PostureSet& s, const FlatOutputCandidates& c, int p, long budget)
+      : set(s), candidates(c), rows(p), max_scores(budget) {}
   const PostureSet& set;
   const FlatOutputCandidates& candidates;
   int rows = 0;  // p
+  long max_scores = 0;  // of the exchange search
   long scored = 0;
   std::vector<int> best_pick;
   FlatOutputMargin best;
+  std::vector<std::size_t> order = in_grid_order(set);  // of the postures: see score_over
 
   FlatOutputMargin score(const std::vector<int>& pick, double bar) {
     ++scored;
-    return score_over(set, rows_of(candidates, pick), bar);
+    return score_over(set, rows_of(candidates, pick), order, bar);
   }
   void offer(const std::vector<int>& pick, const FlatOutputMargin& s) {
     if (best_pick.empty() || better(s, best)) {
@@ -181,11 +198,12 @@ struct Search {
     }
   }
 
-  // Rows taken in `order` while they keep [R; rows] of full rank at the first search posture.
-  std::vector<int> greedy_start(const std::vector<int>& order) const {
-    const Eigen::MatrixXd& R = set.R.front();
+  // Rows taken in `preference` order while they keep [R; rows] of full rank at the first search
+  // posture.
+  std::vector<int> greedy_start(const std::vector<int>& preference) const {
+    const Eigen::MatrixXd& R = set.R_unit.front();
     std::vector<int> pick;
-    for (int c : order) {
+    for (int c : preference) {
       if (static_cast<int>(pick.size()) == rows) break;
       std::vector<int> trial = pick;
       trial.push_back(c);
@@ -198,28 +216,27 @@ struct Search {
     return pick;
   }
 
-  // Best-improvement exchange of one row at a time until no exchange improves the score.
+  // Exchanges one row at a time, taking each exchange that improves the score at once, until a
+  // whole pass over the rows and candidates improves nothing (or the budget is spent).
   void exchange_from(std::vector<int> pick) {
     if (static_cast<int>(pick.size()) != rows) return;
     FlatOutputMargin current = score(pick, -kInf);
     const int count = static_cast<int>(candidates.rows.rows());
-    for (int sweep = 0; sweep < 10 * rows + 10; ++sweep) {
-      std::vector<int> best_trial;
-      FlatOutputMargin best_score = current;
-      for (int i = 0; i < rows; ++i)
-        for (int c = 0; c < count; ++c) {
+    bool improved = true;
+    while (improved && scored < max_scores) {
+      improved = false;
+      for (int i = 0; i < rows && scored < max_scores; ++i)
+        for (int c = 0; c < count && scored < max_scores; ++c) {
           if (std::find(pick.begin(), pick.end(), c) != pick.end()) continue;
           std::vector<int> trial = pick;
           trial[static_cast<std::size_t>(i)] = c;
-          const FlatOutputMargin s = score(trial, best_score.margin);
-          if (better(s, best_score)) {
-            best_score = s;
-            best_trial = trial;
+          const FlatOutputMargin s = score(trial, current.margin);
+          if (better(s, current)) {
+            current = s;
+            pick = trial;
+            improved = true;
           }
         }
-      if (best_trial.empty()) break;
-      pick = best_trial;
-      current = best_score;
     }
     offer(pick, current);
   }
@@ -229,9 +246,9 @@ struct Search {
 // (empty when there is none).
 std::string unopposed_joint(const plugin::MusculoskeletalModel& model, const PostureSet& set) {
   const plugin::ModelDescription& d = model.description();
-  for (std::size_t k = 0; k < set.R.size(); ++k)
+  for (std::size_t k = 0; k < set.R_unit.size(); ++k)
     for (int i = 0; i < model.numJoints(); ++i) {
-      const Eigen::RowVectorXd r = set.R[k].row(i);
+      const Eigen::RowVectorXd r = set.R_unit[k].row(i);
       const bool pulls = r.cwiseAbs().maxCoeff() > 0.0;
       if (pulls && (r.minCoeff() >= 0.0 || r.maxCoeff() <= 0.0)) {
         std::vector<int> all(static_cast<std::size_t>(model.numJoints()));
@@ -249,7 +266,9 @@ std::string unopposed_joint(const plugin::MusculoskeletalModel& model, const Pos
 FlatOutputMargin flat_output_margin(const plugin::MusculoskeletalModel& model, const Eigen::MatrixXd& E, long postures) {
   if (E.rows() != model.numMuscles() - model.numJoints() || E.cols() != model.numMuscles())
     throw std::invalid_argument("flat-output margin: E must be (m - N) x m");
-  return score_over(posture_set(model, postures), E);
+  const PostureSet set = posture_set(model, postures);
+  std::vector<std::size_t> order = in_grid_order(set);
+  return score_over(set, E, order);
 }
 
 FlatOutputCandidates flat_output_candidates(const plugin::MusculoskeletalModel& model, long postures) {
@@ -264,7 +283,7 @@ FlatOutputChoice choose_flat_outputs(const plugin::MusculoskeletalModel& model, 
                         " joints: flat outputs need more muscles than joints");
   const PostureSet set = posture_set(model, options.search_postures);
   const FlatOutputCandidates candidates = candidates_over(model, set);
-  Search search(set, candidates, p);
+  Search search(set, candidates, p, options.max_exchange_scores);
   const int count = static_cast<int>(candidates.rows.rows());
   const double limit = static_cast<double>(options.exhaustive_limit);
   if (!options.force_exchange_search && combinations(count, p, limit + 1.0) <= limit) {

@@ -4,6 +4,7 @@
 bench=$1
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 expect 0 "--repetitions" -- "$bench" --help
+expect 0 "--open-loop-only" -- "$bench" --help
 expect 2 "--repetitions" -- "$bench" --repetitions 0
 expect 1 "$tmp/missing.json" -- "$bench" --model "$tmp/missing.json"
 printf '{"bodies": []}' > "$tmp/bad.json"

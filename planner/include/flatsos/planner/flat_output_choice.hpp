@@ -14,6 +14,8 @@
 // at half weights, as the paper's arm pairs them) by the margin first and, between equal margins,
 // by the worst condition number of C(q): exhaustively when the combinations are few, otherwise by
 // exchanging one row at a time from two starts until no exchange improves the score.
+// Scores stop at the first posture where they fall below the best so far, and the postures that
+// stopped one are visited first by the next.
 
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
@@ -35,8 +37,9 @@ struct FlatOutputMargin {
   double margin = -std::numeric_limits<double>::infinity();
   Eigen::VectorXd posture_rad;  ///< where the margin is smallest, or C(q) singular (N)
   int muscle = -1;              ///< the muscle whose entry is smallest (-1: C(q) singular)
-  /// The largest 1-norm condition number of C(q) = [R(q); E] over the postures, each row of R
-  /// scaled to unit length (so that metres and weights compare); +inf where singular.
+  /// The largest 1-norm condition number of C(q) = [R(q); E] over the postures (the LU's
+  /// estimate, a lower bound), each row of R scaled to unit length (so that metres and weights
+  /// compare); +inf where singular (an estimate above 1e12).
   double condition_number = std::numeric_limits<double>::infinity();
   bool holds() const { return margin > 0.0; }
 };
@@ -60,6 +63,9 @@ struct FlatOutputSearchOptions {
   /// Postures of the final score (as many as the load-time Assumption 1 check visits).
   long final_postures = 20000;
   bool force_exchange_search = false;  ///< skip the exhaustive search (to compare the two)
+  /// The exchange search stops after this many scores with the best E so far (each score
+  /// factors an m x m matrix per posture: dozens of muscles make many candidates).
+  long max_exchange_scores = 200000;
 };
 
 /// The margin of E (p x m) over about `postures` postures of a grid over the joint ranges of
