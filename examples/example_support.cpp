@@ -103,7 +103,7 @@ nlohmann::json problem_summary(const planner::FlatOutputMap& flat) {
     rows.push_back({{"name", y.names[static_cast<std::size_t>(l)]}, {"weights", weights}});
   }
   nlohmann::json margin = {{"value", y.margin.margin}, {"condition_number", y.margin.condition_number}};
-  if (y.margin.posture_rad.size() > 0) {
+  if (!flat.hasConstantMomentArms() && y.margin.posture_rad.size() > 0) {  // else the same everywhere
     nlohmann::json posture = nlohmann::json::object();
     for (int i = 0; i < flat.numJoints(); ++i)
       posture[d.joints[static_cast<std::size_t>(i)].name] = y.margin.posture_rad[i] / kRadPerDeg;

@@ -44,7 +44,7 @@ PostureSet posture_set(const plugin::MusculoskeletalModel& model, long budget) {
 
 // The score of E at one posture: v = C_Y 1 from one LU of C = [R; E] (R's rows at unit length)
 // and the factorization's estimate of its 1-norm condition number; singular where that exceeds
-// 1e12.
+// 1e10 (about where the map's full-pivot LU, threshold 1e-10, calls C singular).
 struct PostureScore {
   bool singular = true;
   double margin = -kInf;
@@ -61,7 +61,7 @@ PostureScore score_at(const Eigen::MatrixXd& R_unit, const Eigen::MatrixXd& E, E
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(C);
   PostureScore s;
   const double rcond = lu.rcond();
-  if (!(rcond > 1e-12)) return s;
+  if (!(rcond > 1e-10)) return s;
   const Eigen::VectorXd v = lu.solve(rhs);
   if (!v.allFinite()) return s;
   s.singular = false;

@@ -35,11 +35,12 @@ struct FlatOutputMargin {
   /// min over the postures and muscles of (C_Y(q) 1)_j; > 0 iff condition 3 holds at every
   /// posture; -inf when C(q) is singular at one.
   double margin = -std::numeric_limits<double>::infinity();
-  Eigen::VectorXd posture_rad;  ///< where the margin is smallest, or C(q) singular (N)
+  /// Where the margin is smallest, or C(q) singular (N; all 0 with constant moment arms).
+  Eigen::VectorXd posture_rad;
   int muscle = -1;              ///< the muscle whose entry is smallest (-1: C(q) singular)
   /// The largest 1-norm condition number of C(q) = [R(q); E] over the postures (the LU's
   /// estimate, a lower bound), each row of R scaled to unit length (so that metres and weights
-  /// compare); +inf where singular (an estimate above 1e12).
+  /// compare); +inf where singular (an estimate above 1e10).
   double condition_number = std::numeric_limits<double>::infinity();
   bool holds() const { return margin > 0.0; }
 };
