@@ -251,10 +251,8 @@ std::string unopposed_joint(const plugin::MusculoskeletalModel& model, const Pos
       const Eigen::RowVectorXd r = set.R_unit[k].row(i);
       const bool pulls = r.cwiseAbs().maxCoeff() > 0.0;
       if (pulls && (r.minCoeff() >= 0.0 || r.maxCoeff() <= 0.0)) {
-        std::vector<int> all(static_cast<std::size_t>(model.numJoints()));
-        for (int a = 0; a < model.numJoints(); ++a) all[static_cast<std::size_t>(a)] = a;
         return "every muscle crossing joint '" + d.joints[static_cast<std::size_t>(i)].name + "' pulls the same way at " +
-               plugin::describe_posture(d, all, set.q_rad[k]) +
+               plugin::describe_posture(d, set.q_rad[k]) +
                ", so no tendon forces that are all positive balance there";
       }
     }
@@ -308,9 +306,7 @@ FlatOutputChoice choose_flat_outputs(const plugin::MusculoskeletalModel& model, 
       why << "; the best (";
       for (std::size_t k = 0; k < search.best_pick.size(); ++k)
         why << (k ? ", " : "") << candidates.names[static_cast<std::size_t>(search.best_pick[k])];
-      std::vector<int> all(static_cast<std::size_t>(n));
-      for (int i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
-      why << ") reaches " << search.best.margin << " at " << plugin::describe_posture(model.description(), all, search.best.posture_rad);
+      why << ") reaches " << search.best.margin << " at " << plugin::describe_posture(model.description(), search.best.posture_rad);
       if (search.best.muscle >= 0) why << " for muscle '" << model.muscle(search.best.muscle).getParameters().name << "'";
     }
     throw FlatnessError(why.str());

@@ -219,9 +219,7 @@ std::string FlatOutputMap::assumption1FailureAt(const Eigen::VectorXd& q) const 
   const std::vector<std::string> failures =
       assumption1_failures(constant_ ? A_ : model_->momentArmMatrix(q), E_);
   if (failures.empty()) return "";
-  std::vector<int> all(static_cast<std::size_t>(numJoints()));
-  for (int i = 0; i < numJoints(); ++i) all[static_cast<std::size_t>(i)] = i;
-  return "at " + plugin::describe_posture(model_->description(), all, q) + ": " + join_failures(failures);
+  return "at " + plugin::describe_posture(model_->description(), q) + ": " + join_failures(failures);
 }
 
 const Eigen::MatrixXd& FlatOutputMap::requireConstant(const Eigen::MatrixXd& matrix, const char* name) const {
@@ -284,9 +282,7 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
   lu.setThreshold(1e-10);
   if (!lu.isInvertible()) {
-    std::vector<int> all(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
-    throw FlatnessError("C(q) = [R(q); E] is singular at " + plugin::describe_posture(model_->description(), all, jet.col(0)) +
+    throw FlatnessError("C(q) = [R(q); E] is singular at " + plugin::describe_posture(model_->description(), jet.col(0)) +
                         " (rank " + std::to_string(lu.rank()) + " of " + std::to_string(m) + "): the flat outputs "
                         "do not determine the tendon forces there");
   }

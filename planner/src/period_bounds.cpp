@@ -118,7 +118,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   const int p = flat.numFlatOutputs();
   const std::vector<BoundPoint> points = period_points(flat, b, step);
   LinearProgram lp;
-  lp.cost = step.buffers.slp.cost.size() ? step.buffers.slp.cost : Eigen::VectorXd::Ones(p);  // SlpWorkspace::cost
+  lp.cost = step.buffers.slp.costVector(p);
   lp.G = step.reserve_rows;
   lp.row_lower = step.bound_N;
   lp.row_upper = Eigen::VectorXd::Constant(step.bound_N.size(), 1e19);

@@ -77,7 +77,7 @@ bool vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, Slp
       w.vertex.noalias() = w.lu.permutationQ() * w.permuted;
       w.slack.noalias() = w.rows * w.vertex;
       w.slack -= w.rhs;
-      const double value = w.cost.size() ? w.cost.dot(w.vertex) : w.vertex.sum();
+      const double value = w.costOf(w.vertex);
       if (w.slack.minCoeff() >= -1e-10 * scale && value < best) {
         best = value;
         alpha = w.vertex;
@@ -161,7 +161,7 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
   } else {
     LinearProgram lp;
     const Eigen::Index m = CY.rows(), p = CY.cols();
-    lp.cost = w.cost.size() ? w.cost : Eigen::VectorXd::Ones(p);
+    lp.cost = w.costVector(p);
     lp.G = CY;
     lp.row_lower = B;
     lp.row_upper = Eigen::VectorXd::Constant(m, 1e19);
@@ -189,7 +189,7 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
       r.message = "solved by Ipopt: vertex enumeration would visit more than 20000 vertices" +
                   (r.message.empty() ? std::string() : "; " + r.message);
   }
-  r.cost_N = w.cost.size() ? w.cost.dot(r.alpha) : r.alpha.sum();
+  r.cost_N = w.costOf(r.alpha);
   r.wall_seconds = wall.seconds();
 }
 

@@ -37,6 +37,12 @@ std::string describe_posture(const ModelDescription& model, const std::vector<in
   return out;
 }
 
+std::string describe_posture(const ModelDescription& model, const Eigen::VectorXd& q) {
+  std::vector<int> all(static_cast<std::size_t>(model.numJoints()));
+  for (int i = 0; i < model.numJoints(); ++i) all[static_cast<std::size_t>(i)] = i;
+  return describe_posture(model, all, q);
+}
+
 std::vector<int> posture_dependent_joints(const ModelDescription& model) {
   std::set<int> joints;
   for (int j = 0; j < model.numMuscles(); ++j) {

@@ -61,6 +61,10 @@ struct SlpWorkspace {
   /// receding-horizon step: the effort weights' flat-output part, c = C_Y^T w).
   Eigen::VectorXd cost;
   Eigen::FullPivLU<Eigen::MatrixXd> lu;
+  /// c . alpha, or sum(alpha) when no cost is set.
+  double costOf(const Eigen::VectorXd& alpha) const { return cost.size() ? cost.dot(alpha) : alpha.sum(); }
+  /// c itself, or ones(p) when no cost is set (allocates: for building an LP).
+  Eigen::VectorXd costVector(Eigen::Index p) const { return cost.size() ? cost : Eigen::VectorXd::Ones(p); }
 };
 
 /// Solves the SLP. Ipopt starts from the appendix construction; if it fails, the result falls

@@ -25,6 +25,8 @@ void for_each_posture(const ModelDescription& model, const std::vector<int>& joi
 
 /// "elbow = 90.000000 deg, shoulder = 10.000000 deg" for the listed joints of q.
 std::string describe_posture(const ModelDescription& model, const std::vector<int>& joints, const Eigen::VectorXd& q_rad);
+/// The same for every joint of the model.
+std::string describe_posture(const ModelDescription& model, const Eigen::VectorXd& q_rad);
 
 /// The joints crossed by some muscle whose moment arms depend on posture, ascending: where
 /// C(q) = [R(q); E] changes.
