@@ -12,5 +12,9 @@ namespace flatsos::plugin {
 ModelDescription parse_model_json(const std::string& json_text, const std::string& source);
 /// Read, parse and validate a model file.
 ModelDescription load_model_file(const std::string& path);
+/// The model as a model file's JSON text (parse_model_json reads it back to an equal model;
+/// scenario angles go through degrees). Muscle fields equal to MuscleParameters' defaults are
+/// left out.
+std::string model_json_text(const ModelDescription& model);
 
 }  // namespace flatsos::plugin

@@ -39,6 +39,8 @@
 //                            "activations": [per muscle], "target_deg": [per joint],
 //                            "duration_s", "reserves_N": one | [per muscle]}}  (optional; every
 //                 field optional: defaults for the programs, e.g. "open_loop", "receding_horizon")
+//   "provenance": {...}   (optional, free-form: where the model came from, e.g. what
+//                 opensim_to_model read and approximated; kept, not interpreted)
 // }
 // Joints are listed parents first; joint order is generalized-coordinate order.
 
@@ -148,6 +150,7 @@ struct ModelDescription {
   std::vector<FlatOutputDescription> flat_outputs;  ///< empty when the file has none
   std::map<std::string, ScenarioDescription> scenarios;  ///< by name; empty when the file has none
   EffortWeights effort_weights;  ///< the file's "effort_weights" (Default when it has none)
+  std::string provenance_json;   ///< the file's "provenance" object as JSON text; empty when none
 
   int numJoints() const { return static_cast<int>(joints.size()); }
   int numMuscles() const { return static_cast<int>(muscles.size()); }
