@@ -1,0 +1,52 @@
+#pragma once
+// An OpenSim model and its fitted muscle paths reduced to a flatsos model: the kept coordinates
+// become pin joints in one plane, every other coordinate is held (in the kinematics and inside
+// the path polynomials), bodies welded to ground are dropped and bodies beyond a kept joint are
+// lumped into its child, and every muscle whose fitted length depends on a kept coordinate is
+// brought along with its OpenSim parameters. What is approximated is measured and recorded in
+// the model's provenance (docs/method/opensim_import.md).
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "flatsos/plugin/io/opensim_model.hpp"
+#include "flatsos/plugin/io/opensim_paths.hpp"
+#include "flatsos/plugin/model/model_description.hpp"
+
+namespace flatsos::plugin {
+
+struct OpenSimImportOptions {
+  std::string name;               ///< the model's name; empty: the OpenSim model's
+  std::vector<std::string> keep;  ///< coordinates that become pin joints (at most one per joint)
+  /// Values of coordinates that are not kept (rad, or m for translations); others are held at 0,
+  /// and a coordinate coupled to another (CoordinateCouplerConstraint) follows it.
+  std::map<std::string, double> hold;
+  /// Ranges of kept coordinates (rad), inside the OpenSim coordinate's own range; a kept
+  /// coordinate not listed keeps its OpenSim range.
+  std::map<std::string, std::array<double, 2>> ranges;
+  /// A muscle whose tendon is slack somewhere in the range (the fitted length does not exceed
+  /// the tendon slack length) is left out and reported; with refuse_slack_muscles, refused.
+  bool refuse_slack_muscles = false;
+  std::string osim_source, paths_source;  ///< file names, for the provenance
+  long slack_check_postures = 20000;      ///< postures per muscle for the slack check
+};
+
+struct OpenSimImport {
+  ModelDescription model;  ///< validated; provenance_json says what was read, held and approximated
+  /// One line per thing a user should know (muscles left out and why, approximations, how far
+  /// the pins are from OpenSim's joints), also in the provenance.
+  std::vector<std::string> notes;
+};
+
+/// Throws OpenSimModelError naming the coordinate, joint, muscle or value for: a kept or held
+/// coordinate the model does not have, one given twice or both kept and held, two kept
+/// coordinates of one joint, a kept translation or coupled coordinate, a kept axis more than
+/// 45 degrees from the plane's normal, a held value or range outside the coordinate's range, a
+/// muscle that crosses a kept joint without a fitted path (or whose path names a coordinate the
+/// model lacks), a slack muscle with refuse_slack_muscles, no muscle left.
+OpenSimImport import_opensim_model(const OpenSimModel& osim, const std::vector<OpenSimPolynomialPath>& paths,
+                                   const OpenSimImportOptions& options);
+
+}  // namespace flatsos::plugin

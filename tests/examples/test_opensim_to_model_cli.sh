@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# opensim_to_model: --help, bad arguments exit 2 naming the option, bad input exits 1 naming the
+# problem and writes nothing, a good run writes a model the other programs plan with.
+# Usage: OPENSIM_TO_MODEL OPEN_LOOP
+set -u
+convert=$1 ol=$2
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
+# A shank on a pin knee with an extensor and a flexor, and their fitted lengths.
+cat > "$tmp/knee.osim" <<'XML'
+<?xml version="1.0" encoding="UTF-8" ?>
+<OpenSimDocument Version="40500"><Model name="pin_knee"><gravity>0 -9.80665 0</gravity>
+<BodySet><objects>
+<Body name="shank"><mass>3.5</mass><mass_center>0 -0.2 0</mass_center><inertia>0.05 0.005 0.05 0 0 0</inertia></Body>
+</objects></BodySet>
+<JointSet><objects>
+<PinJoint name="knee"><socket_parent_frame>/ground</socket_parent_frame><socket_child_frame>/bodyset/shank</socket_child_frame>
+<coordinates><Coordinate name="knee_angle"><default_value>0</default_value><range>-2 0.2</range></Coordinate></coordinates></PinJoint>
+</objects></JointSet>
+<ForceSet><objects>
+<Millard2012EquilibriumMuscle name="extensor"><max_isometric_force>1500</max_isometric_force><optimal_fiber_length>0.1</optimal_fiber_length><tendon_slack_length>0.2</tendon_slack_length></Millard2012EquilibriumMuscle>
+<Millard2012EquilibriumMuscle name="flexor"><max_isometric_force>1000</max_isometric_force><optimal_fiber_length>0.1</optimal_fiber_length><tendon_slack_length>0.2</tendon_slack_length></Millard2012EquilibriumMuscle>
+</objects></ForceSet></Model></OpenSimDocument>
+XML
+fitted() { echo "<FunctionBasedPath name=\"/forceset/$1\"><coordinate_paths>/jointset/knee/knee_angle</coordinate_paths><length_function><MultivariatePolynomialFunction><coefficients>$2</coefficients><dimension>1</dimension><order>1</order></MultivariatePolynomialFunction></length_function></FunctionBasedPath>"; }
+echo "<OpenSimDocument><Set_FunctionBasedPath_><objects>$(fitted extensor "0.35 0.04")$(fitted flexor "0.30 -0.04")</objects></Set_FunctionBasedPath_></OpenSimDocument>" > "$tmp/paths.xml"
+echo "<OpenSimDocument><Set_FunctionBasedPath_><objects>$(fitted extensor "0.35 0.04")$(fitted flexor "0.20 -0.04")</objects></Set_FunctionBasedPath_></OpenSimDocument>" > "$tmp/slack.xml"
+
+args=(--osim "$tmp/knee.osim" --paths "$tmp/paths.xml")
+expect 0 "--keep" -- "$convert" --help
+expect 2 "--keep" -- "$convert" --osim "$tmp/knee.osim" --paths "$tmp/paths.xml" --out "$tmp/m.json"
+expect 2 "not a finite number" -- "$convert" "${args[@]}" --keep knee_angle --hold knee_angle=abc --out "$tmp/m.json"
+expect 2 "--range" -- "$convert" "${args[@]}" --keep knee_angle --range knee_angle=10 --out "$tmp/m.json"
+expect 1 "cannot open the OpenSim model file" -- "$convert" --osim "$tmp/none.osim" --paths "$tmp/paths.xml" --keep knee_angle --out "$tmp/m.json"
+expect 1 "kept coordinate 'hip': the OpenSim model has no such coordinate" -- "$convert" "${args[@]}" --keep hip --out "$tmp/m.json"
+expect 1 "range of 'knee_angle'" -- "$convert" "${args[@]}" --keep knee_angle --range knee_angle=-150:30 --out "$tmp/m.json"
+expect 1 "muscle 'flexor': its fitted length" -- "$convert" --osim "$tmp/knee.osim" --paths "$tmp/slack.xml" --keep knee_angle --refuse-slack-muscles --out "$tmp/m.json"
+[[ -e "$tmp/m.json" ]] && { echo "FAILED: a failed conversion wrote a model"; fail=1; }
+expect 0 "1 joint(s), 2 muscles, 1 bodies" -- "$convert" "${args[@]}" --keep knee_angle --range knee_angle=-90:0 --out "$tmp/m.json"
+grep -q '"coordinate": "knee_angle"' "$tmp/m.json" || { echo "FAILED: the model lacks the kept coordinate"; fail=1; }
+grep -q '"osim": "knee.osim"' "$tmp/m.json" || { echo "FAILED: the provenance lacks the source (by file name)"; fail=1; }
+expect 0 "plan solved" -- "$ol" --model "$tmp/m.json" --q0-deg -80 --target-deg -20 --duration-s 1 --out "$tmp/ol"
+exit $fail
