@@ -114,6 +114,8 @@ class Reduction {
       if (!kept_joints.insert(c->joint).second)
         fail("kept coordinate '" + k + "': another kept coordinate belongs to joint '" + c->joint +
              "' (one pin per joint: keep one of them)");
+      if (!options_.ranges.count(k) && !(std::isfinite(c->range[0]) && std::isfinite(c->range[1])))
+        fail("kept coordinate '" + k + "': the OpenSim model gives it no finite range; give one (--range)");
       if (const auto range = options_.ranges.find(k); range != options_.ranges.end()) {
         const auto& [lo, hi] = range->second;
         if (!(lo < hi) || lo < c->range[0] - 1e-12 || hi > c->range[1] + 1e-12)

@@ -8,23 +8,16 @@
 
 #include <SimTKcommon.h>
 
+#include "opensim_text.hpp"
+
 namespace flatsos::plugin {
 
 namespace {
 
+using opensim_text::last_component;
+using opensim_text::words;
+
 using Element = SimTK::Xml::Element;
-
-std::string last_component(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-std::vector<std::string> words(const std::string& text) {
-  std::istringstream in(text);
-  std::vector<std::string> out;
-  for (std::string w; in >> w;) out.push_back(w);
-  return out;
-}
 
 // Names where a value came from in every error: "'file': Body 'femur_r'.mass".
 class Reader {
@@ -38,15 +31,9 @@ class Reader {
   std::vector<double> numbers(const std::string& text, const std::string& where, std::size_t count = 0) const {
     std::vector<double> out;
     for (const std::string& w : words(text)) {
-      std::size_t used = 0;
-      double value = NAN;
-      try {
-        value = std::stod(w, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != w.size() || !std::isfinite(value)) fail(where, "'" + w + "' is not a finite number");
-      out.push_back(value);
+      const std::optional<double> value = opensim_text::finite_number(w);
+      if (!value) fail(where, "'" + w + "' is not a finite number");
+      out.push_back(*value);
     }
     if (count && out.size() != count)
       fail(where, "needs " + std::to_string(count) + " numbers, got " + std::to_string(out.size()));

@@ -10,23 +10,14 @@
 #include <SimTKcommon.h>
 
 #include "flatsos/muscles/length_polynomial.hpp"
+#include "opensim_text.hpp"
 
 namespace flatsos::plugin {
 
 namespace {
 
-// "/jointset/hip_r/hip_flexion_r" -> "hip_flexion_r".
-std::string last_component(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-std::vector<std::string> words(const std::string& text) {
-  std::istringstream in(text);
-  std::vector<std::string> out;
-  for (std::string w; in >> w;) out.push_back(w);
-  return out;
-}
+using opensim_text::last_component;
+using opensim_text::words;
 
 OpenSimPolynomialPath read_path(SimTK::Xml::Element& element, const std::string& source) {
   OpenSimPolynomialPath path;
@@ -63,16 +54,9 @@ OpenSimPolynomialPath read_path(SimTK::Xml::Element& element, const std::string&
     throw OpenSimFileError(where + ": " + std::to_string(dimension) + " coordinates, more than " +
                            std::to_string(muscles::LengthPolynomial::kMaxDimension));
   for (const std::string& w : words(polynomial.getOptionalElementValue("coefficients", ""))) {
-    std::size_t used = 0;
-    double value = NAN;
-    try {
-      value = std::stod(w, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != w.size() || !std::isfinite(value))
-      throw OpenSimFileError(where + ".length_function.coefficients: '" + w + "' is not a finite number");
-    path.coefficients.push_back(value);
+    const std::optional<double> value = opensim_text::finite_number(w);
+    if (!value) throw OpenSimFileError(where + ".length_function.coefficients: '" + w + "' is not a finite number");
+    path.coefficients.push_back(*value);
   }
   const long expected = muscles::LengthPolynomial::termCount(dimension, path.order);
   if (static_cast<long>(path.coefficients.size()) != expected)
