@@ -383,11 +383,9 @@ OpenSimModel parse_opensim_model(const std::string& xml, const std::string& sour
 }
 
 OpenSimModel read_opensim_model(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw OpenSimFileError("'" + file + "': cannot open the OpenSim model file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_opensim_model(text.str(), file);
+  const std::optional<std::string> text = opensim_text::file_text(file);
+  if (!text) throw OpenSimFileError("'" + file + "': cannot open the OpenSim model file");
+  return parse_opensim_model(*text, file);
 }
 
 }  // namespace flatsos::plugin

@@ -92,11 +92,9 @@ std::vector<OpenSimPolynomialPath> parse_opensim_function_based_paths(const std:
 }
 
 std::vector<OpenSimPolynomialPath> read_opensim_function_based_paths(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw OpenSimFileError("'" + file + "': cannot open the FunctionBasedPathSet file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_opensim_function_based_paths(text.str(), file);
+  const std::optional<std::string> text = opensim_text::file_text(file);
+  if (!text) throw OpenSimFileError("'" + file + "': cannot open the FunctionBasedPathSet file");
+  return parse_opensim_function_based_paths(*text, file);
 }
 
 }  // namespace flatsos::plugin

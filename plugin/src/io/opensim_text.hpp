@@ -2,6 +2,7 @@
 // The text of OpenSim's XML values, shared by the readers of .osim and FunctionBasedPathSet files.
 
 #include <cmath>
+#include <fstream>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -34,6 +35,15 @@ inline std::optional<double> finite_number(const std::string& word) {
   }
   if (used != word.size() || !std::isfinite(value)) return std::nullopt;
   return value;
+}
+
+// The whole file as text, or nothing when it cannot be opened.
+inline std::optional<std::string> file_text(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 }  // namespace flatsos::plugin::opensim_text
