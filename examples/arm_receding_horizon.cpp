@@ -40,8 +40,11 @@ int main(int argc, char** argv) {
   app.add_option("--grid-points", options.plan.grid_points, "torque-box grid points over the horizon")
       ->capture_default_str()->check(CLI::Range(2, 10000));
   app.add_option("--period-s", options.control_period_s, "control period delta, s")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--slp-solver", solver, "exact (vertex enumeration, tested against Ipopt) or ipopt")
-      ->capture_default_str()->check(CLI::IsMember({"exact", "ipopt"}));
+  app.add_option("--slp-solver", solver,
+                 "exact (vertex enumeration; the dual simplex where there are more than 20000 vertices), simplex "
+                 "(Clp's dual simplex, restarted from the previous period's basis) or ipopt (the interior-point "
+                 "reference); all tested against each other")
+      ->capture_default_str()->check(CLI::IsMember({"exact", "simplex", "ipopt"}));
   bool no_bounds = false;
   app.add_flag("--no-excitation-bounds", no_bounds,
                "plan without the excitation bounds on each control period (the paper's step: excitations outside "
@@ -72,7 +75,9 @@ int main(int argc, char** argv) {
     const double duration = in.duration_s;
     options.plan.target_q_rad = in.target_q_rad;
     options.plan.reserves_N = in.reserves_N;
-    options.plan.solver = solver == "ipopt" ? fpl::SlpSolver::Ipopt : fpl::SlpSolver::VertexEnumeration;
+    options.plan.solver = solver == "ipopt"     ? fpl::SlpSolver::Ipopt
+                          : solver == "simplex" ? fpl::SlpSolver::Simplex
+                                                : fpl::SlpSolver::VertexEnumeration;
     options.plan.excitation_bounds.enforce = !no_bounds;
     if (options.control_period_s > options.plan.horizon_s)
       throw CLI::ValidationError("--period-s", "must not exceed --horizon-s");

@@ -152,26 +152,31 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
   r.used_fallback = false;
   r.iterations = 0;
   // Enumeration visits C(m + p, p) vertices: 210 for the paper's arm, millions for dozens of
-  // muscles, where Ipopt's fixed cost per solve is the smaller one.
-  const bool enumerate =
-      solver == SlpSolver::VertexEnumeration && vertex_count(CY.rows() + CY.cols(), CY.cols()) <= kMaxEnumeratedVertices;
-  if (enumerate) {
+  // muscles or stacked grid postures, where the simplex's pivots are far fewer.
+  const bool too_many = vertex_count(CY.rows() + CY.cols(), CY.cols()) > kMaxEnumeratedVertices;
+  if (solver == SlpSolver::VertexEnumeration && !too_many) {
     if (!vertex_enumeration(CY, B, w, r.alpha)) throw std::runtime_error("SLP: no feasible vertex (violates Assumption 1?)");
     r.status = SolveStatus::Solved;
   } else {
-    LinearProgram lp;
     const Eigen::Index m = CY.rows(), p = CY.cols();
+    if (warm_start && (warm_start->size() != p || !warm_start->allFinite()))
+      throw std::invalid_argument("SLP: warm start must have " + std::to_string(p) + " finite entries");
+    LinearProgram lp;
     lp.cost = w.costVector(p);
     lp.G = CY;
     lp.row_lower = B;
     lp.row_upper = Eigen::VectorXd::Constant(m, 1e19);
     lp.x_lower = Eigen::VectorXd::Zero(p);
     lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
-    if (warm_start && (warm_start->size() != p || !warm_start->allFinite()))
-      throw std::invalid_argument("SLP: warm start must have " + std::to_string(p) + " finite entries");
-    LinearProgramOptions o;
-    o.start = warm_start ? *warm_start : w.start;
-    const LinearProgramResult lr = solve_linear_program(lp, o);
+    const bool ipopt = solver == SlpSolver::Ipopt;
+    LinearProgramResult lr;
+    if (ipopt) {
+      LinearProgramOptions o;
+      o.start = warm_start ? *warm_start : w.start;
+      lr = solve_linear_program(lp, o);
+    } else {
+      lr = solve_linear_program_simplex(lp, w.basis);
+    }
     r.iterations = lr.iterations;
     const double scale = 1.0 + B.cwiseAbs().maxCoeff();
     const bool feasible = lr.x.size() == p && lr.x.allFinite() && lr.x.minCoeff() >= -1e-9 * scale &&
@@ -183,11 +188,9 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
       r.alpha = w.start;
       r.status = SolveStatus::Solved;
       r.used_fallback = true;
-      r.message = "Ipopt did not solve the SLP (" + lr.solver_status + "); using the always-feasible appendix construction";
+      r.message = std::string(ipopt ? "Ipopt" : "the dual simplex") + " did not solve the SLP (" + lr.solver_status +
+                  "); using the always-feasible appendix construction";
     }
-    if (solver == SlpSolver::VertexEnumeration)
-      r.message = "solved by Ipopt: vertex enumeration would visit more than 20000 vertices" +
-                  (r.message.empty() ? std::string() : "; " + r.message);
   }
   r.cost_N = w.costOf(r.alpha);
   r.wall_seconds = wall.seconds();

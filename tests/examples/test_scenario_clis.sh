@@ -22,7 +22,7 @@ expect 0 "simulated open loop" -- "$ol" --integrator rosenbrock --accuracy 1e-6 
 grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
 expect 0 "--horizon-s" -- "$rh" --help
 expect 2 "--period-s" -- "$rh" --period-s 1.0 --horizon-s 0.5 --out "$tmp/o"
-expect 2 "--slp-solver" -- "$rh" --slp-solver simplex --out "$tmp/o"
+expect 2 "--slp-solver" -- "$rh" --slp-solver glpk --out "$tmp/o"
 expect 2 "--q0-deg" -- "$rh" --q0-deg 1,2,3 --out "$tmp/o"
 expect 2 "--integrator" -- "$rh" --integrator euler --out "$tmp/o"
 expect 2 "--observer-gain-per-s" -- "$rh" --observer-gain-per-s 50 --out "$tmp/o"

@@ -112,6 +112,36 @@ TEST(RecedingHorizonStepBounds, KeepTheFirstPeriodInsideAtAFirstOrderOptimum) {
   EXPECT_GE(mu.minCoeff(), 0.0) << "a negative multiplier: the cost still falls along some active constraint";
 }
 
+TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
+  // A controller plans into the same step every period: its bounds' sequential LP starts from
+  // the last bounded alpha when that violates less than the SLP's optimum. The seated knee (13
+  // muscles, 1 N reserves): most muscles' SLP optimum sits 100 N below their activation floor.
+  // Same optimum as a step planned afresh, in fewer LP steps.
+  const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
+  const fpl::FlatOutputMap flat(model);
+  fp::ModelWorkspace ws = flat.makeWorkspace();
+  fpl::RecedingHorizonOptions o;
+  o.target_q_rad = Eigen::VectorXd::Constant(1, deg(20));
+  o.reserves_N = Eigen::VectorXd::Constant(13, 1.0);
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(1, deg(60)), qd = Eigen::VectorXd::Constant(1, -1.0);
+  fpl::RecedingHorizonStep reused;
+  fpl::plan_receding_horizon_step(flat, ws, q, qd, o, reused);
+  ASSERT_EQ(reused.status, fpl::SolveStatus::Solved) << reused.message;
+  ASSERT_TRUE(reused.bounds_imposed);
+  ASSERT_EQ(reused.buffers.bounded_alpha, reused.alpha());
+  // One period later.
+  q[0] -= 0.05;
+  qd[0] = -1.1;
+  fpl::plan_receding_horizon_step(flat, ws, q, qd, o, reused);
+  const auto fresh = fpl::plan_receding_horizon_step(flat, ws, q, qd, o);
+  ASSERT_EQ(reused.status, fpl::SolveStatus::Solved) << reused.message;
+  ASSERT_EQ(fresh.status, fpl::SolveStatus::Solved) << fresh.message;
+  ASSERT_TRUE(fresh.bounds_imposed && reused.bounds_imposed);
+  EXPECT_NEAR(reused.slp.cost_N, fresh.slp.cost_N, 1e-6 * fresh.slp.cost_N);
+  EXPECT_LT((reused.alpha() - fresh.alpha()).cwiseAbs().maxCoeff(), 1e-4 * (1 + fresh.alpha().cwiseAbs().maxCoeff()));
+  EXPECT_LT(reused.bound_iterations, fresh.bound_iterations);
+}
+
 TEST(RecedingHorizonStepBounds, AStepThatNeedsNoBoundsIsTheSlpOptimum) {
   PaperFirstStep s;
   s.q = Eigen::Vector2d(deg(78), deg(79));  // near the target: gentle torques

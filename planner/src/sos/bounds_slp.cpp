@@ -11,6 +11,23 @@ namespace flatsos::planner::detail {
 
 namespace {
 constexpr double kInitialPenalty = 1e4, kMaxPenalty = 1e12;
+
+// The smallest box |d| <= r in which the linearization at theta clears every violated row:
+// row v + g.d >= 0 needs r >= -v / |g|_1. A start far from feasibility (a receding-horizon step's
+// SLP optimum, 100 N below the activation floors) then takes a Newton step at once instead of
+// doubling a small radius for ten iterations.
+double linear_reach(const LinearProgram& lp, const BoundRowsAt& rows, const Eigen::VectorXd& theta) {
+  std::vector<double> norm(rows.value.size(), 0.0);
+  for (const auto& t : rows.jacobian) norm[static_cast<std::size_t>(t.row())] += std::abs(t.value());
+  double reach = 0.0;
+  for (std::size_t i = 0; i < rows.value.size(); ++i)
+    if (rows.value[i] < 0.0 && norm[i] > 0.0) reach = std::max(reach, -rows.value[i] / norm[i]);
+  for (Eigen::Index r = 0; r < lp.G.rows(); ++r) {
+    const double value = lp.G.row(r).dot(theta) - lp.row_lower[r], row_norm = lp.G.row(r).cwiseAbs().sum();
+    if (value < 0.0 && row_norm > 0.0) reach = std::max(reach, -value / row_norm);
+  }
+  return reach;
+}
 }  // namespace
 
 NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
@@ -37,6 +54,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     return lp.cost.dot(x) + penalty * (r.violation + reserve_violation_N(lp, x));
   };
   double phi = merit(theta, rows);
+  radius = std::max(radius, linear_reach(lp, rows, theta));
   basis.step.resize(static_cast<std::size_t>(n), BasisStatus::AtLower);
   // Reserve row r of lp is row k of group c (rows in that order; rounds append rows to groups):
   // their statuses are kept per group and row.

@@ -56,6 +56,8 @@ struct SlpLinearPart {
 using NonlinearRows = std::function<BoundRowsAt(const Eigen::VectorXd& x, bool jacobian)>;
 
 /// Improves x in place (and the trust radius and the LP basis, kept across exchange rounds).
+/// The radius is first raised to the smallest box in which the linearization clears every
+/// violated row.
 SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& rows_at, Eigen::VectorXd& theta,
                                double& radius, SlpBasis& basis, int max_iterations);
 

@@ -183,6 +183,9 @@ struct RecedingHorizonStep {
     SlpWorkspace slp;
     PlanExcitationScratch period;                  ///< the first period's samples
     Eigen::MatrixXd excitations, activations;      ///< there: samples x m
+    /// The last alpha the bounds' sequential LP converged to: the next bounded step of a
+    /// receding horizon may start there.
+    Eigen::VectorXd bounded_alpha;
   } buffers;
 };
 

@@ -18,6 +18,7 @@
 #include <Eigen/LU>
 
 #include "flatsos/planner/numerics/linear_program.hpp"
+#include "flatsos/planner/numerics/simplex_lp.hpp"
 
 namespace flatsos::planner {
 
@@ -37,9 +38,13 @@ Eigen::VectorXd slp_appendix_solution(const Eigen::MatrixXd& CY, const Eigen::Ve
 Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B);
 
 /// VertexEnumeration: exact, every vertex of the feasible set (tested against Ipopt; 0.03 ms on
-/// the paper's arm, allocation-free), the default; Ipopt solves instead when there would be more
-/// than 20000 vertices (C(m + p, p)), and says so in the message. Ipopt: 3.5-6.8 ms per solve.
-enum class SlpSolver { Ipopt, VertexEnumeration };
+/// the paper's arm, allocation-free), the default; the dual simplex solves instead when there
+/// would be more than 20000 vertices (C(m + p, p): posture-dependent moment arms stack the rows
+/// of every grid posture); both are exact, so the message stays empty.
+/// Simplex: exact, Clp's dual simplex, restarted from the workspace's last basis (a receding
+/// horizon's consecutive SLPs differ little, so few pivots are left); allocates.
+/// Ipopt: the interior-point reference, 3.5-6.8 ms per solve.
+enum class SlpSolver { Ipopt, VertexEnumeration, Simplex };
 
 struct SlpResult {
   SolveStatus status = SolveStatus::Failed;
@@ -61,6 +66,8 @@ struct SlpWorkspace {
   /// receding-horizon step: the effort weights' flat-output part, c = C_Y^T w).
   Eigen::VectorXd cost;
   Eigen::FullPivLU<Eigen::MatrixXd> lu;
+  /// The dual simplex's last basis: the next SLP of the same size starts from it.
+  SimplexBasis basis;
   /// c . alpha, or sum(alpha) when no cost is set.
   double costOf(const Eigen::VectorXd& alpha) const { return cost.size() ? cost.dot(alpha) : alpha.sum(); }
   /// c itself, or ones(p) when no cost is set (allocates: for building an LP).
@@ -72,7 +79,7 @@ struct SlpWorkspace {
 /// why). Throws std::invalid_argument for wrong sizes or NaN, FlatnessError-like
 /// std::invalid_argument if some row sum of C_Y is not positive.
 /// `warm_start` (optional, p entries): Ipopt's initial point instead of the appendix construction,
-/// e.g. the previous RH step's alpha.
+/// e.g. the previous RH step's alpha (the simplex starts from the workspace's basis instead).
 SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::VertexEnumeration,
                     const std::optional<Eigen::VectorXd>& warm_start = std::nullopt);
 /// The same into `result`, with reusable work storage (no allocation with VertexEnumeration once
