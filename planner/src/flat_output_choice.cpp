@@ -73,16 +73,20 @@ PostureScore score_at(const Eigen::MatrixXd& R_unit, const Eigen::MatrixXd& E, E
 }
 
 // The margin of E over a posture set, visiting the postures in `order`. Stops early once the
-// margin is below `bar` (a score that cannot beat it need not be finished) and then moves the
-// posture that stopped it to the front of `order`: the postures that bind are few, so the next
-// score meets them first.
+// score cannot beat `bar` (see better(): its margin below bar's, or no larger and its condition
+// number already above bar's; more postures only lower the one and raise the other) and then
+// moves the posture that stopped it to the front of `order`: the postures that bind are few, so
+// the next score meets them first. A stopped score is partial, and never better than `bar`.
 FlatOutputMargin score_over(const PostureSet& set, const Eigen::MatrixXd& E, std::vector<std::size_t>& order,
-                            double bar = -kInf) {
+                            const FlatOutputMargin* bar = nullptr) {
   FlatOutputMargin out;
   out.margin = kInf;
   out.condition_number = 0.0;
   Eigen::MatrixXd C;
   Eigen::VectorXd rhs;
+  auto stop_at = [&](std::size_t at) {
+    std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(at), order.begin() + static_cast<std::ptrdiff_t>(at) + 1);
+  };
   for (std::size_t at = 0; at < order.size(); ++at) {
     const std::size_t k = order[at];
     const PostureScore s = score_at(set.R_unit[k], E, C, rhs);
@@ -91,7 +95,7 @@ FlatOutputMargin score_over(const PostureSet& set, const Eigen::MatrixXd& E, std
       out.muscle = -1;
       out.condition_number = kInf;
       out.posture_rad = set.q_rad[k];
-      std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(at), order.begin() + static_cast<std::ptrdiff_t>(at) + 1);
+      stop_at(at);
       return out;
     }
     if (s.margin < out.margin) {
@@ -100,8 +104,11 @@ FlatOutputMargin score_over(const PostureSet& set, const Eigen::MatrixXd& E, std
       out.posture_rad = set.q_rad[k];
     }
     out.condition_number = std::max(out.condition_number, s.condition_number);
-    if (out.margin < bar - kMarginTie) {
-      std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(at), order.begin() + static_cast<std::ptrdiff_t>(at) + 1);
+    if (!bar) continue;
+    const bool below = out.margin < bar->margin - kMarginTie;
+    const bool no_better = out.margin <= bar->margin + kMarginTie && !(out.condition_number < bar->condition_number * (1.0 - 1e-12));
+    if (below || no_better) {
+      stop_at(at);
       return out;
     }
   }
@@ -173,7 +180,7 @@ struct Search {
   FlatOutputMargin best;
   std::vector<std::size_t> order = in_grid_order(set);  // of the postures: see score_over
 
-  FlatOutputMargin score(const std::vector<int>& pick, double bar) {
+  FlatOutputMargin score(const std::vector<int>& pick, const FlatOutputMargin* bar) {
     ++scored;
     return score_over(set, rows_of(candidates, pick), order, bar);
   }
@@ -189,7 +196,7 @@ struct Search {
     std::vector<int> pick(static_cast<std::size_t>(rows));
     for (int i = 0; i < rows; ++i) pick[static_cast<std::size_t>(i)] = i;
     while (true) {
-      offer(pick, score(pick, best_pick.empty() ? -kInf : best.margin));
+      offer(pick, score(pick, best_pick.empty() ? nullptr : &best));
       int i = rows - 1;
       while (i >= 0 && pick[static_cast<std::size_t>(i)] == count - rows + i) --i;
       if (i < 0) return;
@@ -220,7 +227,7 @@ struct Search {
   // whole pass over the rows and candidates improves nothing (or the budget is spent).
   void exchange_from(std::vector<int> pick) {
     if (static_cast<int>(pick.size()) != rows) return;
-    FlatOutputMargin current = score(pick, -kInf);
+    FlatOutputMargin current = score(pick, nullptr);
     const int count = static_cast<int>(candidates.rows.rows());
     bool improved = true;
     while (improved && scored < max_scores) {
@@ -230,7 +237,7 @@ struct Search {
           if (std::find(pick.begin(), pick.end(), c) != pick.end()) continue;
           std::vector<int> trial = pick;
           trial[static_cast<std::size_t>(i)] = c;
-          const FlatOutputMargin s = score(trial, current.margin);
+          const FlatOutputMargin s = score(trial, &current);
           if (better(s, current)) {
             current = s;
             pick = trial;

@@ -14,8 +14,9 @@
 // at half weights, as the paper's arm pairs them) by the margin first and, between equal margins,
 // by the worst condition number of C(q): exhaustively when the combinations are few, otherwise by
 // exchanging one row at a time from two starts until no exchange improves the score.
-// Scores stop at the first posture where they fall below the best so far, and the postures that
-// stopped one are visited first by the next.
+// Scores stop at the first posture where they can no longer beat the best so far (a smaller
+// margin, or an equal one with a larger condition number: at 40 muscles most margins tie at 1),
+// and the postures that stopped one are visited first by the next.
 
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
