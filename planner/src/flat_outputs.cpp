@@ -292,7 +292,10 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   const Eigen::MatrixXd K1 = map.Ctau * R[1], K2 = map.Ctau * R[2];
   map.W10 = -K1;
   map.W21 = -2.0 * K1;
-  map.W20 = 2.0 * K1 * K1 - K2;
+  // K1 K1 = C_tau (R' C_tau) R': the N x N middle keeps it O(m^2 N), not O(m^3).
+  const Eigen::MatrixXd middle = R[1] * map.Ctau;
+  map.W20.noalias() = 2.0 * map.Ctau * (middle * R[1]);
+  map.W20 -= K2;
   return map;
 }
 
