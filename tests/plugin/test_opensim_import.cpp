@@ -100,7 +100,8 @@ std::string muscle(const std::string& name, double fmax, double lopt, double lsl
   return "<Millard2012EquilibriumMuscle name=\"" + name + "\"><GeometryPath name=\"path\"><PathPointSet><objects>" + points +
          "</objects></PathPointSet></GeometryPath><max_isometric_force>" + std::to_string(fmax) +
          "</max_isometric_force><optimal_fiber_length>" + std::to_string(lopt) + "</optimal_fiber_length><tendon_slack_length>" +
-         std::to_string(lslack) + "</tendon_slack_length><pennation_angle_at_optimal>0.05</pennation_angle_at_optimal>"
+         std::to_string(lslack) + "</tendon_slack_length><pennation_angle_at_optimal>0.05</pennation_angle_at_optimal>" +
+         (name == "vas" ? "<minimum_activation>0.02</minimum_activation>" : "") +
          "<FiberForceLengthCurve name=\"f\"><strain_at_one_norm_force>0.6</strain_at_one_norm_force></FiberForceLengthCurve>"
          "</Millard2012EquilibriumMuscle>";
 }
@@ -202,6 +203,8 @@ TEST(OpenSimModelFile, ReadsBodiesJointsCouplersAndMuscles) {
   ASSERT_EQ(m.muscles.size(), 4u);  // the CoordinateActuator is not a muscle
   EXPECT_DOUBLE_EQ(m.muscle("vas")->passive_fiber_strain_at_one_norm_force, 0.6);
   EXPECT_DOUBLE_EQ(m.muscle("vas")->tendon_strain_at_one_norm_force, 0.049);  // Millard's default
+  EXPECT_DOUBLE_EQ(m.muscle("vas")->minimum_activation, 0.02);
+  EXPECT_DOUBLE_EQ(m.muscle("ham")->minimum_activation, 0.01);  // Millard's default
   EXPECT_EQ(m.muscle("ham")->path_bodies, (std::vector<std::string>{"pelvis", "shank"}));
   // The hip flexed 90 deg puts the thigh horizontal, forward (+x).
   const Eigen::Isometry3d shank = fp::opensim_body_in_ground(m, "shank", {{"hip_flexion", kPi / 2}});
@@ -282,6 +285,8 @@ TEST(OpenSimImport, ASeatedKneeLumpsShankFootAndPatellaAsComputedByHand) {
   EXPECT_DOUBLE_EQ(model.muscles[0].parameters.pennation_angle_at_optimal_rad, 0.05);
   EXPECT_DOUBLE_EQ(model.muscles[0].parameters.passive_fiber_strain_at_one_norm_force, 0.6);
   EXPECT_DOUBLE_EQ(model.muscles[0].parameters.tendon_strain_at_max_force, 0.049);
+  EXPECT_DOUBLE_EQ(model.muscles[0].parameters.activation_floor, 0.02);  // OpenSim's minimum activation
+  EXPECT_DOUBLE_EQ(model.muscles[1].parameters.activation_floor, 0.01);
   ASSERT_TRUE(model.muscles[1].polynomial_path);
   EXPECT_DOUBLE_EQ(model.muscles[1].polynomial_path->held_coordinates_rad.at("hip_flexion"), kPi / 2);
   bool said = false;

@@ -400,6 +400,9 @@ OpenSimImport import_opensim_model(const OpenSimModel& osim, const std::vector<O
     p.max_shortening_velocity_in_optimal_lengths_per_s = m.max_contraction_velocity_in_optimal_lengths_per_s;
     p.activation_time_constant_s = m.activation_time_constant_s;
     p.deactivation_time_constant_s = m.deactivation_time_constant_s;
+    // OpenSim's minimum activation is flatsos' activation floor: the same clamp from below, and
+    // the bound every plan keeps.
+    p.activation_floor = m.minimum_activation;
     p.tendon_strain_at_max_force = m.tendon_strain_at_one_norm_force;
     p.passive_fiber_strain_at_one_norm_force = m.passive_fiber_strain_at_one_norm_force;
     md.polynomial_path = d;

@@ -266,6 +266,7 @@ OpenSimMuscle read_muscle(const Reader& r, Element& e) {
       r.optional_number(e, "max_contraction_velocity", where, m.max_contraction_velocity_in_optimal_lengths_per_s);
   m.activation_time_constant_s = r.optional_number(e, "activation_time_constant", where, m.activation_time_constant_s);
   m.deactivation_time_constant_s = r.optional_number(e, "deactivation_time_constant", where, m.deactivation_time_constant_s);
+  m.minimum_activation = r.optional_number(e, "minimum_activation", where, m.minimum_activation);
   for (const auto& [curve, value] : {std::pair<const char*, double*>{"TendonForceLengthCurve", &m.tendon_strain_at_one_norm_force},
                                      std::pair<const char*, double*>{"FiberForceLengthCurve", &m.passive_fiber_strain_at_one_norm_force}}) {
     Element c = find_below(e, curve);

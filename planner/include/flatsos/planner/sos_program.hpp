@@ -71,7 +71,7 @@ struct ExcitationBoundsOptions {
   BoundsSolver solver = BoundsSolver::SequentialLp;
   double min_activation = 0.0;       ///< a >= this; 0: each muscle's own activation floor
   int check_points = 3001;           ///< the uniform grid on which the bounds hold
-  double tolerance = 1e-6;           ///< allowed excess of a and n on that grid
+  double tolerance = 1e-8;           ///< allowed excess of a and n on that grid
   int initial_points_per_span = 1;   ///< uniform points imposed from the start (besides violators)
   int max_rounds = 20;               ///< NLP solves (each adds violated grid points)
   int max_slp_iterations = 200;       ///< per round

@@ -75,6 +75,7 @@ struct OpenSimMuscle {
   double pennation_angle_at_optimal_rad = 0.0;
   double max_contraction_velocity_in_optimal_lengths_per_s = 10.0;
   double activation_time_constant_s = 0.01, deactivation_time_constant_s = 0.04;
+  double minimum_activation = 0.01;  ///< Millard's default: the activation never falls below it
   double tendon_strain_at_one_norm_force = 0.049;  ///< Millard's default
   double passive_fiber_strain_at_one_norm_force = 0.7;  ///< Millard's default
   std::vector<std::string> path_bodies;  ///< the bodies its path points are fixed to (file order, unique)
