@@ -16,7 +16,9 @@
 #include "allocation_counter.hpp"
 #include "default_model.hpp"
 #include "example_support.hpp"
+#include "scaling.hpp"
 #include "scenario_inputs.hpp"
+#include "timing.hpp"
 #include "flatsos/planner/collocation.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatsos/planner/rest_state.hpp"
@@ -31,21 +33,8 @@ using nlohmann::json;
 
 namespace {
 
-json stats(std::vector<double> v, double scale, const std::string& unit) {
-  std::sort(v.begin(), v.end());
-  return {{"median", scale * ex::median(v)}, {"min", scale * v.front()}, {"max", scale * v.back()}, {"samples", v.size()}, {"unit", unit}};
-}
-
-template <class F>
-std::vector<double> repeat(int reps, F f) {
-  std::vector<double> out;
-  for (int i = 0; i < reps; ++i) {
-    const flatsos::Stopwatch wall;
-    f();
-    out.push_back(wall.seconds());
-  }
-  return out;
-}
+using flatsos::bench::repeat;
+using flatsos::bench::stats;
 
 std::string cpu_model() {
   std::ifstream in("/proc/cpuinfo");
@@ -69,13 +58,31 @@ int main(int argc, char** argv) try {
                "time only the open-loop SOP of the model's scenario (default options), its a-posteriori check, one "
                "inverse-map evaluation and one inverse-dynamics call: for comparing models or builds "
                "(bench/compare_paths.sh)");
+  std::vector<std::string> scaling_models = {ex::default_model_path(), ex::default_model_path("seated_knee_r.json"),
+                                             ex::default_model_path("sagittal_leg_r.json")};
+  app.add_option("--scaling-model", scaling_models,
+                 "models of the scaling study, smallest first (default: the paper's arm, 6 muscles; the seated knee, "
+                 "13; the sagittal leg, 40)");
+  bool scaling_only = false;
+  app.add_flag("--scaling-only", scaling_only,
+               "time only the scaling study: each stage (flat-output map, open-loop plan, receding-horizon step and "
+               "its parts, closed loop) on each --scaling-model's own scenarios, beside the targets for its size");
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
+  auto scaling = [&] {
+    json rows = json::array();
+    for (const std::string& path : scaling_models) rows.push_back(flatsos::bench::scaling_row(path, std::max(3, reps / 7)));
+    return json{{"models", rows}, {"growth_over_the_first", flatsos::bench::growth(rows)}};
+  };
   auto emit = [&](const json& result) {
     const std::string text = result.dump(2);
     std::cout << text << "\n";
     if (!out_path.empty()) fp::write_file_atomically(out_path, text + "\n");
   };
 
+  if (scaling_only) {
+    emit({{"machine", {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}}}, {"scaling", scaling()}});
+    return 0;
+  }
   const auto model = fp::MusculoskeletalModel::fromFile(model_path);
   const fpl::FlatOutputMap flat(model);
   fp::ModelWorkspace ws = flat.makeWorkspace();  // the planner's scratch, as a controller owns it

@@ -329,6 +329,7 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.status = SolveStatus::Failed;
   step.message.clear();
   step.first_period_sampled = false;
+  step.grid_seconds = step.bounds_seconds = 0.0;
   fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
   step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation
   const bool offset = o.torque_offset_N_m.size() > 0;
@@ -376,11 +377,14 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
     slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N, step.bound_N);
     if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortWeights();
   }
+  step.grid_seconds = wall.seconds();
   solve_slp(step.reserve_rows, step.bound_N, o.solver, o.warm_start, step.buffers.slp, step.slp);
   step.status = step.slp.status;
   step.message = step.slp.message;
+  const double before_bounds = wall.seconds();
   detail::impose_period_bounds(flat, workspace, o, step);
   step.wall_seconds = wall.seconds();
+  step.bounds_seconds = step.wall_seconds - before_bounds;
 }
 
 }  // namespace flatsos::planner

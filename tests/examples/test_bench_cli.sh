@@ -5,6 +5,8 @@ bench=$1
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 expect 0 "--repetitions" -- "$bench" --help
 expect 0 "--open-loop-only" -- "$bench" --help
+expect 0 "--scaling-model" -- "$bench" --help
+expect 1 "$tmp/missing.json" -- "$bench" --scaling-only --scaling-model "$tmp/missing.json"
 expect 2 "--repetitions" -- "$bench" --repetitions 0
 expect 1 "$tmp/missing.json" -- "$bench" --model "$tmp/missing.json"
 printf '{"bodies": []}' > "$tmp/bad.json"

@@ -176,6 +176,10 @@ struct RecedingHorizonStep {
   Eigen::MatrixXd excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, double tau0_s, double h_s,
                               int count) const;
   double wall_seconds = 0.0;
+  /// Where the step's time went: the horizon's grid (joint path, inverse dynamics, the SLP's
+  /// rows), the SLP (slp.wall_seconds) and the excitation bounds (sampling the first period
+  /// and, when they bind, their sequential LP).
+  double grid_seconds = 0.0, bounds_seconds = 0.0;
   /// Work storage the in-place plan_receding_horizon_step reuses (not part of the result).
   struct Buffers {
     Jet joint_jet;
