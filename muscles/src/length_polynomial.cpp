@@ -114,6 +114,26 @@ LengthPolynomial LengthPolynomial::derivative(int k) const {
   return LengthPolynomial(dimension_, lower, std::move(c));
 }
 
+LengthPolynomial LengthPolynomial::withArgumentHeld(int k, double value) const {
+  if (k < 0 || k >= dimension_)
+    throw std::invalid_argument("holding argument " + std::to_string(k) + " of a polynomial of " + std::to_string(dimension_) +
+                                " arguments");
+  if (!std::isfinite(value)) throw std::invalid_argument("holding argument " + std::to_string(k) + " at a value that is not finite");
+  const auto exponents = termExponents(dimension_ - 1, order_);
+  std::map<std::vector<int>, std::size_t> position;
+  for (std::size_t t = 0; t < exponents.size(); ++t) position[exponents[t]] = t;
+  std::vector<double> c(exponents.size(), 0.0);
+  for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
+    std::vector<int> e(term_exponents_.begin() + static_cast<long>(t * dimension_),
+                       term_exponents_.begin() + static_cast<long>((t + 1) * dimension_));
+    double factor = term_coefficient_[t];
+    for (int p = 0; p < e[k]; ++p) factor *= value;
+    e.erase(e.begin() + k);
+    c[position.at(e)] += factor;
+  }
+  return LengthPolynomial(dimension_ - 1, order_, std::move(c));
+}
+
 void LengthPolynomial::timeDerivatives(const double* x_jet, int count, double* out) const {
   if (count < 1 || count > kMaxJetCount)
     throw std::invalid_argument("time derivatives: count " + std::to_string(count) + " is outside [1, " +

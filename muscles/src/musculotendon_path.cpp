@@ -41,9 +41,15 @@ MusculotendonPath::MusculotendonPath(LengthPolynomial length_m, std::vector<Path
     if (!length_.independentOf(k)) crossed_.push_back(c.joint);
   }
   std::sort(crossed_.begin(), crossed_.end());
-  for (int k = 0; k < d; ++k) gradient_.push_back(length_.derivative(k));
-  for (int k = 0; k < d; ++k)
-    for (int l = 0; l < d; ++l) hessian_.push_back(gradient_[k].derivative(l));
+  free_length_ = length_;
+  for (int k = d - 1; k >= 0; --k)  // from the last, so that the earlier arguments keep their index
+    if (coordinates_[k].held()) free_length_ = free_length_.withArgumentHeld(k, coordinates_[k].held_value_rad);
+  for (const PathCoordinate& c : coordinates_)
+    if (!c.held()) free_joint_.push_back(c.joint);
+  const int free = free_length_.dimension();
+  for (int k = 0; k < free; ++k) gradient_.push_back(free_length_.derivative(k));
+  for (int k = 0; k < free; ++k)
+    for (int l = 0; l < free; ++l) hessian_.push_back(gradient_[k].derivative(l));
 }
 
 MusculotendonPath MusculotendonPath::constantMomentArms(double length_at_zero_angles_m,
@@ -60,44 +66,38 @@ MusculotendonPath MusculotendonPath::constantMomentArms(double length_at_zero_an
 }
 
 void MusculotendonPath::arguments(const double* q_jet, int count, double* x_jet) const {
-  const int d = length_.dimension();
-  for (int k = 0; k < d; ++k) {
-    const PathCoordinate& c = coordinates_[k];
-    for (int j = 0; j < count; ++j)
-      x_jet[j * d + k] = c.held() ? (j == 0 ? c.held_value_rad : 0.0) : q_jet[j * num_joints_ + c.joint];
-  }
+  const int d = static_cast<int>(free_joint_.size());
+  for (int k = 0; k < d; ++k)
+    for (int j = 0; j < count; ++j) x_jet[j * d + k] = q_jet[j * num_joints_ + free_joint_[k]];
 }
 
 double MusculotendonPath::length(const double* q_rad) const {
   double x[LengthPolynomial::kMaxDimension];
   arguments(q_rad, 1, x);
-  return length_.value(x);
+  return free_length_.value(x);
 }
 
 void MusculotendonPath::momentArms(const double* q_rad, double* r_m) const {
   double x[LengthPolynomial::kMaxDimension];
   arguments(q_rad, 1, x);
   std::fill(r_m, r_m + num_joints_, 0.0);
-  for (std::size_t k = 0; k < coordinates_.size(); ++k)
-    if (!coordinates_[k].held()) r_m[coordinates_[k].joint] = -gradient_[k].value(x);
+  for (std::size_t k = 0; k < free_joint_.size(); ++k) r_m[free_joint_[k]] = -gradient_[k].value(x);
 }
 
 void MusculotendonPath::momentArmJacobian(const double* q_rad, double* out) const {
   double x[LengthPolynomial::kMaxDimension];
   arguments(q_rad, 1, x);
   std::fill(out, out + num_joints_ * num_joints_, 0.0);
-  const std::size_t d = coordinates_.size();
+  const std::size_t d = free_joint_.size();
   for (std::size_t k = 0; k < d; ++k)
-    for (std::size_t l = 0; l < d; ++l)
-      if (!coordinates_[k].held() && !coordinates_[l].held())
-        out[coordinates_[k].joint * num_joints_ + coordinates_[l].joint] = -hessian_[k * d + l].value(x);
+    for (std::size_t l = 0; l < d; ++l) out[free_joint_[k] * num_joints_ + free_joint_[l]] = -hessian_[k * d + l].value(x);
 }
 
 void MusculotendonPath::lengthJet(const double* q_jet, int count, double* out) const {
   require_jet_count(count);
   double x[LengthPolynomial::kMaxDimension * LengthPolynomial::kMaxJetCount];
   arguments(q_jet, count, x);
-  length_.timeDerivatives(x, count, out);
+  free_length_.timeDerivatives(x, count, out);
 }
 
 void MusculotendonPath::momentArmJets(const double* q_jet, int count, double* out) const {
@@ -106,10 +106,9 @@ void MusculotendonPath::momentArmJets(const double* q_jet, int count, double* ou
   arguments(q_jet, count, x);
   std::fill(out, out + count * num_joints_, 0.0);
   double jet[LengthPolynomial::kMaxJetCount];
-  for (std::size_t k = 0; k < coordinates_.size(); ++k) {
-    if (coordinates_[k].held()) continue;
+  for (std::size_t k = 0; k < free_joint_.size(); ++k) {
     gradient_[k].timeDerivatives(x, count, jet);
-    for (int j = 0; j < count; ++j) out[j * num_joints_ + coordinates_[k].joint] = -jet[j];
+    for (int j = 0; j < count; ++j) out[j * num_joints_ + free_joint_[k]] = -jet[j];
   }
 }
 

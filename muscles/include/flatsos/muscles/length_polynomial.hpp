@@ -42,6 +42,10 @@ class LengthPolynomial {
   double value(const double* x) const;
   /// dP/dx_k as a polynomial of the same arguments, of order max(order - 1, 0).
   LengthPolynomial derivative(int k) const;
+  /// P with argument k fixed at `value`: a polynomial of the other arguments (same order, one
+  /// dimension fewer). Throws std::invalid_argument for k outside [0, dimension) or a value that
+  /// is not finite.
+  LengthPolynomial withArgumentHeld(int k, double value) const;
   /// d^j/dt^j P(x(t)) for j = 0 .. count - 1 (count <= kMaxJetCount) into out[j], from the
   /// time derivatives of the arguments: x_jet[j * dimension() + k] = d^j x_k / dt^j.
   void timeDerivatives(const double* x_jet, int count, double* out) const;

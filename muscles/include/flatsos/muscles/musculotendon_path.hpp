@@ -51,13 +51,18 @@ class MusculotendonPath {
   void momentArmJets(const double* q_jet, int count, double* out) const;
 
  private:
-  // Writes the polynomial's arguments (or their jets) from the joints' (held: value, then 0).
+  // Writes the free arguments (or their jets) from the joints'.
   void arguments(const double* q_jet, int count, double* x_jet) const;
 
-  LengthPolynomial length_;
-  std::vector<LengthPolynomial> gradient_;  ///< dL/dx_k per argument
-  std::vector<LengthPolynomial> hessian_;   ///< d2L/(dx_k dx_l), row-major over arguments
+  LengthPolynomial length_;                 ///< as given, over every coordinate
   std::vector<PathCoordinate> coordinates_;
+  // What is evaluated: the length with the held coordinates substituted, a polynomial of the
+  // free ones only (a knee path fitted over hip, knee and ankle is then one of the knee: 6 terms
+  // instead of 56), and its derivatives.
+  LengthPolynomial free_length_;
+  std::vector<int> free_joint_;             ///< joint of each free argument
+  std::vector<LengthPolynomial> gradient_;  ///< d/dx_k per free argument
+  std::vector<LengthPolynomial> hessian_;   ///< d2/(dx_k dx_l), row-major over free arguments
   std::vector<int> crossed_;
   int num_joints_ = 0;
 };
