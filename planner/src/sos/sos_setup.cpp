@@ -305,7 +305,10 @@ int build_exchange_rows(SosSetup& setup, double margin_N) {
     for (double s : c.points) {
       const Eigen::RowVectorXd v = monomials(s, c.base.size());
       lp.G.row(row) = v * c.G;
-      lp.row_lower[row] = margin_N * std::pow(s, c.margin_order) - v.dot(c.base);
+      double extra = 0.0;
+      for (const auto& [at, margin] : c.extra_margin)
+        if (at == s) extra += margin;
+      lp.row_lower[row] = margin_N * std::pow(s, c.margin_order) + extra - v.dot(c.base);
       ++row;
     }
   return static_cast<int>(rows);
@@ -318,12 +321,16 @@ bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& 
     const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
     min_value_N = std::min(min_value_N, mn.value);
     if (mn.value < -kConstraintTolerance_N) {
-      const bool known = std::any_of(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
-      if (!known) {
+      const auto known = std::find_if(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
+      if (known == c.points.end()) {
         c.points.push_back(mn.at);
         c.sticky.push_back(true);
-        added = true;
+      } else {
+        // Violated at a point the LP already imposes: it met the row only to its own precision
+        // (near t = 0 the margin s^order vanishes). Twice the violation more there, and again.
+        c.extra_margin.emplace_back(*known, -2.0 * mn.value);
       }
+      added = true;
     }
   }
   return added;

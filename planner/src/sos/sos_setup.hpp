@@ -44,6 +44,10 @@ struct ConstraintPolynomial {
   int margin_order = 0;
   std::vector<double> points;     ///< where the exchange LP imposes it
   std::vector<bool> sticky;       ///< added by the exchange: never pruned
+  /// (s, N): points the LP met only to its own precision (the minimum violated there again by
+  /// more than the tolerance): imposed with this much more margin. By position, not index,
+  /// because pruning removes points.
+  std::vector<std::pair<double, double>> extra_margin;
   Polynomial at(const Eigen::VectorXd& theta) const { return Polynomial(base + G * theta); }
 };
 
