@@ -299,6 +299,41 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   return map;
 }
 
+Eigen::MatrixXd FlatOutputMap::forceJet(const Jet& q_jet, const Eigen::MatrixXd& tau, const Eigen::MatrixXd& Y) const {
+  const int n = numJoints(), m = numMuscles();
+  if (constant_) return forceJetMap(q_jet).forceJet(tau, Y);
+  if (q_jet.rows() != n || q_jet.cols() < 1)
+    throw std::invalid_argument("force jet: the joint jet must be N x (1..5)");
+  Eigen::MatrixXd jet = Eigen::MatrixXd::Zero(n, 3);
+  const Eigen::Index given = std::min<Eigen::Index>(3, q_jet.cols());
+  jet.leftCols(given) = q_jet.leftCols(given);
+  std::array<Eigen::MatrixXd, 3> R;
+  for (auto& r : R) r.resize(n, m);
+  Eigen::MatrixXd arm_jet(n, 3);
+  for (int j = 0; j < m; ++j) {
+    model_->musclePath(j).momentArmJets(jet.data(), 3, arm_jet.data());
+    for (int k = 0; k < 3; ++k) R[static_cast<std::size_t>(k)].col(j) = arm_jet.col(k);
+  }
+  Eigen::MatrixXd C(m, m);
+  C << R[0], E_;
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(C);
+  // A pivot below 1e-10 of the largest: (nearly) singular, where forceJetMap's full-pivot LU
+  // decides and names the posture.
+  const Eigen::VectorXd pivots = lu.matrixLU().diagonal().cwiseAbs();
+  if (!(pivots.minCoeff() > 1e-10 * pivots.maxCoeff())) return forceJetMap(q_jet).forceJet(tau, Y);
+  Eigen::MatrixXd F(m, 3);
+  Eigen::VectorXd rhs(m);
+  rhs << tau.col(0), Y.col(0);
+  F.col(0) = lu.solve(rhs);
+  rhs << tau.col(1) - R[1] * F.col(0), Y.col(1);
+  F.col(1) = lu.solve(rhs);
+  rhs.head(n) = tau.col(2) - 2.0 * R[1] * F.col(1) - R[2] * F.col(0);
+  if (Y.cols() > 2) rhs.tail(m - n) = Y.col(2);
+  else rhs.tail(m - n).setZero();
+  F.col(2) = lu.solve(rhs);
+  return F;
+}
+
 bool FlatOutputMap::effortIsFlatOutputSum() const {
   return effort_kind_ == plugin::EffortWeights::Kind::FlatOutputs;
 }
@@ -362,7 +397,7 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
     throw std::invalid_argument("torque jet must be N x 3: tau, dtau, ddtau");
   const bool has_ddY = Y_jet.cols() > 2;
   // Posture-dependent moment arms: the force jet through C(q) and its rates (allocates).
-  const Eigen::MatrixXd varying_F = constant_ ? Eigen::MatrixXd() : forceJetMap(q_jet).forceJet(tj.tau, Y_jet);
+  const Eigen::MatrixXd varying_F = constant_ ? Eigen::MatrixXd() : forceJet(q_jet, tj.tau, Y_jet);
   for (auto* v : {&p.tendon_force_N, &p.tendon_force_rate_N_per_s, &p.tendon_length_m, &p.tendon_length_rate_m_per_s,
                   &p.fiber_length_m, &p.shortening_velocity_m_per_s, &p.force_ratio, &p.activation,
                   &p.activation_rate_per_s, &p.excitation})

@@ -17,6 +17,8 @@
 #include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
+#include <random>
+
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
@@ -92,6 +94,34 @@ TEST(PostureDependentFlatness, TheForceJetIsTheTimeDerivativeOfCInverseAlongTheM
     // The posture really matters here: the coupling's rates are not zero.
     const fpl::ForceJetMap map = flat.forceJetMap(joint_jet(t, 3));
     EXPECT_GT(map.W10.norm(), 1e-3);
+  }
+}
+
+TEST(PostureDependentFlatness, TheForceJetBySolvesEqualsTheOneThroughCInverse) {
+  // forceJet(q, tau, Y) solves with one LU; forceJetMap forms C^-1 and the coupling rates. The
+  // elbow (3 muscles) and the sagittal leg (40 muscles, 37 flat outputs), at random points of
+  // random motions.
+  for (const char* file : {"elbow_posture_dependent.json", "sagittal_leg_r.json"}) {
+    SCOPED_TRACE(file);
+    const fpl::FlatOutputMap flat(fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/" + file));
+    const int n = flat.numJoints(), p = flat.numFlatOutputs();
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), share(0.2, 0.8);
+    const fp::ModelDescription& d = flat.model().description();
+    for (int trial = 0; trial < 20; ++trial) {
+      fpl::Jet q(n, 3);
+      for (int i = 0; i < n; ++i) {
+        const auto& range = d.joints[static_cast<std::size_t>(i)].range_rad;
+        q(i, 0) = range[0] + share(rng) * (range[1] - range[0]);
+        q(i, 1) = 2.0 * u(rng);
+        q(i, 2) = 10.0 * u(rng);
+      }
+      Eigen::MatrixXd tau(n, 3), Y(p, trial % 2 ? 3 : 2);
+      for (auto& v : tau.reshaped()) v = 20.0 * u(rng);
+      for (auto& v : Y.reshaped()) v = 100.0 + 50.0 * u(rng);
+      const Eigen::MatrixXd by_solves = flat.forceJet(q, tau, Y), by_inverse = flat.forceJetMap(q).forceJet(tau, Y);
+      EXPECT_LT((by_solves - by_inverse).cwiseAbs().maxCoeff(), 1e-9 * (1.0 + by_inverse.cwiseAbs().maxCoeff())) << trial;
+    }
   }
 }
 

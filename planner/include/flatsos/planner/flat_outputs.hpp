@@ -190,6 +190,10 @@ class FlatOutputMap {
   /// qdd, ...; missing rates are 0). Throws FlatnessError, naming the posture, where C(q) is
   /// singular.
   ForceJetMap forceJetMap(const Jet& q_jet) const;
+  /// forceJetMap(q_jet).forceJet(tau, Y) without forming C^-1 (what the inverse map needs): one
+  /// LU of C and three solves, C F' = [tau' - R' F; Y'], C F'' = [tau'' - 2 R' F' - R'' F; Y''].
+  /// Same errors.
+  Eigen::MatrixXd forceJet(const Jet& q_jet, const Eigen::MatrixXd& tau, const Eigen::MatrixXd& Y) const;
 
   /// Checks Assumption 1 for a pair (A, E); throws FlatnessError listing every failure.
   static void checkAssumption1(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E);
