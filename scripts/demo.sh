@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The main job: installs what is missing, builds, runs the paper's two scenarios and plots them.
+# The main job: installs what is missing, builds, runs the paper's two scenarios and the shipped
+# OpenSim models' (a seated knee extension, 13 muscles; a leg swing, 40 muscles) and plots them.
 # Results (plan.sto, simulation.sto, summary.json, PNG figures) go to results/.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -11,9 +12,19 @@ echo "== open loop: [0, 10] deg -> straight up in 3 s (reserves 10 N)"
 "$root/build/bin/arm_open_loop" --out "$results/open_loop"
 echo "== receding horizon: [20, 20] deg -> [80, 80] deg, 2 s (reserves 1 N)"
 "$root/build/bin/arm_receding_horizon" --out "$results/receding_horizon"
+# The models made from OpenSim's example by opensim_to_model, each in its own scenarios.
+models="$root/build/share/flatsos/models"
+echo "== seated knee extension (13 muscles, hip held at 60 deg): open loop 90 -> 30 deg in 1 s (10 N)"
+"$root/build/bin/arm_open_loop" --model "$models/seated_knee_r.json" --out "$results/seated_knee_r/open_loop"
+echo "== seated knee extension: receding horizon 90 -> 20 deg, 1.5 s (1 N)"
+"$root/build/bin/arm_receding_horizon" --model "$models/seated_knee_r.json" --out "$results/seated_knee_r/receding_horizon"
+echo "== leg swing (hip, knee, ankle; 40 muscles): open loop from hanging to [40, 60, 10] deg in 1 s (10 N)"
+"$root/build/bin/arm_open_loop" --model "$models/sagittal_leg_r.json" --out "$results/sagittal_leg_r/open_loop"
+echo "== leg swing: receding horizon to [40, 60, 10] deg, 1.5 s (1 N)"
+"$root/build/bin/arm_receding_horizon" --model "$models/sagittal_leg_r.json" --out "$results/sagittal_leg_r/receding_horizon"
 echo "== figures"
 # Debian's interpreter, which has python3-matplotlib (a python3 earlier on PATH may not).
 python=/usr/bin/python3
 [[ -x $python ]] || python=python3
-"$python" "$root/scripts/plot_results.py" "$results"
+"$python" "$root/scripts/plot_results.py" "$results" "$results/seated_knee_r" "$results/sagittal_leg_r"
 echo "demo: results in $results"
