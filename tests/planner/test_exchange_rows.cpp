@@ -1,6 +1,6 @@
 // The exchange's rows: a constraint violated at its minimum gets a point there; violated again at
-// a point the LP already imposes (it met the row only to its own precision), that point gets
-// twice the violation as extra margin in the rows the next LP sees, and again if it recurs.
+// a point the LP already imposes (it met the row only to its own precision), that point gets the
+// full margin and twice the violation as extra margin in the rows the next LP sees.
 #include <gtest/gtest.h>
 
 #include "sos/sos_setup.hpp"
@@ -20,7 +20,7 @@ TEST(ExchangeRows, AViolationAtAnImposedPointRaisesThatPointsMargin) {
   const Eigen::VectorXd theta = Eigen::VectorXd::Zero(1);
   double min_value = 0.0;
 
-  ASSERT_TRUE(fpl::detail::add_violated_points(setup, theta, min_value));
+  ASSERT_TRUE(fpl::detail::add_violated_points(setup, theta, 1e-9, min_value));
   EXPECT_NEAR(min_value, -1e-6, 1e-15);
   const fpl::detail::ConstraintPolynomial& after = setup.constraints[0];
   ASSERT_EQ(after.points.size(), 3u);
@@ -28,17 +28,17 @@ TEST(ExchangeRows, AViolationAtAnImposedPointRaisesThatPointsMargin) {
   EXPECT_TRUE(after.extra_margin.empty());
 
   // The same theta again: the minimum sits on the imposed point.
-  ASSERT_TRUE(fpl::detail::add_violated_points(setup, theta, min_value));
+  ASSERT_TRUE(fpl::detail::add_violated_points(setup, theta, 1e-9, min_value));
   ASSERT_EQ(after.points.size(), 3u);
   ASSERT_EQ(after.extra_margin.size(), 1u);
   EXPECT_EQ(after.extra_margin[0].first, after.points[2]);
-  EXPECT_NEAR(after.extra_margin[0].second, 2e-6, 1e-15);
+  EXPECT_NEAR(after.extra_margin[0].second, 1e-9 + 2e-6, 1e-15);
   fpl::detail::build_exchange_rows(setup, 1e-9);
-  // Row 2 (s = 0.5): >= margin + extra - g's base at s, i.e. theta/2 >= 1e-9 + 2e-6 + 1e-6.
-  EXPECT_NEAR(setup.lp.row_lower[2], 1e-9 + 2e-6 + 1e-6, 1e-15);
+  // Row 2 (s = 0.5): >= margin + extra - g's base at s, i.e. theta/2 >= 1e-9 + (1e-9 + 2e-6) + 1e-6.
+  EXPECT_NEAR(setup.lp.row_lower[2], 1e-9 + 1e-9 + 2e-6 + 1e-6, 1e-15);
   EXPECT_NEAR(setup.lp.row_lower[0], 1e-9 - (0.25 - 1e-6), 1e-15);  // the others as before
 
   // Met (theta = 1e-5 lifts g near s = 0.5 above zero): nothing added.
-  ASSERT_FALSE(fpl::detail::add_violated_points(setup, Eigen::VectorXd::Constant(1, 1e-5), min_value));
+  ASSERT_FALSE(fpl::detail::add_violated_points(setup, Eigen::VectorXd::Constant(1, 1e-5), 1e-9, min_value));
   EXPECT_EQ(after.extra_margin.size(), 1u);
 }

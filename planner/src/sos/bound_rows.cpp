@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include "flatsos/muscles/hill_laws.hpp"
 
@@ -149,16 +150,19 @@ double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta
 }
 
 GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const std::vector<TorqueJet>& jets,
-                       const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, int points) {
+                       const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, int points, int stride) {
+  if (stride < 1 || (points - 1) % stride != 0) throw std::logic_error("grid excess: the stride must divide the grid");
   const SplineTrajectory Y = flat_outputs_of(setup, theta);
   const FlatOutputMap& flat = mp.flat;
   const double h = setup.duration_s / (points - 1);
   GridExcess out;
-  out.excess.assign(static_cast<std::size_t>(points), 0.0);
+  out.stride = stride;
+  out.excess.assign(static_cast<std::size_t>((points - 1) / stride + 1), 0.0);
   MusclePoint point;
   Jet q_jet(flat.numJoints(), 3), y_jet(flat.numFlatOutputs(), 3);
-  for (int i = 0; i < points; ++i) {
+  for (int i = 0; i < points; i += stride) {
     const double t = h * i;
+    const std::size_t at = static_cast<std::size_t>(i / stride);
     mp.path.jetInto(t, q_jet);
     Y.jetInto(t, y_jet);
     flat.inverseFromTorque(q_jet, jets[static_cast<std::size_t>(i)], y_jet, point);
@@ -169,7 +173,7 @@ GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const 
       if (!std::isfinite(a) || !std::isfinite(n) || kind == DomainViolation::Kind::SlackTendon ||
           kind == DomainViolation::Kind::NoForceCapacity || kind == DomainViolation::Kind::ExcitationUnattainable)
         e = std::numeric_limits<double>::infinity();
-      out.excess[static_cast<std::size_t>(i)] = std::max(out.excess[static_cast<std::size_t>(i)], e);
+      out.excess[at] = std::max(out.excess[at], e);
       if (e > out.worst) {
         out.worst = e;
         std::ostringstream why;
@@ -189,7 +193,7 @@ std::vector<double> violated_times(const GridExcess& g, double h, double toleran
     const double e = g.excess[i];
     if (!(e > tolerance)) continue;
     const bool left = i == 0 || e >= g.excess[i - 1], right = i + 1 == n || e >= g.excess[i + 1];
-    if (left && right) times.push_back(h * static_cast<double>(i));
+    if (left && right) times.push_back(h * static_cast<double>(g.stride) * static_cast<double>(i));
   }
   return times;
 }

@@ -75,16 +75,19 @@ double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta
 
 // The bounds on the check grid for the flat outputs of theta: per grid time the largest excess
 // over any muscle's bounds (0 inside; +inf where the inverse is undefined), and the worst one.
+// With a stride, every stride-th time of the grid only (the excess then has one entry per time
+// visited; `points - 1` must be a multiple of the stride).
 struct GridExcess {
   std::vector<double> excess;
   double worst = 0.0;
   std::string worst_text;
+  int stride = 1;
 };
 
 GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const std::vector<TorqueJet>& jets,
-                       const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, int points);
+                       const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, int points, int stride = 1);
 
-// Grid times where the excess is a local maximum above the tolerance.
+// Grid times where the excess is a local maximum above the tolerance (h: the full grid's spacing).
 std::vector<double> violated_times(const GridExcess& g, double h, double tolerance);
 
 }  // namespace flatsos::planner::detail

@@ -13,6 +13,10 @@ namespace flatsos::planner::detail {
 
 namespace {
 constexpr double kRoundStartRadius = 0.01;  // of the largest coefficient
+// Between rounds the bounds are checked on every tenth time of the check grid, and on the whole
+// grid only once that finds nothing: each time costs an inverse map (an LU of the m x m C(q)),
+// and the 40-muscle leg took six rounds.
+constexpr int kCoarseStride = 10;
 constexpr const char* kBoundsUnmet =
     "no flat outputs in this basis keep every excitation in [0, 1] and activation in [a_min, 1] with the reserves";
 }  // namespace
@@ -95,15 +99,21 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       theta = nlp.x;
     }
     double min_reserve = 0.0;
-    const bool reserves_added = add_violated_points(setup, theta, min_reserve);
+    const bool reserves_added = add_violated_points(setup, theta, o.feasibility_margin_N, min_reserve);
     result.min_constraint_value_N = min_reserve;
-    excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points);
-    result.max_bound_excess = excess.worst;
+    const int stride = (bo.check_points - 1) % kCoarseStride == 0 ? kCoarseStride : 1;
+    excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points, stride);
     bool bounds_added = false;
     // Every local maximum of the excess joins, not only those above the tolerance: along an arc
     // where a bound is active the dips between imposed points come back one by one otherwise.
     for (double t : violated_times(excess, h, 0.0)) bounds_added |= add_point(t);
-    if (!reserves_added && excess.worst <= bo.tolerance) {
+    if (!reserves_added && (excess.worst <= bo.tolerance || !bounds_added) && stride > 1) {
+      // Nothing left that the coarse grid sees: the whole grid decides.
+      excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points);
+      for (double t : violated_times(excess, h, 0.0)) bounds_added |= add_point(t);
+    }
+    result.max_bound_excess = excess.worst;
+    if (!reserves_added && excess.worst <= bo.tolerance && excess.stride == 1) {
       result.bounds_seconds = wall.seconds();
       return true;
     }

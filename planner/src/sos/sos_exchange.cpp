@@ -84,7 +84,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
           }
       }
     }
-    if (add_violated_points(setup, theta, result.min_constraint_value_N)) continue;
+    if (add_violated_points(setup, theta, o.feasibility_margin_N, result.min_constraint_value_N)) continue;
     converged = true;
     break;
   }

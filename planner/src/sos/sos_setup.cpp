@@ -314,7 +314,7 @@ int build_exchange_rows(SosSetup& setup, double margin_N) {
   return static_cast<int>(rows);
 }
 
-bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& min_value_N) {
+bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double margin_N, double& min_value_N) {
   bool added = false;
   min_value_N = 1e300;
   for (auto& c : setup.constraints) {
@@ -327,8 +327,9 @@ bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& 
         c.sticky.push_back(true);
       } else {
         // Violated at a point the LP already imposes: it met the row only to its own precision
-        // (near t = 0 the margin s^order vanishes). Twice the violation more there, and again.
-        c.extra_margin.emplace_back(*known, -2.0 * mn.value);
+        // (near t = 0 the margin s^order vanishes, and the bounds' sequential LP holds rows to
+        // half the margin). The full margin and twice the violation there, and again if need be.
+        c.extra_margin.emplace_back(*known, margin_N - 2.0 * mn.value);
       }
       added = true;
     }

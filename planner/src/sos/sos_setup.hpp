@@ -88,9 +88,11 @@ std::string fixed_violation(const SosSetup& setup, double margin_N);
 int build_exchange_rows(SosSetup& setup, double margin_N);
 
 /// The exact minimum of every constraint polynomial at theta; the violated minima (below
-/// -kConstraintTolerance_N) not yet among a constraint's points join them as sticky points.
-/// Sets min_value_N to the least minimum; returns whether a point was added.
-bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double& min_value_N);
+/// -kConstraintTolerance_N) not yet among a constraint's points join them as sticky points; one
+/// that is (the LP met it only to its own precision) gets the full `margin_N` (not scaled by
+/// s^margin_order) plus twice the violation as extra margin there. Sets min_value_N to the least
+/// minimum; returns whether a point or a margin was added.
+bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double margin_N, double& min_value_N);
 
 /// The flat outputs of theta.
 SplineTrajectory flat_outputs_of(const SosSetup& setup, const Eigen::VectorXd& theta);
