@@ -34,6 +34,27 @@ void multiply_series(double* a, const double* b, int count) {
 
 }  // namespace
 
+namespace {
+// The polynomial of `dimension` arguments and `order` made of the terms (coefficients, and
+// exponents `from_dimension` per term) each mapped by `map(exponents, coefficient)`: it edits the
+// exponents into the new polynomial's and returns the term's coefficient there (0: none).
+template <class Map>
+LengthPolynomial collect_terms(const std::vector<double>& coefficients, const std::vector<int>& exponents,
+                               int from_dimension, int dimension, int order, Map map) {
+  const auto table = LengthPolynomial::termExponents(dimension, order);
+  std::map<std::vector<int>, std::size_t> position;
+  for (std::size_t t = 0; t < table.size(); ++t) position[table[t]] = t;
+  std::vector<double> c(table.size(), 0.0);
+  for (std::size_t t = 0; t < coefficients.size(); ++t) {
+    std::vector<int> e(exponents.begin() + static_cast<long>(t * from_dimension),
+                       exponents.begin() + static_cast<long>((t + 1) * from_dimension));
+    const double value = map(e, coefficients[t]);
+    if (value != 0.0) c[position.at(e)] += value;
+  }
+  return LengthPolynomial(dimension, order, std::move(c));
+}
+}  // namespace
+
 long LengthPolynomial::termCount(int dimension, int order) {
   if (dimension < 0 || order < 0) return 0;
   // binom(d + o, o) built as a product of exact binomials: c_i = c_{i-1} (d + i) / i.
@@ -98,20 +119,13 @@ LengthPolynomial LengthPolynomial::derivative(int k) const {
   if (k < 0 || k >= dimension_)
     throw std::invalid_argument("derivative with respect to argument " + std::to_string(k) + " of a polynomial of " +
                                 std::to_string(dimension_) + " arguments");
-  const int lower = order_ > 0 ? order_ - 1 : 0;
-  const auto exponents = termExponents(dimension_, lower);
-  std::map<std::vector<int>, std::size_t> position;
-  for (std::size_t t = 0; t < exponents.size(); ++t) position[exponents[t]] = t;
-  std::vector<double> c(exponents.size(), 0.0);
-  for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
-    std::vector<int> e(term_exponents_.begin() + static_cast<long>(t * dimension_),
-                       term_exponents_.begin() + static_cast<long>((t + 1) * dimension_));
-    if (e[k] == 0) continue;
-    const double factor = e[k];
-    --e[k];
-    c[position.at(e)] += factor * term_coefficient_[t];
-  }
-  return LengthPolynomial(dimension_, lower, std::move(c));
+  return collect_terms(term_coefficient_, term_exponents_, dimension_, dimension_, order_ > 0 ? order_ - 1 : 0,
+                       [k](std::vector<int>& e, double c) {
+                         if (e[k] == 0) return 0.0;
+                         const double factor = e[k];
+                         --e[k];
+                         return factor * c;
+                       });
 }
 
 LengthPolynomial LengthPolynomial::withArgumentHeld(int k, double value) const {
@@ -119,19 +133,12 @@ LengthPolynomial LengthPolynomial::withArgumentHeld(int k, double value) const {
     throw std::invalid_argument("holding argument " + std::to_string(k) + " of a polynomial of " + std::to_string(dimension_) +
                                 " arguments");
   if (!std::isfinite(value)) throw std::invalid_argument("holding argument " + std::to_string(k) + " at a value that is not finite");
-  const auto exponents = termExponents(dimension_ - 1, order_);
-  std::map<std::vector<int>, std::size_t> position;
-  for (std::size_t t = 0; t < exponents.size(); ++t) position[exponents[t]] = t;
-  std::vector<double> c(exponents.size(), 0.0);
-  for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
-    std::vector<int> e(term_exponents_.begin() + static_cast<long>(t * dimension_),
-                       term_exponents_.begin() + static_cast<long>((t + 1) * dimension_));
-    double factor = term_coefficient_[t];
-    for (int p = 0; p < e[k]; ++p) factor *= value;
-    e.erase(e.begin() + k);
-    c[position.at(e)] += factor;
-  }
-  return LengthPolynomial(dimension_ - 1, order_, std::move(c));
+  return collect_terms(term_coefficient_, term_exponents_, dimension_, dimension_ - 1, order_,
+                       [k, value](std::vector<int>& e, double c) {
+                         for (int p = 0; p < e[k]; ++p) c *= value;
+                         e.erase(e.begin() + k);
+                         return c;
+                       });
 }
 
 void LengthPolynomial::timeDerivatives(const double* x_jet, int count, double* out) const {

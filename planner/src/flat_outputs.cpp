@@ -125,6 +125,24 @@ void FlatOutputMap::checkAssumption1(const Eigen::MatrixXd& A, const Eigen::Matr
 }
 
 namespace {
+// R and its first two time derivatives along a joint motion (q_jet N x 1..5; missing rates 0),
+// exact from each path's jets (the jet's column-major storage is the paths' layout: entry
+// [k n + i] is d^k q_i / dt^k).
+std::array<Eigen::MatrixXd, 3> moment_arm_jets(const plugin::MusculoskeletalModel& model, const Jet& q_jet) {
+  const int n = model.numJoints(), m = model.numMuscles();
+  Eigen::MatrixXd jet = Eigen::MatrixXd::Zero(n, 3);
+  const Eigen::Index given = std::min<Eigen::Index>(3, q_jet.cols());
+  jet.leftCols(given) = q_jet.leftCols(given);
+  std::array<Eigen::MatrixXd, 3> R;
+  for (auto& r : R) r.resize(n, m);
+  Eigen::MatrixXd arm_jet(n, 3);
+  for (int j = 0; j < m; ++j) {
+    model.musclePath(j).momentArmJets(jet.data(), 3, arm_jet.data());
+    for (int k = 0; k < 3; ++k) R[static_cast<std::size_t>(k)].col(j) = arm_jet.col(k);
+  }
+  return R;
+}
+
 const plugin::MusculoskeletalModel& require_model(const std::shared_ptr<const plugin::MusculoskeletalModel>& model) {
   if (!model) throw std::invalid_argument("flat-output map: no model (null pointer)");
   return *model;
@@ -265,24 +283,13 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
     map.CY = CY_;
     return map;
   }
-  // R and its first two time derivatives along the motion, exact from each path's jets (the
-  // jet's column-major storage is the paths' layout: entry [k n + i] is d^k q_i / dt^k).
-  Eigen::MatrixXd jet = Eigen::MatrixXd::Zero(n, 3);
-  const Eigen::Index given = std::min<Eigen::Index>(3, q_jet.cols());
-  jet.leftCols(given) = q_jet.leftCols(given);
-  std::array<Eigen::MatrixXd, 3> R;
-  for (auto& r : R) r.resize(n, m);
-  Eigen::MatrixXd arm_jet(n, 3);
-  for (int j = 0; j < m; ++j) {
-    model_->musclePath(j).momentArmJets(jet.data(), 3, arm_jet.data());
-    for (int k = 0; k < 3; ++k) R[static_cast<std::size_t>(k)].col(j) = arm_jet.col(k);
-  }
+  const std::array<Eigen::MatrixXd, 3> R = moment_arm_jets(*model_, q_jet);
   Eigen::MatrixXd C(m, m);
   C << R[0], E_;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
   lu.setThreshold(1e-10);
   if (!lu.isInvertible()) {
-    throw FlatnessError("C(q) = [R(q); E] is singular at " + plugin::describe_posture(model_->description(), jet.col(0)) +
+    throw FlatnessError("C(q) = [R(q); E] is singular at " + plugin::describe_posture(model_->description(), q_jet.col(0)) +
                         " (rank " + std::to_string(lu.rank()) + " of " + std::to_string(m) + "): the flat outputs "
                         "do not determine the tendon forces there");
   }
@@ -304,16 +311,7 @@ Eigen::MatrixXd FlatOutputMap::forceJet(const Jet& q_jet, const Eigen::MatrixXd&
   if (constant_) return forceJetMap(q_jet).forceJet(tau, Y);
   if (q_jet.rows() != n || q_jet.cols() < 1)
     throw std::invalid_argument("force jet: the joint jet must be N x (1..5)");
-  Eigen::MatrixXd jet = Eigen::MatrixXd::Zero(n, 3);
-  const Eigen::Index given = std::min<Eigen::Index>(3, q_jet.cols());
-  jet.leftCols(given) = q_jet.leftCols(given);
-  std::array<Eigen::MatrixXd, 3> R;
-  for (auto& r : R) r.resize(n, m);
-  Eigen::MatrixXd arm_jet(n, 3);
-  for (int j = 0; j < m; ++j) {
-    model_->musclePath(j).momentArmJets(jet.data(), 3, arm_jet.data());
-    for (int k = 0; k < 3; ++k) R[static_cast<std::size_t>(k)].col(j) = arm_jet.col(k);
-  }
+  const std::array<Eigen::MatrixXd, 3> R = moment_arm_jets(*model_, q_jet);
   Eigen::MatrixXd C(m, m);
   C << R[0], E_;
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(C);
