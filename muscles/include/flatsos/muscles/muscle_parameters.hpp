@@ -19,10 +19,12 @@ struct MuscleParameters {
   double activation_time_constant_s = 0.01;    ///< T_act
   double deactivation_time_constant_s = 0.04;  ///< T_deact (> T_act: deactivation is slower)
   /// Lower bound of the activation used in the contraction dynamics (the activation state
-  /// itself is not clamped). It keeps the forward model finite where a -> 0. It must stay
-  /// far below every planned activation or the plant is biased against the plan: planned
-  /// activations in the receding-horizon scenario go down to about 1e-3, and a floor of 1e-2
-  /// (OpenSim's) drifts the closed loop by degrees, so the default is 1e-4 (measured with the RH scenario).
+  /// itself is not clamped). It keeps the forward model finite where a -> 0. A plan whose
+  /// activations go below it is not what the plant executes: the planners keep a >= floor as
+  /// one of their excitation and activation bounds. Before they did, planned activations in the
+  /// paper's receding-horizon scenario went down to about 1e-3 and a floor of 1e-2 drifted the
+  /// closed loop by degrees, hence the default 1e-4; models imported from OpenSim carry its
+  /// minimum activation (0.01) instead, which their bounded plans keep.
   double activation_floor = 1e-4;
   /// Pennation angle phi0 at optimal fibre length (rad, in [0, pi/2)). The fibres keep a
   /// constant thickness h = Lopt sin(phi0): at fibre length L_M the angle is asin(h / L_M). 0:
