@@ -38,7 +38,7 @@ NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPo
 }
 
 SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& nonlinear_rows, Eigen::VectorXd& theta,
-                               double& radius, SlpBasis& basis, int max_iterations) {
+                               double& radius, SlpBasis& basis, int max_iterations, double relative_decrease) {
   SlpOutcome out;
   const LinearProgram& lp = linear.lp;
   const Eigen::Index n = theta.size();
@@ -185,7 +185,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       phi = merit(theta, rows);
       return false;
     };
-    if (predicted <= 1e-12 * (1.0 + std::abs(phi))) {
+    if (predicted <= relative_decrease * (1.0 + std::abs(phi))) {
       if (settle()) {
         out.converged = true;
         return out;

@@ -57,9 +57,10 @@ using NonlinearRows = std::function<BoundRowsAt(const Eigen::VectorXd& x, bool j
 
 /// Improves x in place (and the trust radius and the LP basis, kept across exchange rounds).
 /// The radius is first raised to the smallest box in which the linearization clears every
-/// violated row.
+/// violated row. Settles once the step LP predicts a merit decrease below `relative_decrease`
+/// (1 + |merit|) (and every row holds, or the penalty has done what it can).
 SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& rows_at, Eigen::VectorXd& theta,
-                               double& radius, SlpBasis& basis, int max_iterations);
+                               double& radius, SlpBasis& basis, int max_iterations, double relative_decrease = 1e-12);
 
 /// The bound rows of `points` (bound_rows.hpp) for theta: what the bounds of a fixed joint path add.
 NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
