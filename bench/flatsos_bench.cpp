@@ -414,6 +414,7 @@ int main(int argc, char** argv) try {
                   {"rh_step_ms", {{"median", rh_step_ms}, {"target", 1.0}, {"met", rh_step_ms <= 1.0}}},
                   {"closed_loop_real_time_factor",
                    {{"median", rtf}, {"target", 50.0}, {"met", rtf >= 50.0}, {"integrator", "rosenbrock at 1e-5"}}}};
+  j["scaling"] = scaling();
   emit(j);
   return 0;
 } catch (const std::exception& e) {
