@@ -284,35 +284,27 @@ Element set_objects(Element& model, const char* set) {
 
 }  // namespace
 
-const OpenSimBody* OpenSimModel::body(const std::string& n) const {
-  for (const auto& b : bodies)
-    if (b.name == n) return &b;
+namespace {
+// The first item whose `field` equals `value`, or nullptr.
+template <class T>
+const T* find_by(const std::vector<T>& items, std::string T::*field, const std::string& value) {
+  for (const T& item : items)
+    if (item.*field == value) return &item;
   return nullptr;
 }
-const OpenSimJoint* OpenSimModel::joint(const std::string& n) const {
-  for (const auto& j : joints)
-    if (j.name == n) return &j;
-  return nullptr;
-}
+}  // namespace
+
+const OpenSimBody* OpenSimModel::body(const std::string& n) const { return find_by(bodies, &OpenSimBody::name, n); }
+const OpenSimJoint* OpenSimModel::joint(const std::string& n) const { return find_by(joints, &OpenSimJoint::name, n); }
 const OpenSimJoint* OpenSimModel::jointOfChild(const std::string& b) const {
-  for (const auto& j : joints)
-    if (j.child_body == b) return &j;
-  return nullptr;
+  return find_by(joints, &OpenSimJoint::child_body, b);
 }
 const OpenSimCoordinate* OpenSimModel::coordinate(const std::string& n) const {
-  for (const auto& c : coordinates)
-    if (c.name == n) return &c;
-  return nullptr;
+  return find_by(coordinates, &OpenSimCoordinate::name, n);
 }
-const OpenSimMuscle* OpenSimModel::muscle(const std::string& n) const {
-  for (const auto& m : muscles)
-    if (m.name == n) return &m;
-  return nullptr;
-}
+const OpenSimMuscle* OpenSimModel::muscle(const std::string& n) const { return find_by(muscles, &OpenSimMuscle::name, n); }
 const OpenSimCoupler* OpenSimModel::couplerOf(const std::string& dependent) const {
-  for (const auto& c : couplers)
-    if (c.dependent == dependent) return &c;
-  return nullptr;
+  return find_by(couplers, &OpenSimCoupler::dependent, dependent);
 }
 
 OpenSimModel parse_opensim_model(const std::string& xml, const std::string& source) {
