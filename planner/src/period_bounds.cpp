@@ -147,7 +147,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   }
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
   SlpBasis basis;
-  const SlpOutcome slp = solve_bounds_by_slp(linear, rows, alpha, radius, basis, b.max_iterations, kRelativeDecrease);
+  const SlpOutcome slp = solve_bounds_by_slp(linear, rows, alpha, radius, basis, {b.max_iterations, kRelativeDecrease});
   step.bound_iterations = slp.iterations;
   step.slp.alpha = alpha;
   step.slp.cost_N = lp.cost.dot(alpha);

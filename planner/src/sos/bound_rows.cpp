@@ -124,6 +124,11 @@ BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoin
   BoundRowsAt out;
   const int m = flat.numMuscles();
   out.value.reserve(points.size() * static_cast<std::size_t>(m * kRowsPerMuscle));
+  if (jacobian) {
+    std::size_t entries = 0;
+    for (const auto& bp : points) entries += bp.columns.size() * static_cast<std::size_t>(m * kRowsPerMuscle);
+    out.jacobian.reserve(entries);
+  }
   int row = 0;
   for (const auto& bp : points)
     for (int j = 0; j < m; ++j) {

@@ -28,6 +28,71 @@ double linear_reach(const LinearProgram& lp, const BoundRowsAt& rows, const Eige
   }
   return reach;
 }
+
+// The bound rows' Jacobian by rows, built from its triplets in O(nonzeros) whatever their order:
+// the step LPs take a few of its rows, and every row's norm and step are needed.
+class JacobianByRow {
+ public:
+  explicit JacobianByRow(const BoundRowsAt& rows) : start_(rows.value.size() + 1, 0) {
+    for (const auto& t : rows.jacobian) ++start_[static_cast<std::size_t>(t.row()) + 1];
+    for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+    column_.resize(rows.jacobian.size());
+    value_.resize(rows.jacobian.size());
+    std::vector<int> next(start_.begin(), start_.end() - 1);
+    for (const auto& t : rows.jacobian) {
+      const auto k = static_cast<std::size_t>(next[static_cast<std::size_t>(t.row())]++);
+      column_[k] = t.col();
+      value_[k] = t.value();
+    }
+  }
+  double l1(std::size_t row) const {
+    double sum = 0.0;
+    for (int k = start_[row]; k < start_[row + 1]; ++k) sum += std::abs(value_[static_cast<std::size_t>(k)]);
+    return sum;
+  }
+  double dot(std::size_t row, const Eigen::VectorXd& d) const {
+    double sum = 0.0;
+    for (int k = start_[row]; k < start_[row + 1]; ++k) sum += value_[static_cast<std::size_t>(k)] * d[column_[static_cast<std::size_t>(k)]];
+    return sum;
+  }
+  void append_row(std::size_t row, int lp_row, std::vector<Eigen::Triplet<double>>& entries) const {
+    for (int k = start_[row]; k < start_[row + 1]; ++k)
+      entries.emplace_back(lp_row, column_[static_cast<std::size_t>(k)], value_[static_cast<std::size_t>(k)]);
+  }
+
+ private:
+  std::vector<int> start_, column_;
+  std::vector<double> value_;
+};
+
+// A row of a step LP, value + g . d >= 0: a bound row (index into the nonlinear rows) or a
+// reserve row (index into the linear part's lp.G), with the l1 norm of its g.
+struct StepRow {
+  bool reserve = false;
+  int index = 0;
+  double value = 0.0, norm = 0.0;
+};
+
+// The rows a step LP starts with: the violated ones (they carry the penalty), the ones active
+// in the last LP (not basic there), and the `closest` others that the smallest move reaches.
+// At an optimum about as many rows are active as there are free coefficients; the rest of the
+// box's 1000-odd rows (the leg's receding-horizon steps) only make the LP slow to load and factor.
+template <class StatusOf>
+std::vector<char> working_set(const std::vector<StepRow>& candidates, StatusOf status_of, std::size_t closest) {
+  std::vector<char> in(candidates.size(), 0);
+  std::vector<std::pair<double, std::size_t>> reach;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const StepRow& c = candidates[k];
+    if (c.value < 0.0 || status_of(c) != BasisStatus::Basic) in[k] = 1;
+    else reach.emplace_back(c.value / c.norm, k);  // norm > 0: a candidate reaches zero in the box
+  }
+  if (reach.size() > closest) {
+    std::nth_element(reach.begin(), reach.begin() + static_cast<std::ptrdiff_t>(closest), reach.end());
+    reach.resize(closest);
+  }
+  for (const auto& r : reach) in[r.second] = 1;
+  return in;
+}
 }  // namespace
 
 NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
@@ -38,7 +103,7 @@ NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPo
 }
 
 SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& nonlinear_rows, Eigen::VectorXd& theta,
-                               double& radius, SlpBasis& basis, int max_iterations, double relative_decrease) {
+                               double& radius, SlpBasis& basis, const SlpSettings& settings) {
   SlpOutcome out;
   const LinearProgram& lp = linear.lp;
   const Eigen::Index n = theta.size();
@@ -70,102 +135,127 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
   }
   if (reserve_id.size() != static_cast<std::size_t>(lp.G.rows()))
     throw std::logic_error("bounds SLP: the reserve rows do not match their groups");
-  for (; out.iterations < max_iterations; ++out.iterations) {
+  const Eigen::VectorXd reserve_norm = lp.G.rows() ? Eigen::VectorXd(lp.G.cwiseAbs().rowwise().sum()) : Eigen::VectorXd();
+  JacobianByRow jacobian(rows);
+  for (; out.iterations < settings.max_iterations; ++out.iterations) {
     // Rows that cannot reach zero inside the box are left out of this LP.
-    std::vector<double> row_norm(rows.value.size(), 0.0);
-    for (const auto& t : rows.jacobian) row_norm[static_cast<std::size_t>(t.row())] += std::abs(t.value());
-    std::vector<int> bound_rows_in;
-    for (std::size_t i = 0; i < rows.value.size(); ++i)
-      if (rows.value[i] - radius * row_norm[i] < 0.0) bound_rows_in.push_back(static_cast<int>(i));
     const Eigen::VectorXd reserve_value = lp.G.rows() ? Eigen::VectorXd(lp.G * theta - lp.row_lower) : Eigen::VectorXd();
-    std::vector<int> reserve_rows_in;
+    std::vector<StepRow> candidates;
+    for (std::size_t i = 0; i < rows.value.size(); ++i)
+      if (const double norm = jacobian.l1(i); rows.value[i] - radius * norm < 0.0)
+        candidates.push_back({false, static_cast<int>(i), rows.value[i], norm});
     for (Eigen::Index r = 0; r < lp.G.rows(); ++r)
-      if (reserve_value[r] - radius * lp.G.row(r).cwiseAbs().sum() < 0.0) reserve_rows_in.push_back(static_cast<int>(r));
+      if (reserve_value[r] - radius * reserve_norm[r] < 0.0)
+        candidates.push_back({true, static_cast<int>(r), reserve_value[r], reserve_norm[r]});
+    basis.bound_row.resize(rows.value.size(), BasisStatus::Basic);
+    basis.bound_slack.resize(rows.value.size(), BasisStatus::AtLower);
+    auto status_of = [&](const StepRow& c) -> BasisStatus& {
+      if (!c.reserve) return basis.bound_row[static_cast<std::size_t>(c.index)];
+      const auto [constraint, point] = reserve_id[static_cast<std::size_t>(c.index)];
+      return basis.reserve_row[constraint][point];
+    };
+    auto slack_of = [&](const StepRow& c) -> BasisStatus& {
+      if (!c.reserve) return basis.bound_slack[static_cast<std::size_t>(c.index)];
+      const auto [constraint, point] = reserve_id[static_cast<std::size_t>(c.index)];
+      return basis.reserve_slack[constraint][point];
+    };
+    // The step's linearized row at d (its value at theta + g . d).
+    auto linear_at = [&](const StepRow& c, const Eigen::VectorXd& d) {
+      return c.value + (c.reserve ? lp.G.row(c.index).dot(d) : jacobian.dot(static_cast<std::size_t>(c.index), d));
+    };
+    const auto closest = static_cast<std::size_t>(settings.closest_rows_per_coefficient * n);
+    std::vector<char> in = settings.working_set ? working_set(candidates, status_of, closest) : std::vector<char>(candidates.size(), 1);
     // Variables: d (n), then a slack for each row violated at theta (d = 0 meets the others, so
     // the LP stays feasible with far fewer columns). Each LP starts from the last LP's basis,
     // matched by row identity (bound row or reserve row).
-    basis.bound_row.resize(rows.value.size(), BasisStatus::Basic);
-    basis.bound_slack.resize(rows.value.size(), BasisStatus::AtLower);
-    std::vector<double> lp_lower;
-    std::vector<Eigen::Triplet<double>> entries;
-    std::vector<BasisStatus*> row_status, slack_status;  // where each LP row's and slack's status is kept
+    std::vector<int> lp_row(candidates.size(), -1);
     int slacks = 0;
-    auto add_row = [&](double lower, BasisStatus& status, BasisStatus& slack) {
-      const int r = static_cast<int>(lp_lower.size());
-      lp_lower.push_back(lower);
-      row_status.push_back(&status);
-      if (lower > 0.0) {
-        entries.emplace_back(r, n + slacks++, 1.0);
-        slack_status.push_back(&slack);
+    auto solve_step_lp = [&]() {
+      std::vector<double> lp_lower;
+      std::vector<Eigen::Triplet<double>> entries;
+      std::vector<BasisStatus*> row_status, slack_status;  // where each LP row's and slack's status is kept
+      slacks = 0;
+      for (std::size_t k = 0; k < candidates.size(); ++k) {
+        lp_row[k] = -1;
+        if (!in[k]) continue;
+        const StepRow& c = candidates[k];
+        const int r = static_cast<int>(lp_lower.size());
+        lp_row[k] = r;
+        lp_lower.push_back(-c.value);
+        row_status.push_back(&status_of(c));
+        if (c.value < 0.0) {
+          entries.emplace_back(r, n + slacks++, 1.0);
+          slack_status.push_back(&slack_of(c));
+        }
+        if (c.reserve) {
+          for (Eigen::Index col = 0; col < n; ++col)
+            if (lp.G(c.index, col) != 0.0) entries.emplace_back(r, col, lp.G(c.index, col));
+        } else {
+          jacobian.append_row(static_cast<std::size_t>(c.index), r, entries);
+        }
       }
-      return r;
+      const Eigen::Index vars = n + slacks, lp_rows = static_cast<Eigen::Index>(lp_lower.size());
+      SparseLinearProgram sub;
+      sub.cost.resize(vars);
+      sub.cost.head(n) = lp.cost;
+      sub.cost.tail(slacks).setConstant(penalty);
+      sub.x_lower.resize(vars);
+      sub.x_upper.resize(vars);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        sub.x_lower[i] = std::max(-radius, lp.x_lower[i] - theta[i]);
+        sub.x_upper[i] = std::min(radius, lp.x_upper[i] - theta[i]);
+      }
+      sub.x_lower.tail(slacks).setZero();
+      sub.x_upper.tail(slacks).setConstant(1e19);
+      sub.row_lower = Eigen::Map<const Eigen::VectorXd>(lp_lower.data(), lp_rows);
+      sub.row_upper = Eigen::VectorXd::Constant(lp_rows, 1e19);
+      sub.G.resize(lp_rows, vars);
+      sub.G.setFromTriplets(entries.begin(), entries.end());
+      SimplexBasis start;
+      start.variables = basis.step;
+      for (BasisStatus* status : slack_status) start.variables.push_back(*status);
+      for (BasisStatus* status : row_status) start.rows.push_back(*status);
+      LinearProgramResult result = solve_linear_program_simplex(sub, start);
+      std::copy_n(start.variables.begin(), n, basis.step.begin());
+      for (std::size_t k = 0; k < slack_status.size(); ++k) *slack_status[k] = start.variables[static_cast<std::size_t>(n) + k];
+      for (std::size_t k = 0; k < row_status.size(); ++k) *row_status[k] = start.rows[k];
+      out.lp_pivots += result.iterations;
+      ++out.lp_solves;
+      out.lp_rows += lp_rows;
+      return result;
     };
-    std::vector<int> lp_row_of(rows.value.size(), -1), reserve_lp_row;
-    for (int i : bound_rows_in) {
-      const auto k = static_cast<std::size_t>(i);
-      lp_row_of[k] = add_row(-rows.value[k], basis.bound_row[k], basis.bound_slack[k]);
-    }
-    for (const auto& t : rows.jacobian)
-      if (const int r = lp_row_of[static_cast<std::size_t>(t.row())]; r >= 0) entries.emplace_back(r, t.col(), t.value());
-    for (int r : reserve_rows_in) {
-      const auto [constraint, point] = reserve_id[static_cast<std::size_t>(r)];
-      const int row = add_row(-reserve_value[r], basis.reserve_row[constraint][point], basis.reserve_slack[constraint][point]);
-      reserve_lp_row.push_back(row);
-      for (Eigen::Index c = 0; c < n; ++c)
-        if (lp.G(r, c) != 0.0) entries.emplace_back(row, c, lp.G(r, c));
-    }
-    const Eigen::Index vars = n + slacks, lp_rows = static_cast<Eigen::Index>(lp_lower.size());
-    SparseLinearProgram sub;
-    sub.cost.resize(vars);
-    sub.cost.head(n) = lp.cost;
-    sub.cost.tail(slacks).setConstant(penalty);
-    sub.x_lower.resize(vars);
-    sub.x_upper.resize(vars);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      sub.x_lower[i] = std::max(-radius, lp.x_lower[i] - theta[i]);
-      sub.x_upper[i] = std::min(radius, lp.x_upper[i] - theta[i]);
-    }
-    sub.x_lower.tail(slacks).setZero();
-    sub.x_upper.tail(slacks).setConstant(1e19);
-    sub.row_lower = Eigen::Map<const Eigen::VectorXd>(lp_lower.data(), lp_rows);
-    sub.row_upper = Eigen::VectorXd::Constant(lp_rows, 1e19);
-    sub.G.resize(lp_rows, vars);
-    sub.G.setFromTriplets(entries.begin(), entries.end());
-    SimplexBasis start;
-    start.variables = basis.step;
-    for (BasisStatus* status : slack_status) start.variables.push_back(*status);
-    for (BasisStatus* status : row_status) start.rows.push_back(*status);
-    const LinearProgramResult step = solve_linear_program_simplex(sub, start);
-    std::copy_n(start.variables.begin(), n, basis.step.begin());
-    for (std::size_t k = 0; k < slack_status.size(); ++k) *slack_status[k] = start.variables[static_cast<std::size_t>(n) + k];
-    for (std::size_t k = 0; k < row_status.size(); ++k) *row_status[k] = start.rows[k];
-    out.lp_pivots += step.iterations;
-    if (step.status != SolveStatus::Solved) {
-      out.failure = "a step LP was not solved (Clp: " + step.solver_status + ")";
-      return out;
+    // Rows left out that the step's linearization would violate join, and the LP is solved again
+    // from its basis: the set only grows, and the last step is the LP's over every candidate.
+    LinearProgramResult step;
+    Eigen::VectorXd d;
+    for (;;) {
+      step = solve_step_lp();
+      if (step.status != SolveStatus::Solved) {
+        out.failure = "a step LP was not solved (Clp: " + step.solver_status + ")";
+        return out;
+      }
+      d = step.x.head(n);
+      bool joined = false;
+      for (std::size_t k = 0; k < candidates.size(); ++k)
+        if (!in[k] && linear_at(candidates[k], d) < 0.0) in[k] = joined = true;
+      if (!joined) break;
     }
     out.row_multipliers.assign(rows.value.size(), 0.0);
-    for (std::size_t i = 0; i < rows.value.size(); ++i)
-      if (lp_row_of[i] >= 0) out.row_multipliers[i] = std::max(0.0, step.row_multipliers[lp_row_of[i]]);
     out.linear_row_multipliers = Eigen::VectorXd::Zero(lp.G.rows());
-    for (std::size_t k = 0; k < reserve_rows_in.size(); ++k)
-      out.linear_row_multipliers[reserve_rows_in[k]] = std::max(0.0, step.row_multipliers[reserve_lp_row[k]]);
-    const Eigen::VectorXd d = step.x.head(n);
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+      if (lp_row[k] >= 0) {
+        const double y = std::max(0.0, step.row_multipliers[lp_row[k]]);
+        if (candidates[k].reserve) out.linear_row_multipliers[candidates[k].index] = y;
+        else out.row_multipliers[static_cast<std::size_t>(candidates[k].index)] = y;
+      }
     const bool lp_paid_violation = slacks > 0 && step.x.tail(slacks).sum() > kBoundMargin;
     // The predicted decrease from the linearized rows at d itself, not from the LP's slacks:
     // those carry the LP's own feasibility tolerance, which the penalty would magnify. The rows
     // left out are >= 0 at 0 and at d in the linearization: they add nothing.
-    Eigen::VectorXd linear_at_d = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rows.value.size()));
-    for (const auto& t : rows.jacobian) linear_at_d[t.row()] += t.value() * d[t.col()];
     double violation_now = 0.0, violation_at_d = 0.0;
-    for (int i : bound_rows_in) {
-      const double v = rows.value[static_cast<std::size_t>(i)];
-      violation_now += std::max(0.0, -v);
-      violation_at_d += std::max(0.0, -(v + linear_at_d[i]));
-    }
-    for (int r : reserve_rows_in) {
-      violation_now += std::max(0.0, -reserve_value[r]);
-      violation_at_d += std::max(0.0, -(reserve_value[r] + lp.G.row(r).dot(d)));
+    for (const StepRow& c : candidates) {
+      violation_now += std::max(0.0, -c.value);
+      violation_at_d += std::max(0.0, -linear_at(c, d));
     }
     const double predicted = penalty * (violation_now - violation_at_d) - lp.cost.dot(d);
     const double step_size = d.size() ? d.cwiseAbs().maxCoeff() : 0.0;
@@ -185,7 +275,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       phi = merit(theta, rows);
       return false;
     };
-    if (predicted <= relative_decrease * (1.0 + std::abs(phi))) {
+    if (predicted <= settings.relative_decrease * (1.0 + std::abs(phi))) {
       if (settle()) {
         out.converged = true;
         return out;
@@ -202,6 +292,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     if (accepted) {
       theta = trial;
       rows = std::move(trial_rows);
+      jacobian = JacobianByRow(rows);
       phi = trial_phi;
       // Near the solution steps shrink quadratically: a box a little larger than the last step
       // keeps only the rows that can become active in the next LP (far smaller LPs).
@@ -216,7 +307,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       radius = std::max(radius, 1e-6 * scale);
     }
   }
-  out.failure = "the sequential LP did not converge in " + std::to_string(max_iterations) + " iterations";
+  out.failure = "the sequential LP did not converge in " + std::to_string(settings.max_iterations) + " iterations";
   return out;
 }
 

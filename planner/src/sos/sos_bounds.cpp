@@ -74,7 +74,7 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       SlpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
       for (const auto& c : setup.constraints) linear.rows_per_group.push_back(c.points.size());
       const SlpOutcome slp = solve_bounds_by_slp(linear, bound_rows_of(flat, points, a_min, kBoundMargin), theta, radius,
-                                                 slp_basis, bo.max_slp_iterations);
+                                                 slp_basis, {bo.max_slp_iterations});
       result.bound_slp_iterations += slp.iterations;
       result.simplex_pivots += slp.lp_pivots;
       if (!slp.converged) {

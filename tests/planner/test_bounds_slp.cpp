@@ -1,0 +1,133 @@
+// The bounds' sequential LP on a problem of its shape, independent of muscles: a linear cost
+// over many smooth concave rows ">= 0" and linear reserve rows. Its step LPs over a working set
+// of rows must take the steps the LPs over every candidate row take, in far smaller LPs, and
+// end at a point that satisfies the KKT conditions.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "sos/bounds_slp.hpp"
+
+namespace fpd = flatsos::planner::detail;
+
+namespace {
+
+// r_i(x) = a_i . x - b_i - kappa_i / 2 |x - c|^2: concave, so the feasible set is convex and the
+// optimum of a positive cost over x >= 0 is unique.
+struct ConcaveRows {
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b, kappa, c;
+
+  ConcaveRows(int rows, int n, unsigned seed) : a(rows, n), b(rows), kappa(rows), c(Eigen::VectorXd::Constant(n, 3.0)) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int i = 0; i < rows; ++i) {
+      for (int j = 0; j < n; ++j) a(i, j) = 0.1 + unit(rng);
+      b[i] = 0.5 + unit(rng);
+      kappa[i] = 0.01 + 0.05 * unit(rng);
+    }
+  }
+
+  fpd::BoundRowsAt operator()(const Eigen::VectorXd& x, bool jacobian) const {
+    fpd::BoundRowsAt out;
+    for (Eigen::Index i = 0; i < a.rows(); ++i) {
+      const double v = a.row(i).dot(x) - b[i] - 0.5 * kappa[i] * (x - c).squaredNorm();
+      out.value.push_back(v);
+      out.violation += std::max(0.0, -v);
+      if (jacobian)
+        for (Eigen::Index j = 0; j < x.size(); ++j)
+          out.jacobian.emplace_back(static_cast<int>(i), static_cast<int>(j), a(i, j) - kappa[i] * (x[j] - c[j]));
+    }
+    return out;
+  }
+};
+
+struct Problem {
+  static constexpr int kVariables = 6, kRows = 400, kReserveRows = 60;
+  ConcaveRows rows{kRows, kVariables, 5};
+  flatsos::planner::LinearProgram lp;
+
+  Problem() {
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    lp.cost = Eigen::VectorXd::LinSpaced(kVariables, 1.0, 2.0);
+    lp.G.resize(kReserveRows, kVariables);
+    lp.row_lower.resize(kReserveRows);
+    for (int r = 0; r < kReserveRows; ++r) {
+      for (int j = 0; j < kVariables; ++j) lp.G(r, j) = unit(rng);
+      lp.row_lower[r] = 2.0 * unit(rng);
+    }
+    lp.row_upper = Eigen::VectorXd::Constant(kReserveRows, 1e19);
+    lp.x_lower = Eigen::VectorXd::Zero(kVariables);
+    lp.x_upper = Eigen::VectorXd::Constant(kVariables, 1e19);
+  }
+
+  struct Solved {
+    fpd::SlpOutcome outcome;
+    Eigen::VectorXd x;
+  };
+  Solved solve(bool working_set, int closest_rows_per_coefficient = 8) const {
+    const fpd::SlpLinearPart linear{lp, {static_cast<std::size_t>(kReserveRows)}, 1e-6};
+    Solved s{{}, Eigen::VectorXd::Zero(kVariables)};
+    double radius = 0.1;
+    fpd::SlpBasis basis;
+    fpd::SlpSettings settings;
+    settings.working_set = working_set;
+    settings.closest_rows_per_coefficient = closest_rows_per_coefficient;
+    s.outcome = fpd::solve_bounds_by_slp(linear, rows, s.x, radius, basis, settings);
+    return s;
+  }
+};
+
+}  // namespace
+
+TEST(BoundsSlp, AWorkingSetTakesTheFullStepLpsStepsInSmallerLps) {
+  const Problem problem;
+  const Problem::Solved full = problem.solve(false), working = problem.solve(true);
+  // Without the closest rows the set starts from the violated and active rows alone: rows join
+  // (LPs solved again) and the steps are still the same.
+  const Problem::Solved joined = problem.solve(true, 0);
+  ASSERT_TRUE(joined.outcome.converged) << joined.outcome.failure;
+  EXPECT_GT(joined.outcome.lp_solves, full.outcome.lp_solves);
+  EXPECT_EQ(joined.outcome.iterations, full.outcome.iterations);
+  EXPECT_LT((joined.x - full.x).cwiseAbs().maxCoeff(), 1e-9);
+  ASSERT_TRUE(full.outcome.converged) << full.outcome.failure;
+  ASSERT_TRUE(working.outcome.converged) << working.outcome.failure;
+  EXPECT_EQ(working.outcome.iterations, full.outcome.iterations);
+  EXPECT_LT((working.x - full.x).cwiseAbs().maxCoeff(), 1e-9);
+  // The working set's LPs, solved again where rows join, hold a fraction of the rows.
+  EXPECT_LT(working.outcome.lp_rows, full.outcome.lp_rows / 2)
+      << working.outcome.lp_rows << " rows in " << working.outcome.lp_solves << " LPs against " << full.outcome.lp_rows;
+  std::cout << "[ measure  ] " << full.outcome.iterations << " LP steps: " << full.outcome.lp_rows << " rows in "
+            << full.outcome.lp_solves << " LPs, with a working set " << working.outcome.lp_rows << " rows in "
+            << working.outcome.lp_solves << " LPs\n";
+}
+
+TEST(BoundsSlp, EndsAtAKktPointOfEveryRow) {
+  const Problem problem;
+  const Problem::Solved s = problem.solve(true);
+  ASSERT_TRUE(s.outcome.converged) << s.outcome.failure;
+  ASSERT_FALSE(s.outcome.rows_violated);
+  // Primal: every row, not only the working set's, holds to the margins the SLP imposes.
+  const fpd::BoundRowsAt at = problem.rows(s.x, true);
+  EXPECT_GE(*std::min_element(at.value.begin(), at.value.end()), -fpd::kBoundMargin);
+  EXPECT_GE((problem.lp.G * s.x - problem.lp.row_lower).minCoeff(), -1e-6);
+  EXPECT_GE(s.x.minCoeff(), 0.0);
+  // Dual: cost = J' lambda + G' mu + (multipliers of x >= 0), lambda, mu >= 0, complementary.
+  ASSERT_EQ(s.outcome.row_multipliers.size(), at.value.size());
+  Eigen::VectorXd residual = problem.lp.cost - problem.lp.G.transpose() * s.outcome.linear_row_multipliers;
+  for (const auto& t : at.jacobian) residual[t.col()] -= s.outcome.row_multipliers[static_cast<std::size_t>(t.row())] * t.value();
+  int active = 0;
+  for (std::size_t i = 0; i < at.value.size(); ++i) {
+    EXPECT_GE(s.outcome.row_multipliers[i], 0.0);
+    if (s.outcome.row_multipliers[i] > 0.0) {
+      ++active;
+      EXPECT_LT(std::abs(at.value[i]), 1e-6) << "row " << i << " has a multiplier but is not active";
+    }
+  }
+  EXPECT_GT(active, 0);
+  for (Eigen::Index j = 0; j < s.x.size(); ++j) {
+    if (s.x[j] > 1e-9) EXPECT_NEAR(residual[j], 0.0, 1e-6) << "coefficient " << j;
+    else EXPECT_GE(residual[j], -1e-6) << "coefficient " << j;  // x_j at its bound 0
+  }
+}
