@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Dense>
@@ -68,6 +69,29 @@ std::string DomainViolation::describe() const {
 
 namespace {
 
+// C = [A; E] factorized by partial pivoting (a fraction of the full-pivot LU's time, which
+// matters at 40 muscles and a dozen postures per receding-horizon step); where a pivot falls
+// below 1e-10 of the largest, the full-pivot LU decides the rank as before, with that threshold.
+class CouplingLu {
+ public:
+  explicit CouplingLu(const Eigen::MatrixXd& C) : partial_(C) {
+    const Eigen::VectorXd pivots = partial_.matrixLU().diagonal().cwiseAbs();
+    if (pivots.minCoeff() > 1e-10 * pivots.maxCoeff()) return;
+    full_.emplace(C);
+    full_->setThreshold(1e-10);
+  }
+  bool invertible() const { return !full_ || full_->isInvertible(); }
+  Eigen::Index rank() const { return full_ ? full_->rank() : partial_.rows(); }
+  Eigen::MatrixXd inverse() const { return full_ ? Eigen::MatrixXd(full_->inverse()) : Eigen::MatrixXd(partial_.inverse()); }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
+    return full_ ? Eigen::VectorXd(full_->solve(b)) : Eigen::VectorXd(partial_.solve(b));
+  }
+
+ private:
+  Eigen::PartialPivLU<Eigen::MatrixXd> partial_;
+  std::optional<Eigen::FullPivLU<Eigen::MatrixXd>> full_;
+};
+
 // The violated conditions of Assumption 1 for moment arms A and flat outputs E of the right
 // shapes (empty: it holds).
 std::vector<std::string> assumption1_failures(const Eigen::MatrixXd& A, const Eigen::MatrixXd& E) {
@@ -82,15 +106,15 @@ std::vector<std::string> assumption1_failures(const Eigen::MatrixXd& A, const Ei
       f << "condition 2: row " << i << " of E sums to " << E.row(i).sum() << ", not 1";
       failures.push_back(f.str());
     }
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
-  lu.setThreshold(1e-10);
-  if (!lu.isInvertible()) {
+  const CouplingLu lu(C);
+  if (!lu.invertible()) {
     failures.push_back("condition 1: C = [A; E] is singular (rank " + std::to_string(lu.rank()) +
                        " of " + std::to_string(m) + ")");
   } else {
-    const Eigen::MatrixXd Cinv = lu.inverse();
-    const Eigen::VectorXd margin =
-        Eigen::VectorXd::Ones(m) - Cinv.leftCols(n) * A.rowwise().sum();
+    // C_tau s_tau = C^-1 [s_tau; 0]: one solve instead of the inverse.
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+    rhs.head(n) = A.rowwise().sum();
+    const Eigen::VectorXd margin = Eigen::VectorXd::Ones(m) - lu.solve(rhs);
     for (Eigen::Index j = 0; j < m; ++j)
       if (!(margin[j] > 0.0)) {
         std::ostringstream f;
@@ -286,9 +310,8 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   const std::array<Eigen::MatrixXd, 3> R = moment_arm_jets(*model_, q_jet);
   Eigen::MatrixXd C(m, m);
   C << R[0], E_;
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
-  lu.setThreshold(1e-10);
-  if (!lu.isInvertible()) {
+  const CouplingLu lu(C);
+  if (!lu.invertible()) {
     throw FlatnessError("C(q) = [R(q); E] is singular at " + plugin::describe_posture(model_->description(), q_jet.col(0)) +
                         " (rank " + std::to_string(lu.rank()) + " of " + std::to_string(m) + "): the flat outputs "
                         "do not determine the tendon forces there");
@@ -314,11 +337,8 @@ Eigen::MatrixXd FlatOutputMap::forceJet(const Jet& q_jet, const Eigen::MatrixXd&
   const std::array<Eigen::MatrixXd, 3> R = moment_arm_jets(*model_, q_jet);
   Eigen::MatrixXd C(m, m);
   C << R[0], E_;
-  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(C);
-  // A pivot below 1e-10 of the largest: (nearly) singular, where forceJetMap's full-pivot LU
-  // decides and names the posture.
-  const Eigen::VectorXd pivots = lu.matrixLU().diagonal().cwiseAbs();
-  if (!(pivots.minCoeff() > 1e-10 * pivots.maxCoeff())) return forceJetMap(q_jet).forceJet(tau, Y);
+  const CouplingLu lu(C);
+  if (!lu.invertible()) return forceJetMap(q_jet).forceJet(tau, Y);  // throws, naming the posture
   Eigen::MatrixXd F(m, 3);
   Eigen::VectorXd rhs(m);
   rhs << tau.col(0), Y.col(0);
