@@ -106,6 +106,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
                           RecedingHorizonStep& step) {
   step.bounds_imposed = false;
   step.bound_iterations = 0;
+  step.bound_lp_pivots = 0;
   step.first_period_sampled = false;
   const PeriodExcitationBounds& b = o.excitation_bounds;
   if (!b.enforce || step.status != SolveStatus::Solved) return;
@@ -146,9 +147,10 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     if (violation(previous) < violation(alpha)) alpha = previous;
   }
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
-  SlpBasis basis;
-  const SlpOutcome slp = solve_bounds_by_slp(linear, rows, alpha, radius, basis, {b.max_iterations, kRelativeDecrease});
+  const SlpOutcome slp =
+      solve_bounds_by_slp(linear, rows, alpha, radius, step.buffers.bounds_basis, {b.max_iterations, kRelativeDecrease});
   step.bound_iterations = slp.iterations;
+  step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;
   step.slp.cost_N = lp.cost.dot(alpha);
   if (slp.converged) step.buffers.bounded_alpha = alpha;

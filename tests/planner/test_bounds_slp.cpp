@@ -70,7 +70,7 @@ struct Problem {
     const fpd::SlpLinearPart linear{lp, {static_cast<std::size_t>(kReserveRows)}, 1e-6};
     Solved s{{}, Eigen::VectorXd::Zero(kVariables)};
     double radius = 0.1;
-    fpd::SlpBasis basis;
+    flatsos::planner::SlpBasis basis;
     fpd::SlpSettings settings;
     settings.working_set = working_set;
     settings.closest_rows_per_coefficient = closest_rows_per_coefficient;

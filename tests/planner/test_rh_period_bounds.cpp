@@ -116,7 +116,8 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   // A controller plans into the same step every period: its bounds' sequential LP starts from
   // the last bounded alpha when that violates less than the SLP's optimum. The seated knee (13
   // muscles, 1 N reserves): most muscles' SLP optimum sits 100 N below their activation floor.
-  // Same optimum as a step planned afresh, in fewer LP steps.
+  // Same optimum as a step planned afresh, in fewer LP steps; and the LP basis it keeps from
+  // the last period saves simplex pivots over the same start without it.
   const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
   const fpl::FlatOutputMap flat(model);
   fp::ModelWorkspace ws = flat.makeWorkspace();
@@ -129,10 +130,19 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   ASSERT_EQ(reused.status, fpl::SolveStatus::Solved) << reused.message;
   ASSERT_TRUE(reused.bounds_imposed);
   ASSERT_EQ(reused.buffers.bounded_alpha, reused.alpha());
+  ASSERT_FALSE(reused.buffers.bounds_basis.bound_row.empty());
+  fpl::RecedingHorizonStep without_basis = reused;
+  without_basis.buffers.bounds_basis = fpl::SlpBasis{};
   // One period later.
   q[0] -= 0.05;
   qd[0] = -1.1;
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, reused);
+  fpl::plan_receding_horizon_step(flat, ws, q, qd, o, without_basis);
+  ASSERT_EQ(without_basis.status, fpl::SolveStatus::Solved) << without_basis.message;
+  EXPECT_NEAR(reused.slp.cost_N, without_basis.slp.cost_N, 1e-9 * without_basis.slp.cost_N);
+  EXPECT_LT(reused.bound_lp_pivots, without_basis.bound_lp_pivots);
+  std::cout << "[ measure  ] next period: " << reused.bound_iterations << " LP steps, " << reused.bound_lp_pivots
+            << " pivots; without the last basis " << without_basis.bound_lp_pivots << "\n";
   const auto fresh = fpl::plan_receding_horizon_step(flat, ws, q, qd, o);
   ASSERT_EQ(reused.status, fpl::SolveStatus::Solved) << reused.message;
   ASSERT_EQ(fresh.status, fpl::SolveStatus::Solved) << fresh.message;

@@ -21,14 +21,6 @@
 
 namespace flatsos::planner::detail {
 
-/// The last step LP's basis by row identity, kept across iterations and exchange rounds: each
-/// step LP differs from the last by a small move, so it restarts a few pivots from its optimum.
-struct SlpBasis {
-  std::vector<BasisStatus> step;                        // per free coefficient
-  std::vector<BasisStatus> bound_row, bound_slack;      // per bound row (point, muscle, row)
-  std::vector<std::vector<BasisStatus>> reserve_row, reserve_slack;  // per reserve constraint and point
-};
-
 struct SlpOutcome {
   bool converged = false;
   bool rows_violated = false;  // settled with imposed rows violated although the LP paid for it at the largest penalty

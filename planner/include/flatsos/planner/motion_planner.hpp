@@ -163,6 +163,7 @@ struct RecedingHorizonStep {
   /// LP moved alpha inside (cost raised); its LP steps.
   bool bounds_imposed = false;
   int bound_iterations = 0;
+  int bound_lp_pivots = 0;  ///< the simplex pivots of those LP steps
   /// buffers.excitations hold this step's excitations (alpha, path, offset as returned) on the
   /// bounds' samples of the first period, so a controller need not compute them again. Set by
   /// plan_receding_horizon_step; a planner that changes the step afterwards must clear it.
@@ -190,6 +191,9 @@ struct RecedingHorizonStep {
     /// The last alpha the bounds' sequential LP converged to: the next bounded step of a
     /// receding horizon may start there.
     Eigen::VectorXd bounded_alpha;
+    /// ... and its sequential LP's last basis, where the next one restarts (the rows keep their
+    /// identity from period to period: sample, muscle, bound).
+    SlpBasis bounds_basis;
   } buffers;
 };
 

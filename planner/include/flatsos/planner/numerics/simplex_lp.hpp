@@ -35,6 +35,15 @@ struct SimplexBasis {
   std::vector<BasisStatus> variables, rows;
 };
 
+/// The bounds' sequential LP's last step-LP basis by row identity, kept across its iterations,
+/// exchange rounds and receding-horizon periods: each step LP differs from the last by a small
+/// move, so it restarts a few pivots from its optimum.
+struct SlpBasis {
+  std::vector<BasisStatus> step;                                     ///< per free coefficient
+  std::vector<BasisStatus> bound_row, bound_slack;                   ///< per bound row (point, muscle, row)
+  std::vector<std::vector<BasisStatus>> reserve_row, reserve_slack;  ///< per reserve constraint and point
+};
+
 /// Starts from `basis` when its sizes match the LP (with as many basic entries as rows; a start
 /// with too many or too few is repaired), cold otherwise, and leaves the final basis in it.
 LinearProgramResult solve_linear_program_simplex(const SparseLinearProgram& lp, SimplexBasis& basis);
