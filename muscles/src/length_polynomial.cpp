@@ -1,5 +1,6 @@
 #include "flatsos/muscles/length_polynomial.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -94,6 +95,13 @@ LengthPolynomial::LengthPolynomial(int dimension, int order, std::vector<double>
     term_coefficient_.push_back(coefficients_[t]);
     term_exponents_.insert(term_exponents_.end(), exponents[t].begin(), exponents[t].end());
   }
+  std::vector<int> largest(static_cast<std::size_t>(dimension_), 0);
+  for (std::size_t i = 0; i < term_exponents_.size(); ++i) {
+    int& l = largest[i % static_cast<std::size_t>(dimension_)];
+    l = std::max(l, term_exponents_[i]);
+  }
+  power_row_.assign(1, 0);
+  for (int e : largest) power_row_.push_back(power_row_.back() + e + 1);
 }
 
 bool LengthPolynomial::independentOf(int k) const {
@@ -154,13 +162,43 @@ void LengthPolynomial::timeDerivatives(const double* x_jet, int count, double* o
     for (int j = 0; j < count; ++j) X[k][j] = x_jet[j * dimension_ + k] / factorial[j];
   double sum[kMaxJetCount] = {};
   double term[kMaxJetCount];
-  for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
-    term[0] = term_coefficient_[t];
-    for (int j = 1; j < count; ++j) term[j] = 0.0;
-    const int* e = term_exponents_.data() + t * dimension_;
-    for (int k = 0; k < dimension_; ++k)
-      for (int p = 0; p < e[k]; ++p) multiply_series(term, X[k], count);
-    for (int j = 0; j < count; ++j) sum[j] += term[j];
+  if (power_row_.back() <= kMaxPowerRows) {
+    // Each term: its coefficient times one series product per argument in it, from the table
+    // of powers (a univariate polynomial of degree d: d products in all, not d^2 / 2).
+    double power[kMaxPowerRows][kMaxJetCount];
+    for (int k = 0; k < dimension_; ++k) {
+      const int first = power_row_[static_cast<std::size_t>(k)], end = power_row_[static_cast<std::size_t>(k) + 1];
+      power[first][0] = 1.0;
+      for (int j = 1; j < count; ++j) power[first][j] = 0.0;
+      for (int row = first + 1; row < end; ++row) {
+        std::copy_n(power[row - 1], count, power[row]);
+        multiply_series(power[row], X[k], count);
+      }
+    }
+    for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
+      const int* e = term_exponents_.data() + t * dimension_;
+      bool started = false;
+      for (int k = 0; k < dimension_; ++k) {
+        if (e[k] == 0) continue;
+        const double* p = power[power_row_[static_cast<std::size_t>(k)] + e[k]];
+        if (started) multiply_series(term, p, count);
+        else std::copy_n(p, count, term);
+        started = true;
+      }
+      if (!started) sum[0] += term_coefficient_[t];
+      else
+        for (int j = 0; j < count; ++j) sum[j] += term_coefficient_[t] * term[j];
+    }
+  } else {
+    // Exponents too large for the table: one series product per unit of exponent.
+    for (std::size_t t = 0; t < term_coefficient_.size(); ++t) {
+      term[0] = term_coefficient_[t];
+      for (int j = 1; j < count; ++j) term[j] = 0.0;
+      const int* e = term_exponents_.data() + t * dimension_;
+      for (int k = 0; k < dimension_; ++k)
+        for (int p = 0; p < e[k]; ++p) multiply_series(term, X[k], count);
+      for (int j = 0; j < count; ++j) sum[j] += term[j];
+    }
   }
   for (int j = 0; j < count; ++j) out[j] = sum[j] * factorial[j];
 }

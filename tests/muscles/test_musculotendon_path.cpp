@@ -197,6 +197,34 @@ TEST(LengthPolynomial, TimeDerivativesAlongACurveMatchFiniteDifferencesInTime) {
   }
 }
 
+// The first two time derivatives by the chain rule through the partial-derivative polynomials,
+// an independent route: dP = sum_k P_k x_k', ddP = sum_kl P_kl x_k' x_l' + sum_k P_k x_k''.
+// Orders up to 40: the arguments' powers come from a table up to 64 rows and from repeated
+// products beyond it (two arguments to order 40 need 82 rows), the same numbers either way.
+TEST(LengthPolynomial, TimeDerivativesFollowTheChainRuleAtLowAndHighOrders) {
+  for (const auto& [d, o] : {std::pair{3, 4}, std::pair{1, 12}, std::pair{3, 20}, std::pair{2, 40}}) {
+    const fm::LengthPolynomial p(d, o, random_coefficients(d, o, 17));
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-0.9, 0.9);
+    std::vector<double> jet_in(static_cast<std::size_t>(3 * d));
+    for (double& v : jet_in) v = u(rng);
+    const double* x = jet_in.data();
+    const double *xd = x + d, *xdd = x + 2 * d;
+    double jet[3];
+    p.timeDerivatives(x, 3, jet);
+    double first = 0.0, second = 0.0;
+    for (int k = 0; k < d; ++k) {
+      const fm::LengthPolynomial pk = p.derivative(k);
+      first += pk.value(x) * xd[k];
+      second += pk.value(x) * xdd[k];
+      for (int l = 0; l < d; ++l) second += pk.derivative(l).value(x) * xd[k] * xd[l];
+    }
+    EXPECT_NEAR(jet[0], p.value(x), 1e-12 * (1.0 + std::abs(jet[0]))) << "d " << d << " o " << o;
+    EXPECT_NEAR(jet[1], first, 1e-11 * (1.0 + std::abs(first))) << "d " << d << " o " << o;
+    EXPECT_NEAR(jet[2], second, 1e-10 * (1.0 + std::abs(second))) << "d " << d << " o " << o;
+  }
+}
+
 TEST(LengthPolynomial, BadInputIsNamed) {
   try {
     fm::LengthPolynomial(2, 3, std::vector<double>(9, 0.0));

@@ -56,6 +56,11 @@ class LengthPolynomial {
   // The nonzero terms, for evaluation: coefficient and exponents (dimension_ per term).
   std::vector<double> term_coefficient_;
   std::vector<int> term_exponents_;
+  // timeDerivatives' table of the arguments' powers x_k^e (e up to the largest exponent of x_k
+  // in a term) as series: argument k's powers start at row power_row_[k]; dimension_ + 1
+  // entries, the last one the table's size.
+  std::vector<int> power_row_;
+  static constexpr int kMaxPowerRows = 64;  // a table on the stack: 3 arguments to order 20
 };
 
 }  // namespace flatsos::muscles
