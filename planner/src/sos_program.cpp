@@ -16,9 +16,10 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
   result.setup_seconds = setup_time.seconds();
 
   Eigen::VectorXd theta;
-  if (!detail::solve_by_exchange(setup, options, theta, result)) return result;
+  SlpBasis basis;
+  if (!detail::solve_by_exchange(setup, options, theta, result, &basis)) return result;
   if (muscles && options.bounds.enforce) {
-    const bool bounded = detail::impose_excitation_bounds(setup, *muscles, options, theta, result);
+    const bool bounded = detail::impose_excitation_bounds(setup, *muscles, options, theta, result, std::move(basis));
     result.solve_seconds += result.bounds_seconds;
     if (!bounded) return result;
   }

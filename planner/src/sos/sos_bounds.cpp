@@ -22,7 +22,7 @@ constexpr const char* kBoundsUnmet =
 }  // namespace
 
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosProgramOptions& o,
-                              Eigen::VectorXd& theta, SosProgramResult& result) {
+                              Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis) {
   const Stopwatch wall;
   const ExcitationBoundsOptions& bo = o.bounds;
   if (bo.check_points < 2) throw std::invalid_argument("SOS program: bounds need at least 2 check points");
@@ -61,7 +61,6 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
 
   double radius = 0.1 * (1.0 + theta.cwiseAbs().maxCoeff());
   bool last_rows_violated = false;
-  SlpBasis slp_basis;
   for (int round = 0; round < bo.max_rounds; ++round) {
     result.bound_rounds = round + 1;
     result.lp_points = build_exchange_rows(setup, o.feasibility_margin_N);
@@ -74,7 +73,7 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       SlpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
       for (const auto& c : setup.constraints) linear.rows_per_group.push_back(c.points.size());
       const SlpOutcome slp = solve_bounds_by_slp(linear, bound_rows_of(flat, points, a_min, kBoundMargin), theta, radius,
-                                                 slp_basis, {bo.max_slp_iterations});
+                                                 basis, {bo.max_slp_iterations});
       result.bound_slp_iterations += slp.iterations;
       result.simplex_pivots += slp.lp_pivots;
       if (!slp.converged) {

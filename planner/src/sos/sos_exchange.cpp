@@ -9,7 +9,8 @@
 
 namespace flatsos::planner::detail {
 
-bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::VectorXd& theta, SosProgramResult& result) {
+bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::VectorXd& theta, SosProgramResult& result,
+                       SlpBasis* final_basis) {
   const Stopwatch solve;
   auto& constraints = setup.constraints;
   const LinearProgram& lp = setup.lp;
@@ -89,6 +90,11 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
     break;
   }
   result.solve_seconds = solve.seconds();
+  if (final_basis) {
+    final_basis->step = theta_status;
+    final_basis->reserve_row = point_status;
+    final_basis->reserve_slack.assign(point_status.size(), {});
+  }
 
   if (const std::string reason = fixed_violation(setup, o.feasibility_margin_N); !reason.empty()) {
     result.status = SolveStatus::Infeasible;

@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include "flatsos/planner/numerics/simplex_lp.hpp"
+
 #include "sos/sos_setup.hpp"
 
 namespace flatsos::planner::detail {
@@ -11,9 +13,11 @@ namespace flatsos::planner::detail {
 /// Solves the semi-infinite LP by exchange: LPs on finitely many points (Clp's dual simplex, or
 /// Ipopt when the options say so), the exact minimum of every constraint polynomial
 /// adding violated points, until none is violated. Fills theta and the result's status, message,
-/// counts and solve_seconds; returns whether a feasible optimum was found.
+/// counts and solve_seconds; returns whether a feasible optimum was found. `basis`, when given,
+/// receives the last LP's basis by row identity (the coefficients', every constraint point's):
+/// the bounds' sequential LP starts from it.
 bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& options, Eigen::VectorXd& theta,
-                       SosProgramResult& result);
+                       SosProgramResult& result, SlpBasis* basis = nullptr);
 
 /// Lukacs certificates (one Ipopt problem) for the pieces whose constraint minimum is below
 /// options.near_active_N; fills the certification fields and certify_seconds.
