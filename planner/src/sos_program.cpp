@@ -17,8 +17,10 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
 
   Eigen::VectorXd theta;
   SlpBasis basis;
-  if (!detail::solve_by_exchange(setup, options, theta, result, &basis)) return result;
-  if (muscles && options.bounds.enforce) {
+  const bool bounds = muscles && options.bounds.enforce;
+  const double tolerance_N = bounds ? detail::kLooseConstraintTolerance_N : detail::kConstraintTolerance_N;
+  if (!detail::solve_by_exchange(setup, options, theta, result, &basis, tolerance_N)) return result;
+  if (bounds) {
     const bool bounded = detail::impose_excitation_bounds(setup, *muscles, options, theta, result, std::move(basis));
     result.solve_seconds += result.bounds_seconds;
     if (!bounded) return result;

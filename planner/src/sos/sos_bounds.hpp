@@ -11,7 +11,9 @@
 
 namespace flatsos::planner::detail {
 
-/// Starts from theta (the reserves-only optimum). When a bound is violated on the check grid,
+/// Starts from theta (the reserves-only optimum, its exchange stopped at
+/// kLooseConstraintTolerance_N: where the bounds hold there on every tenth grid time, the
+/// reserves' exchange is finished first, from its points and `basis`). When a bound is violated on the check grid,
 /// solves the bounded NLP (and re-runs the reserves' exchange inside it) until the grid and the
 /// constraint polynomials hold. Fills the bound fields of `result` and, when it fails, status and
 /// message; returns whether theta is a bounded, reserve-feasible optimum. `basis`: where the

@@ -10,7 +10,7 @@
 namespace flatsos::planner::detail {
 
 bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::VectorXd& theta, SosProgramResult& result,
-                       SlpBasis* final_basis) {
+                       SlpBasis* final_basis, double tolerance_N) {
   const Stopwatch solve;
   auto& constraints = setup.constraints;
   const LinearProgram& lp = setup.lp;
@@ -85,7 +85,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
           }
       }
     }
-    if (add_violated_points(setup, theta, o.feasibility_margin_N, result.min_constraint_value_N)) continue;
+    if (add_violated_points(setup, theta, o.feasibility_margin_N, result.min_constraint_value_N, tolerance_N)) continue;
     converged = true;
     break;
   }
@@ -101,7 +101,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
     result.message = reason;
     return false;
   }
-  if (!converged || result.min_constraint_value_N < -1e-6) {
+  if (!converged || result.min_constraint_value_N < -std::max(1e-6, tolerance_N)) {
     result.status = SolveStatus::Failed;
     std::ostringstream why;
     why << "the exchange method did not converge in " << o.max_exchange_rounds << " rounds (worst constraint value "

@@ -314,13 +314,14 @@ int build_exchange_rows(SosSetup& setup, double margin_N) {
   return static_cast<int>(rows);
 }
 
-bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double margin_N, double& min_value_N) {
+bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double margin_N, double& min_value_N,
+                         double tolerance_N) {
   bool added = false;
   min_value_N = 1e300;
   for (auto& c : setup.constraints) {
     const IntervalMinimum mn = minimum_on_interval(c.at(theta), 0.0, 1.0);
     min_value_N = std::min(min_value_N, mn.value);
-    if (mn.value < -kConstraintTolerance_N) {
+    if (mn.value < -tolerance_N) {
       const auto known = std::find_if(c.points.begin(), c.points.end(), [&](double s) { return std::abs(s - mn.at) < 1e-9; });
       if (known == c.points.end()) {
         c.points.push_back(mn.at);
