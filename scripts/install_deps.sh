@@ -9,6 +9,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
+  python3-dev pybind11-dev python3-pybind11 python3-pytest
 )
 if [[ "${FLATSOS_SANITIZE:-0}" == 1 ]]; then packages+=(clang libclang-rt-14-dev); fi
 

@@ -5,9 +5,10 @@
 # breaks stop at flatsos' guards with their explanation: `using namespace SimTK;` before a header
 # that includes Eigen, and NDEBUG without the package's -UNDEBUG. Finally runs the installed
 # programs from a moved copy of the prefix, elsewhere: they find their models there.
-# Usage: BUILD_DIR SOURCE_DIR
+# With a Python interpreter given, the installed Python package is imported from the prefix.
+# Usage: BUILD_DIR SOURCE_DIR [PYTHON]
 set -euo pipefail
-build=$1 src=$2
+build=$1 src=$2 python=${3:-}
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 cmake --install "$build" --prefix "$tmp/prefix" >/dev/null
 cmake -S "$src/tests/package/consumer" -B "$tmp/consumer" -DCMAKE_PREFIX_PATH="$tmp/prefix" \
@@ -39,6 +40,19 @@ for f in bin/arm_forward bin/arm_open_loop bin/arm_receding_horizon bin/flatsos_
   [[ -e "$tmp/prefix/$f" ]] || { echo "FAILED: $f not installed"; fail=1; }
 done
 ls "$tmp"/prefix/lib*/cmake/flatsos/flatsosConfig.cmake >/dev/null || { echo "FAILED: no CMake package"; fail=1; }
+if [[ -n $python ]]; then
+  site=$(ls -d "$tmp"/prefix/lib*/python3*/dist-packages 2>/dev/null | head -1)
+  if [[ -z $site ]]; then
+    echo "FAILED: the Python package is not installed"; fail=1
+  elif ! (cd "$tmp" && PYTHONPATH=$site "$python" -c "
+import flatsos
+arm = flatsos.Model('$tmp/prefix/share/flatsos/models/arm_richter_warner.json')
+plan = flatsos.plan_open_loop(arm, [0, 0.2], [0, 0], None, [1.5, 0], 3.0, 10.0)
+assert flatsos.__file__.startswith('$site'), flatsos.__file__
+assert plan.status == 'solved', plan.message"); then
+    echo "FAILED: the installed Python package does not plan"; fail=1
+  fi
+fi
 mv "$tmp/prefix" "$tmp/moved"
 mkdir "$tmp/work" && cd "$tmp/work"
 if ! "$tmp/moved/bin/arm_open_loop" --out ol >/dev/null 2>&1; then

@@ -1,0 +1,16 @@
+"""flatsos from Python: minimum-effort muscle excitations of musculoskeletal models by
+differential flatness and sum-of-squares programming, with numpy arrays in and out.
+
+SI units throughout (radians, seconds, newtons). Bad input raises ValueError with the
+library's message; the C++ core releases the GIL while it plans.
+
+    import numpy as np, flatsos
+    arm = flatsos.Model("models/arm_richter_warner.json")
+    plan = flatsos.plan_open_loop(arm, q0=np.radians([0, 10]), qd0=[0, 0], a0=None,
+                                  target=np.radians([90, 0]), duration=3.0, reserves=10.0)
+    plan.status, plan.cost, plan.sample(np.linspace(0, 3, 301))["excitation"]
+"""
+
+from ._flatsos import Model, OpenLoopPlan, plan_open_loop
+
+__all__ = ["Model", "OpenLoopPlan", "plan_open_loop"]

@@ -1,0 +1,28 @@
+#pragma once
+// The Python module flatsos._flatsos: each file registers one part of the API.
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
+#include <memory>
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>  // every file the same casters: std::vector, std::optional, Eigen
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
+
+namespace flatsos::python {
+
+/// A model file loaded, with its flat-output map (built once: at 40 muscles without flat outputs
+/// in the file, the library's choice takes about a second).
+struct Model {
+  std::shared_ptr<const plugin::MusculoskeletalModel> model;
+  std::shared_ptr<const planner::FlatOutputMap> flat;
+};
+
+void register_model(pybind11::module_& m);
+void register_open_loop(pybind11::module_& m);
+
+}  // namespace flatsos::python

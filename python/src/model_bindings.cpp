@@ -1,0 +1,50 @@
+#include "bindings.hpp"
+
+#include <string>
+#include <vector>
+
+namespace py = pybind11;
+
+namespace flatsos::python {
+
+namespace {
+Model load(const std::string& path) {
+  Model out;
+  py::gil_scoped_release release;  // the flat-output choice may take a second
+  out.model = plugin::MusculoskeletalModel::fromFile(path);
+  out.flat = std::make_shared<const planner::FlatOutputMap>(out.model);
+  return out;
+}
+}  // namespace
+
+void register_model(py::module_& m) {
+  py::class_<Model>(m, "Model", "A flatsos model file (JSON): its joints, muscles and flat-output map.")
+      .def(py::init(&load), py::arg("path"),
+           "Loads the model file; a bad file, or flat outputs that violate Assumption 1, raise ValueError.")
+      .def_property_readonly(
+          "name", [](const Model& self) { return self.model->description().name; })
+      .def_property_readonly(
+          "joints",
+          [](const Model& self) {
+            std::vector<std::string> names;
+            for (const auto& j : self.model->description().joints) names.push_back(j.name);
+            return names;
+          },
+          "joint names, in model order")
+      .def_property_readonly(
+          "muscles",
+          [](const Model& self) {
+            std::vector<std::string> names;
+            for (const auto& mu : self.model->description().muscles) names.push_back(mu.parameters.name);
+            return names;
+          },
+          "muscle names, in model order")
+      .def_property_readonly(
+          "flat_outputs", [](const Model& self) { return self.flat->numFlatOutputs(); }, "number of flat outputs")
+      .def("__repr__", [](const Model& self) {
+        return "<flatsos.Model '" + self.model->description().name + "': " + std::to_string(self.model->numJoints()) +
+               " joints, " + std::to_string(self.model->numMuscles()) + " muscles>";
+      });
+}
+
+}  // namespace flatsos::python

@@ -1,0 +1,7 @@
+#include "bindings.hpp"
+
+PYBIND11_MODULE(_flatsos, m) {
+  m.doc() = "flatsos: minimum-effort muscle excitations by differential flatness and SOS programming (C++ core)";
+  flatsos::python::register_model(m);
+  flatsos::python::register_open_loop(m);
+}

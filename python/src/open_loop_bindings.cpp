@@ -1,0 +1,164 @@
+// flatsos.plan_open_loop and the plan it returns.
+#include "bindings.hpp"
+
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/rest_state.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
+
+namespace py = pybind11;
+
+namespace flatsos::python {
+
+namespace {
+
+// A number (for every entry, when `broadcast`) or a sequence of `n` numbers, as a vector; a
+// ValueError naming the argument otherwise.
+Eigen::VectorXd vector_argument(const py::handle& x, Eigen::Index n, const std::string& name, bool broadcast = false) {
+  const std::string expected = std::to_string(n) + (broadcast ? " numbers or one number" : " numbers");
+  if (py::isinstance<py::str>(x) || x.is_none()) throw py::value_error(name + ": expected " + expected);
+  std::vector<double> v;
+  try {
+    if (py::hasattr(x, "__len__")) v = py::cast<std::vector<double>>(x);
+    else if (broadcast) v.assign(static_cast<std::size_t>(n), py::cast<double>(x));
+    else throw py::value_error(name + ": expected " + expected + ", got one number");
+  } catch (const py::cast_error&) {
+    throw py::value_error(name + ": expected " + expected);
+  }
+  if (static_cast<Eigen::Index>(v.size()) != n)
+    throw py::value_error(name + ": expected " + expected + ", got " + std::to_string(v.size()));
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), n);
+}
+
+// The plan and what it needs to be evaluated later.
+struct Plan {
+  std::shared_ptr<const plugin::MusculoskeletalModel> model;
+  std::shared_ptr<const planner::FlatOutputMap> flat;
+  planner::OpenLoopPlan plan;
+};
+
+Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
+                    const py::object& target, double duration, const py::object& reserves, int flat_output_degree,
+                    int flat_output_spans, int torque_pieces, int torque_degree, bool bounds) {
+  const plugin::MusculoskeletalModel& model = *m.model;
+  const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
+  const Eigen::VectorXd q0_rad = vector_argument(q0, joints, "q0"), qd0_rad_per_s = vector_argument(qd0, joints, "qd0");
+  const Eigen::VectorXd target_rad = vector_argument(target, joints, "target");
+  const Eigen::VectorXd reserves_N = vector_argument(reserves, muscles, "reserves", true);
+  std::optional<Eigen::VectorXd> activations;
+  if (!a0.is_none()) activations = vector_argument(a0, muscles, "a0");
+  if (!(duration > 0.0) || !std::isfinite(duration)) throw py::value_error("duration: must be a positive number of seconds");
+  if (activations && !((activations->array() > 0.0).all() && (activations->array() <= 1.0).all()))
+    throw py::value_error("a0: activations must lie in (0, 1]");
+
+  planner::OpenLoopOptions o;
+  o.duration_s = duration;
+  o.target_q_rad = target_rad;
+  o.reserves_N = reserves_N;
+  o.sos.flat_output_degree = flat_output_degree;
+  o.sos.flat_output_spans = flat_output_spans;
+  o.torque.pieces = torque_pieces;
+  o.torque.degree = torque_degree;
+  o.sos.bounds.enforce = bounds;
+  Plan out{m.model, m.flat, {}};
+  py::gil_scoped_release release;
+  // As the programs start: the given activations with tendons in static equilibrium, or the
+  // minimum-effort rest state at q0.
+  SimTK::State s = model.defaultState();
+  if (activations) {
+    model.setJointAngles(s, q0_rad);
+    plugin::equilibrate_tendons(model, s, *activations);
+    model.setExcitations(s, *activations);
+  } else {
+    planner::set_minimum_effort_rest_state(*m.flat, s, q0_rad, reserves_N);
+  }
+  model.setJointSpeeds(s, qd0_rad_per_s);
+  out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(model, s), o);
+  return out;
+}
+
+py::dict sample(const Plan& self, const Eigen::VectorXd& times) {
+  if (self.plan.status != planner::SolveStatus::Solved || !self.plan.Y)
+    throw py::value_error(std::string("the plan is ") + planner::to_string(self.plan.status) + ", nothing to sample: " +
+                          self.plan.message);
+  const double T = self.plan.path.duration_s;
+  for (Eigen::Index i = 0; i < times.size(); ++i)
+    if (!(times[i] >= 0.0 && times[i] <= T))
+      throw py::value_error("times: " + std::to_string(times[i]) + " s is outside the plan's [0, " + std::to_string(T) + "] s");
+  const Eigen::Index n = times.size(), joints = self.model->numJoints(), muscles = self.model->numMuscles();
+  using Table = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  Table q(n, joints), activation(n, muscles), excitation(n, muscles), force(n, muscles);
+  {
+    py::gil_scoped_release release;
+    plugin::ModelWorkspace workspace = self.flat->makeWorkspace();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const planner::Jet qj = self.plan.jointJet(times[i]);
+      const planner::MusclePoint p = self.flat->inverse(workspace, qj, self.plan.flatOutputJet(times[i]));
+      q.row(i) = qj.col(0).transpose();
+      activation.row(i) = p.activation.transpose();
+      excitation.row(i) = p.excitation.transpose();
+      force.row(i) = p.tendon_force_N.transpose();
+    }
+  }
+  py::dict out;
+  out["time"] = times;
+  out["q"] = q;
+  out["activation"] = activation;
+  out["excitation"] = excitation;
+  out["tendon_force"] = force;
+  return out;
+}
+
+}  // namespace
+
+void register_open_loop(py::module_& m) {
+  py::class_<Plan>(m, "OpenLoopPlan", "An open-loop plan: its status, cost and samples.")
+      .def_property_readonly("status", [](const Plan& p) { return std::string(planner::to_string(p.plan.status)); },
+                             "'solved', 'infeasible' or 'failed'")
+      .def_property_readonly("message", [](const Plan& p) { return p.plan.message; }, "why, when not solved")
+      .def_property_readonly(
+          "cost",
+          [](const Plan& p) -> std::optional<double> {
+            if (p.plan.status != planner::SolveStatus::Solved) return std::nullopt;
+            return p.plan.sos.cost_N_s;
+          },
+          "the effort, N s (None when not solved)")
+      .def_property_readonly("duration", [](const Plan& p) { return p.plan.path.duration_s; }, "s")
+      .def_property_readonly("warnings", [](const Plan& p) { return p.plan.warnings; })
+      .def_property_readonly(
+          "seconds",
+          [](const Plan& p) {
+            py::dict d;
+            d["setup"] = p.plan.setup_seconds;
+            d["solve"] = p.plan.solve_seconds;
+            d["certify"] = p.plan.certify_seconds;
+            d["check"] = p.plan.check_seconds;
+            return d;
+          },
+          "where the planning time went, s")
+      .def("sample", &sample, py::arg("times"),
+           "The plan at `times` (s, within [0, duration]): a dict of numpy arrays 'time', 'q' (rad, one row per "
+           "time, one column per joint), 'activation', 'excitation' and 'tendon_force' (N; one column per muscle).")
+      .def("__repr__", [](const Plan& p) {
+        return std::string("<flatsos.OpenLoopPlan ") + planner::to_string(p.plan.status) +
+               (p.plan.status == planner::SolveStatus::Solved ? ", " + std::to_string(p.plan.sos.cost_N_s) + " N s" : "") + ">";
+      });
+
+  m.def("plan_open_loop", &plan_open_loop, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
+        py::arg("target"), py::arg("duration"), py::arg("reserves"), py::kw_only(), py::arg("flat_output_degree") = 4,
+        py::arg("flat_output_spans") = 1, py::arg("torque_pieces") = 12, py::arg("torque_degree") = 3,
+        py::arg("bounds") = true,
+        "Minimum-effort open-loop plan from the initial state to rest at `target` in `duration` s.\n"
+        "q0, qd0, target: rad and rad/s, one per joint; a0: initial activations in (0, 1], one per muscle, with "
+        "tendons in static equilibrium (None: the minimum-effort rest state at q0); reserves: minimum tendon "
+        "force, N, one number or one per muscle. Keywords: the flat outputs' B-spline degree and spans (4 and 1: "
+        "the paper's quartic), the torque model's pieces and degree, and whether excitations and activations are "
+        "kept within their bounds. Bad input raises ValueError; the GIL is released while planning.");
+}
+
+}  // namespace flatsos::python

@@ -1,0 +1,102 @@
+"""flatsos.Model and flatsos.plan_open_loop against the C++ program on the same inputs, the
+plan's samples against its boundary conditions and bounds, and every error path."""
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import flatsos
+
+
+def test_a_model_names_its_joints_and_muscles_in_model_order(arm, knee):
+    model, _ = arm
+    assert model.joints == ["shoulder", "elbow"]
+    assert model.muscles == ["anterior_deltoid", "posterior_deltoid", "biceps", "triceps_long", "triceps_short",
+                             "brachialis"]
+    assert model.flat_outputs == 4
+    knee_model, _ = knee
+    assert knee_model.joints == ["walker_knee_r"]  # OpenSim's joint (its coordinate: knee_angle_r)
+    assert len(knee_model.muscles) == 13 and knee_model.flat_outputs == 12  # chosen by the library
+
+
+@pytest.mark.parametrize("name", ["arm", "knee"])
+def test_the_plan_costs_what_the_cpp_program_plans(name, request, build_dir, models_dir, tmp_path):
+    model, scenario = request.getfixturevalue(name)
+    model_file = {"arm": "arm_richter_warner.json", "knee": "seated_knee_r.json"}[name]
+    plan = scenario.plan(model)
+    assert plan.status == "solved", plan.message
+    program = subprocess.run([str(build_dir / "bin" / "arm_open_loop"), "--model", str(models_dir / model_file),
+                              "--out", str(tmp_path)], capture_output=True, text=True)
+    assert program.returncode == 0, program.stderr
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert plan.cost == pytest.approx(summary["cost_Ns"], rel=1e-9)
+
+
+def test_samples_start_at_the_initial_state_end_at_the_target_and_keep_every_bound(arm):
+    model, scenario = arm
+    plan = scenario.plan(model)
+    times = np.linspace(0.0, scenario.duration, 301)
+    s = plan.sample(times)
+    assert set(s) == {"time", "q", "activation", "excitation", "tendon_force"}
+    assert s["q"].shape == (301, 2) and s["activation"].shape == (301, 6)
+    np.testing.assert_allclose(s["time"], times)
+    np.testing.assert_allclose(s["q"][0], scenario.q0, atol=1e-12)
+    np.testing.assert_allclose(s["q"][-1], scenario.target, atol=1e-9)
+    np.testing.assert_allclose(s["activation"][0], scenario.a0, atol=1e-9)
+    assert s["excitation"].min() >= -1e-6 and s["excitation"].max() <= 1.0 + 1e-6
+    assert s["activation"].min() > 0.0 and s["activation"].max() <= 1.0 + 1e-6
+    assert s["tendon_force"].min() >= scenario.reserves - 1e-6
+
+
+def test_an_infeasible_plan_says_so_and_has_no_cost_or_samples(arm):
+    model, scenario = arm
+    # The paper's single torque box: at t = 0 the initial state fixes Y and the box's half-width
+    # costs the anterior deltoid more guaranteed force than it has.
+    plan = scenario.plan(model, torque_pieces=1, torque_degree=0)
+    assert plan.status == "infeasible"
+    assert plan.message
+    assert plan.cost is None
+    with pytest.raises(ValueError, match="infeasible"):
+        plan.sample([0.0])
+
+
+def test_without_initial_activations_the_plan_starts_from_the_minimum_effort_rest(arm):
+    model, scenario = arm
+    plan = flatsos.plan_open_loop(model, scenario.q0, [0.0, 0.0], None, scenario.target, scenario.duration, 10.0)
+    assert plan.status == "solved", plan.message
+    assert plan.cost > 0.0
+
+
+@pytest.mark.parametrize("field, change, words", [
+    ("q0", {"q0": [0.0]}, "q0: expected 2 numbers, got 1"),
+    ("qd0", {"qd0": "fast"}, "qd0: expected 2 numbers"),
+    ("a0", {"a0": [0.5] * 5}, "a0: expected 6 numbers, got 5"),
+    ("a0", {"a0": [0.0] * 6}, "a0: activations must lie in (0, 1]"),
+    ("target", {"target": 1.0}, "target: expected 2 numbers, got one number"),
+    ("duration", {"duration": -3.0}, "duration: must be a positive number"),
+    ("duration", {"duration": float("nan")}, "duration: must be a positive number"),
+    ("reserves", {"reserves": [1.0, 2.0]}, "reserves: expected 6 numbers or one number, got 2"),
+    ("reserves", {"reserves": -1.0}, "reserve"),
+])
+def test_bad_input_raises_a_value_error_naming_the_field(arm, field, change, words):
+    model, scenario = arm
+    args = dict(q0=scenario.q0, qd0=scenario.qd0, a0=scenario.a0, target=scenario.target, duration=scenario.duration,
+                reserves=scenario.reserves)
+    args.update(change)
+    with pytest.raises(ValueError) as error:
+        flatsos.plan_open_loop(model, **args)
+    assert words in str(error.value)
+
+
+def test_a_bad_model_file_or_sample_time_raises_a_value_error(arm, tmp_path):
+    with pytest.raises(ValueError, match="cannot be opened"):
+        flatsos.Model(str(tmp_path / "missing.json"))
+    broken = tmp_path / "broken.json"
+    broken.write_text("{ not json")
+    with pytest.raises(ValueError, match="broken.json"):
+        flatsos.Model(str(broken))
+    model, scenario = arm
+    plan = scenario.plan(model)
+    with pytest.raises(ValueError, match="outside the plan's"):
+        plan.sample([scenario.duration + 0.1])
