@@ -4,6 +4,7 @@
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
 #include <memory>
+#include <string>
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -11,6 +12,7 @@
 #include <pybind11/stl.h>  // every file the same casters: std::vector, std::optional, Eigen
 
 #include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::python {
@@ -22,7 +24,21 @@ struct Model {
   std::shared_ptr<const planner::FlatOutputMap> flat;
 };
 
+/// An open-loop plan, the model it was made for, and the state it starts from (what simulating
+/// it needs).
+struct Plan {
+  std::shared_ptr<const plugin::MusculoskeletalModel> model;
+  std::shared_ptr<const planner::FlatOutputMap> flat;
+  planner::OpenLoopPlan plan;
+  SimTK::State initial;
+};
+
+/// A vector from a number (for every entry, when `broadcast`) or a sequence of `n` numbers; a
+/// ValueError naming the argument otherwise.
+Eigen::VectorXd vector_argument(const pybind11::handle& x, Eigen::Index n, const std::string& name, bool broadcast = false);
+
 void register_model(pybind11::module_& m);
 void register_open_loop(pybind11::module_& m);
+void register_simulation(pybind11::module_& m);
 
 }  // namespace flatsos::python

@@ -4,4 +4,5 @@ PYBIND11_MODULE(_flatsos, m) {
   m.doc() = "flatsos: minimum-effort muscle excitations by differential flatness and SOS programming (C++ core)";
   flatsos::python::register_model(m);
   flatsos::python::register_open_loop(m);
+  flatsos::python::register_simulation(m);
 }

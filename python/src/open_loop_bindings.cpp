@@ -17,31 +17,6 @@ namespace flatsos::python {
 
 namespace {
 
-// A number (for every entry, when `broadcast`) or a sequence of `n` numbers, as a vector; a
-// ValueError naming the argument otherwise.
-Eigen::VectorXd vector_argument(const py::handle& x, Eigen::Index n, const std::string& name, bool broadcast = false) {
-  const std::string expected = std::to_string(n) + (broadcast ? " numbers or one number" : " numbers");
-  if (py::isinstance<py::str>(x) || x.is_none()) throw py::value_error(name + ": expected " + expected);
-  std::vector<double> v;
-  try {
-    if (py::hasattr(x, "__len__")) v = py::cast<std::vector<double>>(x);
-    else if (broadcast) v.assign(static_cast<std::size_t>(n), py::cast<double>(x));
-    else throw py::value_error(name + ": expected " + expected + ", got one number");
-  } catch (const py::cast_error&) {
-    throw py::value_error(name + ": expected " + expected);
-  }
-  if (static_cast<Eigen::Index>(v.size()) != n)
-    throw py::value_error(name + ": expected " + expected + ", got " + std::to_string(v.size()));
-  return Eigen::Map<const Eigen::VectorXd>(v.data(), n);
-}
-
-// The plan and what it needs to be evaluated later.
-struct Plan {
-  std::shared_ptr<const plugin::MusculoskeletalModel> model;
-  std::shared_ptr<const planner::FlatOutputMap> flat;
-  planner::OpenLoopPlan plan;
-};
-
 Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
                     const py::object& target, double duration, const py::object& reserves, int flat_output_degree,
                     int flat_output_spans, int torque_pieces, int torque_degree, bool bounds) {
@@ -65,7 +40,7 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
   o.torque.pieces = torque_pieces;
   o.torque.degree = torque_degree;
   o.sos.bounds.enforce = bounds;
-  Plan out{m.model, m.flat, {}};
+  Plan out{m.model, m.flat, {}, {}};
   py::gil_scoped_release release;
   // As the programs start: the given activations with tendons in static equilibrium, or the
   // minimum-effort rest state at q0.
@@ -79,6 +54,7 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
   }
   model.setJointSpeeds(s, qd0_rad_per_s);
   out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(model, s), o);
+  out.initial = s;
   return out;
 }
 
