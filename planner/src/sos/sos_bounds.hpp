@@ -11,14 +11,14 @@
 
 namespace flatsos::planner::detail {
 
-/// Starts from theta (the reserves-only optimum, its exchange stopped at
-/// kLooseConstraintTolerance_N: where the bounds hold there on every tenth grid time, the
-/// reserves' exchange is finished first, from its points and `basis`). When a bound is violated on the check grid,
-/// solves the bounded NLP (and re-runs the reserves' exchange inside it) until the grid and the
-/// constraint polynomials hold. Fills the bound fields of `result` and, when it fails, status and
-/// message; returns whether theta is a bounded, reserve-feasible optimum. `basis`: where the
-/// sequential LP's step LPs start (the exchange's last basis: most reserve rows keep their
-/// status, and the first step LP took 484 pivots from scratch on the arm at T = 1.5 s).
+/// Starts from theta, the reserves-only optimum with its exchange stopped at
+/// kLooseConstraintTolerance_N; where the bounds hold there on every tenth grid time, the
+/// reserves' exchange is finished first (from its points and `basis`). When a bound is violated
+/// on the check grid, solves the bounded NLP (and re-runs the reserves' exchange inside it) until
+/// the grid and the constraint polynomials hold. Fills the bound fields of `result` and, when it
+/// fails, status and message; returns whether theta is a bounded, reserve-feasible optimum.
+/// `basis`: the exchange's last basis, where the sequential LP's step LPs start (most reserve rows
+/// keep their status; from scratch the first step LP took 484 pivots on the arm at T = 1.5 s).
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& muscles, const SosProgramOptions& options,
                               Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis = {});
 

@@ -30,6 +30,11 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
   // stays (rows follow the constraints' points in order), new points start inactive.
   std::vector<BasisStatus> theta_status(static_cast<std::size_t>(n_theta), BasisStatus::AtLower);
   std::vector<std::vector<BasisStatus>> point_status(constraints.size());
+  if (final_basis && final_basis->step.size() == theta_status.size() && final_basis->reserve_row.size() == constraints.size()) {
+    // A second call goes on from the first one's basis (points it added since start inactive).
+    theta_status = final_basis->step;
+    point_status = final_basis->reserve_row;
+  }
   auto solve_round = [&](int round) -> bool {
     LinearProgramResult lr;
     if (o.study.lp_solver == ExchangeLpSolver::Simplex) {

@@ -15,7 +15,7 @@ namespace flatsos::planner::detail {
 /// adding violated points, until none is violated. Fills theta and the result's status, message,
 /// counts and solve_seconds; returns whether a feasible optimum was found. `basis`, when given,
 /// receives the last LP's basis by row identity (the coefficients', every constraint point's):
-/// the bounds' sequential LP starts from it. `tolerance_N`: how far below 0 a constraint's
+/// the bounds' sequential LP starts from it, and so does a second call (when it fits). `tolerance_N`: how far below 0 a constraint's
 /// minimum may stay (kLooseConstraintTolerance_N: a start for the bounds' exchange, which
 /// finishes the reserves'). A second call goes on from the points the first one left.
 bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& options, Eigen::VectorXd& theta,
