@@ -33,6 +33,9 @@ struct Plan {
   SimTK::State initial;
 };
 
+/// What the module returns as a numpy array of one row per time.
+using Table = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
 /// A vector from a number (for every entry, when `broadcast`) or a sequence of `n` numbers; a
 /// ValueError naming the argument otherwise.
 Eigen::VectorXd vector_argument(const pybind11::handle& x, Eigen::Index n, const std::string& name, bool broadcast = false);

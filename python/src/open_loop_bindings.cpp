@@ -3,11 +3,8 @@
 
 #include <cmath>
 #include <optional>
-#include <stdexcept>
 #include <string>
-#include <vector>
 
-#include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 
@@ -67,7 +64,6 @@ py::dict sample(const Plan& self, const Eigen::VectorXd& times) {
     if (!(times[i] >= 0.0 && times[i] <= T))
       throw py::value_error("times: " + std::to_string(times[i]) + " s is outside the plan's [0, " + std::to_string(T) + "] s");
   const Eigen::Index n = times.size(), joints = self.model->numJoints(), muscles = self.model->numMuscles();
-  using Table = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   Table q(n, joints), activation(n, muscles), excitation(n, muscles), force(n, muscles);
   {
     py::gil_scoped_release release;

@@ -14,8 +14,6 @@ namespace flatsos::python {
 
 namespace {
 
-using Table = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
 py::dict simulate_plan(const Plan& p, double accuracy, const std::string& integrator, int reports) {
   if (p.plan.status != planner::SolveStatus::Solved || !p.plan.Y)
     throw py::value_error(std::string("the plan is ") + planner::to_string(p.plan.status) + ", nothing to simulate: " +

@@ -12,23 +12,6 @@ namespace flatsos::planner::detail {
 namespace {
 constexpr double kInitialPenalty = 1e4, kMaxPenalty = 1e12;
 
-// The smallest box |d| <= r in which the linearization at theta clears every violated row:
-// row v + g.d >= 0 needs r >= -v / |g|_1. A start far from feasibility (a receding-horizon step's
-// SLP optimum, 100 N below the activation floors) then takes a Newton step at once instead of
-// doubling a small radius for ten iterations.
-double linear_reach(const LinearProgram& lp, const BoundRowsAt& rows, const Eigen::VectorXd& theta) {
-  std::vector<double> norm(rows.value.size(), 0.0);
-  for (const auto& t : rows.jacobian) norm[static_cast<std::size_t>(t.row())] += std::abs(t.value());
-  double reach = 0.0;
-  for (std::size_t i = 0; i < rows.value.size(); ++i)
-    if (rows.value[i] < 0.0 && norm[i] > 0.0) reach = std::max(reach, -rows.value[i] / norm[i]);
-  for (Eigen::Index r = 0; r < lp.G.rows(); ++r) {
-    const double value = lp.G.row(r).dot(theta) - lp.row_lower[r], row_norm = lp.G.row(r).cwiseAbs().sum();
-    if (value < 0.0 && row_norm > 0.0) reach = std::max(reach, -value / row_norm);
-  }
-  return reach;
-}
-
 // The bound rows' Jacobian by rows, built from its triplets in O(nonzeros) whatever their order:
 // the step LPs take a few of its rows, and every row's norm and step are needed.
 class JacobianByRow {
@@ -44,12 +27,11 @@ class JacobianByRow {
       column_[k] = t.col();
       value_[k] = t.value();
     }
+    l1_.assign(rows.value.size(), 0.0);
+    for (std::size_t i = 0; i < l1_.size(); ++i)
+      for (int k = start_[i]; k < start_[i + 1]; ++k) l1_[i] += std::abs(value_[static_cast<std::size_t>(k)]);
   }
-  double l1(std::size_t row) const {
-    double sum = 0.0;
-    for (int k = start_[row]; k < start_[row + 1]; ++k) sum += std::abs(value_[static_cast<std::size_t>(k)]);
-    return sum;
-  }
+  double l1(std::size_t row) const { return l1_[row]; }
   double dot(std::size_t row, const Eigen::VectorXd& d) const {
     double sum = 0.0;
     for (int k = start_[row]; k < start_[row + 1]; ++k) sum += value_[static_cast<std::size_t>(k)] * d[column_[static_cast<std::size_t>(k)]];
@@ -62,8 +44,24 @@ class JacobianByRow {
 
  private:
   std::vector<int> start_, column_;
-  std::vector<double> value_;
+  std::vector<double> value_, l1_;  // l1_: each row's norm (every iteration's box test asks for it)
 };
+
+// The smallest box |d| <= r in which the linearization at theta clears every violated row:
+// row v + g.d >= 0 needs r >= -v / |g|_1. A start far from feasibility (a receding-horizon step's
+// SLP optimum, 100 N below the activation floors) then takes a Newton step at once instead of
+// doubling a small radius for ten iterations.
+double linear_reach(const LinearProgram& lp, const BoundRowsAt& rows, const JacobianByRow& jacobian,
+                    const Eigen::VectorXd& reserve_norm, const Eigen::VectorXd& theta) {
+  double reach = 0.0;
+  for (std::size_t i = 0; i < rows.value.size(); ++i)
+    if (rows.value[i] < 0.0 && jacobian.l1(i) > 0.0) reach = std::max(reach, -rows.value[i] / jacobian.l1(i));
+  for (Eigen::Index r = 0; r < lp.G.rows(); ++r) {
+    const double value = lp.G.row(r).dot(theta) - lp.row_lower[r];
+    if (value < 0.0 && reserve_norm[r] > 0.0) reach = std::max(reach, -value / reserve_norm[r]);
+  }
+  return reach;
+}
 
 // A row of a step LP, value + g . d >= 0: a bound row (index into the nonlinear rows) or a
 // reserve row (index into the linear part's lp.G), with the l1 norm of its g.
@@ -119,7 +117,9 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     return lp.cost.dot(x) + penalty * (r.violation + reserve_violation_N(lp, x));
   };
   double phi = merit(theta, rows);
-  radius = std::max(radius, linear_reach(lp, rows, theta));
+  const Eigen::VectorXd reserve_norm = lp.G.rows() ? Eigen::VectorXd(lp.G.cwiseAbs().rowwise().sum()) : Eigen::VectorXd();
+  JacobianByRow jacobian(rows);
+  radius = std::max(radius, linear_reach(lp, rows, jacobian, reserve_norm, theta));
   basis.step.resize(static_cast<std::size_t>(n), BasisStatus::AtLower);
   // Reserve row r of lp is row k of group c (rows in that order; rounds append rows to groups):
   // their statuses are kept per group and row.
@@ -135,8 +135,6 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
   }
   if (reserve_id.size() != static_cast<std::size_t>(lp.G.rows()))
     throw std::logic_error("bounds SLP: the reserve rows do not match their groups");
-  const Eigen::VectorXd reserve_norm = lp.G.rows() ? Eigen::VectorXd(lp.G.cwiseAbs().rowwise().sum()) : Eigen::VectorXd();
-  JacobianByRow jacobian(rows);
   for (; out.iterations < settings.max_iterations; ++out.iterations) {
     // Rows that cannot reach zero inside the box are left out of this LP.
     const Eigen::VectorXd reserve_value = lp.G.rows() ? Eigen::VectorXd(lp.G * theta - lp.row_lower) : Eigen::VectorXd();
