@@ -105,22 +105,10 @@ int main(int argc, char** argv) {
     const Eigen::VectorXd q_final = model->jointAngles(run.final_state) / ex::kRadPerDeg;
     // The task: reach the target and stay within 1 deg of it, with every plan solved. A run that
     // fails it still writes its (complete) files, says why in the summary and exits 1.
-    std::vector<std::string> failures;
-    if (!finite) failures.push_back("the simulation became non-finite");
-    if (finite && settling < 0.0)
-      failures.push_back("never settled within 1 deg of the target in " + ex::format(duration) + " s (final error " +
-                         ex::format((q_final - target / ex::kRadPerDeg).cwiseAbs().maxCoeff()) + " deg)");
-    const auto& history = controller.history();
-    const auto first_failed = std::find_if(history.begin(), history.end(),
-                                           [](const auto& r) { return r.status != fpl::SolveStatus::Solved; });
-    if (first_failed != history.end())
-      failures.push_back(std::to_string(controller.planFailures()) + " of " + std::to_string(steps) +
-                         " plans failed (the previous plan's tail ran instead), the first at t = " +
-                         ex::format(first_failed->time_s) + " s: " + first_failed->message);
     std::string message;
-    for (const auto& f : failures) message += (message.empty() ? "" : "; ") + f;
+    for (const auto& f : rh_run.failures) message += (message.empty() ? "" : "; ") + f;
     nlohmann::json summary;
-    summary["success"] = failures.empty();
+    summary["success"] = rh_run.success();
     summary["message"] = message;
     summary["final_q_deg"] = std::vector<double>(q_final.data(), q_final.data() + n);
     summary["target_q_deg"] = std::vector<double>(n);
@@ -170,7 +158,7 @@ int main(int argc, char** argv) {
               << controller.boundedSteps() << "\n  median step "
               << 1e3 * ex::median(step_times) << " ms, real-time factor " << run.real_time_factor << "\n  wrote " << out_dir
               << "/{simulation.sto, simulation_controls.sto, predictions/step_*.sto, summary.json}\n";
-    if (!failures.empty()) {
+    if (!rh_run.success()) {
       std::cerr << "arm_receding_horizon: task failed: " << message << "\n";
       return 1;
     }

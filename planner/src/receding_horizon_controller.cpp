@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "flatsos/plugin/model/plausibility.hpp"
@@ -201,9 +202,30 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
   RecedingHorizonRun run;
   run.loop = plugin::simulate_closed_loop(controller.plant(), controller, initial, o);
   run.predictions = prediction_tables(controller);
+  const Eigen::VectorXd& target = controller.options().plan.target_q_rad;
   if (run.loop.finite)
-    run.settling_time_s = plugin::settling_time(controller.plant(), run.loop.states, controller.options().plan.target_q_rad,
-                                                settle_tolerance_rad);
+    run.settling_time_s = plugin::settling_time(controller.plant(), run.loop.states, target, settle_tolerance_rad);
+  const auto text = [](double x) {
+    std::ostringstream out;
+    out << x;
+    return out.str();
+  };
+  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+  if (!run.loop.finite) run.failures.push_back("the simulation became non-finite");
+  if (run.loop.finite && run.settling_time_s < 0.0) {
+    const double error_rad = (controller.plant().jointAngles(run.loop.final_state) - target).cwiseAbs().maxCoeff();
+    run.failures.push_back("never settled within " + text(settle_tolerance_rad * kDegPerRad) + " deg of the target in " +
+                           text(o.duration_s) + " s (final error " + text(error_rad * kDegPerRad) + " deg)");
+  }
+  if (controller.planFailures() > 0) {
+    std::string failed = std::to_string(controller.planFailures()) + " of " + std::to_string(controller.steps()) +
+                         " plans failed (the previous plan's tail ran instead)";
+    const auto& history = controller.history();
+    const auto first = std::find_if(history.begin(), history.end(),
+                                    [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
+    if (first != history.end()) failed += ", the first at t = " + text(first->time_s) + " s: " + first->message;
+    run.failures.push_back(failed);
+  }
   return run;
 }
 

@@ -11,6 +11,6 @@ library's message; the C++ core releases the GIL while it plans.
     plan.status, plan.cost, plan.sample(np.linspace(0, 3, 301))["excitation"]
 """
 
-from ._flatsos import Model, OpenLoopPlan, plan_open_loop, simulate_plan
+from ._flatsos import Model, OpenLoopPlan, plan_open_loop, run_receding_horizon, simulate_plan
 
-__all__ = ["Model", "OpenLoopPlan", "plan_open_loop", "simulate_plan"]
+__all__ = ["Model", "OpenLoopPlan", "plan_open_loop", "run_receding_horizon", "simulate_plan"]

@@ -1,8 +1,12 @@
-// Python arguments into the library's types.
+// Python arguments into the library's types, and the library's tables out as numpy arrays.
 #include "bindings.hpp"
 
 #include <string>
 #include <vector>
+
+#include "flatsos/planner/rest_state.hpp"
+#include "flatsos/plugin/io/state_table.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace py = pybind11;
 
@@ -22,6 +26,53 @@ Eigen::VectorXd vector_argument(const py::handle& x, Eigen::Index n, const std::
   if (static_cast<Eigen::Index>(v.size()) != n)
     throw py::value_error(name + ": expected " + expected + ", got " + std::to_string(v.size()));
   return Eigen::Map<const Eigen::VectorXd>(v.data(), n);
+}
+
+std::optional<Eigen::VectorXd> activations_argument(const py::handle& a0, Eigen::Index muscles) {
+  if (a0.is_none()) return std::nullopt;
+  Eigen::VectorXd a = vector_argument(a0, muscles, "a0");
+  if (!((a.array() > 0.0).all() && (a.array() <= 1.0).all())) throw py::value_error("a0: activations must lie in (0, 1]");
+  return a;
+}
+
+SimTK::State initial_state(const planner::FlatOutputMap& flat, const Eigen::VectorXd& q0_rad,
+                           const Eigen::VectorXd& qd0_rad_per_s, const std::optional<Eigen::VectorXd>& activations,
+                           const Eigen::VectorXd& reserves_N) {
+  const plugin::MusculoskeletalModel& model = flat.model();
+  SimTK::State s = model.defaultState();
+  if (activations) {
+    model.setJointAngles(s, q0_rad);
+    plugin::equilibrate_tendons(model, s, *activations);
+    model.setExcitations(s, *activations);
+  } else {
+    planner::set_minimum_effort_rest_state(flat, s, q0_rad, reserves_N);
+  }
+  model.setJointSpeeds(s, qd0_rad_per_s);
+  return s;
+}
+
+Eigen::VectorXd column_vector(const plugin::StoTable& table, const std::string& label) {
+  const std::vector<double> c = table.column(label);
+  return Eigen::Map<const Eigen::VectorXd>(c.data(), static_cast<Eigen::Index>(c.size()));
+}
+
+Table columns_table(const plugin::StoTable& table, const std::vector<std::string>& labels) {
+  Table out(static_cast<Eigen::Index>(table.rows.size()), static_cast<Eigen::Index>(labels.size()));
+  for (std::size_t k = 0; k < labels.size(); ++k) out.col(static_cast<Eigen::Index>(k)) = column_vector(table, labels[k]);
+  return out;
+}
+
+std::vector<std::string> joint_value_columns(const plugin::MusculoskeletalModel& model) {
+  std::vector<std::string> labels;
+  for (int i = 0; i < model.numJoints(); ++i) labels.push_back(plugin::coordinate_value_column(model, i));
+  return labels;
+}
+
+std::vector<std::string> muscle_columns(const plugin::MusculoskeletalModel& model, const std::string& suffix) {
+  std::vector<std::string> labels;
+  for (int j = 0; j < model.numMuscles(); ++j)
+    labels.push_back("/forceset/" + model.muscle(j).getParameters().name + suffix);
+  return labels;
 }
 
 }  // namespace flatsos::python

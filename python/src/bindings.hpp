@@ -4,7 +4,9 @@
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -13,6 +15,7 @@
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/plugin/io/sto_file.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::python {
@@ -40,8 +43,26 @@ using Table = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMa
 /// ValueError naming the argument otherwise.
 Eigen::VectorXd vector_argument(const pybind11::handle& x, Eigen::Index n, const std::string& name, bool broadcast = false);
 
+/// a0 of the API: None, or one activation in (0, 1] per muscle (a ValueError otherwise).
+std::optional<Eigen::VectorXd> activations_argument(const pybind11::handle& a0, Eigen::Index muscles);
+
+/// The state the programs start from: q0 and qd0 with the given activations and their tendons in
+/// static equilibrium, or (no activations) the minimum-effort rest state at q0 for `reserves_N`.
+SimTK::State initial_state(const planner::FlatOutputMap& flat, const Eigen::VectorXd& q0_rad,
+                           const Eigen::VectorXd& qd0_rad_per_s, const std::optional<Eigen::VectorXd>& activations,
+                           const Eigen::VectorXd& reserves_N);
+
+/// A table's columns as numpy-ready arrays (std::out_of_range naming an absent label).
+Eigen::VectorXd column_vector(const plugin::StoTable& table, const std::string& label);
+Table columns_table(const plugin::StoTable& table, const std::vector<std::string>& labels);
+/// The state table's labels of each joint's angle, and of each muscle's `suffix` ("" in a
+/// controls table: the excitation).
+std::vector<std::string> joint_value_columns(const plugin::MusculoskeletalModel& model);
+std::vector<std::string> muscle_columns(const plugin::MusculoskeletalModel& model, const std::string& suffix);
+
 void register_model(pybind11::module_& m);
 void register_open_loop(pybind11::module_& m);
 void register_simulation(pybind11::module_& m);
+void register_receding_horizon(pybind11::module_& m);
 
 }  // namespace flatsos::python

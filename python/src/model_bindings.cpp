@@ -15,6 +15,20 @@ Model load(const std::string& path) {
   out.flat = std::make_shared<const planner::FlatOutputMap>(out.model);
   return out;
 }
+// The model with each muscle's maximum isometric force multiplied by its factor (the same flat
+// outputs: E does not depend on strength, and the library's choice need not run again).
+Model with_strength(const Model& self, const py::object& factors) {
+  const Eigen::VectorXd f = vector_argument(factors, self.model->numMuscles(), "factors", true);
+  if (!(f.array() > 0.0).all() || !f.allFinite()) throw py::value_error("factors: must be positive numbers");
+  plugin::ModelDescription description = self.model->description();
+  for (int j = 0; j < description.numMuscles(); ++j) description.muscles[j].parameters.max_isometric_force_N *= f[j];
+  Model out;
+  py::gil_scoped_release release;
+  out.model = std::make_shared<const plugin::MusculoskeletalModel>(std::move(description));
+  out.flat = std::make_shared<const planner::FlatOutputMap>(out.model, self.flat->E());
+  return out;
+}
+
 }  // namespace
 
 void register_model(py::module_& m) {
@@ -41,6 +55,17 @@ void register_model(py::module_& m) {
           "muscle names, in model order")
       .def_property_readonly(
           "flat_outputs", [](const Model& self) { return self.flat->numFlatOutputs(); }, "number of flat outputs")
+      .def_property_readonly(
+          "max_isometric_forces",
+          [](const Model& self) {
+            Eigen::VectorXd f(self.model->numMuscles());
+            for (int j = 0; j < self.model->numMuscles(); ++j) f[j] = self.model->muscle(j).getParameters().max_isometric_force_N;
+            return f;
+          },
+          "each muscle's maximum isometric force, N (model order)")
+      .def("with_strength", &with_strength, py::arg("factors"),
+           "A copy with each muscle's maximum isometric force multiplied by its factor (one number for all, or one "
+           "per muscle; positive), with the same flat outputs. Bad factors raise ValueError.")
       .def("__repr__", [](const Model& self) {
         return "<flatsos.Model '" + self.model->description().name + "': " + std::to_string(self.model->numJoints()) +
                " joints, " + std::to_string(self.model->numMuscles()) + " muscles>";

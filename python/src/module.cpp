@@ -5,4 +5,5 @@ PYBIND11_MODULE(_flatsos, m) {
   flatsos::python::register_model(m);
   flatsos::python::register_open_loop(m);
   flatsos::python::register_simulation(m);
+  flatsos::python::register_receding_horizon(m);
 }

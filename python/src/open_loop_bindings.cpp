@@ -5,8 +5,6 @@
 #include <optional>
 #include <string>
 
-#include "flatsos/planner/rest_state.hpp"
-#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace py = pybind11;
 
@@ -22,11 +20,8 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
   const Eigen::VectorXd q0_rad = vector_argument(q0, joints, "q0"), qd0_rad_per_s = vector_argument(qd0, joints, "qd0");
   const Eigen::VectorXd target_rad = vector_argument(target, joints, "target");
   const Eigen::VectorXd reserves_N = vector_argument(reserves, muscles, "reserves", true);
-  std::optional<Eigen::VectorXd> activations;
-  if (!a0.is_none()) activations = vector_argument(a0, muscles, "a0");
+  const std::optional<Eigen::VectorXd> activations = activations_argument(a0, muscles);
   if (!(duration > 0.0) || !std::isfinite(duration)) throw py::value_error("duration: must be a positive number of seconds");
-  if (activations && !((activations->array() > 0.0).all() && (activations->array() <= 1.0).all()))
-    throw py::value_error("a0: activations must lie in (0, 1]");
 
   planner::OpenLoopOptions o;
   o.duration_s = duration;
@@ -39,17 +34,7 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
   o.sos.bounds.enforce = bounds;
   Plan out{m.model, m.flat, {}, {}};
   py::gil_scoped_release release;
-  // As the programs start: the given activations with tendons in static equilibrium, or the
-  // minimum-effort rest state at q0.
-  SimTK::State s = model.defaultState();
-  if (activations) {
-    model.setJointAngles(s, q0_rad);
-    plugin::equilibrate_tendons(model, s, *activations);
-    model.setExcitations(s, *activations);
-  } else {
-    planner::set_minimum_effort_rest_state(*m.flat, s, q0_rad, reserves_N);
-  }
-  model.setJointSpeeds(s, qd0_rad_per_s);
+  const SimTK::State s = initial_state(*m.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
   out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(model, s), o);
   out.initial = s;
   return out;

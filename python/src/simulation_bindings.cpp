@@ -34,21 +34,10 @@ py::dict simulate_plan(const Plan& p, double accuracy, const std::string& integr
     for (int j = 0; j < model.numMuscles(); ++j) model.muscle(j).setExcitationSignal(s, excitation->signal(j));
     sim = plugin::simulate(model, s, so);
   }
-  const Eigen::Index rows = static_cast<Eigen::Index>(sim.states.rows.size());
-  Table q(rows, model.numJoints()), activation(rows, model.numMuscles());
-  for (int i = 0; i < model.numJoints(); ++i) {
-    const std::vector<double> c = sim.states.column(plugin::coordinate_value_column(model, i));
-    q.col(i) = Eigen::Map<const Eigen::VectorXd>(c.data(), rows);
-  }
-  for (int j = 0; j < model.numMuscles(); ++j) {
-    const std::vector<double> c = sim.states.column("/forceset/" + model.muscle(j).getParameters().name + "/activation");
-    activation.col(j) = Eigen::Map<const Eigen::VectorXd>(c.data(), rows);
-  }
-  const std::vector<double> time = sim.states.column("time");
   py::dict out;
-  out["time"] = Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(time.data(), rows));
-  out["q"] = q;
-  out["activation"] = activation;
+  out["time"] = column_vector(sim.states, "time");
+  out["q"] = columns_table(sim.states, joint_value_columns(model));
+  out["activation"] = columns_table(sim.states, muscle_columns(model, "/activation"));
   out["finite"] = sim.finite;
   out["message"] = sim.message;
   out["integrator_steps"] = sim.integrator_steps;

@@ -59,6 +59,7 @@ TEST(PaperScenarios, RecedingHorizonSettlesAtTheTarget) {
   ASSERT_GE(outcome.run.settling_time_s, 0.0) << "never settled within 1 deg";
   EXPECT_LT(outcome.run.settling_time_s, 1.5);
   EXPECT_LT(outcome.final_error_deg, 0.1);
+  EXPECT_TRUE(outcome.run.success()) << outcome.run.failures.front();
   EXPECT_GT(run.real_time_factor, 0.0);  // reported; its size is the benchmark's business
   // Every step's plan starts where the arm is and ends at the target.
   for (const auto& rec : controller.history()) {

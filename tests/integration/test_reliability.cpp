@@ -247,6 +247,11 @@ TEST(Reliability, RecedingHorizonRunsOnThePreviousPlanWhenStepsFailAndRecovers) 
   EXPECT_EQ(h[9].status, fpl::SolveStatus::Solved);  // recovers
   ASSERT_GE(run.settling_time_s, 0.0);
   EXPECT_LT(outcome.final_error_deg, 1.0);
+  // Settled, but the task failed: the run says so, with the first failure's time and message.
+  EXPECT_FALSE(run.success());
+  ASSERT_EQ(run.failures.size(), 1u);
+  EXPECT_EQ(run.failures[0].rfind("4 of " + std::to_string(controller.steps()) + " plans failed", 0), 0u) << run.failures[0];
+  EXPECT_NE(run.failures[0].find("the first at t = 0.25 s: injected failure"), std::string::npos) << run.failures[0];
 }
 
 class ExtremeExcitations : public ::testing::TestWithParam<std::tuple<int, fp::IntegratorKind>> {};

@@ -146,6 +146,11 @@ struct RecedingHorizonRun {
   /// (the step's time + tau), each joint's coordinate value and speed (state-table columns).
   std::vector<plugin::StoTable> predictions;
   double settling_time_s = -1.0;  ///< every joint within the tolerance of the target from then on; -1: never
+  /// Why the task failed, one sentence each: the run became non-finite, never settled, or some
+  /// plans failed (the first one's time and message, when the controller keeps its history).
+  /// Empty: the task (reach the target, stay within the tolerance, every plan solved) succeeded.
+  std::vector<std::string> failures;
+  bool success() const { return failures.empty(); }
 };
 RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, const SimTK::State& initial,
                                         const plugin::ClosedLoopOptions& options,

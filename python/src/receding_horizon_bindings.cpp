@@ -1,0 +1,123 @@
+// flatsos.run_receding_horizon: the closed loop (the controller on a Simbody plant).
+#include "bindings.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/plugin/integration/stepper.hpp"
+
+namespace py = pybind11;
+
+namespace flatsos::python {
+
+namespace {
+
+planner::SlpSolver slp_solver_from_name(const std::string& name) {
+  if (name == "exact") return planner::SlpSolver::VertexEnumeration;
+  if (name == "simplex") return planner::SlpSolver::Simplex;
+  if (name == "ipopt") return planner::SlpSolver::Ipopt;
+  throw py::value_error("solver: unknown SLP solver '" + name + "' (exact, simplex or ipopt)");
+}
+
+py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::object& target, double duration,
+                              const py::object& qd0, const py::object& a0, const py::object& reserves, double horizon,
+                              int grid_points, double period, const std::string& solver, bool bounds,
+                              double observer_gain, const std::string& integrator, const py::object& accuracy,
+                              const py::object& plant, double settle_tolerance) {
+  const plugin::MusculoskeletalModel& model = *m.model;
+  const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
+  const Eigen::VectorXd q0_rad = vector_argument(q0, joints, "q0"), target_rad = vector_argument(target, joints, "target");
+  const Eigen::VectorXd qd0_rad_per_s = qd0.is_none() ? Eigen::VectorXd::Zero(joints) : vector_argument(qd0, joints, "qd0");
+  const Eigen::VectorXd reserves_N = vector_argument(reserves, muscles, "reserves", true);
+  const std::optional<Eigen::VectorXd> activations = activations_argument(a0, muscles);
+  if (!(duration > 0.0) || !std::isfinite(duration)) throw py::value_error("duration: must be a positive number of seconds");
+  if (!(settle_tolerance > 0.0)) throw py::value_error("settle_tolerance: must be a positive angle, rad");
+
+  planner::RecedingHorizonControllerOptions options;
+  options.plan.horizon_s = horizon;
+  options.plan.grid_points = grid_points;
+  options.plan.target_q_rad = target_rad;
+  options.plan.reserves_N = reserves_N;
+  options.plan.solver = slp_solver_from_name(solver);
+  options.plan.excitation_bounds.enforce = bounds;
+  options.control_period_s = period;
+  options.disturbance_observer_gain_per_s = observer_gain;
+  plugin::ClosedLoopOptions loop;
+  loop.duration_s = duration;
+  loop.integrator = plugin::integrator_from_name(integrator);  // std::invalid_argument (ValueError) naming the choices
+  // The program's defaults (arm_receding_horizon): 1e-5 for the muscle Rosenbrock method, else 1e-8.
+  loop.accuracy = !accuracy.is_none()                                            ? py::cast<double>(accuracy)
+                  : loop.integrator == plugin::IntegratorKind::MuscleRosenbrock ? 1e-5
+                                                                                 : 1e-8;
+  if (!(loop.accuracy > 0.0 && loop.accuracy <= 1e-3)) throw py::value_error("accuracy: must lie in (0, 1e-3]");
+  std::shared_ptr<const plugin::MusculoskeletalModel> plant_model;
+  if (!plant.is_none()) {
+    if (!py::isinstance<Model>(plant)) throw py::value_error("plant: expected a flatsos.Model");
+    plant_model = plant.cast<const Model&>().model;
+  }
+
+  py::dict out;
+  planner::RecedingHorizonRun run;
+  std::vector<std::string> warnings;
+  int plan_failures = 0, steps = 0, clamped = 0, bounded = 0;
+  {
+    py::gil_scoped_release release;
+    // Bad options: std::invalid_argument naming the field (a ValueError).
+    planner::RecedingHorizonController controller(*m.flat, options, plant_model);
+    const SimTK::State initial = initial_state(*m.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
+    run = planner::run_receding_horizon(controller, initial, loop, settle_tolerance);
+    warnings = controller.warnings();
+    plan_failures = controller.planFailures();
+    steps = controller.steps();
+    clamped = controller.clampedSamples();
+    bounded = controller.boundedSteps();
+  }
+  const plugin::MusculoskeletalModel& simulated = plant_model ? *plant_model : model;
+  std::string message;
+  for (const auto& f : run.failures) message += (message.empty() ? "" : "; ") + f;
+  out["time"] = column_vector(run.loop.states, "time");
+  out["q"] = columns_table(run.loop.states, joint_value_columns(simulated));
+  out["activation"] = columns_table(run.loop.states, muscle_columns(simulated, "/activation"));
+  out["excitation"] = columns_table(run.loop.controls, muscle_columns(simulated, ""));
+  out["settling_time"] = run.settling_time_s >= 0.0 ? py::object(py::float_(run.settling_time_s)) : py::object(py::none());
+  out["real_time_factor"] = run.loop.real_time_factor;
+  out["wall_seconds"] = run.loop.wall_seconds;
+  out["success"] = run.success();
+  out["message"] = message;
+  out["finite"] = run.loop.finite;
+  out["steps"] = steps;
+  out["plan_failures"] = plan_failures;
+  out["clamped_samples"] = clamped;
+  out["bounded_steps"] = bounded;
+  out["integrator_steps"] = run.loop.integrator_steps;
+  out["warnings"] = warnings;
+  return out;
+}
+
+}  // namespace
+
+void register_receding_horizon(py::module_& m) {
+  m.def("run_receding_horizon", &run_receding_horizon, py::arg("model"), py::arg("q0"), py::arg("target"),
+        py::arg("duration"), py::kw_only(), py::arg("qd0") = py::none(), py::arg("a0") = py::none(),
+        py::arg("reserves") = 1.0, py::arg("horizon") = 0.5, py::arg("grid_points") = 11, py::arg("period") = 0.05,
+        py::arg("solver") = "exact", py::arg("bounds") = true, py::arg("observer_gain") = 0.0,
+        py::arg("integrator") = "rosenbrock", py::arg("accuracy") = py::none(), py::arg("plant") = py::none(),
+        py::arg("settle_tolerance") = M_PI / 180.0,
+        "The receding-horizon controller moving the model from rest at q0 (rad) to `target` (rad) on a Simbody "
+        "plant for `duration` s: every `period` s a plan over `horizon` s (a cubic to the target, the torque box "
+        "on `grid_points` postures, the SLP by `solver`: 'exact', 'simplex' or 'ipopt'), its excitations kept "
+        "in [0, 1] when `bounds`.\n"
+        "Start: qd0 (rad/s, default 0) with activations a0 and tendons in static equilibrium, or (a0=None) the "
+        "minimum-effort rest state for `reserves` (minimum tendon force, N, one number or one per muscle). "
+        "observer_gain: the disturbance observer, 1/s (0: the paper's controller; 20 removes the offset of a "
+        "model mismatch). plant: another flatsos.Model with the same joints and muscles to simulate instead of "
+        "`model` (model mismatch). integrator: 'rosenbrock' (default accuracy 1e-5), 'bdf' or 'rkm' (1e-8).\n"
+        "Returns a dict: 'time' (s), 'q' (rad, one row per report), 'activation' and 'excitation' (one column "
+        "per muscle; the excitation in effect), 'settling_time' (s from which every joint stays within "
+        "settle_tolerance rad of the target; None: never), 'real_time_factor', 'success' (settled, finite, every "
+        "plan solved) and 'message' (why not), 'steps', 'plan_failures', 'clamped_samples', 'bounded_steps', "
+        "'integrator_steps', 'warnings'. Releases the GIL while it runs.");
+}
+
+}  // namespace flatsos::python
