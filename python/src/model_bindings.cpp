@@ -1,19 +1,31 @@
 #include "bindings.hpp"
 
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "flatsos/plugin/io/model_file.hpp"
 
 namespace py = pybind11;
 
 namespace flatsos::python {
 
 namespace {
-Model load(const std::string& path) {
+Model with_flat_outputs(std::shared_ptr<const plugin::MusculoskeletalModel> model) {
   Model out;
-  py::gil_scoped_release release;  // the flat-output choice may take a second
-  out.model = plugin::MusculoskeletalModel::fromFile(path);
+  out.model = std::move(model);
   out.flat = std::make_shared<const planner::FlatOutputMap>(out.model);
   return out;
+}
+
+Model load(const std::string& path) {
+  py::gil_scoped_release release;  // the flat-output choice may take a second
+  return with_flat_outputs(plugin::MusculoskeletalModel::fromFile(path));
+}
+
+Model from_json(const std::string& text, const std::string& source) {
+  py::gil_scoped_release release;
+  return with_flat_outputs(std::make_shared<const plugin::MusculoskeletalModel>(plugin::parse_model_json(text, source)));
 }
 // The model with each muscle's maximum isometric force multiplied by its factor (the same flat
 // outputs: E does not depend on strength, and the library's choice need not run again).
@@ -35,6 +47,10 @@ void register_model(py::module_& m) {
   py::class_<Model>(m, "Model", "A flatsos model file (JSON): its joints, muscles and flat-output map.")
       .def(py::init(&load), py::arg("path"),
            "Loads the model file; a bad file, or flat outputs that violate Assumption 1, raise ValueError.")
+      .def_static("from_json", &from_json, py::arg("text"), py::arg("source") = "model",
+                  "The model of a model file's JSON text (what to_json gives; `source` names it in messages).")
+      .def("to_json", [](const Model& self) { return plugin::model_json_text(self.model->description()); },
+           "The model as a model file's JSON text (from_json and Model(path) read it back to the same model).")
       .def_property_readonly(
           "name", [](const Model& self) { return self.model->description().name; })
       .def_property_readonly(

@@ -1,0 +1,355 @@
+"""Batch studies on Dask: one open-loop plan per random sample of a model's muscle strengths
+and targets, on a local cluster or on an existing one, written as one table.
+
+    import flatsos.study
+    result = flatsos.study.run("models/arm_richter_warner.json",
+                               {"strength": {"low": 0.8, "high": 1.2}}, samples=1000)
+    result.write("results/strength_study")      # table.csv and summary.json
+
+or from a shell: python3 -m flatsos.study --help.
+
+The study description (a dict, or a JSON file on the command line):
+    "plan":     the plan of every sample, plan_open_loop's inputs in the model files' units:
+                q0_deg, qd0_deg_per_s, a0 (null: the minimum-effort rest state at q0),
+                target_deg, duration_s, reserves_N (one number or one per muscle) and
+                "options" (plan_open_loop's keywords); what it leaves out comes from the
+                model file's "open_loop" scenario, else q0 = 0, at rest, 30 deg on, 1 s, 10 N.
+    "strength": {"low": l, "high": h}: each muscle's maximum isometric force times a factor
+                drawn uniformly from [l, h], independently (absent: the model's forces).
+    "target_deg": {"low": [...], "high": [...]}: the target drawn uniformly in this box, one
+                bound per joint (absent: the plan's target).
+Samples are drawn on the client from numpy's generator with the given seed, so a study gives
+the same table on any cluster, and the same as the serial loop (workers=0).
+"""
+import argparse
+import collections
+import csv
+import hashlib
+import json
+import math
+import os
+import pathlib
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from ._flatsos import Model, plan_open_loop
+
+# Columns that measure the machine rather than the plan: they differ between runs.
+TIMING_COLUMNS = ("setup_s", "solve_s", "certify_s", "check_s", "plan_s", "worker")
+_SAMPLES_FOR_PEAKS = 301
+
+
+class StudyError(ValueError):
+    """A study description or option that cannot run; the message names the field."""
+
+
+def _numbers(value, count, field, broadcast=False):
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and broadcast:
+        value = [value] * count
+    try:
+        out = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise StudyError(f"{field}: expected {count} numbers") from None
+    if out.shape != (count,):
+        raise StudyError(f"{field}: expected {count} numbers" + (" or one number" if broadcast else "") +
+                         f", got {out.size}")
+    if not np.isfinite(out).all():
+        raise StudyError(f"{field}: values must be finite")
+    return out
+
+
+def _range(spec, count, field, broadcast):
+    if not isinstance(spec, dict) or set(spec) != {"low", "high"}:
+        raise StudyError(f"{field}: expected an object with 'low' and 'high'")
+    low = _numbers(spec["low"], count, field + ".low", broadcast)
+    high = _numbers(spec["high"], count, field + ".high", broadcast)
+    if (low > high).any():
+        raise StudyError(f"{field}: low must not exceed high")
+    return low, high
+
+
+class Study:
+    """A validated study description for one model (see the module's documentation)."""
+
+    def __init__(self, model_text, description, source="model"):
+        if not isinstance(description, dict):
+            raise StudyError("study: expected a JSON object")
+        unknown = set(description) - {"plan", "strength", "target_deg"}
+        if unknown:
+            raise StudyError(f"study: unknown field(s) {sorted(unknown)} (plan, strength, target_deg)")
+        model = json.loads(model_text)
+        joints = [j["name"] for j in model["joints"]]
+        muscles = [m["name"] for m in model["muscles"]]
+        self.model_text, self.source, self.joints, self.muscles = model_text, source, joints, muscles
+        n, m = len(joints), len(muscles)
+        scenario = model.get("scenarios", {}).get("open_loop", {})
+        plan = description.get("plan", {})
+        if not isinstance(plan, dict):
+            raise StudyError("plan: expected a JSON object")
+        allowed = {"q0_deg", "qd0_deg_per_s", "a0", "target_deg", "duration_s", "reserves_N", "options"}
+        if set(plan) - allowed:
+            raise StudyError(f"plan: unknown field(s) {sorted(set(plan) - allowed)} ({', '.join(sorted(allowed))})")
+        given = dict(scenario, **plan)
+        if "a0" not in plan and "activations" in scenario:
+            given["a0"] = scenario["activations"]
+        self.q0_deg = _numbers(given.get("q0_deg", [0.0] * n), n, "plan.q0_deg")
+        self.qd0_deg_per_s = _numbers(given.get("qd0_deg_per_s", [0.0] * n), n, "plan.qd0_deg_per_s")
+        self.a0 = None if given.get("a0") is None else _numbers(given["a0"], m, "plan.a0")
+        self.target_deg = _numbers(given.get("target_deg", self.q0_deg + 30.0), n, "plan.target_deg")
+        self.duration_s = float(given.get("duration_s", 1.0))
+        if not (self.duration_s > 0.0 and math.isfinite(self.duration_s)):
+            raise StudyError("plan.duration_s: must be a positive number of seconds")
+        self.reserves_N = _numbers(given.get("reserves_N", 10.0), m, "plan.reserves_N", broadcast=True)
+        self.options = dict(plan.get("options", {}))
+        keywords = {"flat_output_degree", "flat_output_spans", "torque_pieces", "torque_degree", "bounds"}
+        if set(self.options) - keywords:
+            raise StudyError(f"plan.options: unknown field(s) {sorted(set(self.options) - keywords)} "
+                             f"({', '.join(sorted(keywords))})")
+        self.strength = _range(description["strength"], m, "strength", True) if "strength" in description else None
+        self.target_box = _range(description["target_deg"], n, "target_deg", False) \
+            if "target_deg" in description else None
+        self.description = description
+
+    def draw(self, samples, seed):
+        """(strength factors, targets in degrees): one row per sample."""
+        if not (isinstance(samples, int) and samples >= 1):
+            raise StudyError("samples: must be a whole number >= 1")
+        rng = np.random.default_rng(seed)
+        m, n = len(self.muscles), len(self.joints)
+        strength = rng.uniform(*self.strength, size=(samples, m)) if self.strength else np.ones((samples, m))
+        target = rng.uniform(*self.target_box, size=(samples, n)) if self.target_box else \
+            np.tile(self.target_deg, (samples, 1))
+        return strength, target
+
+    def columns(self):
+        return (["sample"] + [f"strength_{name}" for name in self.muscles] +
+                [f"target_{name}_deg" for name in self.joints] +
+                ["status", "cost_Ns", "peak_excitation", "peak_activation", "min_activation", "message"] +
+                list(TIMING_COLUMNS))
+
+
+# The models a process has loaded, by their text's digest: a worker loads each model once
+# (a library choice of flat outputs can take a second), whatever the number of tasks.
+_models = {}
+
+
+def _model(text, source):
+    key = hashlib.sha256(text.encode()).hexdigest()
+    if key not in _models:
+        _models[key] = Model.from_json(text, source)
+    return _models[key]
+
+
+def cached_models():
+    """How many models this process holds (a worker's cache; tests ask the workers)."""
+    return len(_models)
+
+
+def _worker_name():
+    try:
+        from distributed import get_worker
+        return get_worker().address
+    except (ImportError, ValueError):
+        return "serial"
+
+
+def _plan_one(model, study, index, strength, target_deg):
+    row = {"sample": index}
+    row.update({f"strength_{name}": f for name, f in zip(study.muscles, strength)})
+    row.update({f"target_{name}_deg": t for name, t in zip(study.joints, target_deg)})
+    start = time.perf_counter()
+    peaks = (math.nan, math.nan, math.nan)
+    try:
+        subject = model.with_strength(strength) if study.strength else model
+        plan = plan_open_loop(subject, np.radians(study.q0_deg), np.radians(study.qd0_deg_per_s), study.a0,
+                              np.radians(target_deg), study.duration_s, study.reserves_N, **study.options)
+        status, cost, message, seconds = plan.status, plan.cost, plan.message, plan.seconds
+        if status == "solved":
+            s = plan.sample(np.linspace(0.0, study.duration_s, _SAMPLES_FOR_PEAKS))
+            peaks = (s["excitation"].max(), s["activation"].max(), s["activation"].min())
+    except ValueError as e:  # the library refused this sample's inputs: a row that says why
+        status, cost, message, seconds = "failed", None, f"error: {e}", {}
+    row.update(status=status, cost_Ns=math.nan if cost is None else cost, peak_excitation=peaks[0],
+               peak_activation=peaks[1], min_activation=peaks[2], message=message,
+               setup_s=seconds.get("setup", math.nan), solve_s=seconds.get("solve", math.nan),
+               certify_s=seconds.get("certify", math.nan), check_s=seconds.get("check", math.nan),
+               plan_s=time.perf_counter() - start, worker=_worker_name())
+    return row
+
+
+def _plan_block(model_text, source, description, indices, strength, target_deg):
+    """A task: the plans of a block of samples (one Dask task each block, to keep the
+    scheduler's per-task cost small against plans of milliseconds)."""
+    model = _model(model_text, source)
+    study = Study(model_text, description, source)
+    return [_plan_one(model, study, i, s, t) for i, s, t in zip(indices, strength, target_deg)]
+
+
+class StudyResult:
+    """One row per plan (`rows`, in sample order; `table()` as numpy columns) and a summary."""
+
+    def __init__(self, study, rows, summary):
+        self.study, self.rows, self.summary = study, rows, summary
+
+    def table(self):
+        """{column: numpy array}: numbers as float arrays, status, message and worker as str."""
+        out = {}
+        for column in self.study.columns():
+            values = [row[column] for row in self.rows]
+            out[column] = np.array(values, dtype=object if column in ("status", "message", "worker") else float)
+        return out
+
+    def write(self, folder):
+        """folder/table.csv and folder/summary.json, each written whole or not at all."""
+        folder = pathlib.Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile("w", dir=folder, suffix=".csv.tmp", delete=False, newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=self.study.columns())
+            writer.writeheader()
+            for row in self.rows:
+                writer.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+        os.replace(f.name, folder / "table.csv")
+        with tempfile.NamedTemporaryFile("w", dir=folder, suffix=".json.tmp", delete=False) as f:
+            json.dump(self.summary, f, indent=2)
+            f.write("\n")
+        os.replace(f.name, folder / "summary.json")
+
+
+def _summarize(study, rows, samples, seed, where, wall_s):
+    statuses = collections.Counter(row["status"] for row in rows)
+    solved = [row for row in rows if row["status"] == "solved"]
+
+    def spread(column):
+        values = np.array([row[column] for row in solved])
+        if values.size == 0:
+            return None
+        q = np.percentile(values, [0, 5, 50, 95, 100])
+        return {"min": q[0], "p5": q[1], "median": q[2], "p95": q[3], "max": q[4]}
+
+    return {
+        "model": study.source, "samples": samples, "seed": seed, "study": study.description, "ran_on": where,
+        "statuses": dict(statuses), "feasible_fraction": statuses["solved"] / samples,
+        "cost_Ns": spread("cost_Ns"), "peak_excitation": spread("peak_excitation"),
+        "peak_activation": spread("peak_activation"),
+        "plan_seconds_median": float(np.median([row["plan_s"] for row in rows])),
+        "wall_seconds": wall_s, "plans_per_second": samples / wall_s,
+    }
+
+
+def run(model, study, samples, *, seed=0, scheduler=None, workers=2, block=25, progress=False):
+    """Plans every sample of `study` (a dict, see the module) for `model` (a model file's path)
+    and returns a StudyResult.
+
+    scheduler: the address of a running Dask scheduler (tcp://host:port), or a
+    distributed.Client; None: a local cluster of `workers` processes (one thread each), closed
+    at the end; workers=0: a serial loop in this process (no Dask). block: samples per task.
+    progress: print the plans done to standard error as they finish. Bad input raises
+    StudyError (a ValueError) naming the field.
+    """
+    path = pathlib.Path(model)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise StudyError(f"model: cannot read '{model}': {e.strerror}") from None
+    try:
+        json.loads(text)
+    except json.JSONDecodeError as e:
+        raise StudyError(f"model: '{model}' is not JSON: {e}") from None
+    Model.from_json(text, str(path))  # a bad model is refused here, by the library, not in a worker
+    spec = Study(text, study, str(path))
+    if not (isinstance(block, int) and block >= 1):
+        raise StudyError("block: must be a whole number >= 1")
+    if not (isinstance(workers, int) and workers >= 0):
+        raise StudyError("workers: must be a whole number >= 0")
+    strength, target = spec.draw(samples, seed)
+    blocks = [range(k, min(k + block, samples)) for k in range(0, samples, block)]
+    start = time.perf_counter()
+    rows = []
+
+    tty = sys.stderr.isatty()
+    reported = [0]
+
+    def report(done):  # on a terminal one line redrawn; in a log a line per tenth
+        if not progress:
+            return
+        if tty:
+            print(f"\rstudy: {done}/{samples} plans", end="" if done < samples else "\n", file=sys.stderr, flush=True)
+        elif 10 * done // samples > reported[0] or done == samples:
+            reported[0] = 10 * done // samples
+            print(f"study: {done}/{samples} plans", file=sys.stderr, flush=True)
+
+    if scheduler is None and workers == 0:
+        where = "serial"
+        for b in blocks:
+            rows += _plan_block(text, str(path), study, list(b), strength[b.start:b.stop], target[b.start:b.stop])
+            report(len(rows))
+    else:
+        from distributed import Client, LocalCluster, as_completed
+        cluster = None
+        if scheduler is None:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            client = Client(cluster)
+            where = f"local cluster of {workers} worker processes"
+        elif isinstance(scheduler, Client):
+            client, where = scheduler, f"scheduler {scheduler.scheduler.address}"
+        else:
+            client, where = Client(scheduler), f"scheduler {scheduler}"
+        try:
+            futures = [client.submit(_plan_block, text, str(path), study, list(b), strength[b.start:b.stop],
+                                     target[b.start:b.stop], pure=False) for b in blocks]
+            for future in as_completed(futures):
+                rows += future.result()
+                report(len(rows))
+        finally:
+            if client is not scheduler:
+                client.close()
+            if cluster is not None:
+                cluster.close()
+    rows.sort(key=lambda row: row["sample"])
+    wall = time.perf_counter() - start
+    return StudyResult(spec, rows, _summarize(spec, rows, samples, seed, where, wall))
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        prog="python3 -m flatsos.study",
+        description="A batch study on Dask: one open-loop plan per random sample of a model's muscle strengths "
+                    "and targets. Writes OUT/table.csv (one row per plan: its inputs, status, cost, peak "
+                    "excitation and activation, timings) and OUT/summary.json. The study file's fields are "
+                    "described in the module flatsos.study.")
+    parser.add_argument("--model", required=True, help="model file (JSON)")
+    parser.add_argument("--study", required=True, help="study description (JSON file)")
+    parser.add_argument("--samples", type=int, default=1000, help="number of plans (default 1000)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random samples (default 0)")
+    parser.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="worker processes of the local cluster (default 2; 0: a serial loop without Dask)")
+    parser.add_argument("--block", type=int, default=25, help="samples per Dask task (default 25)")
+    parser.add_argument("--out", default="results/study", help="output folder (default results/study)")
+    args = parser.parse_args(argv)
+    try:
+        try:
+            description = json.loads(pathlib.Path(args.study).read_text())
+        except OSError as e:
+            raise StudyError(f"study: cannot read '{args.study}': {e.strerror}") from None
+        except json.JSONDecodeError as e:
+            raise StudyError(f"study: '{args.study}' is not JSON: {e}") from None
+        result = run(args.model, description, args.samples, seed=args.seed, scheduler=args.scheduler,
+                     workers=args.workers, block=args.block, progress=True)
+    except ValueError as e:
+        print(f"flatsos.study: error: {e}", file=sys.stderr)
+        return 2
+    result.write(args.out)
+    s = result.summary
+    print(f"flatsos.study: {args.samples} plans on {s['ran_on']} in {s['wall_seconds']:.2f} s "
+          f"({s['plans_per_second']:.0f} plans/s); statuses {s['statuses']}; wrote {args.out}/table.csv, summary.json")
+    return 0
+
+
+if __name__ == "__main__":
+    # The package's module rather than this __main__: Dask pickles its functions by name then.
+    from flatsos.study import main as package_main
+    sys.exit(package_main())

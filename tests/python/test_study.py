@@ -1,0 +1,140 @@
+"""flatsos.study: the Dask batch against the serial loop (1000 plans, the same table), the
+cluster path seen from a second client, the table file read back, and every error path."""
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import flatsos
+import flatsos.study as study
+
+OWN_REST = {"plan": {"a0": None, "qd0_deg_per_s": [0, 0]}, "strength": {"low": 0.8, "high": 1.2}}
+
+
+@pytest.fixture(scope="module")
+def arm_file(models_dir):
+    return str(models_dir / "arm_richter_warner.json")
+
+
+def test_a_cluster_gives_the_serial_loops_table_and_a_second_client_sees_its_workers(arm_file):
+    import distributed  # installed by scripts/install_deps.sh: a missing one fails here, not skips
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        on_cluster = study.run(arm_file, OWN_REST, 1000, seed=7, scheduler=cluster.scheduler_address)
+        with distributed.Client(cluster.scheduler_address) as second:
+            workers = set(second.scheduler_info()["workers"])
+            cached = second.run(study.cached_models)  # asked in each worker process
+    serial = study.run(arm_file, OWN_REST, 1000, seed=7, workers=0)
+    a, b = on_cluster.table(), serial.table()
+    assert len(workers) == 2 and set(cached) == workers and all(n == 1 for n in cached.values())
+    assert set(a["worker"]) == workers  # both workers planned
+    assert set(b["worker"]) == {"serial"}
+    for column in serial.study.columns():
+        if column not in study.TIMING_COLUMNS:
+            np.testing.assert_array_equal(a[column], b[column], err_msg=column)
+    assert (a["status"] == "solved").all()
+    assert on_cluster.summary["ran_on"] == f"scheduler {cluster.scheduler_address}"
+    assert serial.summary["statuses"] == {"solved": 1000} and serial.summary["feasible_fraction"] == 1.0
+    # The draws: every factor in [0.8, 1.2], spread over it, reproducible from the seed.
+    strengths = np.column_stack([b[f"strength_{m}"] for m in serial.study.muscles])
+    assert strengths.min() >= 0.8 and strengths.max() <= 1.2 and strengths.std() > 0.1
+    assert (strengths == serial.study.draw(1000, 7)[0]).all() and (strengths != serial.study.draw(1000, 8)[0]).all()
+
+
+def test_unperturbed_samples_cost_what_plan_open_loop_plans(arm, arm_file):
+    model, scenario = arm
+    result = study.run(arm_file, {"strength": {"low": 1.0, "high": 1.0}}, 3, workers=0)
+    expected = scenario.plan(model)
+    t = result.table()
+    assert list(t["status"]) == ["solved"] * 3
+    np.testing.assert_allclose(t["cost_Ns"], expected.cost, rtol=1e-12)
+    peaks = expected.sample(np.linspace(0, scenario.duration, 301))
+    np.testing.assert_allclose(t["peak_activation"], peaks["activation"].max(), rtol=1e-12)
+    np.testing.assert_allclose(t["target_shoulder_deg"], 90.0)
+
+
+def test_targets_drawn_in_their_box_and_the_table_file_read_back(arm_file, tmp_path):
+    box = {"plan": {"a0": None, "qd0_deg_per_s": [0, 0]}, "target_deg": {"low": [60, 0], "high": [90, 20]}}
+    result = study.run(arm_file, box, 20, workers=0)
+    t = result.table()
+    assert 60 <= t["target_shoulder_deg"].min() and t["target_shoulder_deg"].max() <= 90
+    assert 0 <= t["target_elbow_deg"].min() and t["target_elbow_deg"].max() <= 20
+    assert len(set(t["cost_Ns"])) == 20  # each target its own plan
+    result.write(tmp_path / "out")
+    with open(tmp_path / "out" / "table.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [list(r) for r in rows[:1]] == [result.study.columns()]
+    for row, original in zip(rows, result.rows):
+        for column, value in original.items():
+            assert (float(row[column]) == value or (np.isnan(value) and row[column] == "nan")) \
+                if isinstance(value, float) else row[column] == str(value), column
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["samples"] == 20 and summary["statuses"] == result.summary["statuses"]
+    assert not list((tmp_path / "out").glob("*.tmp"))
+
+
+def test_a_sample_the_library_refuses_is_a_row_that_says_why(arm_file):
+    result = study.run(arm_file, {"plan": {"options": {"torque_pieces": 0}}}, 2, workers=0)
+    t = result.table()
+    assert list(t["status"]) == ["failed", "failed"] and np.isnan(t["cost_Ns"]).all()
+    assert t["message"][0].startswith("error: ") and "torque" in t["message"][0]
+
+
+@pytest.mark.parametrize("description, match", [
+    ([], "study: expected a JSON object"),
+    ({"strenght": {}}, r"study: unknown field\(s\) \['strenght'\]"),
+    ({"strength": {"low": 0.8}}, "strength: expected an object with 'low' and 'high'"),
+    ({"strength": {"low": 1.2, "high": 0.8}}, "strength: low must not exceed high"),
+    ({"strength": {"low": [0.8] * 5, "high": 1.2}}, "strength.low: expected 6 numbers or one number, got 5"),
+    ({"target_deg": {"low": 0, "high": [1, 2]}}, "target_deg.low: expected 2 numbers"),
+    ({"plan": {"q0": [0, 0]}}, r"plan: unknown field\(s\) \['q0'\]"),
+    ({"plan": {"duration_s": -1}}, "plan.duration_s: must be a positive number"),
+    ({"plan": {"a0": [0.1] * 3}}, "plan.a0: expected 6 numbers, got 3"),
+    ({"plan": {"options": {"degree": 5}}}, r"plan.options: unknown field\(s\) \['degree'\]"),
+    ({"plan": {"reserves_N": float("nan")}}, "plan.reserves_N: values must be finite"),
+])
+def test_a_bad_description_names_the_field(arm_file, description, match):
+    with pytest.raises(ValueError, match=match):
+        study.run(arm_file, description, 2, workers=0)
+
+
+def test_bad_options_and_models(arm_file, tmp_path):
+    with pytest.raises(ValueError, match="samples: must be a whole number >= 1"):
+        study.run(arm_file, {}, 0, workers=0)
+    with pytest.raises(ValueError, match="workers: must be a whole number >= 0"):
+        study.run(arm_file, {}, 2, workers=-1)
+    with pytest.raises(ValueError, match="block: must be a whole number >= 1"):
+        study.run(arm_file, {}, 2, workers=0, block=0)
+    with pytest.raises(ValueError, match="model: cannot read"):
+        study.run(str(tmp_path / "none.json"), {}, 2, workers=0)
+    (tmp_path / "bad.json").write_text("{")
+    with pytest.raises(ValueError, match="is not JSON"):
+        study.run(str(tmp_path / "bad.json"), {}, 2, workers=0)
+    (tmp_path / "empty.json").write_text("{}")
+    with pytest.raises(ValueError, match="empty.json"):  # the library's message, naming the file
+        study.run(str(tmp_path / "empty.json"), {}, 2, workers=0)
+
+
+def test_the_command_line(arm_file, tmp_path):
+    env = dict(os.environ)
+    command = [sys.executable, "-m", "flatsos.study"]
+    shown = subprocess.run(command + ["--help"], capture_output=True, text=True, env=env)
+    assert shown.returncode == 0 and "--scheduler" in shown.stdout
+    (tmp_path / "study.json").write_text(json.dumps(OWN_REST))
+    ran = subprocess.run(command + ["--model", arm_file, "--study", str(tmp_path / "study.json"), "--samples", "30",
+                                    "--workers", "0", "--out", str(tmp_path / "out")], capture_output=True, text=True)
+    assert ran.returncode == 0, ran.stderr
+    assert "study: 30/30 plans" in ran.stderr and "30 plans on serial" in ran.stdout
+    assert len((tmp_path / "out" / "table.csv").read_text().splitlines()) == 31
+    (tmp_path / "bad.json").write_text(json.dumps({"strength": {"low": 2, "high": 1}}))
+    refused = subprocess.run(command + ["--model", arm_file, "--study", str(tmp_path / "bad.json"), "--out",
+                                        str(tmp_path / "refused")], capture_output=True, text=True)
+    assert refused.returncode == 2
+    assert refused.stderr.strip() == "flatsos.study: error: strength: low must not exceed high"
+    assert not (tmp_path / "refused").exists()
+    missing = subprocess.run(command + ["--model", arm_file, "--study", str(tmp_path / "none.json")],
+                             capture_output=True, text=True)
+    assert missing.returncode == 2 and "study: cannot read" in missing.stderr
