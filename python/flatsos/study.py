@@ -188,6 +188,16 @@ def _plan_block(model_text, source, description, indices, strength, target_deg):
     return [_plan_one(model, study, i, s, t) for i, s, t in zip(indices, strength, target_deg)]
 
 
+def local_cluster(workers=2):
+    """A Dask LocalCluster of `workers` processes, one thread each, no dashboard. Dask's workers
+    trim the heap above 64 KiB (MALLOC_TRIM_THRESHOLD_), which costs a plan's many small
+    allocations 10 % (measured); these hold small models, so they trim above 64 MiB instead."""
+    import dask
+    from distributed import LocalCluster
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": 64 * 2**20}):
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+
+
 class StudyResult:
     """One row per plan (`rows`, in sample order; `table()` as numpy columns) and a summary."""
 
@@ -287,10 +297,10 @@ def run(model, study, samples, *, seed=0, scheduler=None, workers=2, block=25, p
             rows += _plan_block(text, str(path), study, list(b), strength[b.start:b.stop], target[b.start:b.stop])
             report(len(rows))
     else:
-        from distributed import Client, LocalCluster, as_completed
+        from distributed import Client, as_completed
         cluster = None
         if scheduler is None:
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            cluster = local_cluster(workers)
             client = Client(cluster)
             where = f"local cluster of {workers} worker processes"
         elif isinstance(scheduler, Client):

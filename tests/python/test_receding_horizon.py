@@ -126,6 +126,13 @@ def test_with_strength_is_the_model_file_with_those_forces(arm, models_dir, tmp_
     np.testing.assert_allclose(sa["activation"], sb["activation"], atol=1e-12)
     # The effort is in tendon force, which the torques fix; strength shows in the activations.
     assert np.abs(sa["activation"] - sn["activation"]).max() > 0.01
+    # Its text read back (what a study's workers get) is the same model.
+    text = flatsos.Model.from_json(strong.to_json(), "strong")
+    np.testing.assert_allclose(text.max_isometric_forces, strong.max_isometric_forces, rtol=1e-15)
+    assert flatsos.plan_open_loop(text, scenario.q0, [0, 0], None, scenario.target, scenario.duration,
+                                  scenario.reserves).cost == pytest.approx(a.cost, rel=1e-12)
+    with pytest.raises(ValueError, match="strong"):
+        flatsos.Model.from_json("{}", "strong")
     np.testing.assert_allclose(model.with_strength(1.1).max_isometric_forces, 1.1 * model.max_isometric_forces)
     for bad, match in [(0.0, "factors: must be positive"), ([1.0] * 5, "factors: expected 6 numbers"),
                        (float("nan"), "factors: must be positive")]:

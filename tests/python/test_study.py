@@ -22,14 +22,16 @@ def arm_file(models_dir):
 
 def test_a_cluster_gives_the_serial_loops_table_and_a_second_client_sees_its_workers(arm_file):
     import distributed  # installed by scripts/install_deps.sh: a missing one fails here, not skips
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with study.local_cluster(2) as cluster:
         on_cluster = study.run(arm_file, OWN_REST, 1000, seed=7, scheduler=cluster.scheduler_address)
         with distributed.Client(cluster.scheduler_address) as second:
             workers = set(second.scheduler_info()["workers"])
             cached = second.run(study.cached_models)  # asked in each worker process
+            second_trim = second.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_"))
     serial = study.run(arm_file, OWN_REST, 1000, seed=7, workers=0)
     a, b = on_cluster.table(), serial.table()
     assert len(workers) == 2 and set(cached) == workers and all(n == 1 for n in cached.values())
+    assert set(second_trim.values()) == {str(64 * 2**20)}  # the workers' environment, as local_cluster sets it
     assert set(a["worker"]) == workers  # both workers planned
     assert set(b["worker"]) == {"serial"}
     for column in serial.study.columns():
