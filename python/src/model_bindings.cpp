@@ -1,5 +1,6 @@
 #include "bindings.hpp"
 
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,6 +42,29 @@ Model with_strength(const Model& self, const py::object& factors) {
   return out;
 }
 
+// Each joint's child body in the ground frame at posture q (Simbody's kinematics): origins
+// (joints x 3, m) and rotations (joints x 3 x 3, body to ground).
+py::tuple body_frames(const Model& self, const py::object& q) {
+  const plugin::MusculoskeletalModel& model = *self.model;
+  const Eigen::VectorXd q_rad = vector_argument(q, model.numJoints(), "q");
+  if (!q_rad.allFinite()) throw py::value_error("q: angles must be finite");
+  SimTK::State s = model.defaultState();
+  model.setJointAngles(s, q_rad);
+  model.system().realize(s, SimTK::Stage::Position);
+  const py::ssize_t n = model.numJoints();
+  Table origins(n, 3);
+  py::array_t<double> rotations({n, py::ssize_t{3}, py::ssize_t{3}});
+  auto r = rotations.mutable_unchecked<3>();
+  for (int i = 0; i < model.numJoints(); ++i) {
+    const SimTK::Transform& X = model.joint(i).getBodyTransform(s);
+    for (int a = 0; a < 3; ++a) {
+      origins(i, a) = X.p()[a];
+      for (int b = 0; b < 3; ++b) r(i, a, b) = X.R()[a][b];
+    }
+  }
+  return py::make_tuple(origins, rotations);
+}
+
 }  // namespace
 
 void register_model(py::module_& m) {
@@ -79,6 +103,26 @@ void register_model(py::module_& m) {
             return f;
           },
           "each muscle's maximum isometric force, N (model order)")
+      .def_property_readonly(
+          "coordinates",
+          [](const Model& self) {
+            std::vector<std::string> names;
+            for (const auto& j : self.model->description().joints) names.push_back(j.coordinateName());
+            return names;
+          },
+          "each joint's coordinate name, in model order (OpenSim's, for imported models)")
+      .def_property_readonly(
+          "held_coordinates",
+          [](const Model& self) {
+            std::map<std::string, double> held;
+            for (const auto& mu : self.model->description().muscles)
+              if (mu.polynomial_path) held.insert(mu.polynomial_path->held_coordinates_rad.begin(), mu.polynomial_path->held_coordinates_rad.end());
+            return held;
+          },
+          "coordinates of the original model held fixed in this one (rad, by name; imported models)")
+      .def("body_frames", &body_frames, py::arg("q"),
+           "Each joint's child body in the ground frame at posture q (rad): (origins, joints x 3, m; rotations, "
+           "joints x 3 x 3, body to ground).")
       .def("with_strength", &with_strength, py::arg("factors"),
            "A copy with each muscle's maximum isometric force multiplied by its factor (one number for all, or one "
            "per muscle; positive), with the same flat outputs. Bad factors raise ValueError.")

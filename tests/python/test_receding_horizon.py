@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import flatsos
-from sto import read_sto
+from flatsos.sto import read_sto
 
 MODEL_FILES = {"arm": "arm_richter_warner.json", "knee": "seated_knee_r.json"}
 

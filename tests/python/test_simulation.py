@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import flatsos
-from sto import read_sto
+from flatsos.sto import read_sto
 
 
 def test_the_simulation_is_the_cpp_programs_and_follows_the_plan(arm, build_dir, models_dir, tmp_path):
