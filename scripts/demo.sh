@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, builds, runs the paper's two scenarios and the shipped
 # OpenSim models' (a seated knee extension, 13 muscles; a leg swing, 40 muscles) and plots them.
-# Results (plan.sto, simulation.sto, summary.json, PNG figures) go to results/.
+# Results (plan.sto, simulation.sto, summary.json, PNG figures, GIF animations, OpenSim motion
+# files, the strength study's tables) go to results/.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 "$root/scripts/install_deps.sh"
@@ -27,4 +28,18 @@ echo "== figures"
 python=/usr/bin/python3
 [[ -x $python ]] || python=python3
 "$python" "$root/scripts/plot_results.py" "$results" "$results/seated_knee_r" "$results/sagittal_leg_r"
+echo "== animations (GIF) of every scenario; OpenSim motion files (.mot) of the imported models"
+export PYTHONPATH="$root/build/python${PYTHONPATH:+:$PYTHONPATH}"
+for run in open_loop:arm_richter_warner receding_horizon:arm_richter_warner \
+           seated_knee_r/open_loop:seated_knee_r seated_knee_r/receding_horizon:seated_knee_r \
+           sagittal_leg_r/open_loop:sagittal_leg_r sagittal_leg_r/receding_horizon:sagittal_leg_r; do
+  folder=$results/${run%%:*}
+  model=$models/${run##*:}.json
+  "$python" -m flatsos.animation --model "$model" --states "$folder/simulation.sto" --out "$folder/motion.gif"
+  if [[ $run == *_r ]]; then
+    "$python" -m flatsos.sto --model "$model" --states "$folder/simulation.sto" --out "$folder/motion.mot"
+  fi
+done
+echo "== batch study on Dask: the paper's plan for 1000 subjects of +-20 % muscle strength"
+"$python" "$root/examples/strength_study/strength_study.py" --out "$results/strength_study"
 echo "demo: results in $results"
