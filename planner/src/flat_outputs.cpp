@@ -202,6 +202,15 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
 FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E)
     : FlatOutputMap(std::move(model), given_flat_outputs(std::move(E))) {}
 
+FlatOutputMap FlatOutputMap::withModel(std::shared_ptr<const plugin::MusculoskeletalModel> model) const {
+  const plugin::MusculoskeletalModel& m = require_model(model);
+  if (m.numJoints() != joints_ || m.numMuscles() != muscles_)
+    throw std::invalid_argument("flat outputs of a model of " + std::to_string(joints_) + " joints and " +
+                                std::to_string(muscles_) + " muscles given to one of " + std::to_string(m.numJoints()) +
+                                " and " + std::to_string(m.numMuscles()));
+  return FlatOutputMap(std::move(model), flat_outputs_);
+}
+
 FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, FlatOutputChoice flat_outputs)
     : model_(std::move(model)), flat_outputs_(std::move(flat_outputs)), E_(flat_outputs_.E) {
   const plugin::MusculoskeletalModel& m = require_model(model_);

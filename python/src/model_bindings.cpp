@@ -28,8 +28,9 @@ Model from_json(const std::string& text, const std::string& source) {
   py::gil_scoped_release release;
   return with_flat_outputs(std::make_shared<const plugin::MusculoskeletalModel>(plugin::parse_model_json(text, source)));
 }
-// The model with each muscle's maximum isometric force multiplied by its factor (the same flat
-// outputs: E does not depend on strength, and the library's choice need not run again).
+// The model with each muscle's maximum isometric force multiplied by its factor, with the same
+// flat outputs (the library's choice, which scores moment arms, need not run again; a chosen
+// one keeps its effort, tendon force over maximum force, now of the new forces).
 Model with_strength(const Model& self, const py::object& factors) {
   const Eigen::VectorXd f = vector_argument(factors, self.model->numMuscles(), "factors", true);
   if (!(f.array() > 0.0).all() || !f.allFinite()) throw py::value_error("factors: must be positive numbers");
@@ -38,7 +39,7 @@ Model with_strength(const Model& self, const py::object& factors) {
   Model out;
   py::gil_scoped_release release;
   out.model = std::make_shared<const plugin::MusculoskeletalModel>(std::move(description));
-  out.flat = std::make_shared<const planner::FlatOutputMap>(out.model, self.flat->E());
+  out.flat = std::make_shared<const planner::FlatOutputMap>(self.flat->withModel(out.model));
   return out;
 }
 

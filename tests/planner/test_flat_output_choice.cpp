@@ -208,6 +208,32 @@ TEST(FlatOutputChoice, TheEffortDefaultsToNormalizedTendonForcesWhenTheLibraryCh
   EXPECT_LT((sum.effortWeights() - sum.E().transpose() * Eigen::VectorXd::Ones(2)).norm(), 1e-15);
 }
 
+TEST(FlatOutputChoice, AnotherModelKeepsTheChoiceAndItsKindOfEffort) {
+  fp::ModelDescription d = shipped("elbow_1dof.json");
+  const fpl::FlatOutputMap chosen(without_flat_outputs(d));
+  d.flat_outputs.clear();
+  for (auto& muscle : d.muscles) muscle.parameters.max_isometric_force_N *= 1.3;
+  const auto stronger = std::make_shared<const fp::MusculoskeletalModel>(d);
+  const fpl::FlatOutputMap moved = chosen.withModel(stronger);
+  EXPECT_EQ(&moved.model(), stronger.get());
+  EXPECT_EQ(moved.E(), chosen.E());
+  EXPECT_EQ(moved.flatOutputs().names, chosen.flatOutputs().names);
+  EXPECT_TRUE(moved.flatOutputs().automatic);
+  // Still the normalized tendon force, now of the new maximum forces (E alone would have
+  // made it the flat outputs' sum).
+  EXPECT_EQ(moved.effortKind(), fp::EffortWeights::Kind::NormalizedTendonForce);
+  for (int j = 0; j < 3; ++j)
+    EXPECT_DOUBLE_EQ(moved.effortWeights()[j], chosen.effortWeights()[j] / 1.3);
+  EXPECT_EQ(fpl::FlatOutputMap(stronger, chosen.E()).effortKind(), fp::EffortWeights::Kind::FlatOutputs);
+  const auto arm = std::make_shared<const fp::MusculoskeletalModel>(shipped("arm_richter_warner.json"));
+  try {
+    (void)chosen.withModel(arm);
+    FAIL() << "a model of other size was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "flat outputs of a model of 1 joints and 3 muscles given to one of 2 and 6");
+  }
+}
+
 TEST(FlatOutputChoice, AModelNoFlatOutputsCanServeSaysWhy) {
   const std::string body = R"("bodies": [{"name": "forearm", "mass_kg": 1.5, "mass_center_m": [0.17, 0, 0], "inertia_about_mass_center_kg_m2": 0.02}],
     "joints": [{"name": "elbow", "type": "pin", "parent": "ground", "child": "forearm", "location_in_parent_m": [0, 0, 0],

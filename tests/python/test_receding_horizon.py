@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import flatsos
-from flatsos.sto import read_sto
+from flatsos.sto import joint_angles, muscle_activations, read_sto
 
 MODEL_FILES = {"arm": "arm_richter_warner.json", "knee": "seated_knee_r.json"}
 
@@ -36,13 +36,12 @@ def test_the_closed_loop_is_the_cpp_programs(name, request, build_dir, models_di
     assert run["settling_time"] == pytest.approx(summary["settling_time_s"], abs=1e-12)
     assert summary["steps"] == run["steps"] and summary["excitation_bounds"]["bounded_steps"] == run["bounded_steps"]
     states, controls = read_sto(tmp_path / "simulation.sto"), read_sto(tmp_path / "simulation_controls.sto")
-    np.testing.assert_allclose(run["time"], states["time"], atol=1e-12)
-    for i, joint in enumerate(model.joints):
-        column = next(label for label in states if label.startswith(f"/jointset/{joint}/") and label.endswith("/value"))
-        assert np.degrees(np.abs(run["q"][:, i] - states[column]).max()) < 1e-9
-    for j, muscle in enumerate(model.muscles):
-        assert np.abs(run["activation"][:, j] - states[f"/forceset/{muscle}/activation"]).max() < 1e-9
-        assert np.abs(run["excitation"][:, j] - controls[f"/forceset/{muscle}"]).max() < 1e-9
+    time, q = joint_angles(model, states)
+    np.testing.assert_allclose(run["time"], time, atol=1e-12)
+    assert np.degrees(np.abs(run["q"] - q).max()) < 1e-9
+    assert np.abs(run["activation"] - muscle_activations(model, states)).max() < 1e-9
+    excitation = np.column_stack([controls[f"/forceset/{muscle}"] for muscle in model.muscles])
+    assert np.abs(run["excitation"] - excitation).max() < 1e-9
     # It settles where the program says, and stays there.
     settled = run["time"] >= run["settling_time"]
     assert np.degrees(np.abs(run["q"][settled] - target).max()) <= 1.0
@@ -102,6 +101,21 @@ def test_a_plant_of_another_model_is_refused(arm, knee):
     model, _ = arm
     with pytest.raises(ValueError, match="plant"):
         flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 0.5, plant=knee[0])
+
+
+def test_with_strength_on_a_model_whose_flat_outputs_the_library_chose(knee, models_dir, tmp_path):
+    model, scenario = knee
+    factors = np.linspace(0.8, 1.2, len(model.muscles))
+    data = json.loads((models_dir / MODEL_FILES["knee"]).read_text())
+    for muscle, f in zip(data["muscles"], factors):
+        muscle["max_isometric_force_N"] *= f
+    (tmp_path / "scaled.json").write_text(json.dumps(data))
+    # The file's model chooses its flat outputs again (the same: the choice scores moment arms);
+    # its effort is the tendon forces over the new maximum forces.
+    a, b = scenario.plan(model.with_strength(factors)), scenario.plan(flatsos.Model(str(tmp_path / "scaled.json")))
+    assert a.status == b.status == "solved"
+    assert a.cost == pytest.approx(b.cost, rel=1e-9)
+    assert a.cost != pytest.approx(scenario.plan(model).cost, rel=1e-3)
 
 
 def test_with_strength_is_the_model_file_with_those_forces(arm, models_dir, tmp_path):

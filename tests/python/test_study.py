@@ -140,3 +140,18 @@ def test_the_command_line(arm_file, tmp_path):
     missing = subprocess.run(command + ["--model", arm_file, "--study", str(tmp_path / "none.json")],
                              capture_output=True, text=True)
     assert missing.returncode == 2 and "study: cannot read" in missing.stderr
+
+
+def test_a_study_of_a_model_whose_flat_outputs_the_library_chooses(knee, models_dir):
+    model, scenario = knee
+    knee_file = str(models_dir / "seated_knee_r.json")
+    result = study.run(knee_file, {"strength": {"low": 1.0, "high": 1.0}, "target_deg": {"low": [30], "high": [30]}},
+                       2, workers=0)
+    t = result.table()
+    assert list(t["status"]) == ["solved", "solved"], t["message"]
+    np.testing.assert_allclose(t["cost_Ns"], scenario.plan(model).cost, rtol=1e-12)
+    weaker = study.run(knee_file, {"strength": {"low": 0.8, "high": 0.9}}, 3, workers=0).table()
+    assert (weaker["status"] == "solved").all(), weaker["message"]
+    # The library's effort here is tendon force over maximum force: each weight grows by 1/f >=
+    # 1/0.9 (the start, each subject's own rest, moves too, so the cost need not grow as much).
+    assert (weaker["cost_Ns"] > 1.03 * t["cost_Ns"][0]).all()

@@ -155,6 +155,10 @@ class FlatOutputMap {
   explicit FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model);
   /// The given E (the model's flat_outputs ignored), checked as above.
   FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E);
+  /// These flat outputs (E, names, whether the library chose them: hence the same kind of
+  /// effort) on another model of as many joints and muscles, e.g. other muscle strengths,
+  /// checked as above; the choice's margin is the one scored for this map's model.
+  FlatOutputMap withModel(std::shared_ptr<const plugin::MusculoskeletalModel> model) const;
 
   const plugin::MusculoskeletalModel& model() const { return *model_; }
   const std::shared_ptr<const plugin::MusculoskeletalModel>& sharedModel() const { return model_; }
