@@ -9,6 +9,10 @@ library's message; the C++ core releases the GIL while it plans.
     plan = flatsos.plan_open_loop(arm, q0=np.radians([0, 10]), qd0=[0, 0], a0=None,
                                   target=np.radians([90, 0]), duration=3.0, reserves=10.0)
     plan.status, plan.cost, plan.sample(np.linspace(0, 3, 301))["excitation"]
+
+Also: simulate_plan (Simbody, open loop), run_receding_horizon (the closed loop); the
+submodules flatsos.study (batch studies on Dask), flatsos.animation (GIF and MP4 of planar
+models) and flatsos.sto (OpenSim tables and motion files), each runnable with python3 -m.
 """
 
 from ._flatsos import Model, OpenLoopPlan, plan_open_loop, run_receding_horizon, simulate_plan
