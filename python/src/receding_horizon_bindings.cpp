@@ -51,11 +51,10 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
                   : loop.integrator == plugin::IntegratorKind::MuscleRosenbrock ? 1e-5
                                                                                  : 1e-8;
   if (!(loop.accuracy > 0.0 && loop.accuracy <= 1e-3)) throw py::value_error("accuracy: must lie in (0, 1e-3]");
-  std::shared_ptr<const plugin::MusculoskeletalModel> plant_model;
-  if (!plant.is_none()) {
-    if (!py::isinstance<Model>(plant)) throw py::value_error("plant: expected a flatsos.Model");
-    plant_model = plant.cast<const Model&>().model;
-  }
+  // The plant starts from its own state (its muscles' rest, or their equilibrium at a0).
+  if (!plant.is_none() && !py::isinstance<Model>(plant)) throw py::value_error("plant: expected a flatsos.Model");
+  const Model& simulated_model = plant.is_none() ? m : plant.cast<const Model&>();
+  const std::shared_ptr<const plugin::MusculoskeletalModel> plant_model = plant.is_none() ? nullptr : simulated_model.model;
 
   py::dict out;
   planner::RecedingHorizonRun run;
@@ -65,7 +64,7 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
     py::gil_scoped_release release;
     // Bad options: std::invalid_argument naming the field (a ValueError).
     planner::RecedingHorizonController controller(*m.flat, options, plant_model);
-    const SimTK::State initial = initial_state(*m.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
+    const SimTK::State initial = initial_state(*simulated_model.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
     run = planner::run_receding_horizon(controller, initial, loop, settle_tolerance);
     warnings = controller.warnings();
     plan_failures = controller.planFailures();
@@ -73,7 +72,7 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
     clamped = controller.clampedSamples();
     bounded = controller.boundedSteps();
   }
-  const plugin::MusculoskeletalModel& simulated = plant_model ? *plant_model : model;
+  const plugin::MusculoskeletalModel& simulated = *simulated_model.model;
   std::string message;
   for (const auto& f : run.failures) message += (message.empty() ? "" : "; ") + f;
   out["time"] = column_vector(run.loop.states, "time");

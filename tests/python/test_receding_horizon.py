@@ -57,6 +57,12 @@ def test_a_weaker_plant_is_driven_to_the_target_with_the_observer(arm, models_di
     mismatched = flatsos.run_receding_horizon(model, q0, target, 2.0, observer_gain=20.0, **kwargs)
     assert mismatched["success"], mismatched["message"]
     assert np.degrees(np.abs(mismatched["q"][-1] - target).max()) < 0.1
+    # The plant starts from its own muscles' rest (what a plan for it starts from), not the model's.
+    rest = {m: flatsos.plan_open_loop(m, q0, [0, 0], None, target, 2.0, 1.0).sample([0.0])["activation"][0]
+            for m in (model, weak)}
+    np.testing.assert_allclose(mismatched["activation"][0], rest[weak], rtol=1e-9)
+    np.testing.assert_allclose(nominal["activation"][0], rest[model], rtol=1e-9)
+    assert np.abs(rest[weak] - rest[model]).max() > 0.01
     # The weaker plant needs more activation for the same motion.
     assert mismatched["activation"].sum() > 1.05 * nominal["activation"].sum()
 
