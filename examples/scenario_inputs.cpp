@@ -1,7 +1,6 @@
 #include "scenario_inputs.hpp"
 
 #include "flatsos/planner/rest_state.hpp"
-#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace flatsos::examples {
 
@@ -112,17 +111,7 @@ ScenarioInputs resolve_scenario(const plugin::MusculoskeletalModel& model, const
 }
 
 SimTK::State initial_state(const planner::FlatOutputMap& flat, const ScenarioInputs& in) {
-  const plugin::MusculoskeletalModel& model = flat.model();
-  SimTK::State s = model.defaultState();
-  if (in.activations) {
-    model.setJointAngles(s, in.q0_rad);
-    plugin::equilibrate_tendons(model, s, *in.activations);
-    model.setExcitations(s, *in.activations);
-  } else {
-    planner::set_minimum_effort_rest_state(flat, s, in.q0_rad, in.reserves_N);
-  }
-  model.setJointSpeeds(s, in.qd0_rad_per_s);
-  return s;
+  return planner::start_state(flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.reserves_N);
 }
 
 }  // namespace flatsos::examples

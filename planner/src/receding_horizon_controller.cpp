@@ -205,26 +205,23 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
   const Eigen::VectorXd& target = controller.options().plan.target_q_rad;
   if (run.loop.finite)
     run.settling_time_s = plugin::settling_time(controller.plant(), run.loop.states, target, settle_tolerance_rad);
-  const auto text = [](double x) {
-    std::ostringstream out;
-    out << x;
-    return out.str();
-  };
   constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
   if (!run.loop.finite) run.failures.push_back("the simulation became non-finite");
   if (run.loop.finite && run.settling_time_s < 0.0) {
     const double error_rad = (controller.plant().jointAngles(run.loop.final_state) - target).cwiseAbs().maxCoeff();
-    run.failures.push_back("never settled within " + text(settle_tolerance_rad * kDegPerRad) + " deg of the target in " +
-                           text(o.duration_s) + " s (final error " + text(error_rad * kDegPerRad) + " deg)");
+    std::ostringstream why;
+    why << "never settled within " << settle_tolerance_rad * kDegPerRad << " deg of the target in " << o.duration_s
+        << " s (final error " << error_rad * kDegPerRad << " deg)";
+    run.failures.push_back(why.str());
   }
   if (controller.planFailures() > 0) {
-    std::string failed = std::to_string(controller.planFailures()) + " of " + std::to_string(controller.steps()) +
-                         " plans failed (the previous plan's tail ran instead)";
+    std::ostringstream why;
+    why << controller.planFailures() << " of " << controller.steps() << " plans failed (the previous plan's tail ran instead)";
     const auto& history = controller.history();
     const auto first = std::find_if(history.begin(), history.end(),
                                     [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
-    if (first != history.end()) failed += ", the first at t = " + text(first->time_s) + " s: " + first->message;
-    run.failures.push_back(failed);
+    if (first != history.end()) why << ", the first at t = " << first->time_s << " s: " << first->message;
+    run.failures.push_back(why.str());
   }
   return run;
 }

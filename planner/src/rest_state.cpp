@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace flatsos::planner {
 
@@ -30,6 +31,21 @@ void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& stat
   model.setTendonLengths(state, mp.tendon_length_m);
   model.setActivations(state, mp.activation);
   model.setExcitations(state, mp.activation);
+}
+
+SimTK::State start_state(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
+                         const std::optional<Eigen::VectorXd>& activations, const Eigen::VectorXd& reserves_N) {
+  const plugin::MusculoskeletalModel& model = flat.model();
+  SimTK::State s = model.defaultState();
+  if (activations) {
+    model.setJointAngles(s, q_rad);
+    plugin::equilibrate_tendons(model, s, *activations);
+    model.setExcitations(s, *activations);
+  } else {
+    set_minimum_effort_rest_state(flat, s, q_rad, reserves_N);
+  }
+  model.setJointSpeeds(s, qd_rad_per_s);
+  return s;
 }
 
 }  // namespace flatsos::planner

@@ -180,11 +180,10 @@ def _plan_one(model, study, index, strength, target_deg):
     return row
 
 
-def _plan_block(model_text, source, description, indices, strength, target_deg):
+def _plan_block(study, indices, strength, target_deg):
     """A task: the plans of a block of samples (one Dask task each block, to keep the
     scheduler's per-task cost small against plans of milliseconds)."""
-    model = _model(model_text, source)
-    study = Study(model_text, description, source)
+    model = _model(study.model_text, study.source)
     return [_plan_one(model, study, i, s, t) for i, s, t in zip(indices, strength, target_deg)]
 
 
@@ -268,7 +267,7 @@ def run(model, study, samples, *, seed=0, scheduler=None, workers=2, block=25, p
         json.loads(text)
     except json.JSONDecodeError as e:
         raise StudyError(f"model: '{model}' is not JSON: {e}") from None
-    Model.from_json(text, str(path))  # a bad model is refused here, by the library, not in a worker
+    _model(text, str(path))  # a bad model is refused here, by the library, not in a worker; a serial loop reuses it
     spec = Study(text, study, str(path))
     if not (isinstance(block, int) and block >= 1):
         raise StudyError("block: must be a whole number >= 1")
@@ -294,7 +293,7 @@ def run(model, study, samples, *, seed=0, scheduler=None, workers=2, block=25, p
     if scheduler is None and workers == 0:
         where = "serial"
         for b in blocks:
-            rows += _plan_block(text, str(path), study, list(b), strength[b.start:b.stop], target[b.start:b.stop])
+            rows += _plan_block(spec, list(b), strength[b.start:b.stop], target[b.start:b.stop])
             report(len(rows))
     else:
         from distributed import Client, as_completed
@@ -308,8 +307,8 @@ def run(model, study, samples, *, seed=0, scheduler=None, workers=2, block=25, p
         else:
             client, where = Client(scheduler), f"scheduler {scheduler}"
         try:
-            futures = [client.submit(_plan_block, text, str(path), study, list(b), strength[b.start:b.stop],
-                                     target[b.start:b.stop], pure=False) for b in blocks]
+            futures = [client.submit(_plan_block, spec, list(b), strength[b.start:b.stop], target[b.start:b.stop],
+                                     pure=False) for b in blocks]
             for future in as_completed(futures):
                 rows += future.result()
                 report(len(rows))

@@ -4,9 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/io/state_table.hpp"
-#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace py = pybind11;
 
@@ -33,22 +31,6 @@ std::optional<Eigen::VectorXd> activations_argument(const py::handle& a0, Eigen:
   Eigen::VectorXd a = vector_argument(a0, muscles, "a0");
   if (!((a.array() > 0.0).all() && (a.array() <= 1.0).all())) throw py::value_error("a0: activations must lie in (0, 1]");
   return a;
-}
-
-SimTK::State initial_state(const planner::FlatOutputMap& flat, const Eigen::VectorXd& q0_rad,
-                           const Eigen::VectorXd& qd0_rad_per_s, const std::optional<Eigen::VectorXd>& activations,
-                           const Eigen::VectorXd& reserves_N) {
-  const plugin::MusculoskeletalModel& model = flat.model();
-  SimTK::State s = model.defaultState();
-  if (activations) {
-    model.setJointAngles(s, q0_rad);
-    plugin::equilibrate_tendons(model, s, *activations);
-    model.setExcitations(s, *activations);
-  } else {
-    planner::set_minimum_effort_rest_state(flat, s, q0_rad, reserves_N);
-  }
-  model.setJointSpeeds(s, qd0_rad_per_s);
-  return s;
 }
 
 Eigen::VectorXd column_vector(const plugin::StoTable& table, const std::string& label) {

@@ -46,12 +46,6 @@ Eigen::VectorXd vector_argument(const pybind11::handle& x, Eigen::Index n, const
 /// a0 of the API: None, or one activation in (0, 1] per muscle (a ValueError otherwise).
 std::optional<Eigen::VectorXd> activations_argument(const pybind11::handle& a0, Eigen::Index muscles);
 
-/// The state the programs start from: q0 and qd0 with the given activations and their tendons in
-/// static equilibrium, or (no activations) the minimum-effort rest state at q0 for `reserves_N`.
-SimTK::State initial_state(const planner::FlatOutputMap& flat, const Eigen::VectorXd& q0_rad,
-                           const Eigen::VectorXd& qd0_rad_per_s, const std::optional<Eigen::VectorXd>& activations,
-                           const Eigen::VectorXd& reserves_N);
-
 /// A table's columns as numpy-ready arrays (std::out_of_range naming an absent label).
 Eigen::VectorXd column_vector(const plugin::StoTable& table, const std::string& label);
 Table columns_table(const plugin::StoTable& table, const std::vector<std::string>& labels);

@@ -5,6 +5,8 @@
 #include <optional>
 #include <string>
 
+#include "flatsos/planner/rest_state.hpp"
+
 
 namespace py = pybind11;
 
@@ -34,7 +36,7 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
   o.sos.bounds.enforce = bounds;
   Plan out{m.model, m.flat, {}, {}};
   py::gil_scoped_release release;
-  const SimTK::State s = initial_state(*m.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
+  const SimTK::State s = planner::start_state(*m.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
   out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(model, s), o);
   out.initial = s;
   return out;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/stepper.hpp"
 
 namespace py = pybind11;
@@ -64,7 +65,7 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
     py::gil_scoped_release release;
     // Bad options: std::invalid_argument naming the field (a ValueError).
     planner::RecedingHorizonController controller(*m.flat, options, plant_model);
-    const SimTK::State initial = initial_state(*simulated_model.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
+    const SimTK::State initial = planner::start_state(*simulated_model.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
     run = planner::run_receding_horizon(controller, initial, loop, settle_tolerance);
     warnings = controller.warnings();
     plan_failures = controller.planFailures();

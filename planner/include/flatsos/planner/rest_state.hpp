@@ -4,6 +4,8 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <optional>
+
 #include <Eigen/Core>
 #include <Simbody.h>
 
@@ -19,5 +21,11 @@ namespace flatsos::planner {
 /// Throws std::runtime_error when the SLP fails or the rest lies outside the valid domain.
 void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& state, const Eigen::VectorXd& q_rad,
                                    const Eigen::VectorXd& reserves_N);
+
+/// The state a plan or a closed loop starts from (a State of flat.model()): joint angles q and
+/// speeds qd with the given activations (held excitations equal) and their tendons in static
+/// equilibrium, or, without activations, the minimum-effort rest at q for `reserves_N`.
+SimTK::State start_state(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
+                         const std::optional<Eigen::VectorXd>& activations, const Eigen::VectorXd& reserves_N);
 
 }  // namespace flatsos::planner
