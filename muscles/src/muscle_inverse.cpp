@@ -67,11 +67,23 @@ Dual<K> seed(double value, int index) {
 }
 
 template <int K>
+void set_domain_distance(MuscleInverse& out, const Dual<K>& distance) {
+  out.domain_distance = distance.v;
+  if constexpr (K == 6)
+    for (int i = 0; i < 3; ++i) {
+      out.domain_distance_gradient[i] = distance.g[i];
+      out.path_domain_distance_gradient[i] = distance.g[3 + i];
+    }
+}
+
+template <int K>
 MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, const SecondOrderJet& path) {
   using D = Dual<K>;
   MuscleInverse out;
   if (!(force.value > 0.0)) {
     out.stage = MuscleInverse::Stage::SlackTendon;
+    out.domain_distance = -force.value / p.max_isometric_force_N;
+    if constexpr (K > 0) out.domain_distance_gradient[0] = -1.0 / p.max_isometric_force_N;
     return out;
   }
   const D F = seed<K>(force.value, 0), dF = seed<K>(force.rate, 1), ddF = seed<K>(force.acceleration, 2);
@@ -95,6 +107,7 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
   if (h != 0.0 && !(x.v > 0.0)) {
     out.stage = MuscleInverse::Stage::FiberCollapsed;
     out.fiber_length_m = x.v;
+    set_domain_distance(out, (-1.0 / p.optimal_fiber_length_m) * x);
     return out;
   }
   D lm = x, c{1.0, {}}, dc{}, dlm = dx, ddlm = ddx;
@@ -125,6 +138,7 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
   out.force_ratio = g.v;
   if (!(g.v > 0.0)) {
     out.stage = MuscleInverse::Stage::NoForceCapacity;
+    set_domain_distance(out, -g);
     return out;
   }
   // Active fibre force F / cos - Phi_P(L_M) = a Fmax f g, and its rate.

@@ -141,8 +141,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   const Eigen::VectorXd& previous = step.buffers.bounded_alpha;
   if (previous.size() == alpha.size() && previous.allFinite()) {
     auto violation = [&](const Eigen::VectorXd& x) {
-      const BoundRowsAt at = rows(x, false);
-      return at.defined ? at.violation + reserve_violation_N(lp, x) : std::numeric_limits<double>::infinity();
+      return rows(x, false).violation + reserve_violation_N(lp, x);
     };
     if (violation(previous) < violation(alpha)) alpha = previous;
   }

@@ -204,3 +204,66 @@ TEST(MuscleInverse, SlackTendonAndNoForceCapacityStopTheChain) {
   EXPECT_EQ(fast.stage, fm::MuscleInverse::Stage::NoForceCapacity);
   EXPECT_NEAR(fast.shortening_velocity_m_per_s, 1.2 * vmax, 1e-12);
 }
+
+// Outside the domain the inverse says how far (>= 0, 0 inside) with gradients in both jets, so
+// that the bounded planners can lead a start outside back in: a slack tendon (F <= 0), a
+// collapsed pennated fibre (the tendon longer than the unit) and a fibre shortening faster than
+// Vmax, each against finite differences; a step against the gradient shrinks the distance.
+TEST(MuscleInverse, TheDistanceOutsideTheDomainHasExactGradients) {
+  const auto plain = triceps();
+  const auto pennated = variants()[1];
+  const double vmax = plain.max_shortening_velocity_m_per_s();
+  const double slack_path = plain.tendon_slack_length_m + plain.optimal_fiber_length_m;
+  struct Case {
+    const char* name;
+    fm::MuscleParameters p;
+    fm::SecondOrderJet force, path;
+    fm::MuscleInverse::Stage stage;
+  };
+  const Case cases[] = {
+      {"slack tendon", plain, {-30.0, 5.0, 1.0}, {slack_path, 0.1, 0.0}, fm::MuscleInverse::Stage::SlackTendon},
+      {"collapsed fibre", pennated, {300.0, 40.0, -200.0}, {pennated.tendon_slack_length_m - 0.01, 0.05, 0.3},
+       fm::MuscleInverse::Stage::FiberCollapsed},
+      {"no force capacity", plain, {150.0, 300.0, 2e3}, {slack_path, -1.3 * vmax, 0.7}, fm::MuscleInverse::Stage::NoForceCapacity},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fm::MuscleInverse inv = fm::invert_muscle(c.p, c.force, c.path, true);
+    ASSERT_EQ(inv.stage, c.stage);
+    EXPECT_GT(inv.domain_distance, 0.0);
+    EXPECT_EQ(fm::invert_muscle(c.p, c.force, c.path, false).domain_distance, inv.domain_distance);
+    double gradient_norm = 0.0;
+    for (int k = 0; k < 6; ++k) {
+      const bool on_force = k < 3;
+      const int o = k % 3;
+      auto distance = [&](double x) {
+        fm::SecondOrderJet f = c.force, l = c.path;
+        fm::SecondOrderJet& jet = on_force ? f : l;
+        (o == 0 ? jet.value : o == 1 ? jet.rate : jet.acceleration) = x;
+        return fm::invert_muscle(c.p, f, l, false).domain_distance;
+      };
+      const fm::SecondOrderJet& jet = on_force ? c.force : c.path;
+      const double x0 = o == 0 ? jet.value : o == 1 ? jet.rate : jet.acceleration;
+      const double analytic = on_force ? inv.domain_distance_gradient[o] : inv.path_domain_distance_gradient[o];
+      EXPECT_MATCHES_FINITE_DIFFERENCE(analytic, central_difference(distance, x0, default_step(x0, on_force ? 1.0 : 1e-3)))
+          << (on_force ? "d / dF" : "d / dL") << o;
+      gradient_norm += analytic * analytic;
+    }
+    EXPECT_GT(gradient_norm, 0.0);
+    // A small step down the gradient (in the force jet) moves toward the domain.
+    fm::SecondOrderJet closer = c.force;
+    const double s = 1e-3 * inv.domain_distance / std::max(1e-300, gradient_norm);
+    closer.value -= s * inv.domain_distance_gradient[0];
+    closer.rate -= s * inv.domain_distance_gradient[1];
+    closer.acceleration -= s * inv.domain_distance_gradient[2];
+    fm::SecondOrderJet path = c.path;
+    path.value -= s * inv.path_domain_distance_gradient[0];
+    path.rate -= s * inv.path_domain_distance_gradient[1];
+    path.acceleration -= s * inv.path_domain_distance_gradient[2];
+    EXPECT_LT(fm::invert_muscle(c.p, closer, path, false).domain_distance, inv.domain_distance);
+  }
+  // Inside the domain: 0.
+  const fm::MuscleInverse inside = fm::invert_muscle(plain, {200.0, 0.0, 0.0}, {slack_path, 0.0, 0.0}, true);
+  ASSERT_EQ(inside.stage, fm::MuscleInverse::Stage::Complete);
+  EXPECT_EQ(inside.domain_distance, 0.0);
+}

@@ -154,17 +154,16 @@ class PathRows {
         out.value.push_back(reserve_value);
         out.violation += std::max(0.0, -reserve_value);
         for (int k = 0; k < kRowsPerMuscle; ++k) {
-          const double v = bounds.defined ? bounds.value[static_cast<std::size_t>(k)] : -std::numeric_limits<double>::infinity();
+          const double v = bounds.value[static_cast<std::size_t>(k)];
           out.value.push_back(v);
-          if (!bounds.defined) out.defined = false;
-          else out.violation += std::max(0.0, -v);
+          out.violation += std::max(0.0, -v);
         }
         if (jacobian) {
           // The reserve row: dF / d(theta, c).
           for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
             out.jacobian.emplace_back(row, pt.flat.columns[col], pt.flat.slope[0](j, static_cast<Eigen::Index>(col)));
           for (int col = 0; col < v_.paths; ++col) out.jacobian.emplace_back(row, v_.thetas + col, dF_dc[0](j, col));
-          if (bounds.defined) {
+          {
             flat_.pathLengthJetGradient(j, q_jet, path_gradient);
             const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x paths
             for (int k = 0; k < kRowsPerMuscle; ++k) {

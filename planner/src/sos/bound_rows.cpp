@@ -74,28 +74,48 @@ BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double 
   return bp;
 }
 
+CompressedRow compress_row(double r) {
+  if (std::abs(r) <= 1.0) return {r, 1.0};
+  return {std::copysign(1.0 + std::log(std::abs(r)), r), 1.0 / std::abs(r)};
+}
+
 MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::SecondOrderJet& force,
                                   const fm::SecondOrderJet& path, double a_min, bool gradients, double margin) {
   const fm::MuscleInverse inv = fm::invert_muscle(p, force, path, gradients);
   MuscleBoundRows rows;
-  if (inv.stage != fm::MuscleInverse::Stage::Complete) return rows;
-  rows.defined = true;
+  if (inv.stage != fm::MuscleInverse::Stage::Complete) {
+    rows.value.fill(-(kOutsideDomain + inv.domain_distance));
+    for (std::size_t k = 0; k < rows.value.size(); ++k)
+      for (std::size_t o = 0; o < 3; ++o) {
+        rows.gradient[k][o] = -inv.domain_distance_gradient[o];
+        rows.path_gradient[k][o] = -inv.path_domain_distance_gradient[o];
+      }
+    return rows;
+  }
+  rows.in_domain = true;
   const fm::ExcitationBoundMargins m = fm::excitation_bound_margins(p, inv.activation, inv.activation_rate_per_s);
   // Imposed with a margin (kBoundMargin at least) wider than the step LPs resolve rows (about
   // 4e-7 with Clp's scaling), so that a row met to that resolution still leaves the plan inside.
-  rows.value = {inv.activation - a_min - margin, 1.0 - inv.activation - margin, m.lower - margin, m.upper - margin};
+  const std::array<double, kRowsPerMuscle> raw = {inv.activation - a_min - margin, 1.0 - inv.activation - margin,
+                                                  m.lower - margin, m.upper - margin};
+  std::array<double, kRowsPerMuscle> slope{};
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const CompressedRow c = compress_row(raw[k]);
+    rows.value[k] = c.value;
+    slope[k] = c.slope;
+  }
   if (gradients)
     for (std::size_t o = 0; o < 3; ++o) {
       const double da = inv.activation_gradient[o], dadot = inv.activation_rate_gradient[o];
-      rows.gradient[0][o] = da;
-      rows.gradient[1][o] = -da;
-      rows.gradient[2][o] = m.lower_d_activation * da + m.lower_d_rate_s * dadot;
-      rows.gradient[3][o] = m.upper_d_activation * da + m.upper_d_rate_s * dadot;
+      rows.gradient[0][o] = slope[0] * da;
+      rows.gradient[1][o] = -slope[1] * da;
+      rows.gradient[2][o] = slope[2] * (m.lower_d_activation * da + m.lower_d_rate_s * dadot);
+      rows.gradient[3][o] = slope[3] * (m.upper_d_activation * da + m.upper_d_rate_s * dadot);
       const double pa = inv.path_activation_gradient[o], padot = inv.path_activation_rate_gradient[o];
-      rows.path_gradient[0][o] = pa;
-      rows.path_gradient[1][o] = -pa;
-      rows.path_gradient[2][o] = m.lower_d_activation * pa + m.lower_d_rate_s * padot;
-      rows.path_gradient[3][o] = m.upper_d_activation * pa + m.upper_d_rate_s * padot;
+      rows.path_gradient[0][o] = slope[0] * pa;
+      rows.path_gradient[1][o] = -slope[1] * pa;
+      rows.path_gradient[2][o] = slope[2] * (m.lower_d_activation * pa + m.lower_d_rate_s * padot);
+      rows.path_gradient[3][o] = slope[3] * (m.upper_d_activation * pa + m.upper_d_rate_s * padot);
     }
   return rows;
 }
@@ -134,11 +154,6 @@ BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoin
     for (int j = 0; j < m; ++j) {
       const MuscleBoundRows rows = bound_rows(flat, bp, j, a_min[j], theta, jacobian, margin);
       for (int k = 0; k < kRowsPerMuscle; ++k, ++row) {
-        if (!rows.defined) {
-          out.value.push_back(-std::numeric_limits<double>::infinity());
-          out.defined = false;
-          continue;
-        }
         out.value.push_back(rows.value[static_cast<std::size_t>(k)]);
         out.violation += std::max(0.0, -rows.value[static_cast<std::size_t>(k)]);
         if (jacobian)

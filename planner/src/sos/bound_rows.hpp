@@ -35,13 +35,28 @@ BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double 
 /// joint path that is itself a variable.
 BoundPoint flat_output_point(const SosSetup& setup, const FlatOutputMap& flat, double t);
 
+/// A row r >= 0 in units of activation, compressed where |r| > 1 to sign(r) (1 + ln|r|): the same
+/// sign, so the same feasible set, and C1 (slope 1 at |r| = 1). A fibre stretched far along the
+/// Gaussian force-length curve needs activations of 1e86 (rows and gradients that large made the
+/// step LPs fail in Clp); compressed they are a few hundred with gradients of their size.
+/// Inside the bounds (|r| <= 1) rows are unchanged.
+struct CompressedRow {
+  double value = 0.0, slope = 1.0;  // slope: d value / d r
+};
+CompressedRow compress_row(double r);
+
 // The bound rows of one muscle at one point, each ">= 0": a - a_min, 1 - a, and the two margins
 // of muscles::excitation_bound_margins for 0 <= n <= 1 (smooth in a and da/dt, defined where n
 // is not), with their gradients in the point's tendon-force jet.
 constexpr int kRowsPerMuscle = 4;
 constexpr double kBoundMargin = 1e-6;
+/// Outside the muscle's domain (slack tendon, collapsed fibre, no force capacity: no a, no n)
+/// each row is -(kOutsideDomain + the inverse's domain_distance): more violated than any
+/// compressed row inside can be (1 + ln(DBL_MAX) < 711), and less so toward the domain, so an
+/// optimizer that starts or steps outside is led back in.
+constexpr double kOutsideDomain = 1000.0;
 struct MuscleBoundRows {
-  bool defined = false;  // false: slack tendon or no force capacity (no a, no n)
+  bool in_domain = false;  // false: the rows are the extension above
   std::array<double, kRowsPerMuscle> value{};
   std::array<muscles::TendonForceJetGradient, kRowsPerMuscle> gradient{};     // in (F, dF, ddF)
   std::array<muscles::PathLengthJetGradient, kRowsPerMuscle> path_gradient{};  // in (L, dL, ddL)
@@ -61,10 +76,9 @@ double column_derivative(const BoundPoint& bp, const muscles::TendonForceJetGrad
 
 /// The bound rows at every point (and their Jacobian) for theta.
 struct BoundRowsAt {
-  std::vector<double> value;  // per point, muscle, row; -inf where undefined
+  std::vector<double> value;  // per point, muscle, row
   std::vector<Eigen::Triplet<double>> jacobian;  // (row, theta column, derivative)
   double violation = 0.0;     // sum of max(0, -value)
-  bool defined = true;
 };
 
 BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,

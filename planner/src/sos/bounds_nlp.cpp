@@ -60,7 +60,6 @@ class BoundedSopNlp : public Ipopt::TNLP {
     for (const auto& bp : points_)
       for (int j = 0; j < muscles(); ++j) {
         const MuscleBoundRows rows = bound_rows(flat_, bp, j, a_min_[j], theta, false);
-        if (!rows.defined) return false;
         for (double v : rows.value) g[r++] = v;
       }
     return true;
@@ -81,7 +80,6 @@ class BoundedSopNlp : public Ipopt::TNLP {
     for (const auto& bp : points_)
       for (int j = 0; j < muscles(); ++j) {
         const MuscleBoundRows rows = bound_rows(flat_, bp, j, a_min_[j], theta, true);
-        if (!rows.defined) return false;
         for (const auto& grad : rows.gradient)
           for (std::size_t c = 0; c < bp.columns.size(); ++c) values[k++] = column_derivative(bp, grad, j, c);
       }

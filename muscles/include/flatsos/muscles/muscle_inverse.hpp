@@ -51,6 +51,13 @@ struct MuscleInverse {
   /// The same with respect to the path's jet (L, dL/dt, d2L/dt2): what a joint path that moves
   /// changes through the muscle's length.
   PathLengthJetGradient path_activation_gradient{}, path_activation_rate_gradient{}, path_excitation_gradient{};
+  /// How far outside the domain when stage is not Complete (>= 0, dimensionless): -F / Fmax for
+  /// a slack tendon, -x / (optimal fibre length) for a collapsed fibre, -g(u) without force
+  /// capacity; 0 when Complete. With its gradients (when asked for): an optimizer that starts
+  /// outside the domain can move back into it.
+  double domain_distance = 0.0;
+  TendonForceJetGradient domain_distance_gradient{};
+  PathLengthJetGradient path_domain_distance_gradient{};
 };
 
 /// `path` is the musculotendon length L and its rates (m, m/s, m/s^2).
