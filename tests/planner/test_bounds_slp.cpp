@@ -4,6 +4,7 @@
 // end at a point that satisfies the KKT conditions.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <random>
 
 #include "sos/bounds_slp.hpp"
@@ -129,5 +130,61 @@ TEST(BoundsSlp, EndsAtAKktPointOfEveryRow) {
   for (Eigen::Index j = 0; j < s.x.size(); ++j) {
     if (s.x[j] > 1e-9) EXPECT_NEAR(residual[j], 0.0, 1e-6) << "coefficient " << j;
     else EXPECT_GE(residual[j], -1e-6) << "coefficient " << j;  // x_j at its bound 0
+  }
+}
+
+// Two rows that no x meets together (x0 >= 5 and x0 <= 1, both bent a little) among the
+// concave ones: the SLP must end at a stationary point of the violation and say the rows are
+// violated. Steering the penalty by the violation's own LP gets there in fewer LP steps than
+// raising it only after settling at each price (41 against 94 when written), at the same point.
+TEST(BoundsSlp, AnInfeasibleProblemEndsAtAStationaryPointOfTheViolationSoonerWhenSteered) {
+  const Problem problem;
+  auto rows = [&](const Eigen::VectorXd& x, bool jacobian) {
+    fpd::BoundRowsAt out = problem.rows(x, jacobian);
+    const int first = static_cast<int>(out.value.size());
+    const double bend = 0.01 * x.squaredNorm();
+    for (const double sign : {1.0, -1.0}) {
+      const double v = sign > 0 ? x[0] - 5.0 - bend : 1.0 - x[0] - bend;
+      const int row = first + (sign > 0 ? 0 : 1);
+      out.value.push_back(v);
+      out.violation += std::max(0.0, -v);
+      if (jacobian)
+        for (Eigen::Index j = 0; j < x.size(); ++j)
+          out.jacobian.emplace_back(row, static_cast<int>(j), (j == 0 ? sign : 0.0) - 0.02 * x[j]);
+    }
+    return out;
+  };
+  const fpd::SlpLinearPart linear{problem.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
+  auto solve = [&](bool steering, Eigen::VectorXd& x) {
+    x = Eigen::VectorXd::Zero(Problem::kVariables);
+    double radius = 0.1;
+    flatsos::planner::SlpBasis basis;
+    fpd::SlpSettings settings;
+    settings.steering = steering;
+    return fpd::solve_bounds_by_slp(linear, rows, x, radius, basis, settings);
+  };
+  Eigen::VectorXd x, x_unsteered;
+  const fpd::SlpOutcome outcome = solve(true, x), unsteered = solve(false, x_unsteered);
+  ASSERT_TRUE(outcome.converged) << outcome.failure;
+  EXPECT_TRUE(outcome.rows_violated);
+  ASSERT_TRUE(unsteered.converged) << unsteered.failure;
+  EXPECT_TRUE(unsteered.rows_violated);
+  std::printf("LP steps to the violation's stationary point: %d steered, %d unsteered\n", outcome.iterations,
+              unsteered.iterations);
+  EXPECT_LT(outcome.iterations, unsteered.iterations);
+  // Stationary for the violation (bound rows and reserve rows): no small move lowers it.
+  auto violation = [&](const Eigen::VectorXd& at) {
+    return rows(at, false).violation + fpd::reserve_violation_N(problem.lp, at);
+  };
+  const double at_end = violation(x);
+  EXPECT_GE(at_end, 4.0);  // x0 - 5 and 1 - x0 cannot both be above -2
+  EXPECT_NEAR(violation(x_unsteered), at_end, 1e-6 * at_end);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::VectorXd move(x.size());
+    for (Eigen::Index j = 0; j < move.size(); ++j) move[j] = normal(rng);
+    const Eigen::VectorXd y = (x + 1e-4 * move.normalized()).cwiseMax(0.0);
+    EXPECT_GE(violation(y), at_end - 1e-9) << "trial " << trial;
   }
 }

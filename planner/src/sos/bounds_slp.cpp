@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include "flatsos/planner/numerics/simplex_lp.hpp"
@@ -108,10 +107,6 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
   if (lp.cost.size() != n || lp.G.cols() != n) throw std::logic_error("bounds SLP: the linear part has other variables than theta");
   auto rows_at = [&](const Eigen::VectorXd& x) { return nonlinear_rows(x, true); };
   BoundRowsAt rows = rows_at(theta);
-  if (!rows.defined) {
-    out.failure = "the start leaves the muscles' domain at a bound point";
-    return out;
-  }
   double penalty = kInitialPenalty;
   auto merit = [&](const Eigen::VectorXd& x, const BoundRowsAt& r) {
     return lp.cost.dot(x) + penalty * (r.violation + reserve_violation_N(lp, x));
@@ -135,6 +130,13 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
   }
   if (reserve_id.size() != static_cast<std::size_t>(lp.G.rows()))
     throw std::logic_error("bounds SLP: the reserve rows do not match their groups");
+  // Every imposed row holds: bound rows to their margin (so that a and n are inside at the
+  // point), reserve rows to half the exchange margin.
+  auto rows_hold = [&]() {
+    const double worst_row = rows.value.empty() ? 0.0 : *std::min_element(rows.value.begin(), rows.value.end());
+    const double worst_reserve = lp.G.rows() ? (lp.G * theta - lp.row_lower).minCoeff() : 0.0;
+    return worst_row >= -kBoundMargin && worst_reserve >= -0.5 * linear.reserve_margin_N;
+  };
   for (; out.iterations < settings.max_iterations; ++out.iterations) {
     // Rows that cannot reach zero inside the box are left out of this LP.
     const Eigen::VectorXd reserve_value = lp.G.rows() ? Eigen::VectorXd(lp.G * theta - lp.row_lower) : Eigen::VectorXd();
@@ -168,6 +170,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     // matched by row identity (bound row or reserve row).
     std::vector<int> lp_row(candidates.size(), -1);
     int slacks = 0;
+    double cost_scale = 1.0 / penalty;  // 0: the feasibility LP (the violation alone)
     auto solve_step_lp = [&]() {
       std::vector<double> lp_lower;
       std::vector<Eigen::Triplet<double>> entries;
@@ -195,8 +198,11 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       const Eigen::Index vars = n + slacks, lp_rows = static_cast<Eigen::Index>(lp_lower.size());
       SparseLinearProgram sub;
       sub.cost.resize(vars);
-      sub.cost.head(n) = lp.cost;
-      sub.cost.tail(slacks).setConstant(penalty);
+      // The merit divided by the penalty: slacks cost 1 and the step's cost shrinks as the
+      // penalty grows (slack costs of 1e11 next to gradients of 1e-6 made Clp call these
+      // always-feasible LPs infeasible).
+      sub.cost.head(n) = lp.cost * cost_scale;
+      sub.cost.tail(slacks).setConstant(1.0);
       sub.x_lower.resize(vars);
       sub.x_upper.resize(vars);
       for (Eigen::Index i = 0; i < n; ++i) {
@@ -214,6 +220,14 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       for (BasisStatus* status : slack_status) start.variables.push_back(*status);
       for (BasisStatus* status : row_status) start.rows.push_back(*status);
       LinearProgramResult result = solve_linear_program_simplex(sub, start);
+      if (result.status != SolveStatus::Solved) {
+        // Every step LP is feasible (d = 0 with the violated rows' slacks): a verdict of
+        // infeasibility or numerical errors is Clp's, from the start basis (seen on rows whose
+        // gradients span 1e-6 to 1e6). Solved again from scratch.
+        SimplexBasis cold;
+        result = solve_linear_program_simplex(sub, cold);
+        if (cold.variables.size() == start.variables.size() && cold.rows.size() == start.rows.size()) start = std::move(cold);
+      }
       std::copy_n(start.variables.begin(), n, basis.step.begin());
       for (std::size_t k = 0; k < slack_status.size(); ++k) *slack_status[k] = start.variables[static_cast<std::size_t>(n) + k];
       for (std::size_t k = 0; k < row_status.size(); ++k) *row_status[k] = start.rows[k];
@@ -224,25 +238,67 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     };
     // Rows left out that the step's linearization would violate join, and the LP is solved again
     // from its basis: the set only grows, and the last step is the LP's over every candidate.
+    auto solve_over_candidates = [&](LinearProgramResult& lp_step, Eigen::VectorXd& lp_d) {
+      for (;;) {
+        lp_step = solve_step_lp();
+        if (lp_step.status != SolveStatus::Solved) {
+          out.failure = "a step LP was not solved (Clp: " + lp_step.solver_status + ")";
+          return false;
+        }
+        lp_d = lp_step.x.head(n);
+        bool joined = false;
+        for (std::size_t k = 0; k < candidates.size(); ++k)
+          if (!in[k] && linear_at(candidates[k], lp_d) < 0.0) in[k] = joined = true;
+        if (!joined) return true;
+      }
+    };
+    // The linearized rows' violation at d. The rows left out are >= 0 at 0 and at d in the
+    // linearization: they add nothing.
+    auto linear_violation = [&](const Eigen::VectorXd& at) {
+      double sum = 0.0;
+      for (const StepRow& c : candidates) sum += std::max(0.0, -linear_at(c, at));
+      return sum;
+    };
+    const double violation_now = linear_violation(Eigen::VectorXd::Zero(n));
     LinearProgramResult step;
     Eigen::VectorXd d;
-    for (;;) {
-      step = solve_step_lp();
-      if (step.status != SolveStatus::Solved) {
-        out.failure = "a step LP was not solved (Clp: " + step.solver_status + ")";
+    if (!solve_over_candidates(step, d)) return out;
+    std::vector<int> step_row = lp_row;  // the step LP's rows (a feasibility LP may follow)
+    // Violations at the LP's resolution (the bound rows' margin) are left to the settling below.
+    if (settings.steering && violation_now > kBoundMargin) {
+      // Steering (Byrd, Nocedal and Waltz): the step must remove a tenth of what the
+      // violation's own LP can remove in this box, or the penalty rises now, not after the
+      // iteration has settled at a penalty too low (each settling cost dozens of LP steps).
+      cost_scale = 0.0;
+      LinearProgramResult feasibility;
+      Eigen::VectorXd d_feasibility;
+      if (!solve_over_candidates(feasibility, d_feasibility)) return out;
+      const double best = violation_now - linear_violation(d_feasibility);
+      // The LP itself leaves violation (its slacks above the margin): what it cannot remove is
+      // not below its resolution (Clp holds rows to about 5e-7 of their size).
+      const bool lp_keeps_violation = slacks > 0 && feasibility.x.tail(slacks).sum() > kBoundMargin;
+      if (lp_keeps_violation && best <= 1e-9 * (1.0 + violation_now)) {
+        // No step lowers the linearized violation in this box, so none in any box (it is
+        // convex in d): a stationary point of the violation. Inside the bounds to their
+        // resolution, or the flat outputs of this basis cannot meet them from here.
+        out.converged = true;
+        out.rows_violated = !rows_hold();
         return out;
       }
-      d = step.x.head(n);
-      bool joined = false;
-      for (std::size_t k = 0; k < candidates.size(); ++k)
-        if (!in[k] && linear_at(candidates[k], d) < 0.0) in[k] = joined = true;
-      if (!joined) break;
+      while (violation_now - linear_violation(d) < 0.1 * best && penalty < kMaxPenalty) {
+        penalty *= 10.0;
+        phi = merit(theta, rows);
+        cost_scale = 1.0 / penalty;
+        if (!solve_over_candidates(step, d)) return out;
+        step_row = lp_row;
+      }
+      cost_scale = 1.0 / penalty;
     }
     out.row_multipliers.assign(rows.value.size(), 0.0);
     out.linear_row_multipliers = Eigen::VectorXd::Zero(lp.G.rows());
     for (std::size_t k = 0; k < candidates.size(); ++k)
-      if (lp_row[k] >= 0) {
-        const double y = std::max(0.0, step.row_multipliers[lp_row[k]]);
+      if (step_row[k] >= 0) {
+        const double y = penalty * std::max(0.0, step.row_multipliers[step_row[k]]);
         if (candidates[k].reserve) out.linear_row_multipliers[candidates[k].index] = y;
         else out.row_multipliers[static_cast<std::size_t>(candidates[k].index)] = y;
       }
@@ -250,25 +306,18 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     // The predicted decrease from the linearized rows at d itself, not from the LP's slacks:
     // those carry the LP's own feasibility tolerance, which the penalty would magnify. The rows
     // left out are >= 0 at 0 and at d in the linearization: they add nothing.
-    double violation_now = 0.0, violation_at_d = 0.0;
-    for (const StepRow& c : candidates) {
-      violation_now += std::max(0.0, -c.value);
-      violation_at_d += std::max(0.0, -linear_at(c, d));
-    }
-    const double predicted = penalty * (violation_now - violation_at_d) - lp.cost.dot(d);
+    const double predicted = penalty * (violation_now - linear_violation(d)) - lp.cost.dot(d);
     const double step_size = d.size() ? d.cwiseAbs().maxCoeff() : 0.0;
     // Settled: nothing left to gain, or steps far below any meaningful force. Done when every
     // imposed row holds (bound rows to their margin, so that a and n are inside at the point;
     // reserve rows to half the exchange margin); otherwise the violated rows' multipliers exceed
     // the penalty: raise it and go on.
     auto settle = [&]() {
-      const double worst_row = *std::min_element(rows.value.begin(), rows.value.end());
-      const double worst_reserve = lp.G.rows() ? (lp.G * theta - lp.row_lower).minCoeff() : 0.0;
-      const bool rows_hold = worst_row >= -kBoundMargin && worst_reserve >= -0.5 * linear.reserve_margin_N;
+      const bool hold = rows_hold();
       // An LP that left every slack at zero believes its rows met: what remains is below its
       // resolution, a higher price only repeats the same LP, and it is no sign of infeasibility.
-      out.rows_violated = !rows_hold && lp_paid_violation;
-      if (rows_hold || penalty >= kMaxPenalty || !lp_paid_violation) return true;
+      out.rows_violated = !hold && lp_paid_violation;
+      if (hold || penalty >= kMaxPenalty || !lp_paid_violation) return true;
       penalty *= 10.0;
       phi = merit(theta, rows);
       return false;
@@ -282,7 +331,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     }
     const Eigen::VectorXd trial = theta + d;
     BoundRowsAt trial_rows = rows_at(trial);
-    const double trial_phi = trial_rows.defined ? merit(trial, trial_rows) : std::numeric_limits<double>::infinity();
+    const double trial_phi = merit(trial, trial_rows);
     const double ratio = (phi - trial_phi) / predicted;
     if (ratio < 0.25) radius = 0.5 * step_size;
     else if (ratio > 0.75 && step_size >= 0.99 * radius) radius *= 2.0;

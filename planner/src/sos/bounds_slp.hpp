@@ -7,8 +7,10 @@
 //   phi(theta) = cost . theta + penalty (sum of bound-row violations + reserve-row violations in N)
 // an exact penalty once the penalty exceeds every multiplier; steps are accepted by the ratio of
 // actual to predicted merit decrease. Near t = 0 the initial state pins the flat outputs, rows
-// move little per newton and their multipliers are large: the penalty grows tenfold whenever the
-// iteration settles with rows still violated.
+// move little per newton and their multipliers are large: the penalty is steered by the LP of
+// the violation alone (SlpSettings::steering) and grows tenfold whenever the iteration settles
+// with rows still violated. Where the violation is stationary the rows cannot be met from here:
+// converged with rows_violated.
 
 #include <functional>
 #include <string>
@@ -62,6 +64,11 @@ struct SlpSettings {
   /// 8: the leg's receding-horizon steps (37 coefficients, 1760 rows) took 4.2 ms with 2 (more
   /// LPs solved again as rows joined), 3.8 ms with 8, 4.0 with 16 (larger LPs).
   int closest_rows_per_coefficient = 8;
+  /// While rows are violated, a second LP over the violation alone says what this box can
+  /// remove: the penalty rises at once until the step removes a tenth of it, and where nothing
+  /// can be removed the violation is stationary (the rows cannot be met from here). false: the
+  /// penalty rises only once the iteration has settled (for comparison).
+  bool steering = true;
 };
 
 /// Improves x in place (and the trust radius and the LP basis, kept across exchange rounds).

@@ -98,6 +98,8 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
         return false;
       }
       last_rows_violated = slp.rows_violated;
+      // The rows at these points alone cannot be met: more points cannot help.
+      if (last_rows_violated) break;
     } else {
       const IpoptBoundsOutcome nlp = solve_bounds_by_ipopt(setup, flat, points, a_min, theta, bo.max_ipopt_iterations);
       result.ipopt_iterations += nlp.iterations;
