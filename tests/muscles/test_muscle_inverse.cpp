@@ -4,6 +4,7 @@
 // reproduce what the inverse says (round trip); and the stages where nothing further is defined.
 #include <gtest/gtest.h>
 
+#include "example_muscles.hpp"
 #include "finite_difference.hpp"
 
 #include <cmath>
@@ -18,14 +19,7 @@ using flatsos::test::default_step;
 
 namespace {
 
-fm::MuscleParameters triceps() {
-  fm::MuscleParameters p;
-  p.name = "triceps";
-  p.max_isometric_force_N = 800.0;
-  p.optimal_fiber_length_m = 0.0877;
-  p.tendon_slack_length_m = 0.19;
-  return p;
-}
+fm::MuscleParameters triceps() { return flatsos::test::example_triceps(); }
 
 // The same muscle with pennation (0.35 rad) and passive fibre force (e0 = 0.6).
 std::vector<fm::MuscleParameters> variants() {

@@ -4,6 +4,7 @@
 // row inside with the domain distance's gradient, so that an optimizer is led back in.
 #include <gtest/gtest.h>
 
+#include "example_muscles.hpp"
 #include "finite_difference.hpp"
 
 #include <cmath>
@@ -17,14 +18,7 @@ using flatsos::test::central_difference;
 
 namespace {
 
-fm::MuscleParameters triceps() {
-  fm::MuscleParameters p;
-  p.name = "triceps";
-  p.max_isometric_force_N = 800.0;
-  p.optimal_fiber_length_m = 0.0877;
-  p.tendon_slack_length_m = 0.19;
-  return p;
-}
+fm::MuscleParameters triceps() { return flatsos::test::example_triceps(); }
 
 }  // namespace
 
