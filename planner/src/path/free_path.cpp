@@ -163,20 +163,18 @@ class PathRows {
           for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
             out.jacobian.emplace_back(row, pt.flat.columns[col], pt.flat.slope[0](j, static_cast<Eigen::Index>(col)));
           for (int col = 0; col < v_.paths; ++col) out.jacobian.emplace_back(row, v_.thetas + col, dF_dc[0](j, col));
-          {
-            flat_.pathLengthJetGradient(j, q_jet, path_gradient);
-            const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x paths
-            for (int k = 0; k < kRowsPerMuscle; ++k) {
-              const auto& g = bounds.gradient[static_cast<std::size_t>(k)];
-              const auto& pg = bounds.path_gradient[static_cast<std::size_t>(k)];
-              for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
-                out.jacobian.emplace_back(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
-              for (int col = 0; col < v_.paths; ++col) {
-                double d = 0.0;
-                for (std::size_t o = 0; o < 3; ++o)
-                  d += g[o] * dF_dc[o](j, col) + pg[o] * dL(static_cast<Eigen::Index>(o), col);
-                out.jacobian.emplace_back(row + 1 + k, v_.thetas + col, d);
-              }
+          flat_.pathLengthJetGradient(j, q_jet, path_gradient);
+          const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x paths
+          for (int k = 0; k < kRowsPerMuscle; ++k) {
+            const auto& g = bounds.gradient[static_cast<std::size_t>(k)];
+            const auto& pg = bounds.path_gradient[static_cast<std::size_t>(k)];
+            for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
+              out.jacobian.emplace_back(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
+            for (int col = 0; col < v_.paths; ++col) {
+              double d = 0.0;
+              for (std::size_t o = 0; o < 3; ++o)
+                d += g[o] * dF_dc[o](j, col) + pg[o] * dL(static_cast<Eigen::Index>(o), col);
+              out.jacobian.emplace_back(row + 1 + k, v_.thetas + col, d);
             }
           }
         }

@@ -226,7 +226,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
         // gradients span 1e-6 to 1e6). Solved again from scratch.
         SimplexBasis cold;
         result = solve_linear_program_simplex(sub, cold);
-        if (cold.variables.size() == start.variables.size() && cold.rows.size() == start.rows.size()) start = std::move(cold);
+        start = std::move(cold);
       }
       std::copy_n(start.variables.begin(), n, basis.step.begin());
       for (std::size_t k = 0; k < slack_status.size(); ++k) *slack_status[k] = start.variables[static_cast<std::size_t>(n) + k];
@@ -259,7 +259,8 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
       for (const StepRow& c : candidates) sum += std::max(0.0, -linear_at(c, at));
       return sum;
     };
-    const double violation_now = linear_violation(Eigen::VectorXd::Zero(n));
+    double violation_now = 0.0;  // the linearization's at d = 0
+    for (const StepRow& c : candidates) violation_now += std::max(0.0, -c.value);
     LinearProgramResult step;
     Eigen::VectorXd d;
     if (!solve_over_candidates(step, d)) return out;
