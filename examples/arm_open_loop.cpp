@@ -7,11 +7,13 @@
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
+#include "flatsos/planner/shortest_transfer.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
@@ -51,6 +53,17 @@ int main(int argc, char** argv) {
   app.add_flag("--no-bounds", no_bounds,
                "plan with the reserves only: excitations outside [0, 1] or activations above 1 then make the plan "
                "infeasible instead of being constrained");
+  bool shortest_time = false;
+  fpl::ShortestTransferOptions shortest;
+  app.add_flag("--shortest-time", shortest_time,
+               "plan the shortest transfer instead: the least duration with a plan, searched down from --duration-s "
+               "(which must have one) in steps of --shortest-time-ratio, then by bisection; simulates that plan");
+  app.add_option("--shortest-time-lower-s", shortest.lower_s, "the shortest duration the search tries, s")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--shortest-time-ratio", shortest.scan_ratio, "each scanned duration is this fraction of the one before")
+      ->capture_default_str()->check(CLI::Range(0.01, 0.99));
+  app.add_option("--shortest-time-tolerance-s", shortest.tolerance_s, "the bisection's resolution, s")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,
@@ -75,9 +88,21 @@ int main(int argc, char** argv) {
     SimTK::State s = ex::initial_state(flat, in);
     const fpl::MuscleState s0 = fpl::muscle_state_of(*model, s);
 
-    const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, s0, options);
+    std::optional<fpl::ShortestTransfer> search;
+    if (shortest_time) {
+      shortest.upper_s = in.duration_s;
+      fp::ModelWorkspace workspace = flat.makeWorkspace();
+      search = fpl::shortest_transfer(flat, workspace, s0, options, shortest);
+      std::cout << "arm_open_loop: shortest transfer " << fpl::to_string(search->status)
+                << (search->status == fpl::SolveStatus::Solved ? ", " + ex::format(search->shortest_s) + " s" : "")
+                << (search->message.empty() ? "" : ": " + search->message) << " (" << search->tried.size() << " plans, "
+                << search->seconds << " s)\n";
+    }
+    const fpl::OpenLoopPlan plan = search ? search->plan : fpl::plan_open_loop(flat, s0, options);
+    const double duration_s = search ? search->shortest_s : in.duration_s;
     std::filesystem::create_directories(out_dir);
     nlohmann::json summary = ex::plan_summary(plan, flat);
+    if (search) summary["shortest_transfer"] = ex::shortest_transfer_summary(*search);
     summary["model_file"] = model_path;
     summary["problem"] = ex::problem_summary(flat);
     summary["inputs"] = in.describe();
@@ -87,7 +112,7 @@ int main(int argc, char** argv) {
               << plan.sos.ipopt_calls << " calls, setup " << 1e3 * plan.setup_seconds << " ms, solve "
               << 1e3 * plan.solve_seconds << " ms, certificates " << plan.sos.certified_pieces << "/"
               << plan.sos.near_active_pieces << " (" << 1e3 * plan.certify_seconds << " ms)\n";
-    if (plan.status != fpl::SolveStatus::Solved) {
+    if (plan.status != fpl::SolveStatus::Solved || (search && search->status != fpl::SolveStatus::Solved)) {
       ex::write_json(out_dir + "/summary.json", summary);
       std::cerr << "arm_open_loop: no plan, nothing simulated (summary.json says why)\n";
       return 1;
@@ -97,10 +122,10 @@ int main(int argc, char** argv) {
     const auto excitation = fpl::PlannedExcitation::create(flat, plan.path, *plan.Y);
     for (int j = 0; j < m; ++j) model->muscle(j).setExcitationSignal(s, excitation->signal(j));
     fp::SimulationOptions so;
-    so.duration_s = in.duration_s;
+    so.duration_s = duration_s;
     so.accuracy = accuracy;
     so.integrator = fp::integrator_from_name(integrator);
-    so.report_interval_s = in.duration_s / 300.0;
+    so.report_interval_s = duration_s / 300.0;
     const flatsos::Stopwatch sim_wall;
     const fp::SimulationResult sim = fp::simulate(*model, s, so);
     const double sim_seconds = sim_wall.seconds();
@@ -127,7 +152,7 @@ int main(int argc, char** argv) {
     fp::write_sto(out_dir + "/simulation.sto", sim_table);
     fp::write_sto(out_dir + "/simulation_controls.sto", sim_controls);
     ex::write_json(out_dir + "/summary.json", summary);
-    std::cout << "  simulated open loop " << in.duration_s << " s in " << sim_seconds << " s: max |q error| "
+    std::cout << "  simulated open loop " << duration_s << " s in " << sim_seconds << " s: max |q error| "
               << err.max_q_error_rad / ex::kRadPerDeg << " deg, max |a error| " << err.max_activation_error
               << ", max |L_S error| " << err.max_tendon_length_error_m << " m\n  wrote " << out_dir << "/{plan.sto, plan_controls.sto, simulation.sto, simulation_controls.sto, summary.json}\n";
     return sim.finite ? 0 : 1;

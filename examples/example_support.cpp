@@ -133,6 +133,27 @@ nlohmann::json problem_summary(const planner::FlatOutputMap& flat) {
           {"joint_limits", limits}};
 }
 
+nlohmann::json shortest_transfer_summary(const planner::ShortestTransfer& search) {
+  nlohmann::json tried = nlohmann::json::array();
+  for (const auto& t : search.tried)
+    tried.push_back({{"duration_s", t.duration_s},
+                     {"status", planner::to_string(t.status)},
+                     {"cost_Ns", t.cost_N_s},
+                     {"message", t.message},
+                     {"seconds", t.seconds}});
+  return {{"status", planner::to_string(search.status)},
+          {"success", search.status == planner::SolveStatus::Solved},
+          {"message", search.message},
+          {"shortest_duration_s", search.shortest_s},
+          {"no_plan_below_s", search.no_plan_below_s},
+          {"below_status", planner::to_string(search.below_status)},
+          {"below_message", search.below_message},
+          {"at_lower_end", search.at_lower_end},
+          {"plans", search.tried.size()},
+          {"seconds", search.seconds},
+          {"tried", tried}};
+}
+
 nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::FlatOutputMap& flat) {
   const plugin::MusculoskeletalModel& model = flat.model();
   nlohmann::json j;

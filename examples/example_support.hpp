@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/shortest_transfer.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/io/sto_file.hpp"
@@ -46,6 +47,9 @@ Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTab
 
 /// status, cost, timings, iterations, coefficients and the a-posteriori check of a plan.
 nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::FlatOutputMap& flat);
+
+/// The shortest-transfer search: its verdict, bracket and every duration it planned.
+nlohmann::json shortest_transfer_summary(const planner::ShortestTransfer& search);
 
 /// What the planner minimizes and in which coordinates: the flat outputs E (row names, who chose
 /// them, Assumption 1's margin over the joint ranges, where it is smallest, the condition

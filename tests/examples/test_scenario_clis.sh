@@ -20,6 +20,15 @@ grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box 
 expect 2 "--integrator" -- "$ol" --integrator euler --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
 grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
+# The shortest transfer: found, simulated over that duration, every plan of the search in the
+# summary; a longest duration without a plan fails the task.
+expect 2 "--shortest-time-ratio" -- "$ol" --shortest-time --shortest-time-ratio 1.5 --out "$tmp/o"
+expect 0 "shortest transfer solved, 1.365 s" -- "$ol" --shortest-time --duration-s 3 --integrator rosenbrock --accuracy 1e-6 --out "$tmp/ost"
+grep -q '"shortest_duration_s": 1.365' "$tmp/ost/summary.json" || { echo "FAILED: the summary lacks the shortest duration"; fail=1; }
+grep -q '"below_status": "infeasible"' "$tmp/ost/summary.json" || { echo "FAILED: the summary lacks the verdict below it"; fail=1; }
+expect 1 "no plan at the longest duration, 1 s" -- "$ol" --shortest-time --duration-s 1 --out "$tmp/ost_none"
+grep -q '"success": false' "$tmp/ost_none/summary.json" || { echo "FAILED: a search without a plan reported success"; fail=1; }
+[[ ! -e "$tmp/ost_none/simulation.sto" ]] || { echo "FAILED: a search without a plan left a simulation"; fail=1; }
 expect 0 "--horizon-s" -- "$rh" --help
 expect 2 "--period-s" -- "$rh" --period-s 1.0 --horizon-s 0.5 --out "$tmp/o"
 expect 2 "--slp-solver" -- "$rh" --slp-solver glpk --out "$tmp/o"
