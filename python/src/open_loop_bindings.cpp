@@ -6,6 +6,7 @@
 #include <string>
 
 #include "flatsos/planner/rest_state.hpp"
+#include "flatsos/planner/shortest_transfer.hpp"
 
 
 namespace py = pybind11;
@@ -14,31 +15,90 @@ namespace flatsos::python {
 
 namespace {
 
-Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
-                    const py::object& target, double duration, const py::object& reserves, int flat_output_degree,
-                    int flat_output_spans, int torque_pieces, int torque_degree, bool bounds) {
+// The options and start state both entry points share; bad input raises ValueError.
+struct OpenLoopInputs {
+  planner::OpenLoopOptions options;
+  Eigen::VectorXd q0_rad, qd0_rad_per_s;
+  std::optional<Eigen::VectorXd> activations;
+};
+
+OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
+                                const py::object& target, double duration, const py::object& reserves,
+                                int flat_output_degree, int flat_output_spans, int torque_pieces, int torque_degree,
+                                bool bounds) {
   const plugin::MusculoskeletalModel& model = *m.model;
   const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
-  const Eigen::VectorXd q0_rad = vector_argument(q0, joints, "q0"), qd0_rad_per_s = vector_argument(qd0, joints, "qd0");
-  const Eigen::VectorXd target_rad = vector_argument(target, joints, "target");
-  const Eigen::VectorXd reserves_N = vector_argument(reserves, muscles, "reserves", true);
-  const std::optional<Eigen::VectorXd> activations = activations_argument(a0, muscles);
+  OpenLoopInputs in;
+  in.q0_rad = vector_argument(q0, joints, "q0");
+  in.qd0_rad_per_s = vector_argument(qd0, joints, "qd0");
+  in.activations = activations_argument(a0, muscles);
   if (!(duration > 0.0) || !std::isfinite(duration)) throw py::value_error("duration: must be a positive number of seconds");
-
-  planner::OpenLoopOptions o;
+  planner::OpenLoopOptions& o = in.options;
   o.duration_s = duration;
-  o.target_q_rad = target_rad;
-  o.reserves_N = reserves_N;
+  o.target_q_rad = vector_argument(target, joints, "target");
+  o.reserves_N = vector_argument(reserves, muscles, "reserves", true);
   o.sos.flat_output_degree = flat_output_degree;
   o.sos.flat_output_spans = flat_output_spans;
   o.torque.pieces = torque_pieces;
   o.torque.degree = torque_degree;
   o.sos.bounds.enforce = bounds;
+  return in;
+}
+
+Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
+                    const py::object& target, double duration, const py::object& reserves, int flat_output_degree,
+                    int flat_output_spans, int torque_pieces, int torque_degree, bool bounds) {
+  const OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves, flat_output_degree,
+                                             flat_output_spans, torque_pieces, torque_degree, bounds);
   Plan out{m.model, m.flat, {}, {}};
   py::gil_scoped_release release;
-  const SimTK::State s = planner::start_state(*m.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
-  out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(model, s), o);
+  const SimTK::State s = planner::start_state(*m.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
+  out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(*m.model, s), in.options);
   out.initial = s;
+  return out;
+}
+
+py::dict shortest_transfer(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
+                           const py::object& target, const py::object& reserves, double longest, double shortest,
+                           double ratio, double tolerance, int flat_output_degree, int flat_output_spans,
+                           int torque_pieces, int torque_degree, bool bounds) {
+  const OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, longest, reserves, flat_output_degree,
+                                             flat_output_spans, torque_pieces, torque_degree, bounds);
+  planner::ShortestTransferOptions so;
+  so.lower_s = shortest;
+  so.upper_s = longest;
+  so.scan_ratio = ratio;
+  so.tolerance_s = tolerance;
+  Plan plan{m.model, m.flat, {}, {}};
+  planner::ShortestTransfer r;
+  {
+    py::gil_scoped_release release;  // pybind11 raises std::invalid_argument as ValueError
+    const SimTK::State s = planner::start_state(*m.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
+    plugin::ModelWorkspace workspace = m.flat->makeWorkspace();
+    r = planner::shortest_transfer(*m.flat, workspace, planner::muscle_state_of(*m.model, s), in.options, so);
+    plan.initial = s;
+  }
+  py::list tried;
+  for (const auto& t : r.tried) {
+    py::dict d;
+    d["duration"] = t.duration_s;
+    d["status"] = planner::to_string(t.status);
+    d["cost"] = t.status == planner::SolveStatus::Solved ? py::cast(t.cost_N_s) : py::none();
+    d["message"] = t.message;
+    d["seconds"] = t.seconds;
+    tried.append(d);
+  }
+  py::dict out;
+  out["status"] = planner::to_string(r.status);
+  out["message"] = r.message;
+  out["shortest"] = r.status == planner::SolveStatus::Solved ? py::cast(r.shortest_s) : py::none();
+  out["no_plan_below"] = r.no_plan_below_s > 0.0 ? py::cast(r.no_plan_below_s) : py::none();
+  out["below_status"] = planner::to_string(r.below_status);
+  out["at_lower_end"] = r.at_lower_end;
+  out["tried"] = tried;
+  out["seconds"] = r.seconds;
+  plan.plan = std::move(r.plan);
+  out["plan"] = py::cast(std::move(plan));
   return out;
 }
 
@@ -118,6 +178,19 @@ void register_open_loop(py::module_& m) {
         "force, N, one number or one per muscle. Keywords: the flat outputs' B-spline degree and spans (4 and 1: "
         "the paper's quartic), the torque model's pieces and degree, and whether excitations and activations are "
         "kept within their bounds. Bad input raises ValueError; the GIL is released while planning.");
+
+  m.def("shortest_transfer", &shortest_transfer, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
+        py::arg("target"), py::arg("reserves"), py::kw_only(), py::arg("longest"), py::arg("shortest") = 0.1,
+        py::arg("ratio") = 0.8, py::arg("tolerance") = 1e-3, py::arg("flat_output_degree") = 4,
+        py::arg("flat_output_spans") = 1, py::arg("torque_pieces") = 12, py::arg("torque_degree") = 3,
+        py::arg("bounds") = true,
+        "The shortest duration (s) with a plan for this transfer: searched down from `longest` (which must have "
+        "one) in steps of `ratio`, no further than `shortest`, then bisected to `tolerance`. Returns a dict: "
+        "'status' ('solved', 'infeasible': no plan at `longest`, 'failed'), 'message', 'shortest' (None unless "
+        "solved), 'no_plan_below' (the longest duration found without a plan, None if none), 'below_status' "
+        "('infeasible': proven there; 'failed': undecided, so 'shortest' is an upper bound), 'at_lower_end', "
+        "'tried' (every planned duration: 'duration', 'status', 'cost', 'message', 'seconds'), 'seconds' and "
+        "'plan' (the OpenLoopPlan at 'shortest', else at `longest`). Other arguments as plan_open_loop's.");
 }
 
 }  // namespace flatsos::python
