@@ -56,12 +56,12 @@ ShortestTransfer shortest_transfer(const FlatOutputMap& flat, plugin::ModelWorks
     out.below_status = trial.status;
     out.below_message = trial.message;
   };
-  auto finish = [&](SolveStatus status, std::string message) {
+  auto finish = [&](SolveStatus status, std::string message) -> ShortestTransfer {
     out.status = status;
     out.message = std::move(message);
     out.shortest_s = out.plan.status == SolveStatus::Solved ? above : 0.0;
     out.seconds = wall.seconds();
-    return out;
+    return std::move(out);  // once, as the function returns
   };
 
   if (!plan(o.upper_s)) {

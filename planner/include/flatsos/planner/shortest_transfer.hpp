@@ -35,7 +35,7 @@ struct TriedDuration {
 struct ShortestTransfer {
   /// Solved: shortest_s has a plan and (unless at_lower_end) no_plan_below_s has none, at most
   /// tolerance_s shorter. Infeasible: no plan at `upper` (the message says why). Failed: the plan at
-  /// `upper` failed, or the bisection ran out of plans (shortest_s then holds the bracket found).
+  /// `upper` failed, or the search ran out of plans (shortest_s then holds the shortest plan found).
   SolveStatus status = SolveStatus::Failed;
   std::string message;
   double shortest_s = 0.0;       ///< the shortest duration found with a plan
