@@ -16,6 +16,7 @@
 #include "allocation_counter.hpp"
 #include "default_model.hpp"
 #include "example_support.hpp"
+#include "ipopt_linear_solvers.hpp"
 #include "scaling.hpp"
 #include "scenario_inputs.hpp"
 #include "timing.hpp"
@@ -67,6 +68,10 @@ int main(int argc, char** argv) try {
   app.add_flag("--scaling-only", scaling_only,
                "time only the scaling study: each stage (flat-output map, open-loop plan, receding-horizon step and "
                "its parts, closed loop) on each --scaling-model's own scenarios, beside the targets for its size");
+  bool linear_solvers_only = false;
+  app.add_flag("--ipopt-linear-solvers-only", linear_solvers_only,
+               "time only Ipopt's linear solvers side by side (flatsos's dense LDL^T and MUMPS, per iteration over "
+               "KKT dimensions; the Ipopt-bound stages under MUMPS alone and under the automatic choice)");
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
   auto scaling = [&] {
     json rows = json::array();
@@ -102,6 +107,25 @@ int main(int argc, char** argv) try {
   ol.target_q_rad = ol_in.target_q_rad;
   ol.reserves_N = ol_in.reserves_N;
   ol.check_points = 2;  // the a-posteriori check is timed separately
+  // The receding-horizon scenario's first step: its SLP rows (C_Y and the torque box's B, or with
+  // posture-dependent moment arms C_Y(q_i) and B_i at each grid posture) are the SLP stages' problem.
+  const ex::ScenarioInputs rh_in = ex::resolve_scenario(*model, "receding_horizon", {}, 2.0, 1.0);
+  fpl::RecedingHorizonOptions rh;
+  rh.solver = fpl::SlpSolver::Ipopt;  // the cold/warm comparison below is Ipopt's
+  rh.target_q_rad = rh_in.target_q_rad;
+  rh.reserves_N = rh_in.reserves_N;
+  const Eigen::VectorXd q_rh = rh_in.q0_rad;
+  const fpl::RecedingHorizonStep first =
+      fpl::plan_receding_horizon_step(flat, ws, q_rh, Eigen::VectorXd::Zero(model->numJoints()), rh);
+  const Eigen::MatrixXd& G = first.reserve_rows;
+  const Eigen::VectorXd& B = first.bound_N;
+  auto linear_solver_study = [&] {
+    return flatsos::bench::ipopt_linear_solver_study({flat, ws, ms0, ol, G, B}, reps);
+  };
+  if (linear_solvers_only) {
+    emit({{"machine", j["machine"]}, {"ipopt_linear_solvers", linear_solver_study()}});
+    return 0;
+  }
   auto time_plan = [&](const fpl::OpenLoopOptions& o, int repetitions) {
     std::vector<double> setup, solve, certify, total, bounds;
     fpl::OpenLoopPlan last;
@@ -218,18 +242,6 @@ int main(int argc, char** argv) try {
   time_check_and_inverse_map();
 
   // ---- SLP and one RH step, at the first step of the RH scenario ----
-  const ex::ScenarioInputs rh_in = ex::resolve_scenario(*model, "receding_horizon", {}, 2.0, 1.0);
-  fpl::RecedingHorizonOptions rh;
-  rh.solver = fpl::SlpSolver::Ipopt;  // the cold/warm comparison below is Ipopt's
-  rh.target_q_rad = rh_in.target_q_rad;
-  rh.reserves_N = rh_in.reserves_N;
-  const Eigen::VectorXd q_rh = rh_in.q0_rad;
-  const fpl::RecedingHorizonStep first =
-      fpl::plan_receding_horizon_step(flat, ws, q_rh, Eigen::VectorXd::Zero(model->numJoints()), rh);
-  // The step's own rows: C_Y and the torque box's B, or (posture-dependent moment arms) C_Y(q_i)
-  // and B_i at each grid posture.
-  const Eigen::MatrixXd& G = first.reserve_rows;
-  const Eigen::VectorXd& B = first.bound_N;
   const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(G, B, fpl::SlpSolver::Ipopt); });
   const auto slp_exact = repeat(reps * 20, [&] { fpl::solve_slp(G, B, fpl::SlpSolver::VertexEnumeration); });
   const auto slp_appendix = repeat(reps * 20, [&] { fpl::slp_appendix_solution(G, B); });
@@ -414,6 +426,7 @@ int main(int argc, char** argv) try {
                   {"rh_step_ms", {{"median", rh_step_ms}, {"target", 1.0}, {"met", rh_step_ms <= 1.0}}},
                   {"closed_loop_real_time_factor",
                    {{"median", rtf}, {"target", 50.0}, {"met", rtf >= 50.0}, {"integrator", "rosenbrock at 1e-5"}}}};
+  j["ipopt_linear_solvers"] = linear_solver_study();
   j["scaling"] = scaling();
   emit(j);
   return 0;

@@ -178,6 +178,7 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
       lr = solve_linear_program_simplex(lp, w.basis);
     }
     r.iterations = lr.iterations;
+    if (ipopt) r.ipopt_linear_solver = lr.linear_solver;
     const double scale = 1.0 + B.cwiseAbs().maxCoeff();
     const bool feasible = lr.x.size() == p && lr.x.allFinite() && lr.x.minCoeff() >= -1e-9 * scale &&
                           (CY * lr.x - B).minCoeff() >= -1e-7 * scale;

@@ -121,19 +121,21 @@ std::vector<double> constant_flat_output_start(const FlatOutputMap& flat, plugin
 struct IpoptOutcome {
   bool solved = false, infeasible = false;
   std::string solver_status;
+  std::string linear_solver;
   int iterations = 0;
   std::vector<double> x;
 };
 
 IpoptOutcome run_ipopt(const detail::HermiteSimpsonProblem& problem, std::vector<double> start, const CollocationOptions& o,
                        double duration_s, const Eigen::VectorXd& weights) {
-  auto app = detail::make_ipopt(o.tolerance, o.max_iterations);
+  Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(problem, std::move(start));
+  auto app = detail::make_ipopt(o.tolerance, o.max_iterations, *nlp);
   // The cost in N s is O(100-1000): scaled to O(1)-O(10) per unit of time and weight.
   app->Options()->SetNumericValue("obj_scaling_factor", 1.0 / (duration_s * std::max(weights.sum(), 1e-12) * 10.0));
-  Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(problem, std::move(start));
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
   IpoptOutcome out;
   out.solver_status = detail::ipopt_status_name(status);
+  out.linear_solver = ipopt_linear_solver_name(app.linear_solver);
   if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); IsValid(stats)) out.iterations = stats->IterationCount();
   out.solved = detail::ipopt_solved(status) && static_cast<int>(nlp->x_.size()) == problem.variables();
   out.infeasible = detail::ipopt_infeasible(status);
@@ -288,6 +290,7 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
       run_ipopt(problem, constant_flat_output_start(flat, workspace, path, initial, problem), o, path.duration_s, weights);
   result.solve_seconds = solve.seconds();
   result.solver_status = outcome.solver_status;
+  result.linear_solver = outcome.linear_solver;
   result.iterations = outcome.iterations;
   const std::string what = free ? "with a free joint path" : "along this joint path";
   if (outcome.solved) {

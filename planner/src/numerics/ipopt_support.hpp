@@ -8,6 +8,8 @@
 #include <mutex>
 #include <string>
 
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
+
 namespace flatsos::planner::detail {
 
 /// An Ipopt application together with the process-wide lock of Debian's sequential MUMPS, which
@@ -19,13 +21,21 @@ namespace flatsos::planner::detail {
 struct IpoptSession {
   std::unique_lock<std::recursive_mutex> lock;
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app;
+  IpoptLinearSolver linear_solver = IpoptLinearSolver::Mumps;  ///< the one this application uses
   Ipopt::IpoptApplication* operator->() const { return Ipopt::GetRawPtr(app); }
   Ipopt::IpoptApplication& operator*() const { return *app; }
 };
 
-/// A quiet Ipopt application with MUMPS (the only linear solver of Debian's Ipopt). Initialize("")
-/// so that no stray ipopt.opt in the working directory is read.
-IpoptSession make_ipopt(double tol, int max_iter);
+/// A quiet Ipopt application for `problem`. Its linear solver: the process-wide choice
+/// (flatsos/planner/numerics/ipopt_linear_solver.hpp), which by default depends on the
+/// problem's KKT dimension. Initialize("") so that no stray ipopt.opt in the working directory
+/// is read.
+IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem);
+
+/// Dimension of the KKT system Ipopt factors for `problem`: its variables, a multiplier per
+/// equality row, and a slack and a multiplier per other row (read from the problem's sizes and
+/// bounds).
+int kkt_dimension(Ipopt::TNLP& problem);
 
 /// Ipopt's status as text, for messages.
 std::string ipopt_status_name(Ipopt::ApplicationReturnStatus status);

@@ -94,7 +94,8 @@ LinearProgramResult solve_linear_program(const LinearProgram& lp, const LinearPr
     throw std::invalid_argument("linear program: NaN in the data");
 
   const Stopwatch wall;
-  auto app = detail::make_ipopt(o.tolerance, o.max_iterations);
+  Ipopt::SmartPtr<LinearProgramTnlp> tnlp = new LinearProgramTnlp(lp, o.start);
+  auto app = detail::make_ipopt(o.tolerance, o.max_iterations, *tnlp);
   app->Options()->SetStringValue("jac_c_constant", "yes");
   app->Options()->SetStringValue("jac_d_constant", "yes");
   app->Options()->SetStringValue("hessian_constant", "yes");
@@ -103,11 +104,11 @@ LinearProgramResult solve_linear_program(const LinearProgram& lp, const LinearPr
   // default relaxes by 1e-8 relative, ~1e-6 N here, which showed up as reserve violations).
   app->Options()->SetNumericValue("bound_relax_factor", 0.0);
   app->Options()->SetNumericValue("constr_viol_tol", 1e-9);
-  Ipopt::SmartPtr<LinearProgramTnlp> tnlp = new LinearProgramTnlp(lp, o.start);
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(tnlp)));
 
   LinearProgramResult r;
   r.solver_status = detail::ipopt_status_name(status);
+  r.linear_solver = ipopt_linear_solver_name(app.linear_solver);
   r.status = detail::ipopt_solved(status) ? SolveStatus::Solved
              : detail::ipopt_infeasible(status) ? SolveStatus::Infeasible
                                                  : SolveStatus::Failed;

@@ -251,7 +251,7 @@ IpoptRun run_ipopt(std::vector<Block>& blocks, FactorLayout layout,
   // With the block weights, a constraint violation tau means a relative monomial residual
   // <= tau; ask Ipopt for a tenth of the certification tolerance (re-checked by the caller).
   const double ipopt_tol = std::min(1e-8, 0.1 * tol);
-  const detail::IpoptSession app = detail::make_ipopt(ipopt_tol, options.max_iterations);
+  const detail::IpoptSession app = detail::make_ipopt(ipopt_tol, options.max_iterations, *nlp);
   app->Options()->SetNumericValue("constr_viol_tol", ipopt_tol);
   // No early "acceptable" exit: at polynomials with exact zeros the solution is singular and
   // Newton converges linearly; Ipopt would otherwise stop there short of the tolerance.
@@ -270,6 +270,7 @@ IpoptRun run_ipopt(std::vector<Block>& blocks, FactorLayout layout,
   }
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
   run.status = detail::ipopt_status_name(status);
+  run.linear_solver = ipopt_linear_solver_name(app.linear_solver);
   if (Ipopt::IsValid(app->Statistics())) run.iterations = app->Statistics()->IterationCount();
   if (derivative_test) {
     run.derivative_report = journal->text;

@@ -47,6 +47,7 @@ struct Block {
 
 struct IpoptRun {
   std::string status;
+  std::string linear_solver;
   int iterations = 0;
   int variables = 0;
   int constraints = 0;

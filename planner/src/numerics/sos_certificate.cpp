@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "flatsos/planner/numerics/sos_certificate_study.hpp"
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "numerics/lukacs_algebra.hpp"
 #include "numerics/lukacs_basis.hpp"
@@ -194,6 +195,7 @@ CertificationResult certify_nonnegative_on_unit_interval(const std::vector<Polyn
     certify_blocks(blocks, first);
     res.ipopt_calls = 1;
     res.ipopt_status = first.status;
+    add_linear_solver_name(res.ipopt_linear_solver, first.linear_solver);
     res.ipopt_iterations = first.iterations;
     res.ipopt_variables = first.variables;
     res.ipopt_constraints = first.constraints;
@@ -216,6 +218,7 @@ CertificationResult certify_nonnegative_on_unit_interval(const std::vector<Polyn
         res.retried_blocks = static_cast<int>(again.size());
         res.retry_status = second.status;
         res.ipopt_iterations += second.iterations;
+        add_linear_solver_name(res.ipopt_linear_solver, second.linear_solver);
       }
     }
     res.solve_seconds = ipopt_wall.seconds();

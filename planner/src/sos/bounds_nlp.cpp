@@ -112,17 +112,18 @@ class BoundedSopNlp : public Ipopt::TNLP {
 IpoptBoundsOutcome solve_bounds_by_ipopt(const SosSetup& setup, const FlatOutputMap& flat,
                                          const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
                                          const Eigen::VectorXd& start, int max_iterations) {
-  auto app = make_ipopt(1e-8, max_iterations);
+  Ipopt::SmartPtr<BoundedSopNlp> nlp = new BoundedSopNlp(setup, flat, points, a_min, start);
+  auto app = make_ipopt(1e-8, max_iterations, *nlp);
   app->Options()->SetStringValue("hessian_approximation", "limited-memory");
   app->Options()->SetStringValue("mu_strategy", "adaptive");
   app->Options()->SetNumericValue("bound_relax_factor", 0.0);
   app->Options()->SetNumericValue("constr_viol_tol", 1e-9);
-  Ipopt::SmartPtr<BoundedSopNlp> nlp = new BoundedSopNlp(setup, flat, points, a_min, start);
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
   IpoptBoundsOutcome out;
   out.solved = ipopt_solved(status);
   out.infeasible = ipopt_infeasible(status);
   out.solver_status = ipopt_status_name(status);
+  out.linear_solver = ipopt_linear_solver_name(app.linear_solver);
   out.x = nlp->x_;
   if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); IsValid(stats)) out.iterations = stats->IterationCount();
   return out;

@@ -14,6 +14,7 @@ namespace flatsos::planner::detail {
 struct IpoptBoundsOutcome {
   bool solved = false, infeasible = false;
   std::string solver_status;
+  std::string linear_solver;
   Eigen::VectorXd x;  ///< where Ipopt stopped (empty if it never evaluated)
   int iterations = 0;
 };

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "sos/bound_rows.hpp"
 #include "sos/bounds_nlp.hpp"
@@ -104,6 +105,7 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       const IpoptBoundsOutcome nlp = solve_bounds_by_ipopt(setup, flat, points, a_min, theta, bo.max_ipopt_iterations);
       result.ipopt_iterations += nlp.iterations;
       ++result.ipopt_calls;
+      add_linear_solver_name(result.ipopt_linear_solver, nlp.linear_solver);
       if (!nlp.solved) {
         const GridExcess at = nlp.x.size() ? grid_excess(setup, mp, jets, a_min, nlp.x, bo.check_points) : excess;
         result.status = nlp.infeasible ? SolveStatus::Infeasible : SolveStatus::Failed;

@@ -1,6 +1,7 @@
 #include <algorithm>
 
 #include "flatsos/planner/numerics/sos_certificate.hpp"
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "sos/sos_exchange.hpp"
 
@@ -27,6 +28,7 @@ void certify_near_active_pieces(const SosSetup& setup, const Eigen::VectorXd& th
     result.certified = cert.all_certified;
     result.ipopt_iterations += cert.ipopt_iterations;
     result.ipopt_calls += cert.ipopt_calls;
+    add_linear_solver_name(result.ipopt_linear_solver, cert.ipopt_linear_solver);
   }
   result.certify_seconds = certify.seconds();
 }

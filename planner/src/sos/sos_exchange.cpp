@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "flatsos/planner/numerics/simplex_lp.hpp"
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner::detail {
@@ -55,6 +56,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
       lr = solve_linear_program(lp, lpo);
       result.ipopt_iterations += lr.iterations;
       ++result.ipopt_calls;
+      add_linear_solver_name(result.ipopt_linear_solver, lr.linear_solver);
     }
     if (lr.status != SolveStatus::Solved) {
       const std::string reason = fixed_violation(setup, o.feasibility_margin_N);

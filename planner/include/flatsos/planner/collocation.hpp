@@ -39,6 +39,7 @@ struct CollocationResult {
   SolveStatus status = SolveStatus::Failed;
   std::string message;               ///< why, when not solved
   std::string solver_status;         ///< Ipopt's return status
+  std::string linear_solver;         ///< what factored Ipopt's KKT systems
   double cost_N_s = 0.0;             ///< the effort: Simpson quadrature of sum_j w_j F_j
   int mesh_intervals = 0;
   int variables = 0, constraints = 0;

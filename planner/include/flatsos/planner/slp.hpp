@@ -53,6 +53,7 @@ struct SlpResult {
   double cost_N = 0.0;         ///< c . alpha (SlpWorkspace::cost; sum(alpha) by default)
   bool used_fallback = false;  ///< the solver failed and the appendix construction was used
   int iterations = 0;
+  std::string ipopt_linear_solver;  ///< what factored Ipopt's KKT systems (empty for the others)
   double wall_seconds = 0.0;
 };
 

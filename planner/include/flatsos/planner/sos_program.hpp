@@ -111,6 +111,7 @@ struct SosProgramResult {
   int lp_points = 0;
   int ipopt_iterations = 0;            ///< summed over all Ipopt calls (exchange LPs and certificates)
   int ipopt_calls = 0;
+  std::string ipopt_linear_solver;     ///< what factored those calls' KKT systems (empty: no call)
   int simplex_pivots = 0;              ///< Clp's pivots over the exchange LPs
   int near_active_pieces = 0;
   int certified_pieces = 0;            ///< of the near-active ones

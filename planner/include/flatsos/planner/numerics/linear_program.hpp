@@ -25,6 +25,7 @@ struct LinearProgram {
 struct LinearProgramResult {
   SolveStatus status = SolveStatus::Failed;
   std::string solver_status;  ///< Ipopt's return status
+  std::string linear_solver;  ///< what factored Ipopt's KKT systems (empty for the simplex)
   Eigen::VectorXd x;
   Eigen::VectorXd row_multipliers;  ///< Ipopt's lambda (>= 0 on active lower bounds here: sign per Ipopt)
   double objective = 0.0;

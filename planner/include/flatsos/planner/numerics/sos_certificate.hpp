@@ -98,6 +98,7 @@ struct CertificationResult {
   double solve_seconds = 0.0;  ///< wall time of the Ipopt calls (setup of the TNLPs included)
   double wall_seconds = 0.0;   ///< wall time of the whole certification
   std::string ipopt_status = "not_called";  ///< of the first call
+  std::string ipopt_linear_solver;          ///< what factored Ipopt's KKT systems (empty: no call)
   int retried_blocks = 0;                   ///< polynomials sent to the second call
   std::string retry_status = "not_called";
   /// With options.derivative_test: Ipopt's checker output and its error count (-1 if not run or

@@ -1,0 +1,45 @@
+#pragma once
+// Which linear solver factors the KKT systems of the planner's Ipopt problems.
+//
+// Ipopt spends most of a small problem's time in its linear solver's fixed costs: Debian's MUMPS
+// costs 0.3-0.6 ms per iteration whatever the size. flatsos therefore factors small KKT systems
+// with its own dense Bunch-Kaufman LDL^T (served through Ipopt's ma27 slot; no HSL code is used)
+// and leaves large ones to MUMPS.
+
+#include <string>
+
+namespace flatsos::planner {
+
+enum class IpoptLinearSolver {
+  Automatic,  ///< the dense LDL^T up to kDenseKktMaxDimension, MUMPS above (the default)
+  DenseLdlt,  ///< flatsos's dense Bunch-Kaufman LDL^T, whatever the size
+  Mumps,      ///< MUMPS (sparse multifrontal), whatever the size
+};
+
+/// Largest KKT dimension (variables + equality rows + 2 x inequality rows) that Automatic gives
+/// to the dense LDL^T: where, measured per Ipopt iteration on this project's problems, the two
+/// cost the same (docs/method/ipopt_linear_solver.md).
+inline constexpr int kDenseKktMaxDimension = 200;
+
+/// Process-wide choice for every later Ipopt solve (tests and benchmarks compare the two;
+/// thread-safe, a solve already running keeps its solver).
+void set_ipopt_linear_solver(IpoptLinearSolver solver);
+IpoptLinearSolver ipopt_linear_solver();
+
+/// The solver Automatic picks for a KKT system of this dimension (the others pick themselves).
+IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension);
+
+/// Name for logs and summaries: "dense LDL^T (flatsos)" or "MUMPS" ("automatic" for Automatic).
+std::string ipopt_linear_solver_name(IpoptLinearSolver solver);
+
+/// Ipopt 3.11 reads its CPU timers (getrusage, about 120 system calls per iteration) whether or
+/// not anyone looks at them. flatsos serves them from the monotonic wall clock for the whole
+/// process (docs/method/ipopt_linear_solver.md); `true` restores getrusage (benchmarks measure
+/// the difference in one run). Thread-safe.
+void set_ipopt_timers_by_getrusage(bool by_getrusage);
+
+/// Appends `name` to the comma-separated list `names` unless it is there (results that gather
+/// several Ipopt calls report every linear solver that served them).
+void add_linear_solver_name(std::string& names, const std::string& name);
+
+}  // namespace flatsos::planner

@@ -1,0 +1,33 @@
+#pragma once
+// flatsos's dense LDL^T (numerics/dense_ldlt.hpp) as Ipopt's linear solver for small problems.
+//
+// Debian's Ipopt 3.11 is built with a loader for the HSL solvers it cannot ship: a program may
+// hand it three functions with MA27's calling convention (analyse, factor, solve) and then ask
+// for linear_solver "ma27". flatsos serves that slot with its own code; no HSL code is in the
+// process. Ipopt's MA27 interface keeps every array between its calls, so the functions hold no
+// state: the factor lives in Ipopt's real workspace (after the matrix values), the pivots in
+// its integer workspace.
+
+namespace flatsos::planner::detail {
+
+/// Registers the dense solver for Ipopt's ma27 slot (once per process; thread-safe). Must happen
+/// before the first solve that asks for it.
+void register_dense_kkt_solver();
+
+/// The calls as Ipopt makes them (exposed for tests of the calling convention; Ipopt's Fortran
+/// integer is int, checked where they are defined). Indices
+/// are 1-based (Fortran); entries of either triangle, duplicates summed. info has 20 entries:
+/// info[0] the flag (0 ok, 3 singular, -3/-4 integer/real workspace too small with the size
+/// needed in info[1], 1 an index out of range), info[1] the rank after a factorization,
+/// info[4]/info[5] the real/integer workspace needed, info[14] the negative eigenvalues.
+void dense_kkt_analyse(int* n, int* nz, const int* irn, const int* icn, int* iw, int* liw,
+                       int* ikeep, int* iw1, int* nsteps, int* iflag, int* icntl, double* cntl,
+                       int* info, double* ops);
+void dense_kkt_factor(int* n, int* nz, const int* irn, const int* icn, double* a, int* la, int* iw,
+                      int* liw, int* ikeep, int* nsteps, int* maxfrt, int* iw1, int* icntl,
+                      double* cntl, int* info);
+void dense_kkt_solve(int* n, double* a, int* la, int* iw, int* liw, double* w, int* maxfrt,
+                     double* rhs, int* iw1, int* nsteps, int* icntl, double* cntl);
+void dense_kkt_defaults(int* icntl, double* cntl);
+
+}  // namespace flatsos::planner::detail
