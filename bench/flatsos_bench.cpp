@@ -2,7 +2,8 @@
 // repetitions, wall clock). Stages: the open-loop SOP (setup, exchange solve, certificates), the
 // paper's single box vs the default torque model, the SLP (Ipopt vs exact vs the appendix
 // construction), one inverse-map evaluation, one RH step (cold vs warm Ipopt, exact), the
-// closed-loop RH scenario (real-time factor) and a forward simulation per simulated second.
+// closed-loop RH scenario (real-time factor), a forward simulation per simulated second, and
+// Ipopt's linear solvers side by side (ipopt_linear_solvers.hpp).
 #include <CLI/CLI.hpp>
 
 #include <algorithm>

@@ -109,7 +109,9 @@ int main(int argc, char** argv) {
     summary["warnings"] = ex::print_warnings("arm_open_loop", model->warnings(), plan.warnings);
     std::cout << "arm_open_loop: plan " << fpl::to_string(plan.status) << (plan.message.empty() ? "" : ": " + plan.message)
               << "\n  cost " << plan.sos.cost_N_s << " N s, " << plan.sos.ipopt_iterations << " Ipopt iterations in "
-              << plan.sos.ipopt_calls << " calls, setup " << 1e3 * plan.setup_seconds << " ms, solve "
+              << plan.sos.ipopt_calls << " calls"
+              << (plan.sos.ipopt_linear_solver.empty() ? "" : " (KKT systems by " + plan.sos.ipopt_linear_solver + ")")
+              << ", setup " << 1e3 * plan.setup_seconds << " ms, solve "
               << 1e3 * plan.solve_seconds << " ms, certificates " << plan.sos.certified_pieces << "/"
               << plan.sos.near_active_pieces << " (" << 1e3 * plan.certify_seconds << " ms)\n";
     if (plan.status != fpl::SolveStatus::Solved || (search && search->status != fpl::SolveStatus::Solved)) {

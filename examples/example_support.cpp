@@ -170,6 +170,8 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   j["check_seconds"] = plan.check_seconds;
   j["ipopt_iterations"] = s.ipopt_iterations;
   j["ipopt_calls"] = s.ipopt_calls;
+  // Which linear solver factored those calls' KKT systems: flatsos's dense LDL^T or MUMPS.
+  j["ipopt_linear_solver"] = s.ipopt_linear_solver;
   j["exchange_rounds"] = s.exchange_rounds;
   j["lp_points"] = s.lp_points;
   j["torque_model"] = {{"pieces", plan.torque.pieces.size()},

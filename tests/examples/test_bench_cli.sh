@@ -6,6 +6,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 expect 0 "--repetitions" -- "$bench" --help
 expect 0 "--open-loop-only" -- "$bench" --help
 expect 0 "--scaling-model" -- "$bench" --help
+expect 0 "--ipopt-linear-solvers-only" -- "$bench" --help
 expect 1 "$tmp/missing.json" -- "$bench" --scaling-only --scaling-model "$tmp/missing.json"
 expect 2 "--repetitions" -- "$bench" --repetitions 0
 expect 1 "$tmp/missing.json" -- "$bench" --model "$tmp/missing.json"

@@ -20,6 +20,9 @@ grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box 
 expect 2 "--integrator" -- "$ol" --integrator euler --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
 grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
+# The plan's Ipopt calls (its certificates) name the linear solver that served them: the paper's
+# problem is small, so flatsos's dense LDL^T.
+grep -q '"ipopt_linear_solver": "dense LDL^T (flatsos)"' "$tmp/olr/summary.json" || { echo "FAILED: the summary does not name Ipopt's linear solver"; fail=1; }
 # The shortest transfer: found, simulated over that duration, every plan of the search in the
 # summary; a longest duration without a plan fails the task.
 expect 2 "--shortest-time-ratio" -- "$ol" --shortest-time --shortest-time-ratio 1.5 --out "$tmp/o"
