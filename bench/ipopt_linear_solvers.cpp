@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "example_support.hpp"
+#include "random_linear_program.hpp"
 #include "timing.hpp"
 #include "flatsos/planner/collocation.hpp"
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
@@ -17,21 +18,6 @@ namespace {
 namespace fpl = planner;
 using nlohmann::json;
 using fpl::IpoptLinearSolver;
-
-// A feasible LP with dense rows: n coefficients, `rows` lower-bounded rows (the exchange's shape).
-fpl::LinearProgram random_lp(int n, int rows, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  fpl::LinearProgram lp;
-  lp.cost = Eigen::VectorXd::NullaryExpr(n, [&] { return g(rng); });
-  lp.G = Eigen::MatrixXd::NullaryExpr(rows, n, [&] { return g(rng); });
-  const Eigen::VectorXd x0 = Eigen::VectorXd::NullaryExpr(n, [&] { return g(rng); });
-  lp.row_lower = lp.G * x0 - Eigen::VectorXd::Constant(rows, 0.5);
-  lp.row_upper = Eigen::VectorXd::Constant(rows, 1e19);
-  lp.x_lower = Eigen::VectorXd::Constant(n, -100.0);
-  lp.x_upper = Eigen::VectorXd::Constant(n, 100.0);
-  return lp;
-}
 
 struct Timed {
   double median_s = 0.0;
@@ -83,7 +69,8 @@ json ipopt_linear_solver_study(const LinearSolverStudyInputs& in, int reps) {
   json lp_sweep = json::array();
   for (const auto& [n, rows] : std::vector<std::pair<int, int>>{{4, 6}, {4, 22}, {4, 50}, {4, 100}, {4, 150}, {20, 60},
                                                                {20, 120}, {20, 200}, {4, 300}, {40, 300}}) {
-    const fpl::LinearProgram lp = random_lp(n, rows, 7u + static_cast<unsigned>(rows));
+    std::mt19937 rng(7u + static_cast<unsigned>(rows));
+    const fpl::LinearProgram lp = test::random_feasible_lp(rng, n, rows);
     auto solve = [&] {
       const fpl::LinearProgramResult r = fpl::solve_linear_program(lp);
       return std::make_pair(r.iterations, r.solver_status);

@@ -15,6 +15,7 @@
 #include "flatsos/planner/numerics/linear_program.hpp"
 #include "flatsos/planner/numerics/sos_certificate_study.hpp"
 #include "flatsos/planner/slp.hpp"
+#include "random_linear_program.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -33,19 +34,6 @@ auto under(IpoptLinearSolver solver, F f) {
   } restore;
   fpl::set_ipopt_linear_solver(solver);
   return f();
-}
-
-fpl::LinearProgram random_lp(std::mt19937& rng, int n, int rows) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  fpl::LinearProgram lp;
-  lp.cost = Eigen::VectorXd::NullaryExpr(n, [&] { return g(rng); });
-  lp.G = Eigen::MatrixXd::NullaryExpr(rows, n, [&] { return g(rng); });
-  const Eigen::VectorXd x0 = Eigen::VectorXd::NullaryExpr(n, [&] { return g(rng); });
-  lp.row_lower = lp.G * x0 - Eigen::VectorXd::Constant(rows, 0.5);
-  lp.row_upper = Eigen::VectorXd::Constant(rows, 1e19);
-  lp.x_lower = Eigen::VectorXd::Constant(n, -100.0);
-  lp.x_upper = Eigen::VectorXd::Constant(n, 100.0);
-  return lp;
 }
 
 void expect_same_lp_result(const fpl::LinearProgram& lp, const std::string& what) {
@@ -70,9 +58,9 @@ TEST(IpoptLinearSolvers, AutomaticPicksTheDenseSolverForSmallSystemsOnly) {
   EXPECT_EQ(fpl::ipopt_linear_solver_for(fpl::kDenseKktMaxDimension + 1), IpoptLinearSolver::Mumps);
   // An LP with 4 variables and 22 rows (the SLP's shape): KKT dimension 48.
   std::mt19937 rng(1);
-  EXPECT_EQ(fpl::solve_linear_program(random_lp(rng, 4, 22)).linear_solver, kDense);
+  EXPECT_EQ(fpl::solve_linear_program(flatsos::test::random_feasible_lp(rng, 4, 22)).linear_solver, kDense);
   // 60 variables and 200 rows: dimension 460.
-  EXPECT_EQ(fpl::solve_linear_program(random_lp(rng, 60, 200)).linear_solver, kMumps);
+  EXPECT_EQ(fpl::solve_linear_program(flatsos::test::random_feasible_lp(rng, 60, 200)).linear_solver, kMumps);
 }
 
 TEST(IpoptLinearSolvers, SolverNamesAreListedOnce) {
@@ -89,7 +77,7 @@ TEST(IpoptLinearSolvers, RandomLinearProgramsAgree) {
   std::mt19937 rng(2);
   for (const auto& [n, rows] : std::vector<std::pair<int, int>>{{2, 6}, {4, 22}, {8, 40}, {20, 60}})
     for (int trial = 0; trial < 3; ++trial)
-      expect_same_lp_result(random_lp(rng, n, rows), std::to_string(n) + " x " + std::to_string(rows));
+      expect_same_lp_result(flatsos::test::random_feasible_lp(rng, n, rows), std::to_string(n) + " x " + std::to_string(rows));
 }
 
 TEST(IpoptLinearSolvers, DegenerateInfeasibleAndRankDeficientLinearProgramsAgree) {
