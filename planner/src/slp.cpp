@@ -151,6 +151,7 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
   r.message.clear();
   r.used_fallback = false;
   r.iterations = 0;
+  r.ipopt_linear_solver.clear();  // a reused result must not name an earlier solve's solver
   // Enumeration visits C(m + p, p) vertices: 210 for the paper's arm, millions for dozens of
   // muscles or stacked grid postures, where the simplex's pivots are far fewer.
   const bool too_many = vertex_count(CY.rows() + CY.cols(), CY.cols()) > kMaxEnumeratedVertices;
