@@ -101,9 +101,11 @@ Inertia factor_ldlt_in_place(double* data, int n, int* pivots, double zero_pivot
         trailing.rankUpdate(c1, -d22 / det);
         trailing.rankUpdate(c2, -d11 / det);
         trailing.rankUpdate(c1, c2, d21 / det);
-        const Eigen::VectorXd l1 = (d22 * c1 - d21 * c2) / det;
-        c2 = (d11 * c2 - d21 * c1) / det;
-        c1 = l1;
+        for (int i = 0; i < rest; ++i) {  // [l1 l2] = C D^-1, row by row (no temporary)
+          const double x1 = c1(i), x2 = c2(i);
+          c1(i) = (d22 * x1 - d21 * x2) / det;
+          c2(i) = (d11 * x2 - d21 * x1) / det;
+        }
       }
       pivots[k] = pivots[k + 1] = -partner - 1;
       // The block's eigenvalues: opposite signs when det < 0, the trace's sign when det > 0.
