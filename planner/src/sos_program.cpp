@@ -4,8 +4,17 @@
 #include "sos/sos_bounds.hpp"
 #include "sos/sos_exchange.hpp"
 #include "sos/sos_setup.hpp"
+#include "sos/whole_program_nlp.hpp"
 
 namespace flatsos::planner {
+
+namespace {
+void finish(const detail::SosSetup& setup, const Eigen::VectorXd& theta, SosProgramResult& result) {
+  result.cost_N_s = setup.cost_constant + setup.lp.cost.dot(theta);
+  result.Y = detail::flat_outputs_of(setup, theta);
+  result.status = SolveStatus::Solved;
+}
+}  // namespace
 
 SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                    const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
@@ -16,8 +25,18 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
   result.setup_seconds = setup_time.seconds();
 
   Eigen::VectorXd theta;
-  SlpBasis basis;
   const bool bounds = muscles && options.bounds.enforce;
+  if (options.method == SosProgramMethod::WholeProgramNlp) {
+    if (!detail::solve_whole_program(setup, options, theta, result)) return result;
+    if (bounds) {
+      const bool within = detail::check_excitation_bounds(setup, *muscles, options, theta, result);
+      result.solve_seconds += result.bounds_seconds;
+      if (!within) return result;
+    }
+    finish(setup, theta, result);
+    return result;
+  }
+  SlpBasis basis;
   const double tolerance_N = bounds ? detail::kLooseConstraintTolerance_N : detail::kConstraintTolerance_N;
   if (!detail::solve_by_exchange(setup, options, theta, result, &basis, tolerance_N)) return result;
   if (bounds) {
@@ -25,9 +44,7 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
     result.solve_seconds += result.bounds_seconds;
     if (!bounded) return result;
   }
-  result.cost_N_s = setup.cost_constant + setup.lp.cost.dot(theta);
-  result.Y = detail::flat_outputs_of(setup, theta);
-  result.status = SolveStatus::Solved;
+  finish(setup, theta, result);
   if (options.certify) detail::certify_near_active_pieces(setup, theta, options, result);
   return result;
 }

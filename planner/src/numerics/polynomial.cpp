@@ -89,9 +89,7 @@ Polynomial Polynomial::operator*(const Polynomial& o) const {
   return Polynomial(r);
 }
 
-namespace {
-// Roots (complex) of p, with trailing zero coefficients trimmed; empty for constants.
-Eigen::VectorXcd all_roots(const Polynomial& p) {
+Eigen::VectorXcd complex_roots(const Polynomial& p) {
   const Eigen::VectorXd& c = p.coefficients();
   const double scale = c.cwiseAbs().maxCoeff();
   Eigen::Index n = c.size();
@@ -106,11 +104,10 @@ Eigen::VectorXcd all_roots(const Polynomial& p) {
   solver.compute(c.head(n));
   return solver.roots();
 }
-}  // namespace
 
 Eigen::VectorXd real_roots_in(const Polynomial& p, double a, double b, double tol) {
   std::vector<double> out;
-  for (const auto& r : all_roots(p))
+  for (const auto& r : complex_roots(p))
     if (std::abs(r.imag()) <= tol * (1.0 + std::abs(r)) && r.real() >= a && r.real() <= b)
       out.push_back(r.real());
   std::sort(out.begin(), out.end());
@@ -126,7 +123,7 @@ IntervalMinimum minimum_on_interval(const Polynomial& p, double a, double b) {
   };
   consider(b);
   // Every root's real part is a candidate: exact critical points and near-real pairs alike.
-  for (const auto& r : all_roots(p.derivative())) consider(r.real());
+  for (const auto& r : complex_roots(p.derivative())) consider(r.real());
   return best;
 }
 

@@ -23,16 +23,38 @@ constexpr const char* kBoundsUnmet =
     "no flat outputs in this basis keep every excitation in [0, 1] and activation in [a_min, 1] with the reserves";
 }  // namespace
 
+namespace {
+// The torques' jets on the check grid (what the bounds need besides theta).
+std::vector<TorqueJet> check_grid_jets(const SosSetup& setup, const MusclesAlongPath& mp, const ExcitationBoundsOptions& bo) {
+  if (bo.check_points < 2) throw std::invalid_argument("SOS program: bounds need at least 2 check points");
+  const double h = setup.duration_s / (bo.check_points - 1);
+  return mp.flat.torqueJetsOnGrid(mp.workspace, [&](double t) { return mp.path.jet(t, 4); }, 0.0, h, bo.check_points);
+}
+}  // namespace
+
+bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, const SosProgramOptions& o,
+                             const Eigen::VectorXd& theta, SosProgramResult& result) {
+  const Stopwatch wall;
+  const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, o.bounds);
+  const GridExcess excess =
+      grid_excess(setup, mp, jets, activation_minima(mp.flat, o.bounds), theta, o.bounds.check_points);
+  result.max_bound_excess = excess.worst;
+  result.bounds_seconds = wall.seconds();
+  if (excess.worst <= o.bounds.tolerance) return true;
+  result.status = SolveStatus::Failed;
+  result.message = "the reserves' optimum leaves the excitation bounds, which this method does not impose (the "
+                   "exchange does): " + excess.worst_text;
+  return false;
+}
+
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosProgramOptions& o,
                               Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis) {
   const Stopwatch wall;
   const ExcitationBoundsOptions& bo = o.bounds;
-  if (bo.check_points < 2) throw std::invalid_argument("SOS program: bounds need at least 2 check points");
   const FlatOutputMap& flat = mp.flat;
+  const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, bo);
   const Eigen::VectorXd a_min = activation_minima(flat, bo);
   const double h = setup.duration_s / (bo.check_points - 1);
-  const std::vector<TorqueJet> jets =
-      flat.torqueJetsOnGrid(mp.workspace, [&](double t) { return mp.path.jet(t, 4); }, 0.0, h, bo.check_points);
 
   const int stride = (bo.check_points - 1) % kCoarseStride == 0 ? kCoarseStride : 1;
   if (grid_excess(setup, mp, jets, a_min, theta, bo.check_points, stride).worst <= bo.tolerance) {

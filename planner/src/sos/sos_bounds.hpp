@@ -22,4 +22,10 @@ namespace flatsos::planner::detail {
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& muscles, const SosProgramOptions& options,
                               Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis = {});
 
+/// Only checks the bounds at theta on the whole check grid (for solvers that do not impose them):
+/// fills max_bound_excess and bounds_seconds; when a bound is exceeded, sets status Failed and a
+/// message naming the worst excess, and returns false.
+bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& muscles, const SosProgramOptions& options,
+                             const Eigen::VectorXd& theta, SosProgramResult& result);
+
 }  // namespace flatsos::planner::detail

@@ -88,7 +88,24 @@ struct MusclesAlongPath {
   plugin::ModelWorkspace& workspace;
 };
 
+/// How the reserves' program is solved.
+enum class SosProgramMethod {
+  Exchange,      ///< the exchange method, then certificates of the near-active pieces (the default)
+  /// The whole program as one Ipopt problem: theta and a single-square Markov-Lukacs certificate
+  /// f^2 + s(1-s) g^2 of every constraint polynomial theta moves (the reference formulation,
+  /// docs/method/whole_program_nlp.md). Excitation bounds are checked, not imposed.
+  WholeProgramNlp,
+};
+
+/// Settings of the whole-program NLP.
+struct WholeProgramOptions {
+  double tolerance = 1e-10;  ///< Ipopt's tol and constr_viol_tol (the equalities are scaled to order 1)
+  int max_iterations = 3000;
+};
+
 struct SosProgramOptions {
+  SosProgramMethod method = SosProgramMethod::Exchange;
+  WholeProgramOptions whole_program;
   int flat_output_degree = 4;          ///< d (>= 3 keeps the excitations continuous)
   int flat_output_spans = 1;           ///< S uniform knot spans of the B-splines
   double feasibility_margin_N = 1e-6;  ///< constraints are imposed >= this at the LP points
@@ -113,8 +130,12 @@ struct SosProgramResult {
   int ipopt_calls = 0;
   std::string ipopt_linear_solver;     ///< what factored those calls' KKT systems (empty: no call)
   int simplex_pivots = 0;              ///< Clp's pivots over the exchange LPs
-  int near_active_pieces = 0;
+  int near_active_pieces = 0;          ///< the whole-program NLP: every piece theta moves
   int certified_pieces = 0;            ///< of the near-active ones
+  int nlp_variables = 0, nlp_equalities = 0;  ///< of the whole-program NLP (0: not used)
+  /// The whole-program NLP: largest l1 norm of a certificate's coefficient residual (N), a bound
+  /// on how far below 0 the certified constraint can be besides the 1e-9 N tolerance.
+  double max_certificate_residual_N = 0.0;
   bool certified = false;              ///< every near-active piece has a certificate
   bool bounds_imposed = false;         ///< the reserves-only optimum violated a bound: the NLP ran
   int bound_rounds = 0;                ///< NLP solves

@@ -46,6 +46,10 @@ struct IntervalMinimum {
 };
 IntervalMinimum minimum_on_interval(const Polynomial& p, double a, double b);
 
+/// Every root of p (complex, from the companion matrix), top coefficients below 1e-14 of the
+/// largest trimmed first; empty for constants.
+Eigen::VectorXcd complex_roots(const Polynomial& p);
+
 /// Real roots of p in [a, b] (|imaginary part| <= tol * (1 + |root|)), ascending.
 Eigen::VectorXd real_roots_in(const Polynomial& p, double a, double b, double tol = 1e-9);
 

@@ -1,0 +1,404 @@
+#include "sos/whole_program_nlp.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include "flatsos/planner/numerics/simplex_lp.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
+#include "numerics/ipopt_support.hpp"
+#include "numerics/lukacs_squares.hpp"
+
+namespace flatsos::planner::detail {
+
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// The start's grid: points per segment (uniform, ends included) at which the start LPs impose
+// the constraints, and the slack they aim for (N): more only moves the start further inside.
+constexpr int kStartPoints = 9;
+constexpr double kStartSlackCap_N = 10.0;
+// The proximal rounds (measured on the arm's quartic: without them Ipopt's restoration fails;
+// falling a hundredfold per round fails too). Weights are of the factors, which are of order 1.
+constexpr double kFirstProximalWeight = 1.0;
+constexpr double kProximalFall = 10.0;
+constexpr double kLastProximalWeight = 1e-5;
+
+struct Entry {
+  int row, col;
+};
+
+// s(1 - s) = s - s^2: the coefficient of s^k.
+double d_coefficient(int k) { return k == 1 ? 1.0 : k == 2 ? -1.0 : 0.0; }
+
+class WholeProgramNlp : public Ipopt::TNLP {
+ public:
+  WholeProgramNlp(const std::vector<SquaresBlock>& blocks, const VectorXd& cost, const VectorXd& start,
+                  const VectorXd& start_multipliers)
+      : blocks_(blocks), cost_(cost), start_(start), lambda_(start_multipliers), n_theta_(static_cast<int>(cost.size())) {
+    n_ = static_cast<int>(start.size());
+    center_ = start;
+    rho_ = VectorXd::Zero(n_);
+    for (int j = 0; j < n_theta_; ++j) hess_.push_back({j, j});
+    for (const SquaresBlock& b : blocks_) {
+      m_ += b.rows();
+      const int h = b.half, f0 = b.var_offset, g0 = f0 + h + 1;
+      for (int k = 0; k < b.rows(); ++k) {
+        const int row = b.con_offset + k;
+        for (int j = 0; j < n_theta_; ++j)
+          if (b.G(k, j) != 0.0) jac_.push_back({row, j});
+        for (int i = 0; i <= h; ++i)
+          if (k - i >= 0 && k - i <= h) jac_.push_back({row, f0 + i});
+        for (int i = 0; i < h; ++i)
+          if (k - i >= 1 && k - i <= h + 1) jac_.push_back({row, g0 + i});
+      }
+      for (int i = 0; i <= h; ++i)
+        for (int j = 0; j <= i; ++j) hess_.push_back({f0 + i, f0 + j});
+      for (int i = 0; i < h; ++i)
+        for (int j = 0; j <= i; ++j) hess_.push_back({g0 + i, g0 + j});
+    }
+  }
+
+  /// Adds (1/2) sum rho_i (x_i - center_i)^2 to the cost (rho = 0: none) and starts the next
+  /// solve from the last one's point and multipliers.
+  void set_proximal(const VectorXd& rho) {
+    rho_ = rho;
+    if (x_.size() == n_) start_ = center_ = x_;
+    if (multipliers_.size() == m_) lambda_ = multipliers_;
+  }
+  int variables() const { return n_; }
+  int equalities() const { return m_; }
+  const VectorXd& solution() const { return x_; }
+
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac, Ipopt::Index& nnz_h,
+                    IndexStyleEnum& style) override {
+    n = n_;
+    m = m_;
+    nnz_jac = static_cast<Ipopt::Index>(jac_.size());
+    nnz_h = static_cast<Ipopt::Index>(hess_.size());
+    style = C_STYLE;
+    return true;
+  }
+
+  bool get_bounds_info(Ipopt::Index, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index, Ipopt::Number* g_l,
+                       Ipopt::Number* g_u) override {
+    std::fill(x_l, x_l + n_, -2e19);
+    std::fill(x_u, x_u + n_, 2e19);
+    std::fill(g_l, g_l + m_, 0.0);
+    std::fill(g_u, g_u + m_, 0.0);
+    return true;
+  }
+
+  bool get_starting_point(Ipopt::Index, bool init_x, Ipopt::Number* x, bool, Ipopt::Number*, Ipopt::Number*,
+                          Ipopt::Index, bool init_lambda, Ipopt::Number* lambda) override {
+    if (init_x) std::copy(start_.data(), start_.data() + n_, x);
+    if (init_lambda) std::copy(lambda_.data(), lambda_.data() + m_, lambda);
+    return true;  // no bounds: no z to start
+  }
+
+  bool eval_f(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number& f) override {
+    f = cost_.dot(Eigen::Map<const VectorXd>(x, n_theta_)) +
+        0.5 * (rho_.array() * (Eigen::Map<const VectorXd>(x, n_) - center_).array().square()).sum();
+    return true;
+  }
+
+  bool eval_grad_f(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Number* grad) override {
+    Eigen::Map<VectorXd> gr(grad, n_);
+    gr = rho_.cwiseProduct(Eigen::Map<const VectorXd>(x, n_) - center_);
+    gr.head(n_theta_) += cost_;
+    return true;
+  }
+
+  bool eval_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index, Ipopt::Number* g) override {
+    const Eigen::Map<const VectorXd> theta(x, n_theta_);
+    for (const SquaresBlock& b : blocks_) {
+      const double* f = x + b.var_offset;
+      const double* gg = f + b.half + 1;
+      for (int k = 0; k < b.rows(); ++k) {
+        double v = b.base[k] + b.G.row(k).dot(theta);
+        for (int i = std::max(0, k - b.half); i <= std::min(k, b.half); ++i) v -= f[i] * f[k - i];
+        for (int i = 0; i < b.half; ++i)
+          for (int j = 0; j < b.half; ++j) v -= gg[i] * gg[j] * d_coefficient(k - i - j);
+        g[b.con_offset + k] = v;
+      }
+    }
+    return true;
+  }
+
+  bool eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index, Ipopt::Index, Ipopt::Index* iRow,
+                  Ipopt::Index* jCol, Ipopt::Number* values) override {
+    if (values == nullptr) {
+      for (std::size_t e = 0; e < jac_.size(); ++e) {
+        iRow[e] = jac_[e].row;
+        jCol[e] = jac_[e].col;
+      }
+      return true;
+    }
+    // The same order as the structure: per block and row, theta, then f, then g.
+    std::size_t e = 0;
+    for (const SquaresBlock& b : blocks_) {
+      const double* f = x + b.var_offset;
+      const double* gg = f + b.half + 1;
+      auto g_at = [&](int i) { return i >= 0 && i < b.half ? gg[i] : 0.0; };
+      for (int k = 0; k < b.rows(); ++k) {
+        for (int j = 0; j < n_theta_; ++j)
+          if (b.G(k, j) != 0.0) values[e++] = b.G(k, j);
+        for (int i = 0; i <= b.half; ++i)
+          if (k - i >= 0 && k - i <= b.half) values[e++] = -2.0 * f[k - i];
+        // d/dg_i of sum_{i,j} g_i g_j d_{k-i-j} = 2 (g_{k-i-1} - g_{k-i-2}).
+        for (int i = 0; i < b.half; ++i)
+          if (k - i >= 1 && k - i <= b.half + 1) values[e++] = -2.0 * (g_at(k - i - 1) - g_at(k - i - 2));
+      }
+    }
+    return true;
+  }
+
+  bool eval_h(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Number obj_factor, Ipopt::Index, const Ipopt::Number* lambda, bool,
+              Ipopt::Index, Ipopt::Index* iRow, Ipopt::Index* jCol, Ipopt::Number* values) override {
+    if (values == nullptr) {
+      for (std::size_t e = 0; e < hess_.size(); ++e) {
+        iRow[e] = hess_[e].row;
+        jCol[e] = hess_[e].col;
+      }
+      return true;
+    }
+    // The cost is linear; row k holds -f_i f_{k-i} and -g_i g_j d_{k-i-j}.
+    std::size_t e = 0;
+    for (int j = 0; j < n_theta_; ++j) values[e++] = obj_factor * rho_[j];
+    for (const SquaresBlock& b : blocks_) {
+      const double* l = lambda + b.con_offset;
+      auto l_at = [&](int k) { return k >= 0 && k < b.rows() ? l[k] : 0.0; };
+      for (int i = 0; i <= b.half; ++i)
+        for (int j = 0; j <= i; ++j)
+          values[e++] = -2.0 * l[i + j] + (i == j ? obj_factor * rho_[b.var_offset + i] : 0.0);
+      for (int i = 0; i < b.half; ++i)
+        for (int j = 0; j <= i; ++j)
+          values[e++] = -2.0 * (l_at(i + j + 1) - l_at(i + j + 2)) +
+                        (i == j ? obj_factor * rho_[b.var_offset + b.half + 1 + i] : 0.0);
+    }
+    return true;
+  }
+
+  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Ipopt::Number* x, const Ipopt::Number*,
+                         const Ipopt::Number*, Ipopt::Index m, const Ipopt::Number*, const Ipopt::Number* lambda,
+                         Ipopt::Number, const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
+    x_ = Eigen::Map<const VectorXd>(x, n);
+    multipliers_ = Eigen::Map<const VectorXd>(lambda, m);
+  }
+
+ private:
+  const std::vector<SquaresBlock>& blocks_;
+  const VectorXd& cost_;
+  VectorXd start_, lambda_, center_, rho_, multipliers_;
+  int n_theta_ = 0, n_ = 0, m_ = 0;
+  std::vector<Entry> jac_, hess_;
+  VectorXd x_;
+};
+
+// The start LP's dual: a weight (N s / N) on one constraint at one point.
+struct StartDual {
+  std::size_t constraint;
+  double s, weight;
+};
+
+bool moves_with_theta(const ConstraintPolynomial& c) { return c.G.size() > 0 && c.G.cwiseAbs().maxCoeff() > 0.0; }
+
+// The start: on a grid of every segment, first the largest slack t (capped) with which every
+// constraint can hold (>= t s^margin_order, so values the initial state fixes need none), then
+// the cheapest theta with half of it. Returns false (with a reason) when the grid allows none.
+bool strictly_feasible_start(const SosSetup& setup, const SosProgramOptions& o, VectorXd& theta,
+                             std::vector<StartDual>& duals, std::string& why) {
+  const int n_theta = setup.free_coefficients;
+  std::vector<std::pair<std::size_t, double>> points;  // (constraint, s)
+  for (std::size_t c = 0; c < setup.constraints.size(); ++c)
+    if (moves_with_theta(setup.constraints[c]))
+      for (int i = 0; i < kStartPoints; ++i) points.emplace_back(c, i / (kStartPoints - 1.0));
+  LinearProgram lp;
+  const Index rows = static_cast<Index>(points.size());
+  lp.G = MatrixXd::Zero(rows, n_theta + 1);
+  lp.row_lower.resize(rows);
+  lp.row_upper = VectorXd::Constant(rows, 1e19);
+  for (Index r = 0; r < rows; ++r) {
+    const ConstraintPolynomial& c = setup.constraints[points[static_cast<std::size_t>(r)].first];
+    const double s = points[static_cast<std::size_t>(r)].second;
+    const Eigen::RowVectorXd v = monomials(s, c.base.size());
+    lp.G.row(r).head(n_theta) = v * c.G;
+    lp.G(r, n_theta) = -std::pow(s, c.margin_order);
+    lp.row_lower[r] = -v.dot(c.base);
+  }
+  lp.x_lower = VectorXd::Constant(n_theta + 1, -o.study.coefficient_bound_N);
+  lp.x_upper = VectorXd::Constant(n_theta + 1, o.study.coefficient_bound_N);
+  lp.x_lower[n_theta] = -1e19;
+  lp.x_upper[n_theta] = kStartSlackCap_N;
+  lp.cost = VectorXd::Zero(n_theta + 1);
+  lp.cost[n_theta] = -1.0;
+  const LinearProgramResult widest = solve_linear_program_simplex(lp);
+  if (widest.status != SolveStatus::Solved || !(widest.x[n_theta] > 0.0)) {
+    why = widest.status == SolveStatus::Solved
+              ? "no flat outputs meet every constraint with a positive slack on the start grid"
+              : "the start's LP failed (" + widest.solver_status + ")";
+    return false;
+  }
+  lp.x_lower[n_theta] = lp.x_upper[n_theta] = 0.5 * widest.x[n_theta];
+  lp.cost.head(n_theta) = setup.lp.cost;
+  lp.cost[n_theta] = 0.0;
+  const LinearProgramResult cheapest = solve_linear_program_simplex(lp);
+  if (cheapest.status != SolveStatus::Solved) {
+    why = "the start's LP failed (" + cheapest.solver_status + ")";
+    return false;
+  }
+  theta = cheapest.x.head(n_theta);
+  duals.clear();
+  for (Index r = 0; r < rows; ++r)
+    if (cheapest.row_multipliers[r] != 0.0)
+      duals.push_back({points[static_cast<std::size_t>(r)].first, points[static_cast<std::size_t>(r)].second,
+                       cheapest.row_multipliers[r]});
+  return true;
+}
+
+}  // namespace
+
+Ipopt::SmartPtr<Ipopt::TNLP> make_whole_program_nlp(const std::vector<SquaresBlock>& blocks, const VectorXd& cost,
+                                                    const VectorXd& start, const VectorXd& multipliers,
+                                                    const VectorXd& proximal_weights) {
+  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, cost, start, multipliers);
+  nlp->set_proximal(proximal_weights);
+  return Ipopt::GetRawPtr(nlp);
+}
+
+bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, VectorXd& theta, SosProgramResult& result) {
+  const Stopwatch solve;
+  auto fail = [&](SolveStatus status, std::string message) {
+    result.status = status;
+    result.message = std::move(message);
+    result.solve_seconds = solve.seconds();
+    return false;
+  };
+  if (const std::string reason = fixed_violation(setup, o.feasibility_margin_N); !reason.empty())
+    return fail(SolveStatus::Infeasible, reason);
+  // What theta cannot move is data: it must hold on its whole segment.
+  for (const ConstraintPolynomial& c : setup.constraints)
+    if (!moves_with_theta(c)) {
+      const IntervalMinimum low = minimum_on_interval(Polynomial(c.base), 0.0, 1.0);
+      if (low.value < -kConstraintTolerance_N) {
+        std::ostringstream why;
+        why << "infeasible: the boundary conditions fix the " << c.name << " on [" << c.t0_s << ", " << c.t1_s
+            << "] s, and it falls " << -low.value << " N below its bound at t = "
+            << c.t0_s + low.at * (c.t1_s - c.t0_s) << " s";
+        return fail(SolveStatus::Infeasible, why.str());
+      }
+    }
+  std::string why;
+  VectorXd theta_start;
+  std::vector<StartDual> duals;
+  if (!strictly_feasible_start(setup, o, theta_start, duals, why)) return fail(SolveStatus::Failed, why);
+
+  // The blocks, each scaled by its polynomial's size at the start, with its start factors.
+  const int n_theta = setup.free_coefficients;
+  std::vector<SquaresBlock> blocks;
+  std::vector<LukacsSquares> start_squares;
+  int n = n_theta, m = 0;
+  for (std::size_t ci = 0; ci < setup.constraints.size(); ++ci) {
+    const ConstraintPolynomial& c = setup.constraints[ci];
+    if (!moves_with_theta(c)) continue;
+    SquaresBlock b;
+    b.constraint = ci;
+    b.half = static_cast<int>(c.base.size()) / 2;  // degree D = size - 1 <= 2h
+    VectorXd at_start = c.base + c.G * theta_start;
+    at_start[0] += kConstraintTolerance_N;  // certified: constraint >= -1e-9 N, as the exchange stops
+    b.scale_N = std::max(1.0, at_start.cwiseAbs().maxCoeff());
+    b.base = VectorXd::Zero(b.rows());
+    b.base.head(c.base.size()) = c.base / b.scale_N;
+    b.base[0] += kConstraintTolerance_N / b.scale_N;
+    b.G = MatrixXd::Zero(b.rows(), n_theta);
+    b.G.topRows(c.G.rows()) = c.G / b.scale_N;
+    b.var_offset = n;
+    b.con_offset = m;
+    n += 2 * b.half + 1;
+    m += b.rows();
+    start_squares.push_back(lukacs_squares(Polynomial(at_start / b.scale_N), b.half));
+    blocks.push_back(std::move(b));
+  }
+  VectorXd start(n), start_multipliers = VectorXd::Zero(m);
+  start.head(n_theta) = theta_start;
+  // Multipliers from the start LP's dual measure mu: the cost's gradient is sum mu grad p(s), so
+  // row k of block b gets -scale_b sum mu s^k, and the Hessian starts as the blocks' moment
+  // matrices, positive semidefinite, as at the optimum.
+  for (const StartDual& d : duals)
+    for (const SquaresBlock& b : blocks)
+      if (b.constraint == d.constraint)
+        for (int k = 0; k < b.rows(); ++k) start_multipliers[b.con_offset + k] -= b.scale_N * d.weight * std::pow(d.s, k);
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    start.segment(blocks[i].var_offset, blocks[i].half + 1) = start_squares[i].f;
+    start.segment(blocks[i].var_offset + blocks[i].half + 1, blocks[i].half) = start_squares[i].g;
+  }
+
+  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, setup.lp.cost, start, start_multipliers);
+  result.nlp_variables = nlp->variables();
+  result.nlp_equalities = nlp->equalities();
+  // A vanishing proximal term: rounds with (rho/2) |x - x_last|^2 (theta measured against its
+  // start's size), rho falling tenfold per round, then rho = 0, each round from the last one's
+  // point and multipliers.
+  const double theta_scale = std::max(1.0, theta_start.cwiseAbs().maxCoeff());
+  double rho = kFirstProximalWeight;
+  for (;;) {
+    VectorXd weights = VectorXd::Constant(n, rho);
+    weights.head(n_theta) /= theta_scale * theta_scale;
+    nlp->set_proximal(weights);
+    const double tol = rho == 0.0 ? o.whole_program.tolerance : 1e-7;
+    const IpoptSession app = make_ipopt(tol, o.whole_program.max_iterations, *nlp);
+    app->Options()->SetNumericValue("constr_viol_tol", tol);
+    app->Options()->SetNumericValue("acceptable_tol", tol);
+    app->Options()->SetNumericValue("acceptable_constr_viol_tol", tol);
+    app->Options()->SetStringValue("warm_start_init_point", "yes");
+    const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
+    result.ipopt_calls += 1;
+    if (Ipopt::IsValid(app->Statistics())) result.ipopt_iterations += app->Statistics()->IterationCount();
+    add_linear_solver_name(result.ipopt_linear_solver, ipopt_linear_solver_name(app.linear_solver));
+    if (!(status == Ipopt::Solve_Succeeded || (rho > 0.0 && ipopt_solved(status))) || nlp->solution().size() != n)
+      return fail(SolveStatus::Failed, "the whole-program NLP stopped without an optimum: Ipopt " +
+                                           ipopt_status_name(status));
+    if (rho == 0.0) break;
+    rho = rho / kProximalFall < kLastProximalWeight ? 0.0 : rho / kProximalFall;
+  }
+  theta = nlp->solution().head(n_theta);
+
+  // Each block's factors certify its polynomial up to the residual (in N); a block counts as
+  // certified when that residual's l1 norm (a bound on its size over [0, 1]) is within the
+  // exchange's tolerance, so the constraint is proven >= -2e-9 N.
+  result.near_active_pieces = static_cast<int>(blocks.size());
+  result.certified_pieces = 0;
+  double worst_residual_N = 0.0;
+  for (const SquaresBlock& b : blocks) {
+    const LukacsSquares sq{nlp->solution().segment(b.var_offset, b.half + 1),
+                           nlp->solution().segment(b.var_offset + b.half + 1, b.half)};
+    const VectorXd residual = b.scale_N * (b.base + b.G * theta - lukacs_squares_polynomial(sq));
+    const double l1 = residual.cwiseAbs().sum();
+    worst_residual_N = std::max(worst_residual_N, l1);
+    if (l1 <= kConstraintTolerance_N) ++result.certified_pieces;
+  }
+  result.certified = result.certified_pieces == result.near_active_pieces;
+  result.min_constraint_value_N = std::numeric_limits<double>::infinity();
+  for (const ConstraintPolynomial& c : setup.constraints)
+    result.min_constraint_value_N =
+        std::min(result.min_constraint_value_N, minimum_on_interval(c.at(theta), 0.0, 1.0).value);
+  result.max_certificate_residual_N = worst_residual_N;
+  result.solve_seconds = solve.seconds();
+  if (!result.certified) {
+    std::ostringstream msg;
+    msg << "the whole-program NLP's certificates leave a residual of " << worst_residual_N << " N (allowed "
+        << kConstraintTolerance_N << " N)";
+    result.status = SolveStatus::Failed;
+    result.message = msg.str();
+    return false;
+  }
+  return true;
+}
+
+}  // namespace flatsos::planner::detail
+
