@@ -293,6 +293,15 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
         return fail(SolveStatus::Infeasible, why.str());
       }
     }
+  if (setup.free_coefficients == 0) {  // the equalities fix Y, and every constraint holds
+    theta = VectorXd();
+    result.certified = true;
+    result.solve_seconds = solve.seconds();
+    return true;
+  }
+  if (std::none_of(setup.constraints.begin(), setup.constraints.end(), moves_with_theta))
+    return fail(SolveStatus::Failed, "no constraint depends on the free coefficients, so the whole-program NLP "
+                                     "has nothing to bound its linear cost (the exchange bounds them by a box)");
   std::string why;
   VectorXd theta_start;
   std::vector<StartDual> duals;
