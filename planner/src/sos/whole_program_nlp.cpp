@@ -33,6 +33,14 @@ struct Entry {
   int row, col;
 };
 
+bool copy_structure(const std::vector<Entry>& entries, Ipopt::Index* iRow, Ipopt::Index* jCol) {
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    iRow[e] = entries[e].row;
+    jCol[e] = entries[e].col;
+  }
+  return true;
+}
+
 // s(1 - s) = s - s^2: the coefficient of s^k.
 double d_coefficient(int k) { return k == 1 ? 1.0 : k == 2 ? -1.0 : 0.0; }
 
@@ -132,13 +140,7 @@ class WholeProgramNlp : public Ipopt::TNLP {
 
   bool eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::Index, Ipopt::Index, Ipopt::Index* iRow,
                   Ipopt::Index* jCol, Ipopt::Number* values) override {
-    if (values == nullptr) {
-      for (std::size_t e = 0; e < jac_.size(); ++e) {
-        iRow[e] = jac_[e].row;
-        jCol[e] = jac_[e].col;
-      }
-      return true;
-    }
+    if (values == nullptr) return copy_structure(jac_, iRow, jCol);
     // The same order as the structure: per block and row, theta, then f, then g.
     std::size_t e = 0;
     for (const SquaresBlock& b : blocks_) {
@@ -160,14 +162,8 @@ class WholeProgramNlp : public Ipopt::TNLP {
 
   bool eval_h(Ipopt::Index, const Ipopt::Number*, bool, Ipopt::Number obj_factor, Ipopt::Index, const Ipopt::Number* lambda, bool,
               Ipopt::Index, Ipopt::Index* iRow, Ipopt::Index* jCol, Ipopt::Number* values) override {
-    if (values == nullptr) {
-      for (std::size_t e = 0; e < hess_.size(); ++e) {
-        iRow[e] = hess_[e].row;
-        jCol[e] = hess_[e].col;
-      }
-      return true;
-    }
-    // The cost is linear; row k holds -f_i f_{k-i} and -g_i g_j d_{k-i-j}.
+    if (values == nullptr) return copy_structure(hess_, iRow, jCol);
+    // The cost: linear plus the proximal diagonal; row k holds -f_i f_{k-i} and -g_i g_j d_{k-i-j}.
     std::size_t e = 0;
     for (int j = 0; j < n_theta_; ++j) values[e++] = obj_factor * rho_[j];
     for (const SquaresBlock& b : blocks_) {
