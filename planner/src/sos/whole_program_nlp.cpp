@@ -306,8 +306,9 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
   // The blocks, each scaled by its polynomial's size at the start, with its start factors.
   const int n_theta = setup.free_coefficients;
   std::vector<SquaresBlock> blocks;
-  std::vector<LukacsSquares> start_squares;
-  int n = n_theta, m = 0;
+  std::vector<int> block_of(setup.constraints.size(), -1);
+  std::vector<double> start(theta_start.data(), theta_start.data() + n_theta);  // theta, then each f and g
+  int m = 0;
   for (std::size_t ci = 0; ci < setup.constraints.size(); ++ci) {
     const ConstraintPolynomial& c = setup.constraints[ci];
     if (!moves_with_theta(c)) continue;
@@ -322,28 +323,27 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
     b.base[0] += kConstraintTolerance_N / b.scale_N;
     b.G = MatrixXd::Zero(b.rows(), n_theta);
     b.G.topRows(c.G.rows()) = c.G / b.scale_N;
-    b.var_offset = n;
+    b.var_offset = static_cast<int>(start.size());
     b.con_offset = m;
-    n += 2 * b.half + 1;
     m += b.rows();
-    start_squares.push_back(lukacs_squares(Polynomial(at_start / b.scale_N), b.half));
+    const LukacsSquares squares = lukacs_squares(Polynomial(at_start / b.scale_N), b.half);
+    start.insert(start.end(), squares.f.data(), squares.f.data() + squares.f.size());
+    start.insert(start.end(), squares.g.data(), squares.g.data() + squares.g.size());
+    block_of[ci] = static_cast<int>(blocks.size());
     blocks.push_back(std::move(b));
   }
-  VectorXd start(n), start_multipliers = VectorXd::Zero(m);
-  start.head(n_theta) = theta_start;
+  const int n = static_cast<int>(start.size());
+  VectorXd start_multipliers = VectorXd::Zero(m);
   // Multipliers from the start LP's dual measure mu: the cost's gradient is sum mu grad p(s), so
   // row k of block b gets -scale_b sum mu s^k, and the Hessian starts as the blocks' moment
   // matrices, positive semidefinite, as at the optimum.
-  for (const StartDual& d : duals)
-    for (const SquaresBlock& b : blocks)
-      if (b.constraint == d.constraint)
-        for (int k = 0; k < b.rows(); ++k) start_multipliers[b.con_offset + k] -= b.scale_N * d.weight * std::pow(d.s, k);
-  for (std::size_t i = 0; i < blocks.size(); ++i) {
-    start.segment(blocks[i].var_offset, blocks[i].half + 1) = start_squares[i].f;
-    start.segment(blocks[i].var_offset + blocks[i].half + 1, blocks[i].half) = start_squares[i].g;
+  for (const StartDual& d : duals) {
+    const SquaresBlock& b = blocks[static_cast<std::size_t>(block_of[d.constraint])];  // duals are on moving ones
+    for (int k = 0; k < b.rows(); ++k) start_multipliers[b.con_offset + k] -= b.scale_N * d.weight * std::pow(d.s, k);
   }
 
-  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, setup.lp.cost, start, start_multipliers);
+  Ipopt::SmartPtr<WholeProgramNlp> nlp =
+      new WholeProgramNlp(blocks, setup.lp.cost, Eigen::Map<const VectorXd>(start.data(), n), start_multipliers);
   result.nlp_variables = nlp->variables();
   result.nlp_equalities = nlp->equalities();
   // A vanishing proximal term: rounds with (rho/2) |x - x_last|^2 (theta measured against its
