@@ -101,12 +101,15 @@ class WholeProgramNlp : public ::testing::Test {
   flatsos::test::ArmPlanning arm;
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
 
-  void expect_same_optimum(fpl::OpenLoopOptions options, const char* what) {
+  /// Returns the NLP's Ipopt calls (0 when a check failed before they were known).
+  int expect_same_optimum(fpl::OpenLoopOptions options, const char* what) {
     const auto exchange = fpl::plan_open_loop(arm.flat, s0, options);
-    ASSERT_EQ(exchange.status, fpl::SolveStatus::Solved) << exchange.message;
+    EXPECT_EQ(exchange.status, fpl::SolveStatus::Solved) << exchange.message;
+    if (exchange.status != fpl::SolveStatus::Solved) return 0;
     options.sos.method = fpl::SosProgramMethod::WholeProgramNlp;
     const auto nlp = fpl::plan_open_loop(arm.flat, s0, options);
-    ASSERT_EQ(nlp.status, fpl::SolveStatus::Solved) << nlp.message;
+    EXPECT_EQ(nlp.status, fpl::SolveStatus::Solved) << nlp.message;
+    if (nlp.status != fpl::SolveStatus::Solved) return 0;
     std::printf("%s: exchange %.9f N s, whole-program NLP %.9f N s (%d Ipopt iterations in %d rounds, %d variables, "
                 "%d equalities, %.1f ms, certificate residual %.1e N)\n",
                 what, exchange.sos.cost_N_s, nlp.sos.cost_N_s, nlp.sos.ipopt_iterations, nlp.sos.ipopt_calls,
@@ -125,6 +128,7 @@ class WholeProgramNlp : public ::testing::Test {
     EXPECT_EQ(nlp.sos.exchange_rounds, 0);
     // The plan the NLP's flat outputs give meets every reserve on the check grid, as the exchange's does.
     EXPECT_GE(nlp.check.min_reserve_margin_N, -1e-8);
+    return nlp.sos.ipopt_calls;
   }
 };
 
@@ -136,4 +140,29 @@ TEST_F(WholeProgramNlp, ReachesTheExchangeOptimumOnAQuinticOnThreeSpans) {
   auto options = flatsos::test::open_loop_options(2.0, 5, 3);
   options.sos.bounds.enforce = false;
   expect_same_optimum(options, "quintic, 3 spans, 2 s");
+}
+
+// Two programs the first formulation failed on. On 2 spans the constraint polynomials have 7
+// coefficients but degree 4: blocks sized by the count (degree 6) had to cancel their top
+// coefficients, f and g shared a root at infinity, and restoration failed in the first round.
+TEST_F(WholeProgramNlp, ReachesTheExchangeOptimumOnAQuarticOnTwoSpans) {
+  auto options = flatsos::test::open_loop_options(3.0, 4, 2);
+  options.sos.bounds.enforce = false;
+  expect_same_optimum(options, "quartic, 2 spans, 3 s");
+}
+
+TEST_F(WholeProgramNlp, ReachesTheExchangeOptimumOnThePapersQuarticWithThirtyTorquePieces) {
+  auto options = flatsos::test::open_loop_options();
+  options.torque.pieces = 30;
+  expect_same_optimum(options, "quartic, 30 torque pieces, 3 s");
+}
+
+// A program on which a tenfold fall of the proximal weight fails in one round: the round is
+// tried again from the same point with a smaller fall, so more rounds than the seven of the
+// tenfold schedule.
+TEST_F(WholeProgramNlp, ARoundThatFailsIsTriedAgainWithASmallerFall) {
+  auto options = flatsos::test::open_loop_options(1.5, 6, 1);
+  options.sos.bounds.enforce = false;
+  const int calls = expect_same_optimum(options, "sextic, 1 span, 1.5 s");
+  EXPECT_GT(calls, 7);
 }

@@ -28,6 +28,11 @@ constexpr double kStartSlackCap_N = 10.0;
 constexpr double kFirstProximalWeight = 1.0;
 constexpr double kProximalFall = 10.0;
 constexpr double kLastProximalWeight = 1e-5;
+constexpr double kSmallestProximalFall = 1.2;
+// The rounds before the last stop at this tolerance and iteration count (a round that takes
+// more has met a fold of some certificate and is better tried again with a smaller fall).
+constexpr double kRoundTolerance = 1e-7;
+constexpr int kRoundIterations = 200;
 
 struct Entry {
   int row, col;
@@ -72,16 +77,22 @@ class WholeProgramNlp : public Ipopt::TNLP {
     }
   }
 
-  /// Adds (1/2) sum rho_i (x_i - center_i)^2 to the cost (rho = 0: none) and starts the next
-  /// solve from the last one's point and multipliers.
-  void set_proximal(const VectorXd& rho) {
+  /// The next solve starts from x and these multipliers, with (1/2) sum rho_i (x_i - x'_i)^2
+  /// added to the cost (rho = 0: none).
+  void start_round(const VectorXd& x, const VectorXd& multipliers, const VectorXd& rho) {
+    start_ = center_ = x;
+    lambda_ = multipliers;
     rho_ = rho;
-    if (x_.size() == n_) start_ = center_ = x_;
-    if (multipliers_.size() == m_) lambda_ = multipliers_;
+    x_.resize(0);
+    multipliers_.resize(0);
   }
   int variables() const { return n_; }
   int equalities() const { return m_; }
+  const VectorXd& start() const { return start_; }
+  const VectorXd& start_multipliers() const { return lambda_; }
+  /// Empty until a solve has ended.
   const VectorXd& solution() const { return x_; }
+  const VectorXd& multipliers() const { return multipliers_; }
 
   bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac, Ipopt::Index& nnz_h,
                     IndexStyleEnum& style) override {
@@ -202,6 +213,17 @@ struct StartDual {
   double s, weight;
 };
 
+// The highest power whose coefficient is not zero for every theta. A block sized by the
+// coefficient count instead would certify a degree-4 polynomial (padded to 7 coefficients on
+// spline spans) with f^2 + s(1-s) g^2 of degree 6, whose top coefficients must cancel: f and g
+// then share a root at infinity, and the equalities' Jacobian loses rank (Ipopt's restoration
+// failed on the quartic on 2 spans).
+Index structural_degree(const ConstraintPolynomial& c) {
+  Index d = c.base.size() - 1;
+  while (d > 0 && c.base[d] == 0.0 && (c.G.cols() == 0 || c.G.row(d).cwiseAbs().maxCoeff() == 0.0)) --d;
+  return d;
+}
+
 bool moves_with_theta(const ConstraintPolynomial& c) { return c.G.size() > 0 && c.G.cwiseAbs().maxCoeff() > 0.0; }
 
 // The start: on a grid of every segment, first the largest slack t (capped) with which every
@@ -263,7 +285,7 @@ Ipopt::SmartPtr<Ipopt::TNLP> make_whole_program_nlp(const std::vector<SquaresBlo
                                                     const VectorXd& start, const VectorXd& multipliers,
                                                     const VectorXd& proximal_weights) {
   Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, cost, start, multipliers);
-  nlp->set_proximal(proximal_weights);
+  nlp->start_round(start, multipliers, proximal_weights);
   return Ipopt::GetRawPtr(nlp);
 }
 
@@ -314,15 +336,17 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
     if (!moves_with_theta(c)) continue;
     SquaresBlock b;
     b.constraint = ci;
-    b.half = static_cast<int>(c.base.size()) / 2;  // degree D = size - 1 <= 2h
+    b.half = static_cast<int>(structural_degree(c) + 1) / 2;  // D <= 2h
     VectorXd at_start = c.base + c.G * theta_start;
     at_start[0] += kConstraintTolerance_N;  // certified: constraint >= -1e-9 N, as the exchange stops
     b.scale_N = std::max(1.0, at_start.cwiseAbs().maxCoeff());
+    // An odd degree 2h - 1 uses the even family: one more row, whose coefficient is zero.
+    const Index kept = std::min<Index>(b.rows(), c.base.size());
     b.base = VectorXd::Zero(b.rows());
-    b.base.head(c.base.size()) = c.base / b.scale_N;
+    b.base.head(kept) = c.base.head(kept) / b.scale_N;
     b.base[0] += kConstraintTolerance_N / b.scale_N;
     b.G = MatrixXd::Zero(b.rows(), n_theta);
-    b.G.topRows(c.G.rows()) = c.G / b.scale_N;
+    b.G.topRows(kept) = c.G.topRows(kept) / b.scale_N;
     b.var_offset = static_cast<int>(start.size());
     b.con_offset = m;
     m += b.rows();
@@ -347,16 +371,19 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
   result.nlp_variables = nlp->variables();
   result.nlp_equalities = nlp->equalities();
   // A vanishing proximal term: rounds with (rho/2) |x - x_last|^2 (theta measured against its
-  // start's size), rho falling tenfold per round, then rho = 0, each round from the last one's
-  // point and multipliers.
+  // start's size), each from the last round's point and multipliers, rho falling tenfold per
+  // round and then to 0. A round that fails is tried again from the same point with a smaller
+  // fall (its square root), down to kSmallestProximalFall.
   const double theta_scale = std::max(1.0, theta_start.cwiseAbs().maxCoeff());
-  double rho = kFirstProximalWeight;
-  for (;;) {
+  VectorXd x = nlp->start(), lambda = nlp->start_multipliers();
+  double rho = kFirstProximalWeight, last_rho = 0.0, fall = kProximalFall;
+  for (bool first = true;; first = false) {
     VectorXd weights = VectorXd::Constant(n, rho);
     weights.head(n_theta) /= theta_scale * theta_scale;
-    nlp->set_proximal(weights);
-    const double tol = rho == 0.0 ? o.whole_program.tolerance : 1e-7;
-    const IpoptSession app = make_ipopt(tol, o.whole_program.max_iterations, *nlp);
+    nlp->start_round(x, lambda, weights);
+    const double tol = rho == 0.0 ? o.whole_program.tolerance : kRoundTolerance;
+    const int budget = o.whole_program.max_iterations - result.ipopt_iterations;
+    const IpoptSession app = make_ipopt(tol, rho == 0.0 ? budget : std::min(budget, kRoundIterations), *nlp);
     app->Options()->SetNumericValue("constr_viol_tol", tol);
     app->Options()->SetNumericValue("acceptable_tol", tol);
     app->Options()->SetNumericValue("acceptable_constr_viol_tol", tol);
@@ -365,11 +392,22 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
     result.ipopt_calls += 1;
     if (Ipopt::IsValid(app->Statistics())) result.ipopt_iterations += app->Statistics()->IterationCount();
     add_linear_solver_name(result.ipopt_linear_solver, ipopt_linear_solver_name(app.linear_solver));
-    if (!(status == Ipopt::Solve_Succeeded || (rho > 0.0 && ipopt_solved(status))) || nlp->solution().size() != n)
-      return fail(SolveStatus::Failed, "the whole-program NLP stopped without an optimum: Ipopt " +
-                                           ipopt_status_name(status));
-    if (rho == 0.0) break;
-    rho = rho / kProximalFall < kLastProximalWeight ? 0.0 : rho / kProximalFall;
+    const bool solved = (status == Ipopt::Solve_Succeeded || (rho > 0.0 && ipopt_solved(status))) &&
+                        nlp->solution().size() == n && nlp->multipliers().size() == nlp->equalities();
+    if (solved && rho == 0.0) break;
+    if (solved) {
+      x = nlp->solution();
+      lambda = nlp->multipliers();
+      last_rho = rho;
+      fall = std::min(kProximalFall, fall * fall);  // back to faster falls once a round succeeds
+    } else {
+      fall = std::sqrt(fall);
+      if (first || fall < kSmallestProximalFall || result.ipopt_iterations >= o.whole_program.max_iterations)
+        return fail(SolveStatus::Failed, "the whole-program NLP stopped without an optimum: Ipopt " +
+                                             ipopt_status_name(status) + " at proximal weight " + std::to_string(rho));
+    }
+    // Below the last weight the next round is the problem itself, unless a round just failed.
+    rho = solved && last_rho / fall < kLastProximalWeight ? 0.0 : last_rho / fall;
   }
   theta = nlp->solution().head(n_theta);
 

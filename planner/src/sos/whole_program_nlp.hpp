@@ -9,7 +9,8 @@
 // on a grid), with its certificates built from roots and multipliers from that grid LP's duals.
 // Newton on this lifted problem alone wanders off (Ipopt's restoration fails on the arm), so a
 // proximal term (rho/2)|x - x_last|^2 steadies it and vanishes: rounds with rho = 1, 0.1, ...,
-// 1e-5, then rho = 0, each from the last round's point and multipliers.
+// 1e-5, then rho = 0, each from the last round's point and multipliers; a round that fails is
+// tried again from the same point with a smaller fall.
 
 #include <vector>
 
@@ -21,7 +22,8 @@
 
 namespace flatsos::planner::detail {
 
-// One certified constraint: scaled coefficients w (base + G theta + tolerance) of degree 2h,
+// One certified constraint: scaled coefficients w (base + G theta + tolerance) of degree <= 2h
+// (h from the highest power that is not zero for every theta: 2h = degree, or degree + 1),
 // and where its f (h + 1 entries) and g (h entries) sit among Ipopt's variables.
 struct SquaresBlock {
   std::size_t constraint = 0;
