@@ -53,6 +53,14 @@ int main(int argc, char** argv) {
   app.add_flag("--no-bounds", no_bounds,
                "plan with the reserves only: excitations outside [0, 1] or activations above 1 then make the plan "
                "infeasible instead of being constrained");
+  std::string sos_method = fpl::to_string(options.sos.method);
+  app.add_option("--sos-method", sos_method,
+                 "how the reserves' program is solved: exchange (an exchange of LPs, then certificates of the "
+                 "near-active pieces) or whole_program_nlp (one Ipopt problem with a certificate of every piece, "
+                 "the reference formulation; it checks the excitation bounds instead of imposing them)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({fpl::to_string(fpl::SosProgramMethod::Exchange),
+                             fpl::to_string(fpl::SosProgramMethod::WholeProgramNlp)}));
   bool shortest_time = false;
   fpl::ShortestTransferOptions shortest;
   app.add_flag("--shortest-time", shortest_time,
@@ -78,6 +86,7 @@ int main(int argc, char** argv) {
     const int m = model->numMuscles();
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "open_loop", given, 3.0, 10.0);
     options.sos.bounds.enforce = !no_bounds;
+    options.sos.method = fpl::sos_program_method(sos_method);
     options.free_path.enabled = free_path_spans > 0;
     if (free_path_spans > 0) options.free_path.spans = free_path_spans;
     options.duration_s = in.duration_s;

@@ -165,6 +165,7 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   j["cost_Ns"] = s.cost_N_s;
   j["solve_seconds"] = plan.setup_seconds + plan.solve_seconds;
   j["setup_seconds"] = plan.setup_seconds;
+  j["sos_method"] = planner::to_string(s.method);
   j["exchange_solve_seconds"] = plan.solve_seconds;
   j["certify_seconds"] = plan.certify_seconds;
   j["check_seconds"] = plan.check_seconds;
@@ -173,6 +174,10 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   // Which linear solver factored those calls' KKT systems: flatsos's dense LDL^T or MUMPS.
   j["ipopt_linear_solver"] = s.ipopt_linear_solver;
   j["exchange_rounds"] = s.exchange_rounds;
+  if (s.method == planner::SosProgramMethod::WholeProgramNlp)
+    j["whole_program_nlp"] = {{"variables", s.nlp_variables},
+                              {"equalities", s.nlp_equalities},
+                              {"max_certificate_residual_N", s.max_certificate_residual_N}};
   j["lp_points"] = s.lp_points;
   j["torque_model"] = {{"pieces", plan.torque.pieces.size()},
                        {"degree", plan.torque.pieces.empty() || plan.torque.pieces[0].torque.empty() ? 0 : plan.torque.pieces[0].torque[0].degree()}};

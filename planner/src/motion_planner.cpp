@@ -111,6 +111,10 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
   if (!o.sos.bounds.enforce)
     throw std::invalid_argument("open-loop plan: free_path needs the excitation bounds (sos.bounds.enforce): without "
                                 "them a faster path always costs less");
+  if (o.sos.method != SosProgramMethod::Exchange)
+    throw std::invalid_argument(std::string("open-loop plan: free_path plans by the exchange method, which imposes the "
+                                            "excitation bounds; sos.method '") +
+                                to_string(o.sos.method) + "' only checks them");
   if (f.degree < 5) throw std::invalid_argument("open-loop plan: free_path.degree must be >= 5 (q'''' continuous)");
   if (f.spans < 1 || f.degree + f.spans - 9 < 1)
     throw std::invalid_argument("open-loop plan: free_path.degree + free_path.spans must be >= 10 (9 boundary "

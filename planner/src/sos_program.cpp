@@ -1,5 +1,7 @@
 #include "flatsos/planner/sos_program.hpp"
 
+#include <stdexcept>
+
 #include "flatsos/plugin/stopwatch.hpp"
 #include "sos/sos_bounds.hpp"
 #include "sos/sos_exchange.hpp"
@@ -16,12 +18,19 @@ void finish(const detail::SosSetup& setup, const Eigen::VectorXd& theta, SosProg
 }
 }  // namespace
 
+SosProgramMethod sos_program_method(const std::string& name) {
+  for (const SosProgramMethod m : {SosProgramMethod::Exchange, SosProgramMethod::WholeProgramNlp})
+    if (name == to_string(m)) return m;
+  throw std::invalid_argument("SOS program method '" + name + "': expected 'exchange' or 'whole_program_nlp'");
+}
+
 SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                    const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
                                    const SosProgramOptions& options, const MusclesAlongPath* muscles) {
   const Stopwatch setup_time;
   detail::SosSetup setup = detail::set_up_sos_program(flat, torque, duration_s, boundary, reserves_N, options);
   SosProgramResult result;
+  result.method = options.method;
   result.setup_seconds = setup_time.seconds();
 
   Eigen::VectorXd theta;

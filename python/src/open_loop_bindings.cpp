@@ -47,9 +47,14 @@ OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::
 
 Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
                     const py::object& target, double duration, const py::object& reserves, int flat_output_degree,
-                    int flat_output_spans, int torque_pieces, int torque_degree, bool bounds) {
-  const OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves, flat_output_degree,
-                                             flat_output_spans, torque_pieces, torque_degree, bounds);
+                    int flat_output_spans, int torque_pieces, int torque_degree, bool bounds, const std::string& method) {
+  OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves, flat_output_degree,
+                                       flat_output_spans, torque_pieces, torque_degree, bounds);
+  try {
+    in.options.sos.method = planner::sos_program_method(method);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string("method: ") + e.what());
+  }
   Plan out{m.model, m.flat, {}, {}};
   py::gil_scoped_release release;
   const SimTK::State s = planner::start_state(*m.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
@@ -160,6 +165,29 @@ void register_open_loop(py::module_& m) {
             return d;
           },
           "where the planning time went, s")
+      .def_property_readonly(
+          "sos",
+          [](const Plan& p) {
+            const planner::SosProgramResult& r = p.plan.sos;
+            py::dict d;
+            d["method"] = planner::to_string(r.method);
+            d["ipopt_iterations"] = r.ipopt_iterations;
+            d["ipopt_calls"] = r.ipopt_calls;
+            d["ipopt_linear_solver"] = r.ipopt_linear_solver;
+            d["exchange_rounds"] = r.exchange_rounds;
+            d["certified"] = r.certified;
+            d["certified_pieces"] = r.certified_pieces;
+            d["near_active_pieces"] = r.near_active_pieces;
+            if (r.method == planner::SosProgramMethod::WholeProgramNlp) {
+              d["nlp_variables"] = r.nlp_variables;
+              d["nlp_equalities"] = r.nlp_equalities;
+              d["max_certificate_residual"] = r.max_certificate_residual_N;
+            }
+            return d;
+          },
+          "how the reserves' program was solved: 'method', Ipopt's iterations, calls and linear solver, "
+          "'exchange_rounds', the certificates ('certified', 'certified_pieces' of 'near_active_pieces') and, for "
+          "'whole_program_nlp', its 'nlp_variables', 'nlp_equalities' and 'max_certificate_residual' (N)")
       .def("sample", &sample, py::arg("times"),
            "The plan at `times` (s, within [0, duration]): a dict of numpy arrays 'time', 'q' (rad, one row per "
            "time, one column per joint), 'activation', 'excitation' and 'tendon_force' (N; one column per muscle).")
@@ -171,13 +199,15 @@ void register_open_loop(py::module_& m) {
   m.def("plan_open_loop", &plan_open_loop, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("target"), py::arg("duration"), py::arg("reserves"), py::kw_only(), py::arg("flat_output_degree") = 4,
         py::arg("flat_output_spans") = 1, py::arg("torque_pieces") = 12, py::arg("torque_degree") = 3,
-        py::arg("bounds") = true,
+        py::arg("bounds") = true, py::arg("method") = "exchange",
         "Minimum-effort open-loop plan from the initial state to rest at `target` in `duration` s.\n"
         "q0, qd0, target: rad and rad/s, one per joint; a0: initial activations in (0, 1], one per muscle, with "
         "tendons in static equilibrium (None: the minimum-effort rest state at q0); reserves: minimum tendon "
         "force, N, one number or one per muscle. Keywords: the flat outputs' B-spline degree and spans (4 and 1: "
         "the paper's quartic), the torque model's pieces and degree, and whether excitations and activations are "
-        "kept within their bounds. Bad input raises ValueError; the GIL is released while planning.");
+        "kept within their bounds; `method`: 'exchange' (the default) or 'whole_program_nlp' (the whole program as one "
+        "Ipopt problem, the reference formulation, which checks the bounds instead of imposing them). Bad input "
+        "raises ValueError; the GIL is released while planning.");
 
   m.def("shortest_transfer", &shortest_transfer, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("target"), py::arg("reserves"), py::kw_only(), py::arg("longest"), py::arg("shortest") = 0.1,

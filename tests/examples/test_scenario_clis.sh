@@ -23,6 +23,14 @@ grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: 
 # The plan's Ipopt calls (its certificates) name the linear solver that served them: the paper's
 # problem is small, so flatsos's dense LDL^T.
 grep -q '"ipopt_linear_solver": "dense LDL^T (flatsos)"' "$tmp/olr/summary.json" || { echo "FAILED: the summary does not name Ipopt's linear solver"; fail=1; }
+# The reserves' program as one Ipopt problem: the same plan (the summary names the method and the
+# NLP's size); an unknown method exits 2, and the free path, which needs the exchange, exits 1.
+expect 2 "--sos-method" -- "$ol" --sos-method sdp --out "$tmp/o"
+expect 0 "simulated open loop" -- "$ol" --sos-method whole_program_nlp --no-bounds --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olw"
+grep -q '"sos_method": "whole_program_nlp"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not name the SOS method"; fail=1; }
+grep -q '"equalities": 368' "$tmp/olw/summary.json" || { echo "FAILED: the summary lacks the whole-program NLP's size"; fail=1; }
+grep -q '"cost_Ns": 958.3213' "$tmp/olw/summary.json" || { echo "FAILED: the whole-program NLP's cost is not the exchange's"; fail=1; }
+expect 1 "free_path plans by the exchange method" -- "$ol" --sos-method whole_program_nlp --free-path-spans 2 --out "$tmp/o"
 # The shortest transfer: found, simulated over that duration, every plan of the search in the
 # summary; a longest duration without a plan fails the task.
 expect 2 "--shortest-time-ratio" -- "$ol" --shortest-time --shortest-time-ratio 1.5 --out "$tmp/o"

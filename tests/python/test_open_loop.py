@@ -49,6 +49,21 @@ def test_samples_start_at_the_initial_state_end_at_the_target_and_keep_every_bou
     assert s["tendon_force"].min() >= scenario.reserves - 1e-6
 
 
+def test_the_whole_program_nlp_plans_what_the_exchange_plans(arm):
+    model, scenario = arm
+    exchange = scenario.plan(model, bounds=False)
+    nlp = scenario.plan(model, bounds=False, method="whole_program_nlp")
+    assert exchange.status == "solved" and nlp.status == "solved", nlp.message
+    assert exchange.sos["method"] == "exchange" and nlp.sos["method"] == "whole_program_nlp"
+    assert nlp.cost == pytest.approx(exchange.cost, rel=1e-6)
+    assert nlp.sos["certified"] and nlp.sos["exchange_rounds"] == 0
+    assert nlp.sos["nlp_variables"] > nlp.sos["nlp_equalities"] > 0
+    assert 0.0 <= nlp.sos["max_certificate_residual"] <= 1e-9
+    assert "nlp_variables" not in exchange.sos
+    with pytest.raises(ValueError, match="method: .*'sdp'.*expected 'exchange' or 'whole_program_nlp'"):
+        scenario.plan(model, method="sdp")
+
+
 def test_an_infeasible_plan_says_so_and_has_no_cost_or_samples(arm):
     model, scenario = arm
     # The paper's single torque box: at t = 0 the initial state fixes Y and the box's half-width

@@ -97,6 +97,13 @@ enum class SosProgramMethod {
   WholeProgramNlp,
 };
 
+/// "exchange" or "whole_program_nlp": the names the programs, summaries and Python use.
+constexpr const char* to_string(SosProgramMethod m) {
+  return m == SosProgramMethod::WholeProgramNlp ? "whole_program_nlp" : "exchange";
+}
+/// The method of that name; std::invalid_argument naming the accepted ones otherwise.
+SosProgramMethod sos_program_method(const std::string& name);
+
 /// Settings of the whole-program NLP.
 struct WholeProgramOptions {
   double tolerance = 1e-10;  ///< Ipopt's tol and constr_viol_tol (the equalities are scaled to order 1)
@@ -119,6 +126,7 @@ struct SosProgramOptions {
 struct SosProgramResult {
   SolveStatus status = SolveStatus::Failed;
   std::string message;                 ///< why, when not solved
+  SosProgramMethod method = SosProgramMethod::Exchange;  ///< the one that solved (or failed)
   double cost_N_s = 0.0;               ///< integral of sum Y
   /// The flat outputs (N): the optimum when solved; when the bounds are infeasible, the closest
   /// plan found (for diagnosis: it violates them); otherwise none.
