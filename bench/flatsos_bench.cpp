@@ -143,7 +143,8 @@ int main(int argc, char** argv) try {
               {"pieces", o.torque.pieces},
               {"degree", o.torque.degree},
               {"setup", stats(setup, 1e3, "ms")},
-              {"exchange_solve", stats(solve, 1e3, "ms")},
+              {o.sos.method == fpl::SosProgramMethod::Exchange ? "exchange_solve" : "whole_program_nlp_solve",
+               stats(solve, 1e3, "ms")},
               {"certify", stats(certify, 1e3, "ms")},
               {"setup_plus_solve", stats(total, 1e3, "ms")},
               {"ipopt_iterations", last.sos.ipopt_iterations},
@@ -155,6 +156,10 @@ int main(int argc, char** argv) try {
               {"bounds_check_and_solve", stats(bounds, 1e3, "ms")},
               {"sequential_lp_iterations", last.sos.bound_slp_iterations}};
     if (last.status == fpl::SolveStatus::Solved) r["cost_Ns"] = last.sos.cost_N_s;
+    if (o.sos.method == fpl::SosProgramMethod::WholeProgramNlp)
+      r["nlp"] = {{"variables", last.sos.nlp_variables},
+                  {"equalities", last.sos.nlp_equalities},
+                  {"max_certificate_residual_N", last.sos.max_certificate_residual_N}};
     return std::make_pair(r, ex::median(total));
   };
   const auto [sop, sop_median] = time_plan(ol, reps);
@@ -173,6 +178,17 @@ int main(int argc, char** argv) try {
     time_check_and_inverse_map();
     emit(j);
     return 0;
+  }
+  {
+    // The same program as one Ipopt problem (the reference formulation), beside the exchange.
+    fpl::OpenLoopOptions whole = ol;
+    whole.sos.method = fpl::SosProgramMethod::WholeProgramNlp;
+    const auto [nlp, nlp_median] = time_plan(whole, std::max(3, reps / 10));
+    j["open_loop_sop_whole_program_nlp"] = nlp;
+    if (nlp.contains("cost_Ns") && sop.contains("cost_Ns"))
+      j["open_loop_sop_whole_program_nlp"]["cost_relative_to_exchange"] =
+          nlp["cost_Ns"].get<double>() / sop["cost_Ns"].get<double>() - 1.0;
+    j["open_loop_sop_whole_program_nlp"]["time_over_exchange_time"] = nlp_median / sop_median;
   }
   fpl::OpenLoopOptions box = ol;
   box.torque.pieces = 1;
