@@ -29,6 +29,7 @@ expect 2 "--sos-method" -- "$ol" --sos-method sdp --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --sos-method whole_program_nlp --no-bounds --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olw"
 grep -q '"sos_method": "whole_program_nlp"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not name the SOS method"; fail=1; }
 grep -q '"equalities": 368' "$tmp/olw/summary.json" || { echo "FAILED: the summary lacks the whole-program NLP's size"; fail=1; }
+grep -q '"whole_program_nlp_solve_seconds"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not time the NLP under its name"; fail=1; }
 grep -q '"cost_Ns": 958.3213' "$tmp/olw/summary.json" || { echo "FAILED: the whole-program NLP's cost is not the exchange's"; fail=1; }
 expect 1 "free_path plans by the exchange method" -- "$ol" --sos-method whole_program_nlp --free-path-spans 2 --out "$tmp/o"
 # The shortest transfer: found, simulated over that duration, every plan of the search in the
