@@ -51,12 +51,9 @@ double d_coefficient(int k) { return k == 1 ? 1.0 : k == 2 ? -1.0 : 0.0; }
 
 class WholeProgramNlp : public Ipopt::TNLP {
  public:
-  WholeProgramNlp(const std::vector<SquaresBlock>& blocks, const VectorXd& cost, const VectorXd& start,
-                  const VectorXd& start_multipliers)
-      : blocks_(blocks), cost_(cost), start_(start), lambda_(start_multipliers), n_theta_(static_cast<int>(cost.size())) {
-    n_ = static_cast<int>(start.size());
-    center_ = start;
-    rho_ = VectorXd::Zero(n_);
+  /// Variables: theta (cost.size()), then each block's f and g. Call start_round before a solve.
+  WholeProgramNlp(const std::vector<SquaresBlock>& blocks, const VectorXd& cost)
+      : blocks_(blocks), cost_(cost), n_theta_(static_cast<int>(cost.size())) {
     for (int j = 0; j < n_theta_; ++j) hess_.push_back({j, j});
     for (const SquaresBlock& b : blocks_) {
       m_ += b.rows();
@@ -75,12 +72,13 @@ class WholeProgramNlp : public Ipopt::TNLP {
       for (int i = 0; i < h; ++i)
         for (int j = 0; j <= i; ++j) hess_.push_back({g0 + i, g0 + j});
     }
+    n_ = n_theta_ + m_;  // each block has as many factor entries as rows
   }
 
   /// The next solve starts from x and these multipliers, with (1/2) sum rho_i (x_i - x'_i)^2
   /// added to the cost (rho = 0: none).
   void start_round(const VectorXd& x, const VectorXd& multipliers, const VectorXd& rho) {
-    start_ = center_ = x;
+    center_ = x;
     lambda_ = multipliers;
     rho_ = rho;
     x_.resize(0);
@@ -88,8 +86,6 @@ class WholeProgramNlp : public Ipopt::TNLP {
   }
   int variables() const { return n_; }
   int equalities() const { return m_; }
-  const VectorXd& start() const { return start_; }
-  const VectorXd& start_multipliers() const { return lambda_; }
   /// Empty until a solve has ended.
   const VectorXd& solution() const { return x_; }
   const VectorXd& multipliers() const { return multipliers_; }
@@ -115,7 +111,7 @@ class WholeProgramNlp : public Ipopt::TNLP {
 
   bool get_starting_point(Ipopt::Index, bool init_x, Ipopt::Number* x, bool, Ipopt::Number*, Ipopt::Number*,
                           Ipopt::Index, bool init_lambda, Ipopt::Number* lambda) override {
-    if (init_x) std::copy(start_.data(), start_.data() + n_, x);
+    if (init_x) std::copy(center_.data(), center_.data() + n_, x);
     if (init_lambda) std::copy(lambda_.data(), lambda_.data() + m_, lambda);
     return true;  // no bounds: no z to start
   }
@@ -201,7 +197,7 @@ class WholeProgramNlp : public Ipopt::TNLP {
  private:
   const std::vector<SquaresBlock>& blocks_;
   const VectorXd& cost_;
-  VectorXd start_, lambda_, center_, rho_, multipliers_;
+  VectorXd center_, lambda_, rho_, multipliers_;  // center_: the round's start and proximal center
   int n_theta_ = 0, n_ = 0, m_ = 0;
   std::vector<Entry> jac_, hess_;
   VectorXd x_;
@@ -284,7 +280,7 @@ bool strictly_feasible_start(const SosSetup& setup, const SosProgramOptions& o, 
 Ipopt::SmartPtr<Ipopt::TNLP> make_whole_program_nlp(const std::vector<SquaresBlock>& blocks, const VectorXd& cost,
                                                     const VectorXd& start, const VectorXd& multipliers,
                                                     const VectorXd& proximal_weights) {
-  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, cost, start, multipliers);
+  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, cost);
   nlp->start_round(start, multipliers, proximal_weights);
   return Ipopt::GetRawPtr(nlp);
 }
@@ -366,8 +362,7 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
     for (int k = 0; k < b.rows(); ++k) start_multipliers[b.con_offset + k] -= b.scale_N * d.weight * std::pow(d.s, k);
   }
 
-  Ipopt::SmartPtr<WholeProgramNlp> nlp =
-      new WholeProgramNlp(blocks, setup.lp.cost, Eigen::Map<const VectorXd>(start.data(), n), start_multipliers);
+  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, setup.lp.cost);
   result.nlp_variables = nlp->variables();
   result.nlp_equalities = nlp->equalities();
   // A vanishing proximal term: rounds with (rho/2) |x - x_last|^2 (theta measured against its
@@ -375,9 +370,9 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
   // round and then to 0. A round that fails is tried again from the same point with a smaller
   // fall (its square root), down to kSmallestProximalFall.
   const double theta_scale = std::max(1.0, theta_start.cwiseAbs().maxCoeff());
-  VectorXd x = nlp->start(), lambda = nlp->start_multipliers();
-  double rho = kFirstProximalWeight, last_rho = 0.0, fall = kProximalFall;
-  for (bool first = true;; first = false) {
+  VectorXd x = Eigen::Map<const VectorXd>(start.data(), n), lambda = start_multipliers;
+  double rho = kFirstProximalWeight, last_rho = 0.0, fall = kProximalFall;  // last_rho: of the last success
+  for (;;) {
     VectorXd weights = VectorXd::Constant(n, rho);
     weights.head(n_theta) /= theta_scale * theta_scale;
     nlp->start_round(x, lambda, weights);
@@ -402,7 +397,7 @@ bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, Vect
       fall = std::min(kProximalFall, fall * fall);  // back to faster falls once a round succeeds
     } else {
       fall = std::sqrt(fall);
-      if (first || fall < kSmallestProximalFall || result.ipopt_iterations >= o.whole_program.max_iterations)
+      if (last_rho == 0.0 || fall < kSmallestProximalFall || result.ipopt_iterations >= o.whole_program.max_iterations)
         return fail(SolveStatus::Failed, "the whole-program NLP stopped without an optimum: Ipopt " +
                                              ipopt_status_name(status) + " at proximal weight " + std::to_string(rho));
     }
