@@ -49,6 +49,14 @@ int main(int argc, char** argv) {
                  "optimize the joint path too: a degree-8 B-spline on this many spans through the same boundary "
                  "conditions (0: the prescribed degree-8 polynomial)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  std::string free_path_method = fpl::to_string(options.free_path.method);
+  app.add_option("--free-path-method", free_path_method,
+                 "how the free joint path moves: reduced_quasi_newton (BFGS on the bounded plan's cost as a "
+                 "function of the path; fastest on few spans) or joint_newton (one Ipopt problem over the plan and "
+                 "the path; converges on 24-48 spans too)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({fpl::to_string(fpl::FreePathMethod::ReducedQuasiNewton),
+                             fpl::to_string(fpl::FreePathMethod::JointNewton)}));
   bool no_bounds = false;
   app.add_flag("--no-bounds", no_bounds,
                "plan with the reserves only: excitations outside [0, 1] or activations above 1 then make the plan "
@@ -89,6 +97,7 @@ int main(int argc, char** argv) {
     options.sos.method = fpl::sos_program_method(sos_method);
     options.free_path.enabled = free_path_spans > 0;
     if (free_path_spans > 0) options.free_path.spans = free_path_spans;
+    options.free_path.method = fpl::free_path_method(free_path_method);
     options.duration_s = in.duration_s;
     options.target_q_rad = in.target_q_rad;
     options.reserves_N = in.reserves_N;

@@ -209,17 +209,22 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   }
   j["q_coeffs"] = qc;
   const planner::FreePathReport& f = plan.free_path;
-  if (f.optimized || !f.prescribed_status.empty())
+  if (f.optimized || !f.prescribed_status.empty()) {
+    const bool newton = f.method == planner::FreePathMethod::JointNewton;
     j["free_path"] = {{"optimized", f.optimized},
+                      {"method", planner::to_string(f.method)},
                       {"prescribed_path_status", f.prescribed_status},
                       {"prescribed_path_cost_Ns", f.prescribed_cost_N_s},
                       {"cost_at_points_Ns", f.cost_at_points_N_s},
                       {"rounds", f.rounds},
                       {"points", f.points},
-                      {"quasi_newton_steps", f.path_iterations},
-                      {"evaluations", f.evaluations},
-                      {"sequential_lp_iterations", f.slp_iterations},
+                      {newton ? "ipopt_iterations" : "quasi_newton_steps", f.path_iterations},
                       {"seconds", f.seconds}};
+    if (!newton) {
+      j["free_path"]["evaluations"] = f.evaluations;
+      j["free_path"]["sequential_lp_iterations"] = f.slp_iterations;
+    }
+  }
   if (plan.Y) {
     const planner::BSplineBasis& basis = plan.Y->basis();
     nlohmann::json yc = nlohmann::json::object();

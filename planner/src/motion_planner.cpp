@@ -18,6 +18,12 @@
 
 namespace flatsos::planner {
 
+FreePathMethod free_path_method(const std::string& name) {
+  for (const FreePathMethod m : {FreePathMethod::ReducedQuasiNewton, FreePathMethod::JointNewton})
+    if (name == to_string(m)) return m;
+  throw std::invalid_argument("free path method '" + name + "': expected 'reduced_quasi_newton' or 'joint_newton'");
+}
+
 namespace {
 
 using detail::require;
@@ -267,6 +273,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   const detail::FreePathOutcome free = detail::optimize_joint_path(
       program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, *plan.sos.Y), o.reserves_N, a_min, o.free_path);
   FreePathReport& report = plan.free_path;
+  report.method = o.free_path.method;
   report.cost_at_points_N_s = free.cost_N_s;
   report.rounds = free.rounds;
   report.points = free.points;

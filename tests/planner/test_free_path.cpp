@@ -10,6 +10,7 @@
 
 #include "executable_plan.hpp"
 #include "path/free_path.hpp"
+#include "path/path_rows.hpp"
 #include "scenario_fixture.hpp"
 #include "sos/bound_rows.hpp"
 #include "sos/sos_setup.hpp"
@@ -101,6 +102,52 @@ TEST_F(FreePath, TheValuesGradientIsTheMultipliersTimesTheRowsDerivatives) {
   }
 }
 
+TEST_F(FreePath, TheRowsHessianIsTheDerivativeOfTheirWeightedGradient) {
+  // At T = 1.5 s the bound rows are active: the rows' curvature is large where the plan lives.
+  o = open_loop_options(1.5, kDegree, 24);
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  const fpd::PathParameterization P = fpd::parameterize(o.free_path, o.duration_s, p.initial_q_jet, o.target_q_rad);
+  const fpd::PathVariables v{p.setup->free_coefficients, P.free};
+  std::vector<fpd::PathPoint> points;
+  for (double t : {0.1, 0.37, 0.74, 1.2}) points.push_back(fpd::make_path_point(*p.setup, arm.flat, P, t));
+  const fpd::PathRows rows(arm.flat, v, points, o.reserves_N, p.a_min);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), move(-0.02, 0.02);
+  Eigen::VectorXd z(v.size());
+  z << fpd::theta_of(*p.setup, *p.prescribed.Y), fpd::fit_to(P, p.prescribed.path);
+  for (Eigen::Index i = v.thetas; i < z.size(); ++i) z[i] += move(rng);  // a generic path
+  std::vector<double> lambda(static_cast<std::size_t>(rows.rows()));
+  for (double& l : lambda) l = unit(rng);
+  // The twin: central differences of the exact weighted gradient sum_k lambda_k grad g_k in z.
+  auto weighted_gradient = [&](const Eigen::VectorXd& at) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(at.size());
+    for (const auto& t : rows(at, true).jacobian) g[t.col()] += lambda[static_cast<std::size_t>(t.row())] * t.value();
+    return g;
+  };
+  Eigen::MatrixXd twin(z.size(), z.size());
+  for (Eigen::Index i = 0; i < z.size(); ++i) {
+    const double h = 1e-6 * (1.0 + std::abs(z[i]));
+    Eigen::VectorXd up = z, down = z;
+    up[i] += h;
+    down[i] -= h;
+    twin.col(i) = (weighted_gradient(up) - weighted_gradient(down)) / (2.0 * h);
+  }
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(z.size(), z.size());
+  for (const auto& t : rows.lagrangianHessian(z, lambda)) {
+    H(t.row(), t.col()) += t.value();
+    if (t.row() != t.col()) H(t.col(), t.row()) += t.value();
+  }
+  const auto paths = Eigen::seqN(v.thetas, v.paths);
+  const double scale = twin.cwiseAbs().maxCoeff();
+  ASSERT_GT(twin(paths, paths).cwiseAbs().maxCoeff(), 1e-3 * scale);  // the path's block matters
+  EXPECT_LT((H - twin).cwiseAbs().maxCoeff(), 1e-5 * scale);
+  EXPECT_LT((H - twin)(paths, paths).cwiseAbs().maxCoeff(), 1e-5 * twin(paths, paths).cwiseAbs().maxCoeff());
+  // The pattern holds every entry the values fill.
+  const auto pattern = rows.hessianPattern();
+  ASSERT_EQ(pattern.size(), rows.lagrangianHessian(z, lambda).size());
+}
+
 TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost) {
   o.free_path.enabled = true;
   const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
@@ -132,6 +179,33 @@ TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost)
     if (moved.ok) lowest = std::min(lowest, moved.cost_N_s);
   }
   EXPECT_GE(lowest, at.cost_N_s * (1.0 - 1e-4));
+}
+
+TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
+  // Two independent optimizers of the same problem: BFGS on the plan's value function and Ipopt
+  // over the plan and the path together. Both paths' plans must keep the rows on the dense grid
+  // and cost the same (the quasi-Newton method stops on V's kinks a little higher).
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  const Eigen::VectorXd theta = fpd::theta_of(*p.setup, *p.prescribed.Y);
+  auto optimize = [&](fpl::FreePathMethod method) {
+    fpl::FreeJointPathOptions f = o.free_path;
+    f.method = method;
+    return fpd::optimize_joint_path(*p.setup, arm.flat, p.prescribed.path, p.initial_q_jet, o.target_q_rad, theta,
+                                    o.reserves_N, p.a_min, f);
+  };
+  const fpd::FreePathOutcome newton = optimize(fpl::FreePathMethod::JointNewton);
+  const fpd::FreePathOutcome quasi = optimize(fpl::FreePathMethod::ReducedQuasiNewton);
+  ASSERT_TRUE(newton.converged) << newton.failure;
+  ASSERT_TRUE(quasi.converged) << quasi.failure;
+  std::cout << "[ measure  ] free path at its points: joint Newton " << newton.cost_N_s << " N s (" << newton.path_iterations
+            << " Ipopt iterations, " << newton.rounds << " rounds), quasi-Newton " << quasi.cost_N_s << " N s ("
+            << quasi.path_iterations << " steps)\n";
+  EXPECT_LE(newton.worst_bound_excess, o.free_path.tolerance);
+  EXPECT_GE(newton.min_reserve_margin_N, -o.free_path.tolerance_N);
+  EXPECT_LT(newton.cost_N_s, 0.8 * p.prescribed.sos.cost_N_s);
+  EXPECT_NEAR(newton.cost_N_s, quasi.cost_N_s, 2e-3 * quasi.cost_N_s);
+  EXPECT_LE(newton.cost_N_s, quasi.cost_N_s * (1.0 + 1e-5));
 }
 
 TEST_F(FreePath, BadOptionsAreNamed) {

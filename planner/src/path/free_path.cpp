@@ -8,6 +8,8 @@
 
 #include <Eigen/Dense>
 
+#include "path/joint_path_nlp.hpp"
+#include "path/path_rows.hpp"
 #include "sos/bound_rows.hpp"
 #include "sos/bounds_slp.hpp"
 
@@ -15,233 +17,11 @@ namespace flatsos::planner::detail {
 
 namespace {
 
-constexpr int kOrders = 5;                   // q .. q'''' (the excitation needs d2 tau / dt2)
-constexpr double kReserveMargin_N = 1e-6;    // reserve rows hold F >= reserve + this
 constexpr double kFirstStep_rad = 0.05;       // the first quasi-Newton step's largest coefficient change
 constexpr double kArmijo = 1e-4;
 constexpr int kMaxBacktracks = 12;
 constexpr double kRoundStartRadius = 0.01;  // the SLP's trust radius after new points, of the largest coefficient
-
-// The joint path's spline: q_i = B (particular_i + nullspace_i c_i), c = [c_0; c_1; ...].
-struct PathParameterization {
-  explicit PathParameterization(BSplineBasis b) : basis(std::move(b)) {}
-  BSplineBasis basis;
-  std::vector<OutputParameterization> joints;
-  int free = 0;
-
-  Eigen::MatrixXd coefficients(const Eigen::VectorXd& c) const {
-    Eigen::MatrixXd out(static_cast<Eigen::Index>(joints.size()), basis.size());
-    for (std::size_t i = 0; i < joints.size(); ++i) {
-      const auto& j = joints[i];
-      Eigen::VectorXd row = j.particular;
-      if (j.nullspace.cols()) row += j.nullspace * c.segment(j.offset, j.nullspace.cols());
-      out.row(static_cast<Eigen::Index>(i)) = row.transpose();
-    }
-    return out;
-  }
-  JointPath path(const Eigen::VectorXd& c) const { return JointPath::fromSpline(SplineTrajectory(basis, coefficients(c))); }
-};
-
-PathParameterization parameterize(const FreeJointPathOptions& o, double T, const Eigen::MatrixXd& initial,
-                                  const Eigen::VectorXd& target) {
-  PathParameterization out(BSplineBasis(o.degree, o.spans, T));
-  FlatOutputBoundary bc;
-  bc.initial = initial;
-  bc.terminal = Eigen::MatrixXd::Zero(target.size(), kOrders);
-  bc.terminal.col(0) = target;
-  bc.terminal_first_order = 0;
-  for (Eigen::Index i = 0; i < target.size(); ++i) {
-    OutputParameterization j = eliminate_equalities(out.basis, bc, static_cast<int>(i));
-    j.offset = out.free;
-    out.free += static_cast<int>(j.nullspace.cols());
-    out.joints.push_back(std::move(j));
-  }
-  return out;
-}
-
-// The c whose spline is closest (least squares on a fine grid) to `path`: exact when the
-// spline's space holds it (degree 8: the prescribed path itself).
-Eigen::VectorXd fit_to(const PathParameterization& P, const JointPath& path) {
-  const int samples = 8 * P.basis.spans() * (P.basis.degree() + 1) + 1;
-  Eigen::VectorXd c = Eigen::VectorXd::Zero(P.free);
-  for (std::size_t i = 0; i < P.joints.size(); ++i) {
-    const auto& j = P.joints[i];
-    if (!j.nullspace.cols()) continue;
-    Eigen::MatrixXd A(samples, j.nullspace.cols());
-    Eigen::VectorXd b(samples);
-    for (int k = 0; k < samples; ++k) {
-      const double t = P.basis.duration() * k / (samples - 1);
-      const Eigen::RowVectorXd row = P.basis.derivativeRow(t, 0);
-      A.row(k) = row * j.nullspace;
-      b[k] = path.jet(t, 1)(static_cast<Eigen::Index>(i), 0) - row.dot(j.particular);
-    }
-    c.segment(j.offset, j.nullspace.cols()) = A.colPivHouseholderQr().solve(b);
-  }
-  return c;
-}
-
-// Everything about one time point that does not depend on the variables.
-struct PathPoint {
-  BoundPoint flat;                        // F's flat-output part: base + slope theta
-  Eigen::MatrixXd q_base;                 // N x 5: the joint jet at c = 0
-  std::array<Eigen::MatrixXd, kOrders> q_slope;  // per order: N x free (d q^(l) / d c)
-};
-
-PathPoint make_path_point(const SosSetup& setup, const FlatOutputMap& flat, const PathParameterization& P, double t) {
-  PathPoint pt{flat_output_point(setup, flat, t), Eigen::MatrixXd(flat.numJoints(), kOrders), {}};
-  for (int l = 0; l < kOrders; ++l) {
-    const Eigen::RowVectorXd row = P.basis.derivativeRow(t, l);
-    auto& slope = pt.q_slope[static_cast<std::size_t>(l)];
-    slope = Eigen::MatrixXd::Zero(flat.numJoints(), P.free);
-    for (std::size_t i = 0; i < P.joints.size(); ++i) {
-      const auto& j = P.joints[i];
-      pt.q_base(static_cast<Eigen::Index>(i), l) = row.dot(j.particular);
-      if (j.nullspace.cols()) slope.block(static_cast<Eigen::Index>(i), j.offset, 1, j.nullspace.cols()) = row * j.nullspace;
-    }
-  }
-  return pt;
-}
-
-// The rows' variables z = (theta, c).
-struct Variables {
-  int thetas = 0, paths = 0;
-  Eigen::VectorXd theta(const Eigen::VectorXd& z) const { return z.head(thetas); }
-  Eigen::VectorXd c(const Eigen::VectorXd& z) const { return z.tail(paths); }
-};
-
-class PathRows {
- public:
-  PathRows(const FlatOutputMap& flat, const Variables& v, const std::vector<PathPoint>& points, const Eigen::VectorXd& reserves,
-           const Eigen::VectorXd& a_min)
-      : flat_(flat), v_(v), points_(points), reserves_(reserves), a_min_(a_min) {}
-
-  // Per point and muscle: the reserve row, then the four bound rows.
-  static constexpr int kRows = 1 + kRowsPerMuscle;
-
-  BoundRowsAt operator()(const Eigen::VectorXd& z, bool jacobian) const {
-    const int n = flat_.numJoints(), m = flat_.numMuscles();
-    const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
-    BoundRowsAt out;
-    out.value.reserve(points_.size() * static_cast<std::size_t>(m * kRows));
-    Eigen::MatrixXd q_jet(n, kOrders), tau_gradient, dq(kOrders * n, v_.paths), path_gradient(3, kOrders * n);
-    int row = 0;
-    for (const PathPoint& pt : points_) {
-      q_jet = pt.q_base;
-      for (int l = 0; l < kOrders; ++l) q_jet.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * c;
-      const Eigen::MatrixXd tau = jacobian ? flat_.model().pinTree().torqueJet(q_jet, tau_gradient)
-                                           : flat_.model().pinTree().torqueJet(q_jet);
-      // F^(k) = base + slope theta + C_tau tau^(k).
-      Eigen::MatrixXd F = pt.flat.base + flat_.Ctau() * tau;
-      for (int k = 0; k < 3; ++k)
-        for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
-          F.col(k) += pt.flat.slope[static_cast<std::size_t>(k)].col(static_cast<Eigen::Index>(col)) * theta[pt.flat.columns[col]];
-      std::array<Eigen::MatrixXd, 3> dF_dc;  // m x paths (per unit z)
-      if (jacobian) {
-        for (int r = 0; r < n; ++r)
-          for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
-        const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x paths, row 3 i + k
-        for (int k = 0; k < 3; ++k) {
-          Eigen::MatrixXd dtau_k(n, v_.paths);
-          for (int i = 0; i < n; ++i) dtau_k.row(i) = dtau.row(3 * i + k);
-          dF_dc[static_cast<std::size_t>(k)] = flat_.Ctau() * dtau_k;
-        }
-      }
-      for (int j = 0; j < m; ++j) {
-        const muscles::SecondOrderJet path = flat_.pathLengthJet(j, q_jet);
-        const MuscleBoundRows bounds = muscle_bound_rows(flat_.model().muscle(j).getParameters(), {F(j, 0), F(j, 1), F(j, 2)},
-                                                         path, a_min_[j], jacobian);
-        const double reserve_value = F(j, 0) - reserves_[j] - kReserveMargin_N;
-        out.value.push_back(reserve_value);
-        out.violation += std::max(0.0, -reserve_value);
-        for (int k = 0; k < kRowsPerMuscle; ++k) {
-          const double v = bounds.value[static_cast<std::size_t>(k)];
-          out.value.push_back(v);
-          out.violation += std::max(0.0, -v);
-        }
-        if (jacobian) {
-          // The reserve row: dF / d(theta, c).
-          for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
-            out.jacobian.emplace_back(row, pt.flat.columns[col], pt.flat.slope[0](j, static_cast<Eigen::Index>(col)));
-          for (int col = 0; col < v_.paths; ++col) out.jacobian.emplace_back(row, v_.thetas + col, dF_dc[0](j, col));
-          flat_.pathLengthJetGradient(j, q_jet, path_gradient);
-          const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x paths
-          for (int k = 0; k < kRowsPerMuscle; ++k) {
-            const auto& g = bounds.gradient[static_cast<std::size_t>(k)];
-            const auto& pg = bounds.path_gradient[static_cast<std::size_t>(k)];
-            for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
-              out.jacobian.emplace_back(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
-            for (int col = 0; col < v_.paths; ++col) {
-              double d = 0.0;
-              for (std::size_t o = 0; o < 3; ++o)
-                d += g[o] * dF_dc[o](j, col) + pg[o] * dL(static_cast<Eigen::Index>(o), col);
-              out.jacobian.emplace_back(row + 1 + k, v_.thetas + col, d);
-            }
-          }
-        }
-        row += kRows;
-      }
-    }
-    return out;
-  }
-
- private:
-  const FlatOutputMap& flat_;
-  const Variables& v_;
-  const std::vector<PathPoint>& points_;
-  const Eigen::VectorXd& reserves_;
-  const Eigen::VectorXd& a_min_;
-};
-
-// The plan on a dense grid: per time the reserve deficit (N) and the bounds' excess, and their worst.
-struct GridViolations {
-  std::vector<double> deficit_N, excess;
-  double worst_deficit_N = 0.0, worst_excess = 0.0;
-};
-
-GridViolations check_grid(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& path,
-                          const Eigen::VectorXd& theta, const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
-                          int points) {
-  const SplineTrajectory Y = flat_outputs_of(setup, theta);
-  GridViolations g;
-  g.deficit_N.assign(static_cast<std::size_t>(points), 0.0);
-  g.excess.assign(static_cast<std::size_t>(points), 0.0);
-  Jet q_jet(flat.numJoints(), kOrders), y_jet(flat.numFlatOutputs(), 3);
-  for (int i = 0; i < points; ++i) {
-    const double t = path.duration_s * i / (points - 1);
-    path.jetInto(t, q_jet);
-    Y.jetInto(t, y_jet);
-    const Eigen::MatrixXd F = flat.Ctau() * flat.model().pinTree().torqueJet(q_jet) + flat.CY() * y_jet;
-    for (int j = 0; j < flat.numMuscles(); ++j) {
-      const auto& p = flat.model().muscle(j).getParameters();
-      const muscles::MuscleInverse inv = muscles::invert_muscle(p, {F(j, 0), F(j, 1), F(j, 2)}, flat.pathLengthJet(j, q_jet), false);
-      double e = std::numeric_limits<double>::infinity();
-      if (inv.stage == muscles::MuscleInverse::Stage::Complete && inv.excitation_real && std::isfinite(inv.excitation))
-        e = std::max({a_min[j] - inv.activation, inv.activation - 1.0, -inv.excitation, inv.excitation - 1.0, 0.0});
-      const auto k = static_cast<std::size_t>(i);
-      g.excess[k] = std::max(g.excess[k], e);
-      g.deficit_N[k] = std::max(g.deficit_N[k], reserves[j] - F(j, 0));
-    }
-    g.worst_excess = std::max(g.worst_excess, g.excess[static_cast<std::size_t>(i)]);
-    g.worst_deficit_N = std::max(g.worst_deficit_N, g.deficit_N[static_cast<std::size_t>(i)]);
-  }
-  return g;
-}
-
-// Times where a violation is a local maximum above `tolerance`.
-void local_maxima(const std::vector<double>& v, double T, double tolerance, std::vector<double>& times) {
-  const std::size_t n = v.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(v[i] > tolerance)) continue;
-    if ((i == 0 || v[i] >= v[i - 1]) && (i + 1 == n || v[i] >= v[i + 1])) times.push_back(T * static_cast<double>(i) / static_cast<double>(n - 1));
-  }
-}
-
-// The joint jet of the path of c at a point.
-Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c) {
-  Eigen::MatrixXd q = pt.q_base;
-  for (int l = 0; l < kOrders; ++l) q.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * c;
-  return q;
-}
+constexpr double kNewtonTolerance = 1e-8;   // Ipopt's (scaled) optimality tolerance per round
 
 // For a fixed path c, the plan's rows at the points over theta alone: the bound rows (nonlinear)
 // and the linear rows, group-major as the SLP's basis keys them: a group per muscle (F_j >=
@@ -390,7 +170,7 @@ class ValueFunction {
   const Eigen::VectorXd& reserves_;
   const Eigen::VectorXd& a_min_;
   const int max_slp_;
-  Variables v_;
+  PathVariables v_;
 };
 
 // BFGS on V(c) at the current points, from `at` (evaluated there); its inverse-Hessian estimate
@@ -448,12 +228,76 @@ int minimize(ValueFunction& V, QuasiNewton& qn, Evaluation& at, double relative_
   return steps;
 }
 
-}  // namespace
+// The joint Newton method: one Ipopt problem over z = (theta, c) per exchange round, each started
+// from the last round's optimum.
+FreePathOutcome optimize_by_joint_newton(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
+                                         const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
+                                         const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
+                                         const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
+  const double T = setup.duration_s;
+  const PathParameterization P = parameterize(o, T, initial_q_jet, target);
+  const PathVariables v{setup.free_coefficients, P.free};
+  FreePathOutcome out;
+  std::vector<PathPoint> points;
+  std::vector<double> times;
+  auto add_point = [&](double t) {
+    for (double s : times)
+      if (std::abs(s - t) < 1e-9) return false;
+    times.push_back(t);
+    points.push_back(make_path_point(setup, flat, P, t));
+    return true;
+  };
+  const int uniform = o.points_per_span * setup.basis.spans();
+  for (int i = 0; i <= uniform; ++i) add_point(T * i / uniform);
+  JointPathNlpPoint at;
+  at.z.resize(v.size());
+  at.z << theta_start, fit_to(P, start_path);
+  std::size_t solved_points = 0;  // of the last round (its multipliers start the next)
+  bool solved_once = false;
+  for (int round = 0; round < o.max_rounds; ++round) {
+    out.rounds = round + 1;
+    out.points = static_cast<int>(points.size());
+    const JointPathNlpOutcome nlp = solve_joint_path_nlp(setup, flat, v, points, reserves, a_min, at, solved_points,
+                                                         kNewtonTolerance, o.max_newton_iterations);
+    out.path_iterations += nlp.iterations;
+    if (!nlp.solved) {
+      out.infeasible = !solved_once && nlp.infeasible;
+      out.failure = "Ipopt stopped with " + nlp.solver_status + " on " + std::to_string(points.size()) + " points";
+      break;
+    }
+    solved_once = true;
+    at = nlp.at;
+    solved_points = points.size();
+    const GridViolations g = check_grid(setup, flat, P.path(v.c(at.z)), v.theta(at.z), reserves, a_min, o.check_points);
+    out.worst_bound_excess = g.worst_excess;
+    out.min_reserve_margin_N = -g.worst_deficit_N;
+    if (g.worst_excess <= o.tolerance && g.worst_deficit_N <= o.tolerance_N) {
+      out.converged = true;
+      break;
+    }
+    std::vector<double> violated;
+    local_maxima(g.excess, T, o.tolerance, violated);
+    local_maxima(g.deficit_N, T, o.tolerance_N, violated);
+    bool added = false;
+    for (double t : violated) added |= add_point(t);
+    if (!added) {
+      out.failure = "violations remain at points already imposed";
+      break;
+    }
+  }
+  if (!out.converged && out.failure.empty())
+    out.failure = "the joint path's exchange did not converge in " + std::to_string(out.rounds) + " rounds";
+  out.theta = v.theta(at.z);
+  out.path = P.path(v.c(at.z));
+  out.cost_N_s = setup.cost_constant + setup.lp.cost.dot(out.theta);
+  return out;
+}
 
-FreePathOutcome optimize_joint_path(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
-                                    const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
-                                    const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
-                                    const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
+// The reduced-space method: BFGS on V(c) with the envelope gradient, exchange rounds around it.
+FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
+                                         const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
+                                         const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
+                                         const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
   const double T = setup.duration_s;
   const PathParameterization P = parameterize(o, T, initial_q_jet, target);
   FreePathOutcome out;
@@ -511,6 +355,17 @@ FreePathOutcome optimize_joint_path(const SosSetup& setup, const FlatOutputMap& 
   if (at.c.size()) out.path = P.path(at.c);
   out.cost_N_s = at.cost_N_s;
   return out;
+}
+
+}  // namespace
+
+FreePathOutcome optimize_joint_path(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
+                                    const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
+                                    const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
+                                    const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
+  return o.method == FreePathMethod::JointNewton
+             ? optimize_by_joint_newton(setup, flat, start_path, initial_q_jet, target, theta_start, reserves, a_min, o)
+             : optimize_by_quasi_newton(setup, flat, start_path, initial_q_jet, target, theta_start, reserves, a_min, o);
 }
 
 Eigen::VectorXd path_coefficients(const SosSetup& setup, const JointPath& path, const Eigen::MatrixXd& initial_q_jet,

@@ -45,8 +45,26 @@ struct PlanCheck {
 /// bounded plan's multipliers times the rows' derivatives in c; then the plan along the optimized
 /// path is made and certified as along any path. Needs the excitation bounds (without them a
 /// path that moves faster always costs less).
+/// How the joint path's coefficients move (docs/method/free_path.md).
+enum class FreePathMethod {
+  /// BFGS on the bounded plan's cost as a function of the path: fastest on few path spans (1.8 s
+  /// against 17 s on 6 spans), far too slow on many.
+  ReducedQuasiNewton,
+  /// One Ipopt problem over the plan and the path per exchange round, exact first derivatives
+  /// and a Hessian from them: the same optimum on few spans, and it still converges on 24-48.
+  JointNewton,
+};
+
+/// "joint_newton" or "reduced_quasi_newton": the names the programs, summaries and Python use.
+constexpr const char* to_string(FreePathMethod m) {
+  return m == FreePathMethod::ReducedQuasiNewton ? "reduced_quasi_newton" : "joint_newton";
+}
+/// The method of that name; std::invalid_argument naming the accepted ones otherwise.
+FreePathMethod free_path_method(const std::string& name);
+
 struct FreeJointPathOptions {
   bool enabled = false;
+  FreePathMethod method = FreePathMethod::ReducedQuasiNewton;
   int degree = 8;             ///< >= 5 (q'''' continuous); 8 holds the prescribed path exactly
   int spans = 6;
   int points_per_span = 2;    ///< of the flat outputs' spans, imposed from the start
@@ -60,6 +78,7 @@ struct FreeJointPathOptions {
   int max_rounds = 20;
   int max_path_iterations = 200;  ///< quasi-Newton steps per exchange round
   int max_slp_iterations = 200;   ///< sequential-LP steps per evaluation of V(c)
+  int max_newton_iterations = 1000;  ///< Ipopt iterations per exchange round (JointNewton)
 };
 
 /// What optimizing the joint path did (OpenLoopOptions::free_path).
@@ -68,8 +87,11 @@ struct FreePathReport {
   double prescribed_cost_N_s = 0.0;  ///< the plan along the degree-8 path (0 when it has none)
   std::string prescribed_status;  ///< of that plan: "solved", "infeasible", ...
   double cost_at_points_N_s = 0.0;   ///< the path optimization's own cost (exact torques at its points)
+  FreePathMethod method = FreePathMethod::ReducedQuasiNewton;
   int rounds = 0, points = 0;     ///< exchange rounds, time points
-  int path_iterations = 0, evaluations = 0, slp_iterations = 0;  ///< quasi-Newton steps, V(c) evaluations, their LP steps
+  /// Quasi-Newton steps (ReducedQuasiNewton) or Ipopt iterations (JointNewton), then V(c)
+  /// evaluations and their LP steps (ReducedQuasiNewton only).
+  int path_iterations = 0, evaluations = 0, slp_iterations = 0;
   double seconds = 0.0;
 };
 

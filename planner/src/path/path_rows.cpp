@@ -1,0 +1,319 @@
+#include "path/path_rows.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Dense>
+
+namespace flatsos::planner::detail {
+
+namespace {
+constexpr int kOrders = kPathOrders;
+}  // namespace
+
+Eigen::MatrixXd PathParameterization::coefficients(const Eigen::VectorXd& c) const {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(joints.size()), basis.size());
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const auto& j = joints[i];
+    Eigen::VectorXd row = j.particular;
+    if (j.nullspace.cols()) row += j.nullspace * c.segment(j.offset, j.nullspace.cols());
+    out.row(static_cast<Eigen::Index>(i)) = row.transpose();
+  }
+  return out;
+}
+
+JointPath PathParameterization::path(const Eigen::VectorXd& c) const {
+  return JointPath::fromSpline(SplineTrajectory(basis, coefficients(c)));
+}
+
+PathParameterization parameterize(const FreeJointPathOptions& o, double T, const Eigen::MatrixXd& initial,
+                                  const Eigen::VectorXd& target) {
+  PathParameterization out(BSplineBasis(o.degree, o.spans, T));
+  FlatOutputBoundary bc;
+  bc.initial = initial;
+  bc.terminal = Eigen::MatrixXd::Zero(target.size(), kOrders);
+  bc.terminal.col(0) = target;
+  bc.terminal_first_order = 0;
+  for (Eigen::Index i = 0; i < target.size(); ++i) {
+    OutputParameterization j = eliminate_equalities(out.basis, bc, static_cast<int>(i));
+    j.offset = out.free;
+    out.free += static_cast<int>(j.nullspace.cols());
+    out.joints.push_back(std::move(j));
+  }
+  return out;
+}
+
+Eigen::VectorXd fit_to(const PathParameterization& P, const JointPath& path) {
+  const int samples = 8 * P.basis.spans() * (P.basis.degree() + 1) + 1;
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(P.free);
+  for (std::size_t i = 0; i < P.joints.size(); ++i) {
+    const auto& j = P.joints[i];
+    if (!j.nullspace.cols()) continue;
+    Eigen::MatrixXd A(samples, j.nullspace.cols());
+    Eigen::VectorXd b(samples);
+    for (int k = 0; k < samples; ++k) {
+      const double t = P.basis.duration() * k / (samples - 1);
+      const Eigen::RowVectorXd row = P.basis.derivativeRow(t, 0);
+      A.row(k) = row * j.nullspace;
+      b[k] = path.jet(t, 1)(static_cast<Eigen::Index>(i), 0) - row.dot(j.particular);
+    }
+    c.segment(j.offset, j.nullspace.cols()) = A.colPivHouseholderQr().solve(b);
+  }
+  return c;
+}
+
+PathPoint make_path_point(const SosSetup& setup, const FlatOutputMap& flat, const PathParameterization& P, double t) {
+  PathPoint pt{flat_output_point(setup, flat, t), Eigen::MatrixXd(flat.numJoints(), kOrders), {}};
+  for (int l = 0; l < kOrders; ++l) {
+    const Eigen::RowVectorXd row = P.basis.derivativeRow(t, l);
+    auto& slope = pt.q_slope[static_cast<std::size_t>(l)];
+    slope = Eigen::MatrixXd::Zero(flat.numJoints(), P.free);
+    for (std::size_t i = 0; i < P.joints.size(); ++i) {
+      const auto& j = P.joints[i];
+      pt.q_base(static_cast<Eigen::Index>(i), l) = row.dot(j.particular);
+      if (j.nullspace.cols()) slope.block(static_cast<Eigen::Index>(i), j.offset, 1, j.nullspace.cols()) = row * j.nullspace;
+    }
+  }
+  return pt;
+}
+
+Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c) {
+  Eigen::MatrixXd q = pt.q_base;
+  for (int l = 0; l < kOrders; ++l) q.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * c;
+  return q;
+}
+
+BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const {
+  const int n = flat_.numJoints(), m = flat_.numMuscles();
+  const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
+  BoundRowsAt out;
+  out.value.reserve(points_.size() * static_cast<std::size_t>(m * kRows));
+  Eigen::MatrixXd q_jet(n, kOrders), tau_gradient, dq(kOrders * n, v_.paths), path_gradient(3, kOrders * n);
+  int row = 0;
+  for (const PathPoint& pt : points_) {
+    q_jet = pt.q_base;
+    for (int l = 0; l < kOrders; ++l) q_jet.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * c;
+    const Eigen::MatrixXd tau = jacobian ? flat_.model().pinTree().torqueJet(q_jet, tau_gradient)
+                                         : flat_.model().pinTree().torqueJet(q_jet);
+    // F^(k) = base + slope theta + C_tau tau^(k).
+    Eigen::MatrixXd F = pt.flat.base + flat_.Ctau() * tau;
+    for (int k = 0; k < 3; ++k)
+      for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
+        F.col(k) += pt.flat.slope[static_cast<std::size_t>(k)].col(static_cast<Eigen::Index>(col)) * theta[pt.flat.columns[col]];
+    std::array<Eigen::MatrixXd, 3> dF_dc;  // m x paths (per unit z)
+    if (jacobian) {
+      for (int r = 0; r < n; ++r)
+        for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+      const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x paths, row 3 i + k
+      for (int k = 0; k < 3; ++k) {
+        Eigen::MatrixXd dtau_k(n, v_.paths);
+        for (int i = 0; i < n; ++i) dtau_k.row(i) = dtau.row(3 * i + k);
+        dF_dc[static_cast<std::size_t>(k)] = flat_.Ctau() * dtau_k;
+      }
+    }
+    for (int j = 0; j < m; ++j) {
+      const muscles::SecondOrderJet path = flat_.pathLengthJet(j, q_jet);
+      const MuscleBoundRows bounds = muscle_bound_rows(flat_.model().muscle(j).getParameters(), {F(j, 0), F(j, 1), F(j, 2)},
+                                                       path, a_min_[j], jacobian);
+      const double reserve_value = F(j, 0) - reserves_[j] - kReserveMargin_N;
+      out.value.push_back(reserve_value);
+      out.violation += std::max(0.0, -reserve_value);
+      for (int k = 0; k < kRowsPerMuscle; ++k) {
+        const double v = bounds.value[static_cast<std::size_t>(k)];
+        out.value.push_back(v);
+        out.violation += std::max(0.0, -v);
+      }
+      if (jacobian) {
+        // The reserve row: dF / d(theta, c).
+        for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
+          out.jacobian.emplace_back(row, pt.flat.columns[col], pt.flat.slope[0](j, static_cast<Eigen::Index>(col)));
+        for (int col = 0; col < v_.paths; ++col) out.jacobian.emplace_back(row, v_.thetas + col, dF_dc[0](j, col));
+        flat_.pathLengthJetGradient(j, q_jet, path_gradient);
+        const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x paths
+        for (int k = 0; k < kRowsPerMuscle; ++k) {
+          const auto& g = bounds.gradient[static_cast<std::size_t>(k)];
+          const auto& pg = bounds.path_gradient[static_cast<std::size_t>(k)];
+          for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
+            out.jacobian.emplace_back(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
+          for (int col = 0; col < v_.paths; ++col) {
+            double d = 0.0;
+            for (std::size_t o = 0; o < 3; ++o)
+              d += g[o] * dF_dc[o](j, col) + pg[o] * dL(static_cast<Eigen::Index>(o), col);
+            out.jacobian.emplace_back(row + 1 + k, v_.thetas + col, d);
+          }
+        }
+      }
+      row += kRows;
+    }
+  }
+  return out;
+}
+
+namespace {
+// Central-difference steps relative to (1 + |entry|): near eps^(1/3), where the truncation and
+// rounding errors of a difference of exact gradients balance.
+constexpr double kForceJetStep = 1e-5;
+constexpr double kJointJetStep = 1e-5;
+}  // namespace
+
+std::vector<int> PathRows::localVariables(const PathPoint& pt) const {
+  std::vector<int> out(pt.flat.columns.begin(), pt.flat.columns.end());
+  for (int i = 0; i < v_.paths; ++i) out.push_back(v_.thetas + i);
+  return out;
+}
+
+Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
+                                       const double* lambda) const {
+  const int n = flat_.numJoints(), m = flat_.numMuscles(), paths = v_.paths;
+  const int cols = static_cast<int>(pt.flat.columns.size()), local = cols + paths;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(local, local);
+  const Eigen::MatrixXd q_jet = joint_jet(pt, c);
+  Eigen::MatrixXd tau_gradient;
+  const Eigen::MatrixXd tau = flat_.model().pinTree().torqueJet(q_jet, tau_gradient);
+  Eigen::MatrixXd dq(kOrders * n, paths);  // d (joint jet) / dc, row kOrders r + l
+  for (int r = 0; r < n; ++r)
+    for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+  const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x paths, row 3 i + k
+  Eigen::MatrixXd F = pt.flat.base + flat_.Ctau() * tau;
+  for (int k = 0; k < 3; ++k)
+    for (int col = 0; col < cols; ++col)
+      F.col(k) += pt.flat.slope[static_cast<std::size_t>(k)].col(col) * theta[pt.flat.columns[static_cast<std::size_t>(col)]];
+
+  // Per muscle: the multiplier-weighted gradient w of its rows in u = (F jet, L jet), and the
+  // curvature in u, J_u^T (d w / du) J_u.
+  Eigen::MatrixXd wF = Eigen::MatrixXd::Zero(m, 3), wL = Eigen::MatrixXd::Zero(m, 3);
+  Eigen::MatrixXd path_gradient(3, kOrders * n);
+  using Vector6 = Eigen::Matrix<double, 6, 1>;
+  for (int j = 0; j < m; ++j) {
+    const double* l = lambda + j * kRows;
+    const muscles::SecondOrderJet L = flat_.pathLengthJet(j, q_jet);
+    const auto& p = flat_.model().muscle(j).getParameters();
+    auto weighted_gradient = [&](const Vector6& u) {
+      const MuscleBoundRows rows = muscle_bound_rows(p, {u[0], u[1], u[2]}, {u[3], u[4], u[5]}, a_min_[j], true);
+      Vector6 g = Vector6::Zero();
+      for (int r = 0; r < kRowsPerMuscle; ++r)
+        for (int o = 0; o < 3; ++o) {
+          g[o] += l[1 + r] * rows.gradient[static_cast<std::size_t>(r)][static_cast<std::size_t>(o)];
+          g[3 + o] += l[1 + r] * rows.path_gradient[static_cast<std::size_t>(r)][static_cast<std::size_t>(o)];
+        }
+      return g;
+    };
+    Vector6 u;
+    u << F(j, 0), F(j, 1), F(j, 2), L.value, L.rate, L.acceleration;
+    const Vector6 w = weighted_gradient(u);
+    wF.row(j) = w.head<3>().transpose();
+    wF(j, 0) += l[0];  // the reserve row is F_j itself
+    wL.row(j) = w.tail<3>().transpose();
+    Eigen::Matrix<double, 6, 6> Hu;
+    for (int i = 0; i < 6; ++i) {
+      const double h = kForceJetStep * (1.0 + std::abs(u[i]));
+      Vector6 up = u, down = u;
+      up[i] += h;
+      down[i] -= h;
+      Hu.col(i) = (weighted_gradient(up) - weighted_gradient(down)) / (2.0 * h);
+    }
+    Hu = 0.5 * (Hu + Hu.transpose()).eval();
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(6, local);  // du / d(local variables)
+    for (int k = 0; k < 3; ++k) {
+      J.block(k, 0, 1, cols) = pt.flat.slope[static_cast<std::size_t>(k)].row(j);
+      for (int i = 0; i < n; ++i) J.block(k, cols, 1, paths) += flat_.Ctau()(j, i) * dtau.row(3 * i + k);
+    }
+    flat_.pathLengthJetGradient(j, q_jet, path_gradient);
+    J.bottomRightCorner(3, paths) = path_gradient * dq;
+    H.noalias() += J.transpose() * Hu * J;
+  }
+
+  // The torque and length jets' own curvature in the joint jet, weighted by w: the Hessian of
+  // phi(q jet) = sum_jk wF_jk (C_tau tau(q jet))_jk + wL_jk L_jk(q jet), mapped to c by dq.
+  const Eigen::MatrixXd w_tau = flat_.Ctau().transpose() * wF;  // N x 3: weight of tau_i^(k)
+  auto phi_gradient = [&](const Eigen::MatrixXd& q) {
+    Eigen::MatrixXd tg;
+    flat_.model().pinTree().torqueJet(q, tg);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(kOrders * n);
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) g += w_tau(i, k) * tg.row(3 * i + k).transpose();
+    for (int j = 0; j < m; ++j) {
+      flat_.pathLengthJetGradient(j, q, path_gradient);
+      for (int k = 0; k < 3; ++k) g += wL(j, k) * path_gradient.row(k).transpose();
+    }
+    return g;
+  };
+  Eigen::MatrixXd Hq(kOrders * n, kOrders * n);
+  for (int r = 0; r < n; ++r)
+    for (int l = 0; l < kOrders; ++l) {
+      const double h = kJointJetStep * (1.0 + std::abs(q_jet(r, l)));
+      Eigen::MatrixXd up = q_jet, down = q_jet;
+      up(r, l) += h;
+      down(r, l) -= h;
+      Hq.col(kOrders * r + l) = (phi_gradient(up) - phi_gradient(down)) / (2.0 * h);
+    }
+  Hq = 0.5 * (Hq + Hq.transpose()).eval();
+  H.bottomRightCorner(paths, paths).noalias() += dq.transpose() * Hq * dq;
+  return H;
+}
+
+std::vector<Eigen::Triplet<double>> PathRows::hessianPattern() const {
+  std::vector<Eigen::Triplet<double>> out;
+  for (const PathPoint& pt : points_) {
+    const std::vector<int> vars = localVariables(pt);
+    for (std::size_t a = 0; a < vars.size(); ++a)
+      for (std::size_t b = 0; b <= a; ++b) out.emplace_back(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]), 0.0);
+  }
+  return out;
+}
+
+std::vector<Eigen::Triplet<double>> PathRows::lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const {
+  const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
+  const std::size_t per_point = static_cast<std::size_t>(flat_.numMuscles() * kRows);
+  std::vector<Eigen::Triplet<double>> out;
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    const PathPoint& pt = points_[k];
+    const std::vector<int> vars = localVariables(pt);
+    const Eigen::MatrixXd H = pointHessian(pt, theta, c, lambda.data() + k * per_point);
+    for (std::size_t a = 0; a < vars.size(); ++a)
+      for (std::size_t b = 0; b <= a; ++b)
+        out.emplace_back(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]),
+                         H(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
+  }
+  return out;
+}
+
+GridViolations check_grid(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& path,
+                          const Eigen::VectorXd& theta, const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
+                          int points) {
+  const SplineTrajectory Y = flat_outputs_of(setup, theta);
+  GridViolations g;
+  g.deficit_N.assign(static_cast<std::size_t>(points), 0.0);
+  g.excess.assign(static_cast<std::size_t>(points), 0.0);
+  Jet q_jet(flat.numJoints(), kOrders), y_jet(flat.numFlatOutputs(), 3);
+  for (int i = 0; i < points; ++i) {
+    const double t = path.duration_s * i / (points - 1);
+    path.jetInto(t, q_jet);
+    Y.jetInto(t, y_jet);
+    const Eigen::MatrixXd F = flat.Ctau() * flat.model().pinTree().torqueJet(q_jet) + flat.CY() * y_jet;
+    for (int j = 0; j < flat.numMuscles(); ++j) {
+      const auto& p = flat.model().muscle(j).getParameters();
+      const muscles::MuscleInverse inv = muscles::invert_muscle(p, {F(j, 0), F(j, 1), F(j, 2)}, flat.pathLengthJet(j, q_jet), false);
+      double e = std::numeric_limits<double>::infinity();
+      if (inv.stage == muscles::MuscleInverse::Stage::Complete && inv.excitation_real && std::isfinite(inv.excitation))
+        e = std::max({a_min[j] - inv.activation, inv.activation - 1.0, -inv.excitation, inv.excitation - 1.0, 0.0});
+      const auto k = static_cast<std::size_t>(i);
+      g.excess[k] = std::max(g.excess[k], e);
+      g.deficit_N[k] = std::max(g.deficit_N[k], reserves[j] - F(j, 0));
+    }
+    g.worst_excess = std::max(g.worst_excess, g.excess[static_cast<std::size_t>(i)]);
+    g.worst_deficit_N = std::max(g.worst_deficit_N, g.deficit_N[static_cast<std::size_t>(i)]);
+  }
+  return g;
+}
+
+void local_maxima(const std::vector<double>& v, double T, double tolerance, std::vector<double>& times) {
+  const std::size_t n = v.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(v[i] > tolerance)) continue;
+    if ((i == 0 || v[i] >= v[i - 1]) && (i + 1 == n || v[i] >= v[i + 1])) times.push_back(T * static_cast<double>(i) / static_cast<double>(n - 1));
+  }
+}
+
+}  // namespace flatsos::planner::detail

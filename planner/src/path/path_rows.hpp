@@ -1,0 +1,116 @@
+#pragma once
+// The joint path as a variable, and the plan's rows over both kinds of coefficient: each joint is
+// a clamped B-spline through the open-loop plan's boundary derivatives, q_i = B (particular_i +
+// nullspace_i c_i); at each time point and muscle the reserve row F_j >= reserve_j and the four
+// bound rows of a and n are functions of z = (theta, c), with their exact Jacobian and the
+// Hessian of their multiplier-weighted sum. The path's two optimizers share them
+// (docs/method/free_path.md).
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "flatsos/planner/motion_planner.hpp"
+#include "sos/bound_rows.hpp"
+#include "sos/sos_setup.hpp"
+
+namespace flatsos::planner::detail {
+
+constexpr int kPathOrders = 5;               // q .. q'''' (the excitation needs d2 tau / dt2)
+constexpr double kReserveMargin_N = 1e-6;    // reserve rows hold F >= reserve + this
+
+// The joint path's spline: q_i = B (particular_i + nullspace_i c_i), c = [c_0; c_1; ...].
+struct PathParameterization {
+  explicit PathParameterization(BSplineBasis b) : basis(std::move(b)) {}
+  BSplineBasis basis;
+  std::vector<OutputParameterization> joints;
+  int free = 0;
+
+  Eigen::MatrixXd coefficients(const Eigen::VectorXd& c) const;
+  JointPath path(const Eigen::VectorXd& c) const;
+};
+
+/// The spline of `o` through q..q''' at 0 (initial: N x 4) and rest at `target` at T.
+PathParameterization parameterize(const FreeJointPathOptions& o, double T, const Eigen::MatrixXd& initial,
+                                  const Eigen::VectorXd& target);
+
+/// The c whose spline is closest (least squares on a fine grid) to `path`: exact when the
+/// spline's space holds it (degree 8: the prescribed path itself).
+Eigen::VectorXd fit_to(const PathParameterization& P, const JointPath& path);
+
+/// Everything about one time point that does not depend on the variables.
+struct PathPoint {
+  BoundPoint flat;                                   // F's flat-output part: base + slope theta
+  Eigen::MatrixXd q_base;                            // N x 5: the joint jet at c = 0
+  std::array<Eigen::MatrixXd, kPathOrders> q_slope;  // per order: N x free (d q^(l) / d c)
+};
+
+PathPoint make_path_point(const SosSetup& setup, const FlatOutputMap& flat, const PathParameterization& P, double t);
+
+/// The joint jet (N x 5) of the path of c at a point.
+Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c);
+
+/// The rows' variables z = (theta, c).
+struct PathVariables {
+  int thetas = 0, paths = 0;
+  int size() const { return thetas + paths; }
+  Eigen::VectorXd theta(const Eigen::VectorXd& z) const { return z.head(thetas); }
+  Eigen::VectorXd c(const Eigen::VectorXd& z) const { return z.tail(paths); }
+};
+
+/// Per point and muscle: the reserve row, then the four bound rows, each ">= 0". The Jacobian's
+/// pattern does not depend on z: per row, the point's theta columns, then every c.
+class PathRows {
+ public:
+  PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
+           const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min)
+      : flat_(flat), v_(v), points_(points), reserves_(reserves), a_min_(a_min) {}
+
+  static constexpr int kRows = 1 + kRowsPerMuscle;
+  int rows() const { return static_cast<int>(points_.size()) * flat_.numMuscles() * kRows; }
+
+  BoundRowsAt operator()(const Eigen::VectorXd& z, bool jacobian) const;
+
+  /// The lower triangle of sum_k lambda_k (Hessian of row k) in z, as triplets in a fixed order
+  /// (repeated entries add up): per point, its block over (its theta columns, every c).
+  ///
+  /// Row k is h(u(z)) with u = (F, dF, ddF, L, dL, ddL) of its muscle, so its Hessian is
+  /// J_u^T (Hessian of h in u) J_u plus sum_i dh/du_i (Hessian of u_i in z). u is affine in theta,
+  /// and in c only through the joint jet (linear in c) and the torque jet and path length of it.
+  /// The exact gradients of h in u (muscles::invert_muscle) and of the torque and length jets in
+  /// the joint jet (nested dual numbers) are differenced centrally, in the 6 entries of u and the
+  /// 5N of the joint jet: second derivatives to about 1e-8 relative at the cost of a few dozen
+  /// evaluations per point, without third derivatives of the Hill laws.
+  std::vector<Eigen::Triplet<double>> lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const;
+  /// The same pattern (values 0).
+  std::vector<Eigen::Triplet<double>> hessianPattern() const;
+
+ private:
+  // Point k's local variables: its theta columns, then every c (indices into z).
+  std::vector<int> localVariables(const PathPoint& pt) const;
+  Eigen::MatrixXd pointHessian(const PathPoint& pt, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
+                               const double* lambda) const;
+
+  const FlatOutputMap& flat_;
+  const PathVariables& v_;
+  const std::vector<PathPoint>& points_;
+  const Eigen::VectorXd& reserves_;
+  const Eigen::VectorXd& a_min_;
+};
+
+/// The plan on a dense grid: per time the reserve deficit (N) and the bounds' excess, and their worst.
+struct GridViolations {
+  std::vector<double> deficit_N, excess;
+  double worst_deficit_N = 0.0, worst_excess = 0.0;
+};
+
+GridViolations check_grid(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& path,
+                          const Eigen::VectorXd& theta, const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
+                          int points);
+
+/// Appends the times (grid of v.size() points over [0, T]) where v is a local maximum above `tolerance`.
+void local_maxima(const std::vector<double>& v, double T, double tolerance, std::vector<double>& times);
+
+}  // namespace flatsos::planner::detail
