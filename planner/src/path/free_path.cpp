@@ -228,27 +228,61 @@ int minimize(ValueFunction& V, QuasiNewton& qn, Evaluation& at, double relative_
   return steps;
 }
 
+// The exchange's time points: uniform at first, then where the plan violates a row on the grid.
+struct ExchangePoints {
+  const SosSetup& setup;
+  const FlatOutputMap& flat;
+  const PathParameterization& P;
+  std::vector<PathPoint> points;
+  std::vector<double> times;
+
+  ExchangePoints(const SosSetup& s, const FlatOutputMap& f, const PathParameterization& p, int per_span)
+      : setup(s), flat(f), P(p) {
+    const int uniform = per_span * setup.basis.spans();
+    for (int i = 0; i <= uniform; ++i) add(setup.duration_s * i / uniform);
+  }
+  bool add(double t) {
+    for (double s : times)
+      if (std::abs(s - t) < 1e-9) return false;
+    times.push_back(t);
+    points.push_back(make_path_point(setup, flat, P, t));
+    return true;
+  }
+};
+
+enum class GridVerdict { Holds, PointsAdded, Stuck };
+
+// Checks the plan (theta, path of c) on the dense grid, records its worst violations in `out`, and
+// adds a point at each local maximum of a violation; `out.failure` says when none is new.
+GridVerdict check_and_extend(ExchangePoints& pts, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
+                             const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, const FreeJointPathOptions& o,
+                             FreePathOutcome& out) {
+  const double T = pts.setup.duration_s;
+  const GridViolations g = check_grid(pts.setup, pts.flat, pts.P.path(c), theta, reserves, a_min, o.check_points);
+  out.worst_bound_excess = g.worst_excess;
+  out.min_reserve_margin_N = -g.worst_deficit_N;
+  if (g.worst_excess <= o.tolerance && g.worst_deficit_N <= o.tolerance_N) return GridVerdict::Holds;
+  std::vector<double> violated;
+  local_maxima(g.excess, T, o.tolerance, violated);
+  local_maxima(g.deficit_N, T, o.tolerance_N, violated);
+  bool added = false;
+  for (double t : violated) added |= pts.add(t);
+  if (added) return GridVerdict::PointsAdded;
+  out.failure = "violations remain at points already imposed";
+  return GridVerdict::Stuck;
+}
+
 // The joint Newton method: one Ipopt problem over z = (theta, c) per exchange round, each started
 // from the last round's optimum.
 FreePathOutcome optimize_by_joint_newton(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
                                          const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
                                          const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
                                          const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
-  const double T = setup.duration_s;
-  const PathParameterization P = parameterize(o, T, initial_q_jet, target);
+  const PathParameterization P = parameterize(o, setup.duration_s, initial_q_jet, target);
   const PathVariables v{setup.free_coefficients, P.free};
   FreePathOutcome out;
-  std::vector<PathPoint> points;
-  std::vector<double> times;
-  auto add_point = [&](double t) {
-    for (double s : times)
-      if (std::abs(s - t) < 1e-9) return false;
-    times.push_back(t);
-    points.push_back(make_path_point(setup, flat, P, t));
-    return true;
-  };
-  const int uniform = o.points_per_span * setup.basis.spans();
-  for (int i = 0; i <= uniform; ++i) add_point(T * i / uniform);
+  ExchangePoints pts(setup, flat, P, o.points_per_span);
+  const std::vector<PathPoint>& points = pts.points;
   JointPathNlpPoint at;
   at.z.resize(v.size());
   at.z << theta_start, fit_to(P, start_path);
@@ -268,22 +302,9 @@ FreePathOutcome optimize_by_joint_newton(const SosSetup& setup, const FlatOutput
     solved_once = true;
     at = nlp.at;
     solved_points = points.size();
-    const GridViolations g = check_grid(setup, flat, P.path(v.c(at.z)), v.theta(at.z), reserves, a_min, o.check_points);
-    out.worst_bound_excess = g.worst_excess;
-    out.min_reserve_margin_N = -g.worst_deficit_N;
-    if (g.worst_excess <= o.tolerance && g.worst_deficit_N <= o.tolerance_N) {
-      out.converged = true;
-      break;
-    }
-    std::vector<double> violated;
-    local_maxima(g.excess, T, o.tolerance, violated);
-    local_maxima(g.deficit_N, T, o.tolerance_N, violated);
-    bool added = false;
-    for (double t : violated) added |= add_point(t);
-    if (!added) {
-      out.failure = "violations remain at points already imposed";
-      break;
-    }
+    const GridVerdict verdict = check_and_extend(pts, v.theta(at.z), v.c(at.z), reserves, a_min, o, out);
+    out.converged = verdict == GridVerdict::Holds;
+    if (verdict != GridVerdict::PointsAdded) break;
   }
   if (!out.converged && out.failure.empty())
     out.failure = "the joint path's exchange did not converge in " + std::to_string(out.rounds) + " rounds";
@@ -298,21 +319,10 @@ FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutput
                                          const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
                                          const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
                                          const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
-  const double T = setup.duration_s;
-  const PathParameterization P = parameterize(o, T, initial_q_jet, target);
+  const PathParameterization P = parameterize(o, setup.duration_s, initial_q_jet, target);
   FreePathOutcome out;
-  std::vector<PathPoint> points;
-  std::vector<double> times;
-  auto add_point = [&](double t) {
-    for (double s : times)
-      if (std::abs(s - t) < 1e-9) return false;
-    times.push_back(t);
-    points.push_back(make_path_point(setup, flat, P, t));
-    return true;
-  };
-  const int uniform = o.points_per_span * setup.basis.spans();
-  for (int i = 0; i <= uniform; ++i) add_point(T * i / uniform);
-
+  ExchangePoints pts(setup, flat, P, o.points_per_span);
+  const std::vector<PathPoint>& points = pts.points;  // V reads them as they grow
   ValueFunction V(setup, flat, points, P.free, reserves, a_min, o.max_slp_iterations);
   Evaluation start;
   start.theta = theta_start;
@@ -329,22 +339,9 @@ FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutput
       break;
     }
     out.path_iterations += minimize(V, qn, at, o.relative_tolerance, o.max_path_iterations);
-    const GridViolations g = check_grid(setup, flat, P.path(at.c), at.theta, reserves, a_min, o.check_points);
-    out.worst_bound_excess = g.worst_excess;
-    out.min_reserve_margin_N = -g.worst_deficit_N;
-    if (g.worst_excess <= o.tolerance && g.worst_deficit_N <= o.tolerance_N) {
-      out.converged = true;
-      break;
-    }
-    std::vector<double> violated;
-    local_maxima(g.excess, T, o.tolerance, violated);
-    local_maxima(g.deficit_N, T, o.tolerance_N, violated);
-    bool added = false;
-    for (double t : violated) added |= add_point(t);
-    if (!added) {
-      out.failure = "violations remain at points already imposed";
-      break;
-    }
+    const GridVerdict verdict = check_and_extend(pts, at.theta, at.c, reserves, a_min, o, out);
+    out.converged = verdict == GridVerdict::Holds;
+    if (verdict != GridVerdict::PointsAdded) break;
     at = V(at.c, at);  // V at the new points (higher: more rows), from the same path and plan
   }
   if (!out.converged && out.failure.empty())
