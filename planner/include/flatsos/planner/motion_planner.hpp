@@ -37,14 +37,6 @@ struct PlanCheck {
   std::string limiting_violation;
 };
 
-/// The joint path as part of the optimization (the predictive problem, not only the redundancy
-/// along a given path): each joint a clamped B-spline of `degree` on `spans` uniform spans
-/// through the same boundary derivatives as the degree-8 path (q..q''' at 0, rest at T). Its free
-/// coefficients c (degree + spans - 9 per joint) minimize V(c), the bounded plan's cost along the
-/// path of c at time points found by exchange, by a quasi-Newton method whose gradient is the
-/// bounded plan's multipliers times the rows' derivatives in c; then the plan along the optimized
-/// path is made and certified as along any path. Needs the excitation bounds (without them a
-/// path that moves faster always costs less).
 /// How the joint path's coefficients move (docs/method/free_path.md).
 enum class FreePathMethod {
   /// BFGS on the bounded plan's cost as a function of the path: fastest on few path spans (1.8 s
@@ -55,13 +47,21 @@ enum class FreePathMethod {
   JointNewton,
 };
 
-/// "joint_newton" or "reduced_quasi_newton": the names the programs, summaries and Python use.
+/// "reduced_quasi_newton" or "joint_newton": the names the programs and summaries use.
 constexpr const char* to_string(FreePathMethod m) {
   return m == FreePathMethod::ReducedQuasiNewton ? "reduced_quasi_newton" : "joint_newton";
 }
 /// The method of that name; std::invalid_argument naming the accepted ones otherwise.
 FreePathMethod free_path_method(const std::string& name);
 
+/// The joint path as part of the optimization (the predictive problem, not only the redundancy
+/// along a given path): each joint a clamped B-spline of `degree` on `spans` uniform spans
+/// through the same boundary derivatives as the degree-8 path (q..q''' at 0, rest at T). Its free
+/// coefficients c (degree + spans - 9 per joint) minimize V(c), the bounded plan's cost along the
+/// path of c at time points found by exchange (`method`: by BFGS with the gradient from the
+/// bounded plan's multipliers, or by Newton steps over the plan and the path together); then the
+/// plan along the optimized path is made and certified as along any path. Needs the excitation bounds (without them a
+/// path that moves faster always costs less).
 struct FreeJointPathOptions {
   bool enabled = false;
   FreePathMethod method = FreePathMethod::ReducedQuasiNewton;
