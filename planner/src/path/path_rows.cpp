@@ -10,6 +10,24 @@ namespace flatsos::planner::detail {
 
 namespace {
 constexpr int kOrders = kPathOrders;
+
+// d (joint jet) / dc at a point: 5N x paths, row kOrders r + l for d^l q_r / dt^l.
+Eigen::MatrixXd joint_jet_slope(const PathPoint& pt, int joints, int paths) {
+  Eigen::MatrixXd dq(kOrders * joints, paths);
+  for (int r = 0; r < joints; ++r)
+    for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+  return dq;
+}
+
+// The tendon-force jets at a point, m x 3: F^(k) = base + slope theta + C_tau tau^(k).
+Eigen::MatrixXd force_jet(const PathPoint& pt, const Eigen::MatrixXd& Ctau, const Eigen::MatrixXd& tau,
+                          const Eigen::VectorXd& theta) {
+  Eigen::MatrixXd F = pt.flat.base + Ctau * tau;
+  for (int k = 0; k < 3; ++k)
+    for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
+      F.col(k) += pt.flat.slope[static_cast<std::size_t>(k)].col(static_cast<Eigen::Index>(col)) * theta[pt.flat.columns[col]];
+  return F;
+}
 }  // namespace
 
 Eigen::MatrixXd PathParameterization::coefficients(const Eigen::VectorXd& c) const {
@@ -89,22 +107,16 @@ BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const 
   const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
   BoundRowsAt out;
   out.value.reserve(points_.size() * static_cast<std::size_t>(m * kRows));
-  Eigen::MatrixXd q_jet(n, kOrders), tau_gradient, dq(kOrders * n, v_.paths), path_gradient(3, kOrders * n);
+  Eigen::MatrixXd tau_gradient, dq, path_gradient(3, kOrders * n);
   int row = 0;
   for (const PathPoint& pt : points_) {
-    q_jet = pt.q_base;
-    for (int l = 0; l < kOrders; ++l) q_jet.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * c;
+    const Eigen::MatrixXd q_jet = joint_jet(pt, c);
     const Eigen::MatrixXd tau = jacobian ? flat_.model().pinTree().torqueJet(q_jet, tau_gradient)
                                          : flat_.model().pinTree().torqueJet(q_jet);
-    // F^(k) = base + slope theta + C_tau tau^(k).
-    Eigen::MatrixXd F = pt.flat.base + flat_.Ctau() * tau;
-    for (int k = 0; k < 3; ++k)
-      for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
-        F.col(k) += pt.flat.slope[static_cast<std::size_t>(k)].col(static_cast<Eigen::Index>(col)) * theta[pt.flat.columns[col]];
+    const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), tau, theta);
     std::array<Eigen::MatrixXd, 3> dF_dc;  // m x paths (per unit z)
     if (jacobian) {
-      for (int r = 0; r < n; ++r)
-        for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+      dq = joint_jet_slope(pt, n, v_.paths);
       const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x paths, row 3 i + k
       for (int k = 0; k < 3; ++k) {
         Eigen::MatrixXd dtau_k(n, v_.paths);
@@ -171,14 +183,9 @@ Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorX
   const Eigen::MatrixXd q_jet = joint_jet(pt, c);
   Eigen::MatrixXd tau_gradient;
   const Eigen::MatrixXd tau = flat_.model().pinTree().torqueJet(q_jet, tau_gradient);
-  Eigen::MatrixXd dq(kOrders * n, paths);  // d (joint jet) / dc, row kOrders r + l
-  for (int r = 0; r < n; ++r)
-    for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+  const Eigen::MatrixXd dq = joint_jet_slope(pt, n, paths);
   const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x paths, row 3 i + k
-  Eigen::MatrixXd F = pt.flat.base + flat_.Ctau() * tau;
-  for (int k = 0; k < 3; ++k)
-    for (int col = 0; col < cols; ++col)
-      F.col(k) += pt.flat.slope[static_cast<std::size_t>(k)].col(col) * theta[pt.flat.columns[static_cast<std::size_t>(col)]];
+  const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), tau, theta);
 
   // Per muscle: the multiplier-weighted gradient w of its rows in u = (F jet, L jet), and the
   // curvature in u, J_u^T (d w / du) J_u.
