@@ -241,6 +241,52 @@ TEST(PinTreeDynamics, TorqueJetGradientMatchesFiniteDifferences) {
   }
 }
 
+TEST(PinTreeDynamics, TorqueJetHessianIsTheDerivativeOfTheWeightedExactGradient) {
+  // Central differences of the exact (dual-number) gradient, entry by entry, including the pairs
+  // the Hessian skips as structurally zero: the differences must find them zero too.
+  std::mt19937 rng(41);
+  std::srand(43);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int n = 1 + trial % 4;
+    const fp::MusculoskeletalModel model(random_tree(rng, n));
+    const fp::PinTreeDynamics& tree = model.pinTree();
+    Eigen::MatrixXd q_jet = Eigen::MatrixXd::Random(n, 5);
+    q_jet.col(2) *= 10.0;
+    const Eigen::MatrixXd w = Eigen::MatrixXd::Random(n, 3);
+    auto weighted_gradient = [&](const Eigen::MatrixXd& jet) {
+      Eigen::MatrixXd gradient;
+      tree.torqueJet(jet, gradient);
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(5 * n);
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) g += w(i, k) * gradient.row(3 * i + k).transpose();
+      return g;
+    };
+    const Eigen::MatrixXd H = tree.torqueJetHessian(q_jet, w);
+    ASSERT_EQ(H.rows(), 5 * n);
+    ASSERT_EQ(H.cols(), 5 * n);
+    EXPECT_TRUE(H.isApprox(H.transpose(), 0.0));
+    const double scale = 1.0 + weighted_gradient(q_jet).cwiseAbs().maxCoeff();
+    double largest = 0.0;
+    for (int c = 0; c < 5 * n; ++c) {
+      const double h = 1e-6 * (1.0 + std::abs(q_jet(c / 5, c % 5)));
+      Eigen::MatrixXd plus = q_jet, minus = q_jet;
+      plus(c / 5, c % 5) += h;
+      minus(c / 5, c % 5) -= h;
+      const Eigen::VectorXd fd = (weighted_gradient(plus) - weighted_gradient(minus)) / (2 * h);
+      for (int b = 0; b < 5 * n; ++b) {
+        EXPECT_NEAR(H(b, c), fd[b], 1e-6 * scale) << "d2 / d q" << b / 5 << "^(" << b % 5 << ") d q" << c / 5 << "^("
+                                                   << c % 5 << "), trial " << trial;
+        largest = std::max(largest, std::abs(H(b, c)));
+      }
+    }
+    EXPECT_GT(largest, 1e-3 * scale);  // a Hessian that is really there
+  }
+  std::mt19937 rng2(47);
+  const fp::MusculoskeletalModel model(random_tree(rng2, 2));
+  EXPECT_THROW(model.pinTree().torqueJetHessian(Eigen::MatrixXd::Zero(2, 5), Eigen::MatrixXd::Zero(2, 2)), std::invalid_argument);
+  EXPECT_THROW(model.pinTree().torqueJetHessian(Eigen::MatrixXd::Zero(2, 4), Eigen::MatrixXd::Zero(2, 3)), std::invalid_argument);
+}
+
 TEST(PinTreeDynamics, InverseDynamicsJacobianAndHessianMatchFiniteDifferences) {
   std::mt19937 rng(29);
   std::srand(31);

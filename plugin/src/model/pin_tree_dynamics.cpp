@@ -234,6 +234,36 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
   return out;
 }
 
+Eigen::MatrixXd PinTreeDynamics::torqueJetHessian(const Eigen::Ref<const Eigen::MatrixXd>& q_jet,
+                                                  const Eigen::Ref<const Eigen::MatrixXd>& weights) const {
+  require_jet(*this, q_jet);
+  const int n = numJoints();
+  if (weights.rows() != n || weights.cols() != 3)
+    throw std::invalid_argument("torque jet Hessian: the weights must be " + std::to_string(n) + " x 3, not " +
+                                std::to_string(weights.rows()) + " x " + std::to_string(weights.cols()));
+  using S = Dual<Dual<double>>;
+  std::vector<S> tau;
+  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(5 * n, 5 * n);
+  for (int a = 0; a < 5 * n; ++a)
+    for (int b = 0; b <= a; ++b) {
+      const int la = std::max(a % 5, b % 5), lb = std::min(a % 5, b % 5);
+      if ((la == 4 && lb >= 1) || (la == 3 && lb >= 2)) continue;  // structurally zero (above)
+      // Entry a carries e3, entry b e4: the e3 e4 coefficient of each tau^(k) is its d2 / da db.
+      torque_jet_of<S>(
+          *this,
+          [&](int joint, int order) {
+            const int entry = 5 * joint + order;
+            return S(Dual<double>(q_jet(joint, order), entry == b ? 1.0 : 0.0), Dual<double>(entry == a ? 1.0 : 0.0, 0.0));
+          },
+          tau);
+      double sum = 0.0;
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) sum += weights(i, k) * tau[static_cast<std::size_t>(3 * i + k)].derivative.derivative;
+      hessian(a, b) = hessian(b, a) = sum;
+    }
+  return hessian;
+}
+
 namespace {
 void require_state(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                    const Eigen::Ref<const Eigen::VectorXd>& qd, const Eigen::Ref<const Eigen::VectorXd>& qdd) {

@@ -99,6 +99,13 @@ class PinTreeDynamics {
   /// The same and its derivatives with respect to the jet's entries: gradient(3 * i + k,
   /// 5 * r + l) = d (d^k tau_i / dt^k) / d (d^l q_r / dt^l), a 3N x 5N matrix.
   Eigen::MatrixXd torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet, Eigen::MatrixXd& gradient) const;
+  /// The Hessian of sum_ik weights(i, k) d^k tau_i / dt^k in the jet's entries (5N x 5N,
+  /// symmetric, index 5 r + l as the gradient's columns), exactly: one pass of fourth-order dual
+  /// numbers per pair of entries. tau is linear in qdd, so d2 tau''/dt2 is linear in q''' and
+  /// q'''' with coefficients of q and qd alone: the pairs of orders (1..4, 4), (2..3, 3) are zero
+  /// and not evaluated (33 passes of 55 for two joints).
+  Eigen::MatrixXd torqueJetHessian(const Eigen::Ref<const Eigen::MatrixXd>& q_jet,
+                                   const Eigen::Ref<const Eigen::MatrixXd>& weights) const;
 
  private:
   struct Joint {
