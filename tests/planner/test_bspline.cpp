@@ -3,7 +3,9 @@
 // continuity of exactly the orders below the degree at interior knots.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -16,15 +18,24 @@ namespace fpl = flatsos::planner;
 namespace {
 // The k-th derivative (1/h^k scaled) of the span polynomial at s, from the power matrix.
 double span_derivative(const fpl::BSplineBasis& b, int span, double s, int order, const Eigen::VectorXd& c) {
-  return fpl::Polynomial(b.spanPowerMatrix(span) * c).derivativeAt(s, order) / std::pow(b.spanLength(), order);
+  return fpl::Polynomial(b.spanPowerMatrix(span) * c).derivativeAt(s, order) / std::pow(b.spanLength(span), order);
+}
+
+// Spans from 0.05 s to 1 s on [0, 3 s]: knots where a signal is fast, and a ratio of 20.
+fpl::BSplineBasis graded(int degree) { return fpl::BSplineBasis(degree, {0.0, 0.05, 0.15, 0.4, 0.9, 2.0, 3.0}); }
+
+double distance_to_a_knot(const fpl::BSplineBasis& b, double t) {
+  double d = 1e9;
+  for (double k : b.breakpoints()) d = std::min(d, std::abs(t - k));
+  return d;
 }
 }  // namespace
 
 TEST(BSplineBasis, NonnegativePartitionOfUnityWithClampedEnds) {
   for (int k : {1, 3, 5})
-    for (int spans : {1, 4, 13}) {
-      const fpl::BSplineBasis b(k, spans, 2.5);
-      ASSERT_EQ(b.size(), spans + k);
+    for (int spans : {1, 4, 13, 0}) {
+      const fpl::BSplineBasis b = spans ? fpl::BSplineBasis(k, spans, 2.5) : fpl::BSplineBasis(k, {0.0, 0.1, 0.3, 1.0, 2.5});
+      ASSERT_EQ(b.size(), b.spans() + k);
       for (int i = 0; i <= 300; ++i) {
         const double t = 2.5 * i / 300.0;
         const Eigen::RowVectorXd v = b.derivativeRow(t, 0);
@@ -39,14 +50,14 @@ TEST(BSplineBasis, NonnegativePartitionOfUnityWithClampedEnds) {
 }
 
 TEST(BSplineBasis, DerivativesAgreeWithFiniteDifferences) {
-  const fpl::BSplineBasis b(5, 7, 3.0);
+  for (const fpl::BSplineBasis& b : {fpl::BSplineBasis(5, 7, 3.0), graded(5)}) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<double> u(0.05, 2.95);
   Eigen::VectorXd c = Eigen::VectorXd::Random(b.size());
   const double e = 1e-4;
   for (int trial = 0; trial < 40; ++trial) {
     const double t = u(rng);
-    if (std::abs(t / b.spanLength() - std::round(t / b.spanLength())) < 1e-2) continue;  // away from knots
+    if (distance_to_a_knot(b, t) < 3 * e) continue;  // the difference must stay on one span
     for (int order = 1; order <= 3; ++order) {
       const double fd = (-b.derivativeRow(t + 2 * e, order - 1).dot(c) + 8 * b.derivativeRow(t + e, order - 1).dot(c) -
                          8 * b.derivativeRow(t - e, order - 1).dot(c) + b.derivativeRow(t - 2 * e, order - 1).dot(c)) /
@@ -54,25 +65,28 @@ TEST(BSplineBasis, DerivativesAgreeWithFiniteDifferences) {
       EXPECT_NEAR(b.derivativeRow(t, order).dot(c), fd, 1e-6 * (1 + std::abs(fd))) << "t " << t << " order " << order;
     }
   }
+  }
 }
 
 TEST(BSplineBasis, ReproducesEveryPolynomialOfItsDegreeExactly) {
   std::mt19937 rng(9);
   std::normal_distribution<double> n(0.0, 1.0);
-  for (int k : {3, 4}) {
-    const fpl::BSplineBasis b(k, 9, 3.0);
+  for (int k : {3, 4, -3, -5}) {
+    const fpl::BSplineBasis b = k > 0 ? fpl::BSplineBasis(k, 9, 3.0) : graded(-k);
+    k = std::abs(k);
     Eigen::VectorXd pc(k + 1);
     for (auto& x : pc) x = n(rng);
     const fpl::Polynomial p(pc);
-    // Interpolate at size() distinct points (Schoenberg-Whitney holds for uniform points here).
-    Eigen::MatrixXd A(b.size(), b.size());
-    Eigen::VectorXd rhs(b.size());
-    for (int i = 0; i < b.size(); ++i) {
-      const double t = 3.0 * i / (b.size() - 1);
+    // Least squares on many points (the basis holds p exactly, so the residual is rounding).
+    const int samples = 40 * b.size();
+    Eigen::MatrixXd A(samples, b.size());
+    Eigen::VectorXd rhs(samples);
+    for (int i = 0; i < samples; ++i) {
+      const double t = 3.0 * i / (samples - 1);
       A.row(i) = b.derivativeRow(t, 0);
       rhs[i] = p(t);
     }
-    const Eigen::VectorXd c = A.fullPivLu().solve(rhs);
+    const Eigen::VectorXd c = A.colPivHouseholderQr().solve(rhs);
     for (int i = 0; i <= 200; ++i) {
       const double t = 3.0 * i / 200.0;
       EXPECT_NEAR(b.derivativeRow(t, 0).dot(c), p(t), 1e-10) << "k " << k;
@@ -82,7 +96,7 @@ TEST(BSplineBasis, ReproducesEveryPolynomialOfItsDegreeExactly) {
 }
 
 TEST(BSplineBasis, ContinuousBelowItsDegreeAndNoMoreAtInteriorKnots) {
-  const fpl::BSplineBasis b(3, 6, 3.0);
+  for (const fpl::BSplineBasis& b : {fpl::BSplineBasis(3, 6, 3.0), graded(3)}) {
   const Eigen::VectorXd c = Eigen::VectorXd::Random(b.size());
   double jump_in_third = 0.0;
   for (int knot = 1; knot < b.spans(); ++knot) {
@@ -92,6 +106,21 @@ TEST(BSplineBasis, ContinuousBelowItsDegreeAndNoMoreAtInteriorKnots) {
     jump_in_third = std::max(jump_in_third, std::abs(span_derivative(b, knot - 1, 1.0, 3, c) - span_derivative(b, knot, 0.0, 3, c)));
   }
   EXPECT_GT(jump_in_third, 1e-3);  // C2, not C3: the basis really has local freedom
+  }
+}
+
+TEST(BSplineBasis, EvenlySpacedBreakpointsAreTheUniformBasis) {
+  const fpl::BSplineBasis uniform(5, 6, 3.0), listed(5, {0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0});
+  EXPECT_TRUE(uniform.uniform());
+  EXPECT_FALSE(listed.uniform());
+  for (int i = 0; i <= 300; ++i) {
+    const double t = 3.0 * i / 300.0;
+    EXPECT_EQ(uniform.spanAt(t), listed.spanAt(t)) << t;
+    for (int order = 0; order <= 5; ++order)
+      EXPECT_LT((uniform.derivativeRow(t, order) - listed.derivativeRow(t, order)).cwiseAbs().maxCoeff(),
+                1e-9 * std::pow(2.0, order) * (1.0 + uniform.derivativeRow(t, order).cwiseAbs().maxCoeff()))
+          << "t " << t << " order " << order;
+  }
 }
 
 TEST(BSplineBasis, RejectsBadInput) {
@@ -99,24 +128,36 @@ TEST(BSplineBasis, RejectsBadInput) {
   EXPECT_THROW(fpl::BSplineBasis(3, 0, 1.0), std::invalid_argument);
   EXPECT_THROW(fpl::BSplineBasis(3, 3, 0.0), std::invalid_argument);
   EXPECT_THROW(fpl::BSplineBasis(3, 3, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(3, std::vector<double>{0.0}), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(3, {0.1, 1.0}), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(3, {0.0, 1.0, 1.0, 2.0}), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(3, {0.0, 1.0, std::nan("")}), std::invalid_argument);
+  EXPECT_THROW(fpl::BSplineBasis(0, {0.0, 1.0}), std::invalid_argument);
 }
 
 TEST(SplineTrajectory, JetAgreesWithTheBasisRowsEverywhere) {
   // Two evaluation routes: per-span power coefficients by Horner (the trajectory) and the basis
   // functions' derivative rows (Cox-de Boor) times the coefficients.
-  const fpl::BSplineBasis basis(3, 7, 2.5);
+  for (const fpl::BSplineBasis& basis : {fpl::BSplineBasis(3, 7, 2.5), fpl::BSplineBasis(3, {0.0, 0.1, 0.3, 0.7, 1.4, 2.5})}) {
   Eigen::MatrixXd c = Eigen::MatrixXd::Random(3, basis.size()) * 100.0;
   const fpl::SplineTrajectory y(basis, c);
-  for (int i = 0; i <= 700; ++i) {
-    const double t = 2.5 * i / 700.0;  // ends and every knot included
+  // The shortest span sets the derivatives' scale (1/h per order).
+  double shortest_s = 2.5;
+  for (int span = 0; span < basis.spans(); ++span) shortest_s = std::min(shortest_s, basis.spanLength(span));
+  std::vector<double> times = basis.breakpoints();  // ends and every knot
+  for (int i = 0; i <= 700; ++i) times.push_back(2.5 * i / 700.0);
+  for (double t : times) {
     const Eigen::MatrixXd jet = y.jet(t, 4);
     for (int k = 0; k < 4; ++k) {
       const Eigen::VectorXd expected = c * basis.derivativeRow(t, k).transpose();
       for (int r = 0; r < 3; ++r)
-        EXPECT_NEAR(jet(r, k), expected[r], 1e-9 * (1.0 + std::abs(expected[r])) * std::pow(7.0 / 2.5, k)) << t << " " << k;
-      EXPECT_NEAR(y.derivativeAt(1, t, k), expected[1], 1e-9 * (1.0 + std::abs(expected[1])) * std::pow(7.0 / 2.5, k));
+        EXPECT_NEAR(jet(r, k), expected[r], 1e-9 * (1.0 + std::abs(expected[r])) * std::pow(1.0 / shortest_s, k)) << t << " " << k;
+      EXPECT_NEAR(y.derivativeAt(1, t, k), expected[1], 1e-9 * (1.0 + std::abs(expected[1])) * std::pow(1.0 / shortest_s, k));
     }
   }
+  }
+  const fpl::BSplineBasis basis(3, 7, 2.5);
+  const Eigen::MatrixXd c = Eigen::MatrixXd::Random(3, basis.size());
   EXPECT_THROW(fpl::SplineTrajectory(basis, Eigen::MatrixXd::Zero(3, basis.size() + 1)), std::invalid_argument);
   Eigen::MatrixXd bad = c;
   bad(0, 0) = std::nan("");

@@ -25,8 +25,8 @@ Eigen::MatrixXd SplineTrajectory::jet(double t, int orders) const {
 void SplineTrajectory::jetInto(double t, Eigen::Ref<Eigen::MatrixXd> out) const {
   // Horner's scheme for each derivative of the span's polynomial in s, then d/dt = (1/h) d/ds.
   const int span = basis_.spanAt(t);
-  const double h = basis_.spanLength();
-  const double s = std::clamp(t / h - span, 0.0, 1.0);
+  const double h = basis_.spanLength(span);
+  const double s = basis_.scaledTime(t, span);
   const Eigen::MatrixXd& P = span_powers_[static_cast<std::size_t>(span)];
   const int degree = basis_.degree();
   double scale = 1.0;

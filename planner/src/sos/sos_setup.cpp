@@ -26,8 +26,7 @@ Eigen::MatrixXd affine_composition(int size, double a, double b) {
 std::vector<double> segment_breaks(const TorqueModel& torque, const BSplineBasis& basis) {
   std::vector<double> breaks;
   for (const auto& piece : torque.pieces) breaks.push_back(piece.t0_s);
-  for (int i = 0; i < basis.spans(); ++i) breaks.push_back(i * basis.spanLength());
-  breaks.push_back(basis.duration());
+  breaks.insert(breaks.end(), basis.breakpoints().begin(), basis.breakpoints().end());
   std::sort(breaks.begin(), breaks.end());
   const double tolerance = 1e-12 * basis.duration();
   breaks.erase(std::unique(breaks.begin(), breaks.end(), [&](double x, double y) { return y - x <= tolerance; }),
@@ -141,7 +140,8 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
     const int span = basis.spanAt(mid);
     // Both scaled times as affine functions of the segment's s: s_piece = a + b s, s_span = as + bs s.
     const double b = (t1 - t0) / (piece.t1_s - piece.t0_s), a = (t0 - piece.t0_s) / (piece.t1_s - piece.t0_s);
-    const double bs = (t1 - t0) / basis.spanLength(), as = (t0 - span * basis.spanLength()) / basis.spanLength();
+    const double h = basis.spanLength(span);
+    const double bs = (t1 - t0) / h, as = (t0 - basis.spanStart(span)) / h;
     // Y's coefficients -> powers of s on this segment.
     Eigen::MatrixXd P = Eigen::MatrixXd::Zero(D + 1, basis.size());
     P.topRows(d + 1) = affine_composition(d + 1, as, bs) * basis.spanPowerMatrix(span);
@@ -356,6 +356,12 @@ OutputParameterization eliminate_equalities(const BSplineBasis& basis, const Fla
   for (int k = 0; k < bc.terminal.cols(); ++k, ++row) {
     Aeq.row(row) = basis.derivativeRow(basis.duration(), bc.terminal_first_order + k);
     beq[row] = bc.terminal(l, k);
+  }
+  // Each row in units of its largest entry: a derivative of order k scales as 1/h^k, and short
+  // spans next to long ones (graded knots) would otherwise fail the rank test on scale alone.
+  for (int r = 0; r < n_eq; ++r) {
+    const double scale = Aeq.row(r).cwiseAbs().maxCoeff();
+    if (scale > 0.0) Aeq.row(r) /= scale, beq[r] /= scale;
   }
   OutputParameterization out;
   out.particular = Eigen::VectorXd::Zero(size);
