@@ -49,6 +49,10 @@ int main(int argc, char** argv) {
                  "optimize the joint path too: a degree-8 B-spline on this many spans through the same boundary "
                  "conditions (0: the prescribed degree-8 polynomial)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--free-path-span-growth", options.free_path.span_growth,
+                 "each of the free path's spans this many times as long as the one before (1: uniform; above 1: "
+                 "short spans at the start, where a low-effort transfer moves fast)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   std::string free_path_method = fpl::to_string(options.free_path.method);
   app.add_option("--free-path-method", free_path_method,
                  "how the free joint path moves: reduced_quasi_newton (BFGS on the bounded plan's cost as a "

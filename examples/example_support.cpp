@@ -198,8 +198,9 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
       qc[model.description().joints[static_cast<std::size_t>(i)].name] = std::vector<double>(c.data(), c.data() + c.size());
     }
     const planner::BSplineBasis& basis = plan.path.spline->basis();
-    j["q_coefficient_convention"] = "clamped B-spline, uniform knots on [0, T], rad; degree " +
+    j["q_coefficient_convention"] = "clamped B-spline on [0, T] with interior knots at q_breakpoints_s, rad; degree " +
                                     std::to_string(basis.degree()) + ", " + std::to_string(basis.spans()) + " spans";
+    j["q_breakpoints_s"] = basis.breakpoints();
   } else {
     for (std::size_t i = 0; i < plan.path.q.size(); ++i) {
       const auto& c = plan.path.q[i].coefficients();

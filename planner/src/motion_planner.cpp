@@ -125,6 +125,8 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
   if (f.spans < 1 || f.degree + f.spans - 9 < 1)
     throw std::invalid_argument("open-loop plan: free_path.degree + free_path.spans must be >= 10 (9 boundary "
                                 "derivatives per joint and at least one free coefficient)");
+  if (!(f.span_growth > 0.0) || !std::isfinite(f.span_growth))
+    throw std::invalid_argument("open-loop plan: free_path.span_growth must be finite and > 0 (1: uniform spans)");
   if (f.points_per_span < 1) throw std::invalid_argument("open-loop plan: free_path.points_per_span must be >= 1");
   if (f.check_points < 2) throw std::invalid_argument("open-loop plan: free_path.check_points must be >= 2");
   if (!(f.tolerance >= 0.0) || !(f.tolerance_N >= 0.0))

@@ -11,9 +11,9 @@ namespace flatsos::planner::detail {
 namespace {
 constexpr int kOrders = kPathOrders;
 
-// d (joint jet) / dc at a point: 5N x paths, row kOrders r + l for d^l q_r / dt^l.
-Eigen::MatrixXd joint_jet_slope(const PathPoint& pt, int joints, int paths) {
-  Eigen::MatrixXd dq(kOrders * joints, paths);
+// d (joint jet) / d (the point's path columns): 5N x columns, row kOrders r + l for d^l q_r / dt^l.
+Eigen::MatrixXd joint_jet_slope(const PathPoint& pt, int joints) {
+  Eigen::MatrixXd dq(kOrders * joints, static_cast<Eigen::Index>(pt.path_columns.size()));
   for (int r = 0; r < joints; ++r)
     for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
   return dq;
@@ -47,7 +47,7 @@ JointPath PathParameterization::path(const Eigen::VectorXd& c) const {
 
 PathParameterization parameterize(const FreeJointPathOptions& o, double T, const Eigen::MatrixXd& initial,
                                   const Eigen::VectorXd& target) {
-  PathParameterization out(BSplineBasis(o.degree, o.spans, T));
+  PathParameterization out(BSplineBasis::geometric(o.degree, o.spans, T, o.span_growth));
   FlatOutputBoundary bc;
   bc.initial = initial;
   bc.terminal = Eigen::MatrixXd::Zero(target.size(), kOrders);
@@ -82,23 +82,44 @@ Eigen::VectorXd fit_to(const PathParameterization& P, const JointPath& path) {
 }
 
 PathPoint make_path_point(const SosSetup& setup, const FlatOutputMap& flat, const PathParameterization& P, double t) {
-  PathPoint pt{flat_output_point(setup, flat, t), Eigen::MatrixXd(flat.numJoints(), kOrders), {}};
+  PathPoint pt{flat_output_point(setup, flat, t), Eigen::MatrixXd(flat.numJoints(), kOrders), {}, {}};
+  std::array<Eigen::MatrixXd, kOrders> slope;  // per order: N x free
   for (int l = 0; l < kOrders; ++l) {
     const Eigen::RowVectorXd row = P.basis.derivativeRow(t, l);
-    auto& slope = pt.q_slope[static_cast<std::size_t>(l)];
-    slope = Eigen::MatrixXd::Zero(flat.numJoints(), P.free);
+    auto& s = slope[static_cast<std::size_t>(l)];
+    s = Eigen::MatrixXd::Zero(flat.numJoints(), P.free);
     for (std::size_t i = 0; i < P.joints.size(); ++i) {
       const auto& j = P.joints[i];
       pt.q_base(static_cast<Eigen::Index>(i), l) = row.dot(j.particular);
-      if (j.nullspace.cols()) slope.block(static_cast<Eigen::Index>(i), j.offset, 1, j.nullspace.cols()) = row * j.nullspace;
+      if (j.nullspace.cols()) s.block(static_cast<Eigen::Index>(i), j.offset, 1, j.nullspace.cols()) = row * j.nullspace;
     }
+  }
+  // Structural support: the columns any order of any joint touches (exact zeros off the B-splines'
+  // support, and off the few end coefficients the boundary equalities couple).
+  for (int col = 0; col < P.free; ++col) {
+    bool touched = false;
+    for (const auto& s : slope) touched = touched || (s.col(col).array() != 0.0).any();
+    if (touched) pt.path_columns.push_back(col);
+  }
+  for (int l = 0; l < kOrders; ++l) {
+    auto& local = pt.q_slope[static_cast<std::size_t>(l)];
+    local.resize(flat.numJoints(), static_cast<Eigen::Index>(pt.path_columns.size()));
+    for (std::size_t k = 0; k < pt.path_columns.size(); ++k)
+      local.col(static_cast<Eigen::Index>(k)) = slope[static_cast<std::size_t>(l)].col(pt.path_columns[k]);
   }
   return pt;
 }
 
+Eigen::VectorXd PathPoint::localPath(const Eigen::VectorXd& c) const {
+  Eigen::VectorXd out(static_cast<Eigen::Index>(path_columns.size()));
+  for (std::size_t k = 0; k < path_columns.size(); ++k) out[static_cast<Eigen::Index>(k)] = c[path_columns[k]];
+  return out;
+}
+
 Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c) {
   Eigen::MatrixXd q = pt.q_base;
-  for (int l = 0; l < kOrders; ++l) q.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * c;
+  const Eigen::VectorXd local = pt.localPath(c);
+  for (int l = 0; l < kOrders; ++l) q.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * local;
   return q;
 }
 
@@ -114,12 +135,13 @@ BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const 
     const Eigen::MatrixXd tau = jacobian ? flat_.model().pinTree().torqueJet(q_jet, tau_gradient)
                                          : flat_.model().pinTree().torqueJet(q_jet);
     const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), tau, theta);
-    std::array<Eigen::MatrixXd, 3> dF_dc;  // m x paths (per unit z)
+    const auto path_columns = static_cast<int>(pt.path_columns.size());
+    std::array<Eigen::MatrixXd, 3> dF_dc;  // m x path columns (per unit z)
     if (jacobian) {
-      dq = joint_jet_slope(pt, n, v_.paths);
-      const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x paths, row 3 i + k
+      dq = joint_jet_slope(pt, n);
+      const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x path columns, row 3 i + k
       for (int k = 0; k < 3; ++k) {
-        Eigen::MatrixXd dtau_k(n, v_.paths);
+        Eigen::MatrixXd dtau_k(n, path_columns);
         for (int i = 0; i < n; ++i) dtau_k.row(i) = dtau.row(3 * i + k);
         dF_dc[static_cast<std::size_t>(k)] = flat_.Ctau() * dtau_k;
       }
@@ -140,19 +162,20 @@ BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const 
         // The reserve row: dF / d(theta, c).
         for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
           out.jacobian.emplace_back(row, pt.flat.columns[col], pt.flat.slope[0](j, static_cast<Eigen::Index>(col)));
-        for (int col = 0; col < v_.paths; ++col) out.jacobian.emplace_back(row, v_.thetas + col, dF_dc[0](j, col));
+        for (int col = 0; col < path_columns; ++col)
+          out.jacobian.emplace_back(row, v_.thetas + pt.path_columns[static_cast<std::size_t>(col)], dF_dc[0](j, col));
         flat_.pathLengthJetGradient(j, q_jet, path_gradient);
-        const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x paths
+        const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x path columns
         for (int k = 0; k < kRowsPerMuscle; ++k) {
           const auto& g = bounds.gradient[static_cast<std::size_t>(k)];
           const auto& pg = bounds.path_gradient[static_cast<std::size_t>(k)];
           for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
             out.jacobian.emplace_back(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
-          for (int col = 0; col < v_.paths; ++col) {
+          for (int col = 0; col < path_columns; ++col) {
             double d = 0.0;
             for (std::size_t o = 0; o < 3; ++o)
               d += g[o] * dF_dc[o](j, col) + pg[o] * dL(static_cast<Eigen::Index>(o), col);
-            out.jacobian.emplace_back(row + 1 + k, v_.thetas + col, d);
+            out.jacobian.emplace_back(row + 1 + k, v_.thetas + pt.path_columns[static_cast<std::size_t>(col)], d);
           }
         }
       }
@@ -171,20 +194,20 @@ constexpr double kJointJetStep = 1e-5;
 
 std::vector<int> PathRows::localVariables(const PathPoint& pt) const {
   std::vector<int> out(pt.flat.columns.begin(), pt.flat.columns.end());
-  for (int i = 0; i < v_.paths; ++i) out.push_back(v_.thetas + i);
+  for (int col : pt.path_columns) out.push_back(v_.thetas + col);
   return out;
 }
 
 Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
                                        const double* lambda) const {
-  const int n = flat_.numJoints(), m = flat_.numMuscles(), paths = v_.paths;
+  const int n = flat_.numJoints(), m = flat_.numMuscles(), paths = static_cast<int>(pt.path_columns.size());
   const int cols = static_cast<int>(pt.flat.columns.size()), local = cols + paths;
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(local, local);
   const Eigen::MatrixXd q_jet = joint_jet(pt, c);
   Eigen::MatrixXd tau_gradient;
   const Eigen::MatrixXd tau = flat_.model().pinTree().torqueJet(q_jet, tau_gradient);
-  const Eigen::MatrixXd dq = joint_jet_slope(pt, n, paths);
-  const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x paths, row 3 i + k
+  const Eigen::MatrixXd dq = joint_jet_slope(pt, n);
+  const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x path columns, row 3 i + k
   const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), tau, theta);
 
   // Per muscle: the multiplier-weighted gradient w of its rows in u = (F jet, L jet), and the
@@ -232,30 +255,32 @@ Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorX
   }
 
   // The torque and length jets' own curvature in the joint jet, weighted by w: the Hessian of
-  // phi(q jet) = sum_jk wF_jk (C_tau tau(q jet))_jk + wL_jk L_jk(q jet), mapped to c by dq.
+  // phi(q jet) = sum_jk wF_jk (C_tau tau(q jet))_jk + wL_jk L_jk(q jet), mapped to c by dq. The
+  // torque's part is exact (fourth-order dual numbers); the path lengths' comes from central
+  // differences of their exact gradients (a few polynomial evaluations, nothing for constant
+  // moment arms).
   const Eigen::MatrixXd w_tau = flat_.Ctau().transpose() * wF;  // N x 3: weight of tau_i^(k)
-  auto phi_gradient = [&](const Eigen::MatrixXd& q) {
-    Eigen::MatrixXd tg;
-    flat_.model().pinTree().torqueJet(q, tg);
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(kOrders * n);
-    for (int i = 0; i < n; ++i)
-      for (int k = 0; k < 3; ++k) g += w_tau(i, k) * tg.row(3 * i + k).transpose();
-    for (int j = 0; j < m; ++j) {
-      flat_.pathLengthJetGradient(j, q, path_gradient);
-      for (int k = 0; k < 3; ++k) g += wL(j, k) * path_gradient.row(k).transpose();
-    }
-    return g;
-  };
-  Eigen::MatrixXd Hq(kOrders * n, kOrders * n);
-  for (int r = 0; r < n; ++r)
-    for (int l = 0; l < kOrders; ++l) {
-      const double h = kJointJetStep * (1.0 + std::abs(q_jet(r, l)));
-      Eigen::MatrixXd up = q_jet, down = q_jet;
-      up(r, l) += h;
-      down(r, l) -= h;
-      Hq.col(kOrders * r + l) = (phi_gradient(up) - phi_gradient(down)) / (2.0 * h);
-    }
-  Hq = 0.5 * (Hq + Hq.transpose()).eval();
+  Eigen::MatrixXd Hq = flat_.model().pinTree().torqueJetHessian(q_jet, w_tau);
+  if (!flat_.model().hasConstantMomentArms()) {
+    auto length_gradient = [&](const Eigen::MatrixXd& q) {
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(kOrders * n);
+      for (int j = 0; j < m; ++j) {
+        flat_.pathLengthJetGradient(j, q, path_gradient);
+        for (int k = 0; k < 3; ++k) g += wL(j, k) * path_gradient.row(k).transpose();
+      }
+      return g;
+    };
+    Eigen::MatrixXd HL(kOrders * n, kOrders * n);
+    for (int r = 0; r < n; ++r)
+      for (int l = 0; l < kOrders; ++l) {
+        const double h = kJointJetStep * (1.0 + std::abs(q_jet(r, l)));
+        Eigen::MatrixXd up = q_jet, down = q_jet;
+        up(r, l) += h;
+        down(r, l) -= h;
+        HL.col(kOrders * r + l) = (length_gradient(up) - length_gradient(down)) / (2.0 * h);
+      }
+    Hq += 0.5 * (HL + HL.transpose());
+  }
   H.bottomRightCorner(paths, paths).noalias() += dq.transpose() * Hq * dq;
   return H;
 }

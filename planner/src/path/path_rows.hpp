@@ -44,7 +44,13 @@ Eigen::VectorXd fit_to(const PathParameterization& P, const JointPath& path);
 struct PathPoint {
   BoundPoint flat;                                   // F's flat-output part: base + slope theta
   Eigen::MatrixXd q_base;                            // N x 5: the joint jet at c = 0
-  std::array<Eigen::MatrixXd, kPathOrders> q_slope;  // per order: N x free (d q^(l) / d c)
+  /// The path coefficients the joint jet here depends on (the B-splines' local support: a
+  /// handful per joint, whatever the spans), ascending indices into c.
+  std::vector<int> path_columns;
+  std::array<Eigen::MatrixXd, kPathOrders> q_slope;  // per order: N x path_columns (d q^(l) / d c)
+
+  /// c's entries at path_columns.
+  Eigen::VectorXd localPath(const Eigen::VectorXd& c) const;
 };
 
 PathPoint make_path_point(const SosSetup& setup, const FlatOutputMap& flat, const PathParameterization& P, double t);
@@ -61,7 +67,7 @@ struct PathVariables {
 };
 
 /// Per point and muscle: the reserve row, then the four bound rows, each ">= 0". The Jacobian's
-/// pattern does not depend on z: per row, the point's theta columns, then every c.
+/// pattern does not depend on z: per row, the point's theta columns, then its path columns.
 class PathRows {
  public:
   PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
@@ -74,7 +80,7 @@ class PathRows {
   BoundRowsAt operator()(const Eigen::VectorXd& z, bool jacobian) const;
 
   /// The lower triangle of sum_k lambda_k (Hessian of row k) in z, as triplets in a fixed order
-  /// (repeated entries add up): per point, its block over (its theta columns, every c).
+  /// (repeated entries add up): per point, its block over (its theta columns, its path columns).
   ///
   /// Row k is h(u(z)) with u = (F, dF, ddF, L, dL, ddL) of its muscle, so its Hessian is
   /// J_u^T (Hessian of h in u) J_u plus sum_i dh/du_i (Hessian of u_i in z). u is affine in theta,
@@ -88,7 +94,7 @@ class PathRows {
   std::vector<Eigen::Triplet<double>> hessianPattern() const;
 
  private:
-  // Point k's local variables: its theta columns, then every c (indices into z).
+  // A point's local variables: its theta columns, then its path columns (indices into z).
   std::vector<int> localVariables(const PathPoint& pt) const;
   Eigen::MatrixXd pointHessian(const PathPoint& pt, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
                                const double* lambda) const;

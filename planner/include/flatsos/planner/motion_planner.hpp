@@ -67,6 +67,10 @@ struct FreeJointPathOptions {
   FreePathMethod method = FreePathMethod::ReducedQuasiNewton;
   int degree = 8;             ///< >= 5 (q'''' continuous); 8 holds the prescribed path exactly
   int spans = 6;
+  /// Each span this many times as long as the one before (1: uniform). A low-effort transfer
+  /// starts fast and settles slowly, so its path needs short spans near t = 0
+  /// (docs/method/free_path.md, "Knots where the motion is fast").
+  double span_growth = 1.0;
   int points_per_span = 2;    ///< of the flat outputs' spans, imposed from the start
   int check_points = 3001;    ///< the dense grid on which the exchange looks for violations
   /// Allowed excess of a and n and reserve deficit on that grid while the path moves. The plan
