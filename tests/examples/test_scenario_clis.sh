@@ -27,6 +27,11 @@ grep -q '"ipopt_linear_solver": "dense LDL^T (flatsos)"' "$tmp/olr/summary.json"
 # NLP's size); an unknown method exits 2, and the free path, which needs the exchange, exits 1.
 expect 2 "--sos-method" -- "$ol" --sos-method sdp --out "$tmp/o"
 expect 2 "--free-path-method" -- "$ol" --free-path-method bfgs --free-path-spans 2 --out "$tmp/o"
+expect 2 "--free-path-span-growth" -- "$ol" --free-path-span-growth 0 --free-path-spans 2 --out "$tmp/o"
+# A free path on graded spans: its summary gives the knots the coefficients need.
+expect 0 "simulated open loop" -- "$ol" --flat-output-degree 3 --flat-output-spans 12 --free-path-spans 6 \
+  --free-path-span-growth 1.3 --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olg"
+grep -q '"q_breakpoints_s": \[' "$tmp/olg/summary.json" || { echo "FAILED: the summary lacks the free path's knots"; fail=1; }
 expect 0 "simulated open loop" -- "$ol" --sos-method whole_program_nlp --no-bounds --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olw"
 grep -q '"sos_method": "whole_program_nlp"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not name the SOS method"; fail=1; }
 grep -q '"equalities": 368' "$tmp/olw/summary.json" || { echo "FAILED: the summary lacks the whole-program NLP's size"; fail=1; }

@@ -5,6 +5,7 @@
 // bad options are named.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -181,6 +182,26 @@ TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost)
   EXPECT_GE(lowest, at.cost_N_s * (1.0 - 1e-4));
 }
 
+TEST_F(FreePath, SpansThatGrowPutTheKnotsWhereTheTransferIsFastAndLowerItsCost) {
+  // The low-effort transfer throws the arm up in its first few tenths of a second and settles
+  // slowly: with as many coefficients, short spans at the start plan it cheaper.
+  o.free_path.enabled = true;
+  const fpl::OpenLoopPlan uniform = fpl::plan_open_loop(arm.flat, s0, o);
+  o.free_path.span_growth = 1.3;
+  const fpl::OpenLoopPlan graded = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(uniform.status, fpl::SolveStatus::Solved) << uniform.message;
+  ASSERT_EQ(graded.status, fpl::SolveStatus::Solved) << graded.message;
+  ASSERT_TRUE(graded.path.spline);
+  const fpl::BSplineBasis& basis = graded.path.spline->basis();
+  ASSERT_EQ(basis.spans(), o.free_path.spans);
+  for (int span = 1; span < basis.spans(); ++span)
+    EXPECT_NEAR(basis.spanLength(span) / basis.spanLength(span - 1), 1.3, 1e-9) << "span " << span;
+  std::cout << "[ measure  ] free path on " << basis.spans() << " spans: uniform " << uniform.sos.cost_N_s
+            << " N s, growing by 1.3 " << graded.sos.cost_N_s << " N s\n";
+  EXPECT_LT(graded.sos.cost_N_s, uniform.sos.cost_N_s);
+  flatsos::test::expect_executable(arm.flat, graded, o.reserves_N);
+}
+
 TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   // Two independent optimizers of the same problem: BFGS on the plan's value function and Ipopt
   // over the plan and the path together. Both paths' plans must keep the rows on the dense grid
@@ -227,6 +248,11 @@ TEST_F(FreePath, BadOptionsAreNamed) {
   bad = o;
   bad.sos.bounds.enforce = false;
   rejects(bad, "bounds");
+  bad = o;
+  bad.free_path.span_growth = 0.0;
+  rejects(bad, "free_path.span_growth");
+  bad.free_path.span_growth = std::nan("");
+  rejects(bad, "free_path.span_growth");
   bad = o;
   bad.free_path.relative_tolerance = 0.0;
   rejects(bad, "free_path.relative_tolerance");

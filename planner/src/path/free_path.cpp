@@ -236,10 +236,14 @@ struct ExchangePoints {
   std::vector<PathPoint> points;
   std::vector<double> times;
 
+  // per_span points on every span of the flat outputs and of the path: the path's short spans
+  // (graded knots) start with points of their own instead of waiting for the exchange.
   ExchangePoints(const SosSetup& s, const FlatOutputMap& f, const PathParameterization& p, int per_span)
       : setup(s), flat(f), P(p) {
-    const int uniform = per_span * setup.basis.spans();
-    for (int i = 0; i <= uniform; ++i) add(setup.duration_s * i / uniform);
+    for (const BSplineBasis* basis : {&setup.basis, &P.basis})
+      for (int span = 0; span < basis->spans(); ++span)
+        for (int k = 0; k < per_span; ++k) add(basis->spanStart(span) + basis->spanLength(span) * k / per_span);
+    add(setup.duration_s);
   }
   bool add(double t) {
     for (double s : times)

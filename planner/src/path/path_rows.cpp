@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <Eigen/Dense>
 
@@ -123,6 +124,13 @@ Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c) {
   return q;
 }
 
+PathRows::PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
+                   const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min)
+    : flat_(flat), v_(v), points_(points), reserves_(reserves), a_min_(a_min) {
+  if (!flat.hasConstantMomentArms())
+    throw std::logic_error("free path rows: the model's moment arms vary with the posture (not supported)");
+}
+
 BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const {
   const int n = flat_.numJoints(), m = flat_.numMuscles();
   const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
@@ -189,7 +197,6 @@ namespace {
 // Central-difference steps relative to (1 + |entry|): near eps^(1/3), where the truncation and
 // rounding errors of a difference of exact gradients balance.
 constexpr double kForceJetStep = 1e-5;
-constexpr double kJointJetStep = 1e-5;
 }  // namespace
 
 std::vector<int> PathRows::localVariables(const PathPoint& pt) const {
@@ -212,7 +219,7 @@ Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorX
 
   // Per muscle: the multiplier-weighted gradient w of its rows in u = (F jet, L jet), and the
   // curvature in u, J_u^T (d w / du) J_u.
-  Eigen::MatrixXd wF = Eigen::MatrixXd::Zero(m, 3), wL = Eigen::MatrixXd::Zero(m, 3);
+  Eigen::MatrixXd wF = Eigen::MatrixXd::Zero(m, 3);
   Eigen::MatrixXd path_gradient(3, kOrders * n);
   using Vector6 = Eigen::Matrix<double, 6, 1>;
   for (int j = 0; j < m; ++j) {
@@ -234,7 +241,6 @@ Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorX
     const Vector6 w = weighted_gradient(u);
     wF.row(j) = w.head<3>().transpose();
     wF(j, 0) += l[0];  // the reserve row is F_j itself
-    wL.row(j) = w.tail<3>().transpose();
     Eigen::Matrix<double, 6, 6> Hu;
     for (int i = 0; i < 6; ++i) {
       const double h = kForceJetStep * (1.0 + std::abs(u[i]));
@@ -254,33 +260,11 @@ Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorX
     H.noalias() += J.transpose() * Hu * J;
   }
 
-  // The torque and length jets' own curvature in the joint jet, weighted by w: the Hessian of
-  // phi(q jet) = sum_jk wF_jk (C_tau tau(q jet))_jk + wL_jk L_jk(q jet), mapped to c by dq. The
-  // torque's part is exact (fourth-order dual numbers); the path lengths' comes from central
-  // differences of their exact gradients (a few polynomial evaluations, nothing for constant
-  // moment arms).
-  const Eigen::MatrixXd w_tau = flat_.Ctau().transpose() * wF;  // N x 3: weight of tau_i^(k)
-  Eigen::MatrixXd Hq = flat_.model().pinTree().torqueJetHessian(q_jet, w_tau);
-  if (!flat_.model().hasConstantMomentArms()) {
-    auto length_gradient = [&](const Eigen::MatrixXd& q) {
-      Eigen::VectorXd g = Eigen::VectorXd::Zero(kOrders * n);
-      for (int j = 0; j < m; ++j) {
-        flat_.pathLengthJetGradient(j, q, path_gradient);
-        for (int k = 0; k < 3; ++k) g += wL(j, k) * path_gradient.row(k).transpose();
-      }
-      return g;
-    };
-    Eigen::MatrixXd HL(kOrders * n, kOrders * n);
-    for (int r = 0; r < n; ++r)
-      for (int l = 0; l < kOrders; ++l) {
-        const double h = kJointJetStep * (1.0 + std::abs(q_jet(r, l)));
-        Eigen::MatrixXd up = q_jet, down = q_jet;
-        up(r, l) += h;
-        down(r, l) -= h;
-        HL.col(kOrders * r + l) = (length_gradient(up) - length_gradient(down)) / (2.0 * h);
-      }
-    Hq += 0.5 * (HL + HL.transpose());
-  }
+  // The torque jet's own curvature in the joint jet, weighted by w: the Hessian of
+  // phi(q jet) = sum_jk wF_jk (C_tau tau(q jet))_jk, exact (fourth-order dual numbers), mapped to
+  // c by dq. The path lengths have none: with constant moment arms (the constructor's check) they
+  // are affine in q.
+  const Eigen::MatrixXd Hq = flat_.model().pinTree().torqueJetHessian(q_jet, flat_.Ctau().transpose() * wF);
   H.bottomRightCorner(paths, paths).noalias() += dq.transpose() * Hq * dq;
   return H;
 }

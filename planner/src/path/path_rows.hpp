@@ -70,9 +70,10 @@ struct PathVariables {
 /// pattern does not depend on z: per row, the point's theta columns, then its path columns.
 class PathRows {
  public:
+  /// Throws std::logic_error for a model whose moment arms vary with the posture: the Hessian
+  /// leaves out the path lengths' curvature, which only they have.
   PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
-           const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min)
-      : flat_(flat), v_(v), points_(points), reserves_(reserves), a_min_(a_min) {}
+           const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min);
 
   static constexpr int kRows = 1 + kRowsPerMuscle;
   int rows() const { return static_cast<int>(points_.size()) * flat_.numMuscles() * kRows; }
@@ -85,10 +86,10 @@ class PathRows {
   /// Row k is h(u(z)) with u = (F, dF, ddF, L, dL, ddL) of its muscle, so its Hessian is
   /// J_u^T (Hessian of h in u) J_u plus sum_i dh/du_i (Hessian of u_i in z). u is affine in theta,
   /// and in c only through the joint jet (linear in c) and the torque jet and path length of it.
-  /// The exact gradients of h in u (muscles::invert_muscle) and of the torque and length jets in
-  /// the joint jet (nested dual numbers) are differenced centrally, in the 6 entries of u and the
-  /// 5N of the joint jet: second derivatives to about 1e-8 relative at the cost of a few dozen
-  /// evaluations per point, without third derivatives of the Hill laws.
+  /// The exact gradient of h in u (muscles::invert_muscle) is differenced centrally in u's 6
+  /// entries (second derivatives to about 1e-8 relative without third derivatives of the Hill
+  /// laws); the torque jet's Hessian in the joint jet is exact (PinTreeDynamics::torqueJetHessian);
+  /// the path lengths are affine in q (constant moment arms).
   std::vector<Eigen::Triplet<double>> lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const;
   /// The same pattern (values 0).
   std::vector<Eigen::Triplet<double>> hessianPattern() const;
