@@ -42,7 +42,15 @@ int main(int argc, char** argv) {
   app.add_option("--flat-output-degree", options.sos.flat_output_degree,
                  "degree of the flat outputs' B-splines Y (4 with 1 span: the paper's quartic)")
       ->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--flat-output-spans", options.sos.flat_output_spans, "uniform knot spans of the flat outputs' B-splines")
+  app.add_option("--piece-growth", options.torque.piece_growth,
+                 "each torque-model piece this many times as long as the one before (1: uniform; above 1: short "
+                 "pieces at the start, where a fast motion's torques change)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--flat-output-spans", options.sos.flat_output_spans, "knot spans of the flat outputs' B-splines")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--flat-output-span-growth", options.sos.flat_output_span_growth,
+                 "each of the flat outputs' spans this many times as long as the one before (1: uniform; above 1: "
+                 "short spans at the start, where a low-effort transfer spends its effort)")
       ->capture_default_str()->check(CLI::PositiveNumber);
   int free_path_spans = 0;
   app.add_option("--free-path-spans", free_path_spans,

@@ -181,7 +181,10 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
                               {"equalities", s.nlp_equalities},
                               {"max_certificate_residual_N", s.max_certificate_residual_N}};
   j["lp_points"] = s.lp_points;
+  std::vector<double> piece_starts_s;
+  for (const auto& piece : plan.torque.pieces) piece_starts_s.push_back(piece.t0_s);
   j["torque_model"] = {{"pieces", plan.torque.pieces.size()},
+                       {"piece_starts_s", piece_starts_s},
                        {"degree", plan.torque.pieces.empty() || plan.torque.pieces[0].torque.empty() ? 0 : plan.torque.pieces[0].torque[0].degree()}};
   j["certificates"] = {{"near_active_pieces", s.near_active_pieces}, {"certified_pieces", s.certified_pieces}, {"all_certified", s.certified}};
   j["excitation_bounds"] = {{"imposed", s.bounds_imposed},
@@ -233,9 +236,10 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
       const Eigen::VectorXd c = plan.Y->coefficients().row(l).transpose();
       yc[flat.flatOutputs().names[static_cast<std::size_t>(l)]] = std::vector<double>(c.data(), c.data() + c.size());
     }
-    j["flat_outputs"] = {{"basis", "clamped B-spline, uniform knots on [0, T]"},
+    j["flat_outputs"] = {{"basis", "clamped B-spline on [0, T] with interior knots at breakpoints_s"},
                          {"degree", basis.degree()},
                          {"spans", basis.spans()},
+                         {"breakpoints_s", basis.breakpoints()},
                          {"duration_s", basis.duration()},
                          {"coefficients_N", yc}};
   }

@@ -25,12 +25,28 @@ void JointPath::jetInto(double t, Eigen::Ref<Jet> out) const {
     throw std::invalid_argument("joint path jet: the output has " + std::to_string(out.rows()) + " rows, the path " +
                                 std::to_string(numJoints()) + " joints");
   if (spline) {
-    spline->jetInto(t, out);
+    // Beyond [0, T] as the polynomial path: continued (the torque jets' differences reach past
+    // the ends; a frozen path there made tau' and tau'' at t = 0 and T wrong).
+    spline->continuedJetInto(t, out);
     return;
   }
   for (std::size_t i = 0; i < q.size(); ++i)
     for (Eigen::Index k = 0; k < out.cols(); ++k)
       out(static_cast<Eigen::Index>(i), k) = q[i].derivativeAt(t, static_cast<int>(k));
+}
+
+std::vector<TorqueJet> torque_jets_on_grid(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                           const JointPath& path, double h, int count) {
+  if (!path.spline) return flat.torqueJetsOnGrid(workspace, [&](double t) { return path.jet(t, 4); }, 0.0, h, count);
+  if (count < 1 || !(h > 0.0)) throw std::invalid_argument("torque jets on a grid: need count >= 1 and h > 0");
+  std::vector<TorqueJet> jets;
+  jets.reserve(static_cast<std::size_t>(count));
+  Jet q_jet(path.numJoints(), 5);
+  for (int i = 0; i < count; ++i) {
+    path.jetInto(h * i, q_jet);
+    jets.push_back(flat.torqueJet(workspace, q_jet));
+  }
+  return jets;
 }
 
 JointPath fit_joint_path(double T, const Eigen::MatrixXd& initial, const Eigen::MatrixXd& terminal) {

@@ -162,7 +162,7 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   c.min_tendon_force_N = c.min_reserve_margin_N = c.min_activation = c.min_excitation = 1e300;
   c.max_activation = c.max_excitation = -1e300;
   const double h = path.duration_s / (points - 1);
-  const std::vector<TorqueJet> jets = flat.torqueJetsOnGrid(workspace, [&](double t) { return path.jet(t, 4); }, 0.0, h, points);
+  const std::vector<TorqueJet> jets = torque_jets_on_grid(flat, workspace, path, h, points);
   DomainViolation limiting;           // the most fundamental kind, then the largest excess
   std::size_t limiting_muscle = 0;
   std::map<std::pair<std::size_t, DomainViolation::Kind>, double> first_time;  // per muscle and kind

@@ -5,6 +5,8 @@
 
 #include <Eigen/Dense>
 
+#include "flatsos/planner/numerics/bspline.hpp"
+
 namespace flatsos::planner {
 
 double TorquePiece::remainderAt(int joint, double s) const {
@@ -107,6 +109,8 @@ TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace
   if (o.samples_per_piece < 2 || o.samples_per_piece < o.degree + 1)
     throw std::invalid_argument("torque model: need at least max(2, r + 1) samples per piece");
   if (!(o.remainder_inflation >= 1.0)) throw std::invalid_argument("torque model: remainder inflation must be >= 1");
+  if (!(o.piece_growth > 0.0) || !std::isfinite(o.piece_growth))
+    throw std::invalid_argument("torque model: piece_growth must be finite and > 0 (1: uniform pieces)");
   const int n = flat.numJoints(), m = flat.numMuscles(), p = flat.numFlatOutputs();
   const bool varying = !flat.hasConstantMomentArms();
   const int coupled = varying ? m + m * p : 0;
@@ -128,10 +132,11 @@ TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace
 
   TorqueModel model;
   const Eigen::VectorXd nodes = chebyshev_nodes_unit_interval(o.degree + 1);
+  const std::vector<double> breaks = geometric_breakpoints(o.pieces, T, o.piece_growth);
   for (int k = 0; k < o.pieces; ++k) {
     TorquePiece piece;
-    piece.t0_s = T * k / o.pieces;
-    piece.t1_s = T * (k + 1) / o.pieces;
+    piece.t0_s = breaks[k];
+    piece.t1_s = breaks[k + 1];
     const double h = piece.t1_s - piece.t0_s;
     const int ns = o.samples_per_piece;
     PieceSamples torque, coupling;

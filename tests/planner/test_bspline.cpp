@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -123,6 +125,36 @@ TEST(BSplineBasis, EvenlySpacedBreakpointsAreTheUniformBasis) {
   }
 }
 
+TEST(BSplineBasis, GeometricBreakpointsGrowByTheirRatioAndFillTheDuration) {
+  for (double growth : {0.8, 1.0, 1.06, 1.4})
+    for (int spans : {1, 2, 12, 48}) {
+      const std::vector<double> b = fpl::geometric_breakpoints(spans, 3.0, growth);
+      ASSERT_EQ(b.size(), static_cast<std::size_t>(spans + 1));
+      EXPECT_EQ(b.front(), 0.0);
+      EXPECT_EQ(b.back(), 3.0);
+      for (int i = 1; i + 1 <= spans; ++i) {
+        EXPECT_GT(b[i], b[i - 1]);
+        if (i >= 2) {
+          EXPECT_NEAR((b[i] - b[i - 1]) / (b[i - 1] - b[i - 2]), growth, 1e-9) << growth << " " << spans << " " << i;
+        }
+      }
+      if (spans >= 2) {
+        EXPECT_NEAR((b[spans] - b[spans - 1]) / (b[spans - 1] - b[spans - 2]), growth, 1e-9);
+      }
+      // Growth 1 is the uniform basis' own arithmetic, bit for bit.
+      if (growth == 1.0) {
+        for (int i = 0; i <= spans; ++i) EXPECT_EQ(b[static_cast<std::size_t>(i)], 3.0 * i / spans);
+      }
+      const fpl::BSplineBasis basis = fpl::BSplineBasis::geometric(3, spans, 3.0, growth);
+      EXPECT_EQ(basis.uniform(), growth == 1.0);
+      for (int i = 0; i < spans; ++i) EXPECT_NEAR(basis.spanStart(i), b[static_cast<std::size_t>(i)], 1e-12);
+    }
+  EXPECT_THROW(fpl::geometric_breakpoints(0, 3.0, 1.1), std::invalid_argument);
+  EXPECT_THROW(fpl::geometric_breakpoints(4, 0.0, 1.1), std::invalid_argument);
+  EXPECT_THROW(fpl::geometric_breakpoints(4, 3.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(fpl::geometric_breakpoints(4, 3.0, std::nan("")), std::invalid_argument);
+}
+
 TEST(BSplineBasis, RejectsBadInput) {
   EXPECT_THROW(fpl::BSplineBasis(0, 3, 1.0), std::invalid_argument);
   EXPECT_THROW(fpl::BSplineBasis(3, 0, 1.0), std::invalid_argument);
@@ -162,4 +194,31 @@ TEST(SplineTrajectory, JetAgreesWithTheBasisRowsEverywhere) {
   Eigen::MatrixXd bad = c;
   bad(0, 0) = std::nan("");
   EXPECT_THROW(fpl::SplineTrajectory(basis, bad), std::invalid_argument);
+}
+
+TEST(SplineTrajectory, BeyondItsEndsTheContinuedJetFollowsTheEndSpansPolynomials) {
+  // Inside [0, T] the continued jet is the jet; beyond, the first or last span's polynomial
+  // continued, so its Taylor series from the end's jet (exact: degree 5, six orders).
+  const fpl::BSplineBasis basis = graded(5);
+  const Eigen::MatrixXd c = Eigen::MatrixXd::Random(2, basis.size());
+  const fpl::SplineTrajectory y(basis, c);
+  Eigen::MatrixXd inside(2, 6), continued(2, 6);
+  for (double t : {0.0, 0.01, 0.7, 3.0}) {
+    y.jetInto(t, inside);
+    y.continuedJetInto(t, continued);
+    EXPECT_EQ((inside - continued).cwiseAbs().maxCoeff(), 0.0) << t;
+  }
+  for (const auto& [end, dt] : {std::pair{0.0, -0.02}, std::pair{3.0, 0.3}}) {
+    const Eigen::MatrixXd at_end = y.jet(end, 6);
+    y.continuedJetInto(end + dt, continued);
+    for (int k = 0; k < 6; ++k) {
+      Eigen::VectorXd taylor = Eigen::VectorXd::Zero(2);
+      double term = 1.0;
+      for (int j = k; j < 6; ++j, term *= dt / (j - k)) taylor += term * at_end.col(j);
+      EXPECT_LT((continued.col(k) - taylor).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + taylor.cwiseAbs().maxCoeff()))
+          << "t = " << end + dt << ", order " << k;
+    }
+    // Not frozen at the end value (what jet, clamped, gives).
+    EXPECT_GT((continued.col(0) - at_end.col(0)).cwiseAbs().maxCoeff(), 1e-6);
+  }
 }

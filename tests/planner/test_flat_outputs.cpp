@@ -2,8 +2,11 @@
 // are inverses (along a Simbody simulation, and along a planned flat trajectory).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
+#include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/numerics/bspline.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "scenario_fixture.hpp"
 
@@ -141,6 +144,31 @@ TEST(FlatOutputs, InverseThenForwardReproducesAPlannedFlatTrajectory) {
       for (int k = 0; k < 2; ++k)
         EXPECT_NEAR(y.Y(l, k), yj(l, k), 1e-8 * (1 + std::abs(yj(l, k)))) << "t " << t << " output " << l << " order " << k;
   }
+}
+
+TEST(FlatOutputs, TorqueJetsAlongASplinePathAreExactAtItsEndsAndShortSpans) {
+  // A degree-8 spline on spans from 21 ms growing by 1.4: differences in time straddle its knots
+  // (where it is only C7) and its ends; torque_jets_on_grid must give the exact jets there.
+  flatsos::test::ArmPlanning arm;
+  const fpl::BSplineBasis basis = fpl::BSplineBasis::geometric(8, 12, 3.0, 1.4);
+  Eigen::MatrixXd c(2, basis.size());
+  for (int i = 0; i < basis.size(); ++i) c(0, i) = 1.5 * std::sin(0.7 * i), c(1, i) = 0.2 + std::cos(0.9 * i);
+  const fpl::JointPath path = fpl::JointPath::fromSpline(fpl::SplineTrajectory(basis, c));
+  fp::ModelWorkspace ws = arm.flat.makeWorkspace();
+  const int count = 301;
+  const double h = 3.0 / (count - 1);
+  const auto jets = fpl::torque_jets_on_grid(arm.flat, ws, path, h, count);
+  const auto differences = arm.flat.torqueJetsOnGrid(ws, [&](double t) { return path.jet(t, 4); }, 0.0, h, count);
+  ASSERT_EQ(jets.size(), static_cast<std::size_t>(count));
+  double worst_difference = 0.0;
+  for (int i = 0; i < count; ++i) {
+    const fpl::TorqueJet pointwise = arm.flat.torqueJet(ws, path.jet(h * i, 5));
+    const double scale = 1.0 + pointwise.tau.cwiseAbs().maxCoeff();
+    EXPECT_LT((jets[i].tau - pointwise.tau).cwiseAbs().maxCoeff(), 1e-12 * scale) << "t = " << h * i;
+    worst_difference = std::max(worst_difference, (differences[i].tau - pointwise.tau).cwiseAbs().maxCoeff() / scale);
+  }
+  // What the differences would have given: far off (the reason for the exact jets).
+  EXPECT_GT(worst_difference, 1e-3);
 }
 
 TEST(FlatOutputs, TorqueJetsOnAGridEqualThePointwiseJets) {

@@ -3,7 +3,11 @@
 // vanishes at t = 0; K = 1, r = 0 is the paper's box (midpoint, half range).
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
 #include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/numerics/bspline.hpp"
 #include "flatsos/planner/torque_model.hpp"
 #include "scenario_fixture.hpp"
 
@@ -41,6 +45,34 @@ TEST_F(TorqueModelScenario, TheRemainderBoundHoldsOnADenseGridOfEveryPiece) {
           EXPECT_LE(std::abs(exact[joint] - piece.torque[joint](s)), piece.remainderAt(joint, s) + 1e-12)
               << "degree " << degree << ", piece at " << piece.t0_s << " s, s = " << s << ", joint " << joint;
       }
+  }
+}
+
+TEST_F(TorqueModelScenario, PiecesThatGrowFollowTheirBreakpointsAndKeepTheBound) {
+  fpl::TorqueModelOptions o;
+  o.pieces = 10;
+  o.piece_growth = 1.3;
+  const fpl::TorqueModel model = fpl::build_torque_model(arm.flat, ws, path, o);
+  const std::vector<double> breaks = fpl::geometric_breakpoints(10, 3.0, 1.3);
+  ASSERT_EQ(model.pieces.size(), 10u);
+  for (std::size_t k = 0; k < model.pieces.size(); ++k) {
+    const auto& piece = model.pieces[k];
+    EXPECT_EQ(piece.t0_s, breaks[k]);
+    EXPECT_EQ(piece.t1_s, breaks[k + 1]);
+    for (int i = 0; i <= 200; ++i) {
+      const double s = i / 200.0;
+      const Eigen::VectorXd exact = tau(piece.t0_s + s * (piece.t1_s - piece.t0_s));
+      for (int joint = 0; joint < 2; ++joint)
+        EXPECT_LE(std::abs(exact[joint] - piece.torque[joint](s)), piece.remainderAt(joint, s) + 1e-12)
+            << "piece at " << piece.t0_s << " s, s = " << s << ", joint " << joint;
+    }
+  }
+  // Short pieces where the torque changes: the first piece's bound is smaller than uniform's.
+  const fpl::TorqueModel uniform = fpl::build_torque_model(arm.flat, ws, path, {10});
+  EXPECT_LT(model.pieces[0].remainder_N_m.maxCoeff(), uniform.pieces[0].remainder_N_m.maxCoeff());
+  for (double bad : {0.0, -1.0, std::nan("")}) {
+    o.piece_growth = bad;
+    EXPECT_THROW(fpl::build_torque_model(arm.flat, ws, path, o), std::invalid_argument) << bad;
   }
 }
 

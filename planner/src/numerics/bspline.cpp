@@ -64,17 +64,22 @@ BSplineBasis::BSplineBasis(int degree, std::vector<double> breakpoints_s)
   buildSpanPowers();
 }
 
-BSplineBasis BSplineBasis::geometric(int degree, int spans, double duration_s, double growth) {
-  if (!(growth > 0.0) || !std::isfinite(growth)) throw std::invalid_argument("B-spline basis: span growth must be finite and > 0");
-  if (growth == 1.0) return BSplineBasis(degree, spans, duration_s);
+std::vector<double> geometric_breakpoints(int spans, double duration_s, double growth) {
   if (spans < 1) throw std::invalid_argument("B-spline basis: need at least 1 span");
   if (!(duration_s > 0.0) || !std::isfinite(duration_s)) throw std::invalid_argument("B-spline basis: duration must be > 0 s");
-  // h_i = h_0 growth^i with sum h_i = T.
-  const double first_s = duration_s * (growth - 1.0) / (std::pow(growth, spans) - 1.0);
+  if (!(growth > 0.0) || !std::isfinite(growth)) throw std::invalid_argument("B-spline basis: span growth must be finite and > 0");
   std::vector<double> breaks{0.0};
-  for (int i = 0; i + 1 < spans; ++i) breaks.push_back(breaks.back() + first_s * std::pow(growth, i));
+  // h_i = h_0 growth^i with sum h_i = T.
+  const double first_s = growth == 1.0 ? 0.0 : duration_s * (growth - 1.0) / (std::pow(growth, spans) - 1.0);
+  for (int i = 1; i < spans; ++i)
+    breaks.push_back(growth == 1.0 ? duration_s * i / spans : breaks.back() + first_s * std::pow(growth, i - 1));
   breaks.push_back(duration_s);
-  return BSplineBasis(degree, std::move(breaks));
+  return breaks;
+}
+
+BSplineBasis BSplineBasis::geometric(int degree, int spans, double duration_s, double growth) {
+  if (growth == 1.0) return BSplineBasis(degree, spans, duration_s);  // the uniform basis' own arithmetic
+  return BSplineBasis(degree, geometric_breakpoints(spans, duration_s, growth));
 }
 
 void BSplineBasis::buildSpanPowers() {

@@ -23,10 +23,19 @@ Eigen::MatrixXd SplineTrajectory::jet(double t, int orders) const {
 }
 
 void SplineTrajectory::jetInto(double t, Eigen::Ref<Eigen::MatrixXd> out) const {
-  // Horner's scheme for each derivative of the span's polynomial in s, then d/dt = (1/h) d/ds.
   const int span = basis_.spanAt(t);
+  spanJetInto(span, basis_.scaledTime(t, span), out);
+}
+
+void SplineTrajectory::continuedJetInto(double t, Eigen::Ref<Eigen::MatrixXd> out) const {
+  if (t >= 0.0 && t <= basis_.duration()) return jetInto(t, out);
+  const int span = t < 0.0 ? 0 : basis_.spans() - 1;
+  spanJetInto(span, (t - basis_.spanStart(span)) / basis_.spanLength(span), out);
+}
+
+void SplineTrajectory::spanJetInto(int span, double s, Eigen::Ref<Eigen::MatrixXd> out) const {
+  // Horner's scheme for each derivative of the span's polynomial in s, then d/dt = (1/h) d/ds.
   const double h = basis_.spanLength(span);
-  const double s = basis_.scaledTime(t, span);
   const Eigen::MatrixXd& P = span_powers_[static_cast<std::size_t>(span)];
   const int degree = basis_.degree();
   double scale = 1.0;

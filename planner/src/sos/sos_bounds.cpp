@@ -28,7 +28,7 @@ namespace {
 std::vector<TorqueJet> check_grid_jets(const SosSetup& setup, const MusclesAlongPath& mp, const ExcitationBoundsOptions& bo) {
   if (bo.check_points < 2) throw std::invalid_argument("SOS program: bounds need at least 2 check points");
   const double h = setup.duration_s / (bo.check_points - 1);
-  return mp.flat.torqueJetsOnGrid(mp.workspace, [&](double t) { return mp.path.jet(t, 4); }, 0.0, h, bo.check_points);
+  return torque_jets_on_grid(mp.flat, mp.workspace, mp.path, h, bo.check_points);
 }
 }  // namespace
 
@@ -93,8 +93,12 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
     points.push_back(make_point(setup, mp, t));
     return true;
   };
-  const int uniform = bo.initial_points_per_span * setup.basis.spans();
-  for (int i = 0; i <= uniform; ++i) add_point(setup.duration_s * i / std::max(uniform, 1));
+  // initial_points_per_span on every span (short spans get points of their own), and the ends.
+  add_point(0.0);
+  const int per_span = bo.initial_points_per_span;
+  for (int span = 0; span < setup.basis.spans() && per_span > 0; ++span)
+    for (int k = 0; k < per_span; ++k) add_point(setup.basis.spanStart(span) + setup.basis.spanLength(span) * k / per_span);
+  if (per_span > 0) add_point(setup.duration_s);
   for (double t : violated_times(excess, h, bo.tolerance)) add_point(t);
 
   double radius = 0.1 * (1.0 + theta.cwiseAbs().maxCoeff());

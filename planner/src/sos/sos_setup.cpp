@@ -55,6 +55,8 @@ void require_valid_inputs(const FlatOutputMap& flat, const TorqueModel& torque, 
   if (!(T > 0.0) || !std::isfinite(T)) throw std::invalid_argument("SOS program: horizon T must be > 0 s");
   if (o.flat_output_degree < 1) throw std::invalid_argument("SOS program: flat-output degree must be >= 1");
   if (o.flat_output_spans < 1) throw std::invalid_argument("SOS program: flat outputs need at least 1 span");
+  if (!(o.flat_output_span_growth > 0.0) || !std::isfinite(o.flat_output_span_growth))
+    throw std::invalid_argument("SOS program: flat_output_span_growth must be finite and > 0 (1: uniform spans)");
   if (reserves.size() != m || !reserves.allFinite() || reserves.minCoeff() < 0.0)
     throw std::invalid_argument("SOS program: reserves must be " + std::to_string(m) + " finite forces >= 0 N");
   if ((bc.initial.size() && bc.initial.rows() != p) || (bc.terminal.size() && bc.terminal.rows() != p))
@@ -85,7 +87,7 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
   require_valid_inputs(flat, torque, T, bc, reserves, o);
   const int m = flat.numMuscles(), n = flat.numJoints(), p = flat.numFlatOutputs();
   const int d = o.flat_output_degree;
-  SosSetup setup(T, BSplineBasis(d, o.flat_output_spans, T));
+  SosSetup setup(T, BSplineBasis::geometric(d, o.flat_output_spans, T, o.flat_output_span_growth));
   const BSplineBasis& basis = setup.basis;
   setup.torque = &torque;
 

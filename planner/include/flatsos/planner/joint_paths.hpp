@@ -26,11 +26,19 @@ struct JointPath {
   /// A path given by a spline (one row per joint) over its basis' duration.
   static JointPath fromSpline(SplineTrajectory spline);
   int numJoints() const { return spline ? spline->signals() : static_cast<int>(q.size()); }
-  /// N x orders jet (derivatives 0..orders-1) at time t.
+  /// N x orders jet (derivatives 0..orders-1) at time t; beyond [0, duration_s] the path continues
+  /// its end polynomials (a spline path: its end spans').
   Jet jet(double t, int orders = 5) const;
   /// The same into `out` (N x orders, orders = its column count; allocates nothing).
   void jetInto(double t, Eigen::Ref<Jet> out) const;
 };
+
+/// Torque jets along the path at the `count` times i h: for a polynomial path by the map's
+/// differences in time (FlatOutputMap::torqueJetsOnGrid: about one inverse dynamics per time),
+/// for a spline path exactly at each time (differences straddling its knots, where the path is
+/// only degree - 1 times differentiable, lose the fast spans' torque rates).
+std::vector<TorqueJet> torque_jets_on_grid(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                           const JointPath& path, double h, int count);
 
 /// initial: N x k0 (derivatives 0..k0-1 at 0), terminal: N x kT (derivatives 0..kT-1 at T).
 /// Degree k0 + kT - 1. Throws std::invalid_argument for T <= 0, mismatched rows or NaN.

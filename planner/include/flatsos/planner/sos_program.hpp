@@ -114,7 +114,11 @@ struct SosProgramOptions {
   SosProgramMethod method = SosProgramMethod::Exchange;
   WholeProgramOptions whole_program;
   int flat_output_degree = 4;          ///< d (>= 3 keeps the excitations continuous)
-  int flat_output_spans = 1;           ///< S uniform knot spans of the B-splines
+  int flat_output_spans = 1;           ///< S knot spans of the B-splines
+  /// Each span this many times as long as the one before (1: uniform). A low-effort transfer
+  /// spends its effort in a fast start and then settles: short spans there (above 1) put the
+  /// coefficients where the forces change.
+  double flat_output_span_growth = 1.0;
   double feasibility_margin_N = 1e-6;  ///< constraints are imposed >= this at the LP points
   int max_exchange_rounds = 40;
   bool certify = true;                 ///< Lukacs certificates for the near-active pieces

@@ -15,6 +15,11 @@
 
 namespace flatsos::planner {
 
+/// Breakpoints 0 = t_0 < ... < t_spans = duration_s of spans in geometric progression, each
+/// `growth` times as long as the one before (exactly duration_s k / spans for growth 1). Throws
+/// std::invalid_argument for spans < 1, a duration not > 0 or a growth not finite and > 0.
+std::vector<double> geometric_breakpoints(int spans, double duration_s, double growth);
+
 class BSplineBasis {
  public:
   /// Uniform spans. Throws std::invalid_argument for degree < 1, spans < 1 or a duration not > 0.

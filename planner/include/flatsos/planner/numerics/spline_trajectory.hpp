@@ -30,12 +30,17 @@ class SplineTrajectory {
   Eigen::MatrixXd jet(double t, int orders) const;
   /// The same into `out` (signals x orders, orders = its column count; allocates nothing).
   void jetInto(double t, Eigen::Ref<Eigen::MatrixXd> out) const;
+  /// As jetInto inside [0, T]; beyond, the first or last span's polynomial continued, so that
+  /// differences in time across an end see the signal's own motion rather than a frozen one.
+  void continuedJetInto(double t, Eigen::Ref<Eigen::MatrixXd> out) const;
   /// Derivative `order` of signal `row` at t.
   double derivativeAt(int row, double t, int order = 0) const;
   /// Signal `row` on span `span` in powers of the span's scaled time s in [0, 1].
   Polynomial spanPolynomial(int row, int span) const;
 
  private:
+  void spanJetInto(int span, double s, Eigen::Ref<Eigen::MatrixXd> out) const;
+
   BSplineBasis basis_;
   Eigen::MatrixXd coefficients_;
   std::vector<Eigen::MatrixXd> span_powers_;  ///< per span: signals x (degree + 1), powers of s
