@@ -69,10 +69,13 @@ std::vector<double> geometric_breakpoints(int spans, double duration_s, double g
   if (!(duration_s > 0.0) || !std::isfinite(duration_s)) throw std::invalid_argument("B-spline basis: duration must be > 0 s");
   if (!(growth > 0.0) || !std::isfinite(growth)) throw std::invalid_argument("B-spline basis: span growth must be finite and > 0");
   std::vector<double> breaks{0.0};
-  // h_i = h_0 growth^i with sum h_i = T.
-  const double first_s = growth == 1.0 ? 0.0 : duration_s * (growth - 1.0) / (std::pow(growth, spans) - 1.0);
-  for (int i = 1; i < spans; ++i)
-    breaks.push_back(growth == 1.0 ? duration_s * i / spans : breaks.back() + first_s * std::pow(growth, i - 1));
+  if (growth == 1.0) {
+    for (int i = 1; i < spans; ++i) breaks.push_back(duration_s * i / spans);
+  } else {
+    // h_i = h_0 growth^i with sum h_i = T.
+    const double first_s = duration_s * (growth - 1.0) / (std::pow(growth, spans) - 1.0);
+    for (int i = 1; i < spans; ++i) breaks.push_back(breaks.back() + first_s * std::pow(growth, i - 1));
+  }
   breaks.push_back(duration_s);
   return breaks;
 }
