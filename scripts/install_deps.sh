@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libsimbody-dev libeigen3-dev coinor-libipopt-dev coinor-libclp-dev
-  nlohmann-json3-dev libcli11-dev
+  nlohmann-json3-dev libcli11-dev libboost-dev
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
   python3-dev pybind11-dev python3-pybind11 python3-pytest

@@ -1,9 +1,9 @@
 // Excitation and activation bounds in the open-loop planner (0 <= n <= 1, floor <= a <= 1).
 // At T = 3 s the paper's quartic needs no bound: same plan, same cost. At T = 1.5 s its
 // reserves-only optimum asks for excitations above 1; the bounded plan keeps every excitation
-// and activation inside on a 3001-point grid, costs more, is certified, agrees with Ipopt's
-// independent solution of the same NLP, and Simbody executes it. A rich basis whose
-// reserves-only optimum deactivates faster than the muscles can is bounded too.
+// and activation inside on a 3001-point grid and between its points, costs more, is certified,
+// agrees with Ipopt's independent solution of the same NLP, and Simbody executes it. A rich
+// basis whose reserves-only optimum deactivates faster than the muscles can is bounded too.
 #include <gtest/gtest.h>
 
 #include "../planner/executable_plan.hpp"
@@ -91,6 +91,28 @@ TEST_F(BoundedPlans, ARichBasisThatDeactivatesTooFastIsBounded) {
   flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
   const auto quartic = fpl::plan_open_loop(arm.flat, s0, open_loop_options(1.5));
   EXPECT_LT(plan.sos.cost_N_s, 0.25 * quartic.sos.cost_N_s);
+}
+
+TEST_F(BoundedPlans, BetweenTheCheckPointsTheBoundsHoldToo) {
+  // Quintic splines on 24 spans at T = 1.5 s, bounds checked on 301 points only (5 ms apart).
+  // Checked at those points alone, the plan left them between: excitations down to -8.7e-3 and,
+  // for the long triceps above a = 1/3, a deactivation faster than any excitation gives (no real
+  // n) around 28 ms, on 1990 of 300001 points. The search between the points (Brent on each
+  // near-active maximum of the rows' margins) finds those and imposes them.
+  auto o = open_loop_options(1.5, 5, 24);
+  o.sos.bounds.check_points = 301;
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_TRUE(plan.sos.bounds_imposed);
+  auto ws = arm.flat.makeWorkspace();
+  const fpl::PlanCheck dense = fpl::check_plan(arm.flat, ws, plan.path, *plan.Y, o.reserves_N, 30001, 1e-6);
+  EXPECT_EQ(dense.points_outside_domain, 0) << dense.limiting_violation;
+  EXPECT_GE(dense.min_excitation, 0.0);
+  EXPECT_LE(dense.max_excitation, 1.0);
+  // The same optimum as with the default grid of 3001 points, to the tolerance of its rows.
+  const auto fine = fpl::plan_open_loop(arm.flat, s0, open_loop_options(1.5, 5, 24));
+  ASSERT_EQ(fine.status, fpl::SolveStatus::Solved) << fine.message;
+  EXPECT_NEAR(plan.sos.cost_N_s, fine.sos.cost_N_s, 1e-4 * fine.sos.cost_N_s);
 }
 
 TEST_F(BoundedPlans, ALowEffortPlansReplayErrorFollowsTheMotionsOwnGrowthRate) {
