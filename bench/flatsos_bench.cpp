@@ -211,6 +211,22 @@ int main(int argc, char** argv) try {
   fast.sos.flat_output_spans = 24;
   fast.torque.pieces = 24;
   j["open_loop_cubic_24_spans_half_duration_bounded"] = time_plan(fast, rich_reps).first;
+  // The reference's mesh, and the planner's joint path for the options (its plan without bounds:
+  // the path only).
+  fpl::CollocationOptions reference_mesh;
+  reference_mesh.mesh_intervals = 100;
+  auto path_of = [&](fpl::OpenLoopOptions o) {
+    o.sos.bounds.enforce = false;
+    return fpl::plan_open_loop(flat, ws, ms0, o).path;
+  };
+  auto collocation_json = [&](const fpl::CollocationResult& reference, const std::vector<double>& times) {
+    return json{{"status", fpl::to_string(reference.status)},
+                {"mesh_intervals", reference_mesh.mesh_intervals},
+                {"variables", reference.variables},
+                {"constraints", reference.constraints},
+                {"ipopt_iterations", reference.iterations},
+                {"total", stats(times, 1e3, "ms")}};
+  };
   // The same problems by the direct-collocation reference (Hermite-Simpson, 100 intervals: its cost
   // has converged to 0.01 %), beside the flatness plan whose basis comes within 1 % of it.
   {
@@ -222,30 +238,20 @@ int main(int argc, char** argv) try {
       o.sos.flat_output_spans = spans;
       o.torque.pieces = spans;
       const auto [flatness, flatness_median] = time_plan(o, rich_reps);
-      fpl::OpenLoopOptions along = o;
-      along.sos.bounds.enforce = false;  // the joint path only
-      const fpl::JointPath path = fpl::plan_open_loop(flat, ws, ms0, along).path;
-      fpl::CollocationOptions co;
-      co.mesh_intervals = 100;
+      const fpl::JointPath path = path_of(o);
       fpl::CollocationResult reference;
       std::vector<double> t;
       try {
-        t = repeat(std::max(1, reps / 20), [&] { reference = fpl::solve_collocation_along_path(flat, ws, path, ms0, ol.reserves_N, co); });
+        t = repeat(std::max(1, reps / 20), [&] {
+          reference = fpl::solve_collocation_along_path(flat, ws, path, ms0, ol.reserves_N, reference_mesh);
+        });
       } catch (const std::invalid_argument& e) {
         // A model the reference does not cover (posture-dependent moment arms, pennation, passive
         // fibres): the flatness row alone, and why.
         versus.push_back({{"duration_s", T}, {"flatness", flatness}, {"collocation", {{"skipped", e.what()}}}});
         continue;
       }
-      json row = {{"duration_s", T},
-                  {"flatness", flatness},
-                  {"collocation",
-                   {{"status", fpl::to_string(reference.status)},
-                    {"mesh_intervals", co.mesh_intervals},
-                    {"variables", reference.variables},
-                    {"constraints", reference.constraints},
-                    {"ipopt_iterations", reference.iterations},
-                    {"total", stats(t, 1e3, "ms")}}}};
+      json row = {{"duration_s", T}, {"flatness", flatness}, {"collocation", collocation_json(reference, t)}};
       if (reference.status == fpl::SolveStatus::Solved) {
         row["collocation"]["cost_Ns"] = reference.cost_N_s;
         if (flatness.contains("cost_Ns"))
@@ -282,20 +288,11 @@ int main(int argc, char** argv) try {
                          {"path_exchange_rounds", plan.free_path.rounds},
                          {"path_points", plan.free_path.points}};
       if (plan.status == fpl::SolveStatus::Solved) row["flatness"]["cost_Ns"] = plan.sos.cost_N_s;
-      fpl::OpenLoopOptions along = ol;
-      along.sos.bounds.enforce = false;  // the start path only
-      const fpl::JointPath start = fpl::plan_open_loop(flat, ws, ms0, along).path;
-      fpl::CollocationOptions co;
-      co.mesh_intervals = 100;
+      const fpl::JointPath start = path_of(ol);
       fpl::CollocationResult reference;
       const std::vector<double> c =
-          repeat(1, [&] { reference = fpl::solve_collocation_free_path(flat, ws, start, ms0, ol.reserves_N, co); });
-      row["collocation"] = {{"status", fpl::to_string(reference.status)},
-                            {"mesh_intervals", co.mesh_intervals},
-                            {"variables", reference.variables},
-                            {"constraints", reference.constraints},
-                            {"ipopt_iterations", reference.iterations},
-                            {"total", stats(c, 1e3, "ms")}};
+          repeat(1, [&] { reference = fpl::solve_collocation_free_path(flat, ws, start, ms0, ol.reserves_N, reference_mesh); });
+      row["collocation"] = collocation_json(reference, c);
       if (reference.status == fpl::SolveStatus::Solved) {
         row["collocation"]["cost_Ns"] = reference.cost_N_s;
         if (plan.status == fpl::SolveStatus::Solved)
