@@ -24,8 +24,8 @@ struct OpenLoopInputs {
 
 OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
                                 const py::object& target, double duration, const py::object& reserves,
-                                int flat_output_degree, int flat_output_spans, int torque_pieces, int torque_degree,
-                                bool bounds) {
+                                int flat_output_degree, int flat_output_spans, double flat_output_span_growth,
+                                int torque_pieces, double torque_piece_growth, int torque_degree, bool bounds) {
   const plugin::MusculoskeletalModel& model = *m.model;
   const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
   OpenLoopInputs in;
@@ -39,7 +39,9 @@ OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::
   o.reserves_N = vector_argument(reserves, muscles, "reserves", true);
   o.sos.flat_output_degree = flat_output_degree;
   o.sos.flat_output_spans = flat_output_spans;
+  o.sos.flat_output_span_growth = flat_output_span_growth;
   o.torque.pieces = torque_pieces;
+  o.torque.piece_growth = torque_piece_growth;
   o.torque.degree = torque_degree;
   o.sos.bounds.enforce = bounds;
   return in;
@@ -47,9 +49,10 @@ OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::
 
 Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
                     const py::object& target, double duration, const py::object& reserves, int flat_output_degree,
-                    int flat_output_spans, int torque_pieces, int torque_degree, bool bounds, const std::string& method) {
-  OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves, flat_output_degree,
-                                       flat_output_spans, torque_pieces, torque_degree, bounds);
+                    int flat_output_spans, double flat_output_span_growth, int torque_pieces, double torque_piece_growth,
+                    int torque_degree, bool bounds, const std::string& method) {
+  OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves, flat_output_degree, flat_output_spans,
+                                       flat_output_span_growth, torque_pieces, torque_piece_growth, torque_degree, bounds);
   try {
     in.options.sos.method = planner::sos_program_method(method);
   } catch (const std::invalid_argument& e) {
@@ -66,9 +69,11 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
 py::dict shortest_transfer(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
                            const py::object& target, const py::object& reserves, double longest, double shortest,
                            double ratio, double tolerance, int flat_output_degree, int flat_output_spans,
-                           int torque_pieces, int torque_degree, bool bounds) {
-  const OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, longest, reserves, flat_output_degree,
-                                             flat_output_spans, torque_pieces, torque_degree, bounds);
+                           double flat_output_span_growth, int torque_pieces, double torque_piece_growth,
+                           int torque_degree, bool bounds) {
+  const OpenLoopInputs in =
+      open_loop_inputs(m, q0, qd0, a0, target, longest, reserves, flat_output_degree, flat_output_spans,
+                       flat_output_span_growth, torque_pieces, torque_piece_growth, torque_degree, bounds);
   planner::ShortestTransferOptions so;
   so.lower_s = shortest;
   so.upper_s = longest;
@@ -178,6 +183,10 @@ void register_open_loop(py::module_& m) {
             d["certified"] = r.certified;
             d["certified_pieces"] = r.certified_pieces;
             d["near_active_pieces"] = r.near_active_pieces;
+            if (p.plan.Y) d["flat_output_breakpoints"] = p.plan.Y->basis().breakpoints();
+            std::vector<double> piece_starts;
+            for (const auto& piece : p.plan.torque.pieces) piece_starts.push_back(piece.t0_s);
+            d["torque_piece_starts"] = piece_starts;
             if (r.method == planner::SosProgramMethod::WholeProgramNlp) {
               d["nlp_variables"] = r.nlp_variables;
               d["nlp_equalities"] = r.nlp_equalities;
@@ -186,8 +195,8 @@ void register_open_loop(py::module_& m) {
             return d;
           },
           "how the reserves' program was solved: 'method', Ipopt's iterations, calls and linear solver, "
-          "'exchange_rounds', the certificates ('certified', 'certified_pieces' of 'near_active_pieces') and, for "
-          "'whole_program_nlp', its 'nlp_variables', 'nlp_equalities' and 'max_certificate_residual' (N)")
+          "'exchange_rounds', the certificates ('certified', 'certified_pieces' of 'near_active_pieces'), the flat "
+          "outputs' 'flat_output_breakpoints' and the 'torque_piece_starts' (s) and, for 'whole_program_nlp', its 'nlp_variables', 'nlp_equalities' and 'max_certificate_residual' (N)")
       .def("sample", &sample, py::arg("times"),
            "The plan at `times` (s, within [0, duration]): a dict of numpy arrays 'time', 'q' (rad, one row per "
            "time, one column per joint), 'activation', 'excitation' and 'tendon_force' (N; one column per muscle).")
@@ -198,13 +207,15 @@ void register_open_loop(py::module_& m) {
 
   m.def("plan_open_loop", &plan_open_loop, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("target"), py::arg("duration"), py::arg("reserves"), py::kw_only(), py::arg("flat_output_degree") = 4,
-        py::arg("flat_output_spans") = 1, py::arg("torque_pieces") = 12, py::arg("torque_degree") = 3,
-        py::arg("bounds") = true, py::arg("method") = "exchange",
+        py::arg("flat_output_spans") = 1, py::arg("flat_output_span_growth") = 1.0, py::arg("torque_pieces") = 12,
+        py::arg("torque_piece_growth") = 1.0, py::arg("torque_degree") = 3, py::arg("bounds") = true,
+        py::arg("method") = "exchange",
         "Minimum-effort open-loop plan from the initial state to rest at `target` in `duration` s.\n"
         "q0, qd0, target: rad and rad/s, one per joint; a0: initial activations in (0, 1], one per muscle, with "
         "tendons in static equilibrium (None: the minimum-effort rest state at q0); reserves: minimum tendon "
         "force, N, one number or one per muscle. Keywords: the flat outputs' B-spline degree and spans (4 and 1: "
-        "the paper's quartic), the torque model's pieces and degree, and whether excitations and activations are "
+        "the paper's quartic) and how much longer each span is than the one before (1: uniform; above 1: short "
+        "spans where a fast transfer starts), the torque model's pieces, their growth likewise, and degree, and whether excitations and activations are "
         "kept within their bounds; `method`: 'exchange' (the default) or 'whole_program_nlp' (the whole program as one "
         "Ipopt problem, the reference formulation, which checks the bounds instead of imposing them). Bad input "
         "raises ValueError; the GIL is released while planning.");
@@ -212,8 +223,8 @@ void register_open_loop(py::module_& m) {
   m.def("shortest_transfer", &shortest_transfer, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("target"), py::arg("reserves"), py::kw_only(), py::arg("longest"), py::arg("shortest") = 0.1,
         py::arg("ratio") = 0.8, py::arg("tolerance") = 1e-3, py::arg("flat_output_degree") = 4,
-        py::arg("flat_output_spans") = 1, py::arg("torque_pieces") = 12, py::arg("torque_degree") = 3,
-        py::arg("bounds") = true,
+        py::arg("flat_output_spans") = 1, py::arg("flat_output_span_growth") = 1.0, py::arg("torque_pieces") = 12,
+        py::arg("torque_piece_growth") = 1.0, py::arg("torque_degree") = 3, py::arg("bounds") = true,
         "The shortest duration (s) with a plan for this transfer: searched down from `longest` (which must have "
         "one) in steps of `ratio`, no further than `shortest`, then bisected to `tolerance`. Returns a dict: "
         "'status' ('solved', 'infeasible': no plan at `longest`, 'failed'), 'message', 'shortest' (None unless "

@@ -145,3 +145,25 @@ def test_the_shortest_transfer_names_bad_options_and_reports_no_plan(arm):
     none = flatsos.shortest_transfer(model, s.q0, s.qd0, s.a0, s.target, s.reserves, longest=1.0)
     assert none["status"] == "infeasible" and none["shortest"] is None and none["plan"].status == "infeasible"
     assert "no plan at the longest duration" in none["message"]
+
+
+def test_graded_spans_reach_the_planner_and_come_back_in_the_plan(arm):
+    model, scenario = arm
+    # Spans (and torque pieces) that grow by 1.06 from the start: short ones where the transfer is
+    # fast. The plan reports the breakpoints it used; growth 1 keeps them uniform.
+    graded = scenario.plan(model, flat_output_degree=5, flat_output_spans=12, flat_output_span_growth=1.25,
+                           torque_pieces=12, torque_piece_growth=1.25)
+    assert graded.status == "solved", graded.message
+    breaks = np.asarray(graded.sos["flat_output_breakpoints"])
+    assert len(breaks) == 13 and breaks[0] == 0.0 and breaks[-1] == pytest.approx(scenario.duration)
+    assert np.diff(breaks)[1:] / np.diff(breaks)[:-1] == pytest.approx(np.full(11, 1.25))
+    starts = np.asarray(graded.sos["torque_piece_starts"])
+    assert len(starts) == 12 and starts[0] == 0.0
+    assert np.diff(starts)[1:] / np.diff(starts)[:-1] == pytest.approx(np.full(10, 1.25))
+    uniform = scenario.plan(model, flat_output_degree=5, flat_output_spans=12)
+    assert np.diff(uniform.sos["flat_output_breakpoints"]) == pytest.approx(np.full(12, scenario.duration / 12))
+    assert graded.cost != pytest.approx(uniform.cost, rel=1e-6)
+    with pytest.raises(ValueError, match="flat_output_span_growth"):
+        scenario.plan(model, flat_output_spans=12, flat_output_span_growth=0.0)
+    with pytest.raises(ValueError, match="piece_growth"):
+        scenario.plan(model, torque_piece_growth=float("nan"))
