@@ -243,7 +243,6 @@ void search_between_points(const SosSetup& setup, const MusclesAlongPath& mp, co
       };
       std::uintmax_t iterations = kIterations;
       const auto best = boost::math::tools::brent_find_minima(negative_excess, lo, hi, kBits, iterations);
-      ++out.between_searches;
       const double t = best.first, excess = -best.second;
       if (!(excess > 0.0) || !(excess > e)) continue;
       inverse_at(t);

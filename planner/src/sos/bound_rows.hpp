@@ -109,7 +109,6 @@ struct GridExcess {
     double t_s = 0.0, excess = 0.0;
   };
   std::vector<BetweenPoints> between;  // maxima between the points, above 0 (stride 1 only)
-  int between_searches = 0;            // local maxima searched between points
 };
 
 GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const std::vector<TorqueJet>& jets,
