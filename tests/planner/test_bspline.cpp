@@ -222,3 +222,14 @@ TEST(SplineTrajectory, BeyondItsEndsTheContinuedJetFollowsTheEndSpansPolynomials
     EXPECT_GT((continued.col(0) - at_end.col(0)).cwiseAbs().maxCoeff(), 1e-6);
   }
 }
+
+TEST(BSplineBasis, PointsPerSpanStartEachSpanAndDivideItEvenly) {
+  const fpl::BSplineBasis basis = fpl::BSplineBasis::geometric(3, 4, 3.0, 1.5);
+  const std::vector<double> times = basis.pointsPerSpan(2);
+  ASSERT_EQ(times.size(), 8u);
+  for (int span = 0; span < 4; ++span) {
+    EXPECT_EQ(times[static_cast<std::size_t>(2 * span)], basis.spanStart(span));
+    EXPECT_NEAR(times[static_cast<std::size_t>(2 * span + 1)], basis.spanStart(span) + 0.5 * basis.spanLength(span), 1e-15);
+  }
+  EXPECT_TRUE(basis.pointsPerSpan(0).empty());
+}

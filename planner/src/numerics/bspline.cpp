@@ -100,6 +100,13 @@ void BSplineBasis::buildSpanPowers() {
   }
 }
 
+std::vector<double> BSplineBasis::pointsPerSpan(int per_span) const {
+  std::vector<double> times;
+  for (int span = 0; span < spans_ && per_span > 0; ++span)
+    for (int k = 0; k < per_span; ++k) times.push_back(spanStart(span) + spanLength(span) * k / per_span);
+  return times;
+}
+
 int BSplineBasis::spanAt(double t) const {
   if (uniform_) {
     const double x = std::clamp(t / duration_s_, 0.0, 1.0) * spans_;

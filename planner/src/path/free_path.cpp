@@ -241,8 +241,7 @@ struct ExchangePoints {
   ExchangePoints(const SosSetup& s, const FlatOutputMap& f, const PathParameterization& p, int per_span)
       : setup(s), flat(f), P(p) {
     for (const BSplineBasis* basis : {&setup.basis, &P.basis})
-      for (int span = 0; span < basis->spans(); ++span)
-        for (int k = 0; k < per_span; ++k) add(basis->spanStart(span) + basis->spanLength(span) * k / per_span);
+      for (double t : basis->pointsPerSpan(per_span)) add(t);
     add(setup.duration_s);
   }
   bool add(double t) {

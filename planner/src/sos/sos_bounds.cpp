@@ -95,10 +95,8 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
   };
   // initial_points_per_span on every span (short spans get points of their own), and the ends.
   add_point(0.0);
-  const int per_span = bo.initial_points_per_span;
-  for (int span = 0; span < setup.basis.spans() && per_span > 0; ++span)
-    for (int k = 0; k < per_span; ++k) add_point(setup.basis.spanStart(span) + setup.basis.spanLength(span) * k / per_span);
-  if (per_span > 0) add_point(setup.duration_s);
+  for (double t : setup.basis.pointsPerSpan(bo.initial_points_per_span)) add_point(t);
+  if (bo.initial_points_per_span > 0) add_point(setup.duration_s);
   for (double t : violated_times(excess, h, bo.tolerance)) add_point(t);
 
   double radius = 0.1 * (1.0 + theta.cwiseAbs().maxCoeff());

@@ -42,6 +42,9 @@ class BSplineBasis {
   double spanLength(int span) const { return breaks_[static_cast<std::size_t>(span) + 1] - spanStart(span); }
   /// t_0 .. t_S (s).
   const std::vector<double>& breakpoints() const { return breaks_; }
+  /// `per_span` evenly spaced times on every span, from each span's start (T not included): where
+  /// short spans get points of their own.
+  std::vector<double> pointsPerSpan(int per_span) const;
   /// The span holding t (t clamped to [0, T]; T belongs to the last span).
   int spanAt(double t) const;
   /// The span's scaled time of t: (t - t_i) / h_i, clamped to [0, 1].
