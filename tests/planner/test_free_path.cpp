@@ -147,6 +147,18 @@ TEST_F(FreePath, TheRowsHessianIsTheDerivativeOfTheirWeightedGradient) {
   // The pattern holds every entry the values fill.
   const auto pattern = rows.hessianPattern();
   ASSERT_EQ(pattern.size(), rows.lagrangianHessian(z, lambda).size());
+
+  // With the torque jet linearized (the joint Newton method's Hessian) only the path's block
+  // changes, and there by the torque jet's curvature, which is not negligible.
+  const fpd::PathRows linearized(arm.flat, v, points, o.reserves_N, p.a_min, fpd::TorqueCurvature::Linearized);
+  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(z.size(), z.size());
+  for (const auto& t : linearized.lagrangianHessian(z, lambda)) {
+    L(t.row(), t.col()) += t.value();
+    if (t.row() != t.col()) L(t.col(), t.row()) += t.value();
+  }
+  const auto thetas = Eigen::seqN(0, v.thetas), all = Eigen::seqN(0, z.size());
+  EXPECT_LT((L - twin)(thetas, all).cwiseAbs().maxCoeff(), 1e-5 * scale);
+  EXPECT_GT((L - twin)(paths, paths).cwiseAbs().maxCoeff(), 1e-2 * twin(paths, paths).cwiseAbs().maxCoeff());
 }
 
 TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost) {

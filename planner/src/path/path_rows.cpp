@@ -125,8 +125,8 @@ Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c) {
 }
 
 PathRows::PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
-                   const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min)
-    : flat_(flat), v_(v), points_(points), reserves_(reserves), a_min_(a_min) {
+                   const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, TorqueCurvature curvature)
+    : flat_(flat), v_(v), points_(points), reserves_(reserves), a_min_(a_min), curvature_(curvature) {
   if (!flat.hasConstantMomentArms())
     throw std::logic_error("free path rows: the model's moment arms vary with the posture (not supported)");
 }
@@ -264,8 +264,10 @@ Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorX
   // phi(q jet) = sum_jk wF_jk (C_tau tau(q jet))_jk, exact (fourth-order dual numbers), mapped to
   // c by dq. The path lengths have none: with constant moment arms (the constructor's check) they
   // are affine in q.
-  const Eigen::MatrixXd Hq = flat_.model().pinTree().torqueJetHessian(q_jet, flat_.Ctau().transpose() * wF);
-  H.bottomRightCorner(paths, paths).noalias() += dq.transpose() * Hq * dq;
+  if (curvature_ == TorqueCurvature::Exact) {
+    const Eigen::MatrixXd Hq = flat_.model().pinTree().torqueJetHessian(q_jet, flat_.Ctau().transpose() * wF);
+    H.bottomRightCorner(paths, paths).noalias() += dq.transpose() * Hq * dq;
+  }
   return H;
 }
 

@@ -66,6 +66,16 @@ struct PathVariables {
   Eigen::VectorXd c(const Eigen::VectorXd& z) const { return z.tail(paths); }
 };
 
+/// Whether the rows' Hessian holds the torque jet's own curvature in the joint jet.
+enum class TorqueCurvature {
+  Exact,
+  /// Left out: the Hessian of the rows with the torque jet linearized about z (Gauss-Newton in the
+  /// torques). The torque jet's exact curvature is 40 fourth-order dual passes per point; on the
+  /// arm's free path it cost 5.8 of 14.4 s and saved 12 of 156 Ipopt iterations, to the same
+  /// optimum (docs/method/free_path.md, "Speed").
+  Linearized,
+};
+
 /// Per point and muscle: the reserve row, then the four bound rows, each ">= 0". The Jacobian's
 /// pattern does not depend on z: per row, the point's theta columns, then its path columns.
 class PathRows {
@@ -73,7 +83,8 @@ class PathRows {
   /// Throws std::logic_error for a model whose moment arms vary with the posture: the Hessian
   /// leaves out the path lengths' curvature, which only they have.
   PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
-           const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min);
+           const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
+           TorqueCurvature curvature = TorqueCurvature::Exact);
 
   static constexpr int kRows = 1 + kRowsPerMuscle;
   int rows() const { return static_cast<int>(points_.size()) * flat_.numMuscles() * kRows; }
@@ -88,8 +99,8 @@ class PathRows {
   /// and in c only through the joint jet (linear in c) and the torque jet and path length of it.
   /// The exact gradient of h in u (muscles::invert_muscle) is differenced centrally in u's 6
   /// entries (second derivatives to about 1e-8 relative without third derivatives of the Hill
-  /// laws); the torque jet's Hessian in the joint jet is exact (PinTreeDynamics::torqueJetHessian);
-  /// the path lengths are affine in q (constant moment arms).
+  /// laws); the torque jet's Hessian in the joint jet is exact (PinTreeDynamics::torqueJetHessian)
+  /// or left out (TorqueCurvature); the path lengths are affine in q (constant moment arms).
   std::vector<Eigen::Triplet<double>> lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const;
   /// The same pattern (values 0).
   std::vector<Eigen::Triplet<double>> hessianPattern() const;
@@ -105,6 +116,7 @@ class PathRows {
   const std::vector<PathPoint>& points_;
   const Eigen::VectorXd& reserves_;
   const Eigen::VectorXd& a_min_;
+  TorqueCurvature curvature_;
 };
 
 /// The plan on a dense grid: per time the reserve deficit (N) and the bounds' excess, and their worst.
