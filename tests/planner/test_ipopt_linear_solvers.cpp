@@ -52,15 +52,18 @@ void expect_same_lp_result(const fpl::LinearProgram& lp, const std::string& what
 
 }  // namespace
 
-TEST(IpoptLinearSolvers, AutomaticPicksTheDenseSolverForSmallSystemsOnly) {
+TEST(IpoptLinearSolvers, AutomaticPicksTheDenseSolverForSmallOrCondensableSystemsOnly) {
   EXPECT_EQ(fpl::ipopt_linear_solver(), IpoptLinearSolver::Automatic);
-  EXPECT_EQ(fpl::ipopt_linear_solver_for(fpl::kDenseKktMaxDimension), IpoptLinearSolver::DenseLdlt);
-  EXPECT_EQ(fpl::ipopt_linear_solver_for(fpl::kDenseKktMaxDimension + 1), IpoptLinearSolver::Mumps);
+  constexpr int kDenseMax = fpl::kDenseKktMaxDimension, kCondensedMax = fpl::kCondensedKktMaxDimension;
+  EXPECT_EQ(fpl::ipopt_linear_solver_for(kDenseMax, kDenseMax), IpoptLinearSolver::DenseLdlt);
+  EXPECT_EQ(fpl::ipopt_linear_solver_for(kDenseMax + 1, kDenseMax + 1), IpoptLinearSolver::DenseLdlt);
+  EXPECT_EQ(fpl::ipopt_linear_solver_for(100 * kCondensedMax, kCondensedMax), IpoptLinearSolver::DenseLdlt);
+  EXPECT_EQ(fpl::ipopt_linear_solver_for(kCondensedMax + 1, kCondensedMax + 1), IpoptLinearSolver::Mumps);
   // An LP with 4 variables and 22 rows (the SLP's shape): KKT dimension 48.
   std::mt19937 rng(1);
   EXPECT_EQ(fpl::solve_linear_program(flatsos::test::random_feasible_lp(rng, 4, 22)).linear_solver, kDense);
-  // 60 variables and 200 rows: dimension 460.
-  EXPECT_EQ(fpl::solve_linear_program(flatsos::test::random_feasible_lp(rng, 60, 200)).linear_solver, kMumps);
+  // 60 variables and 200 inequality rows: dimension 460, condensed 60.
+  EXPECT_EQ(fpl::solve_linear_program(flatsos::test::random_feasible_lp(rng, 60, 200)).linear_solver, kDense);
 }
 
 TEST(IpoptLinearSolvers, SolverNamesAreListedOnce) {
@@ -75,7 +78,8 @@ TEST(IpoptLinearSolvers, SolverNamesAreListedOnce) {
 
 TEST(IpoptLinearSolvers, RandomLinearProgramsAgree) {
   std::mt19937 rng(2);
-  for (const auto& [n, rows] : std::vector<std::pair<int, int>>{{2, 6}, {4, 22}, {8, 40}, {20, 60}})
+  // The last two above kDenseKktMaxDimension: condensed (the rows' slacks and multipliers first).
+  for (const auto& [n, rows] : std::vector<std::pair<int, int>>{{2, 6}, {4, 22}, {8, 40}, {20, 60}, {30, 120}, {60, 200}})
     for (int trial = 0; trial < 3; ++trial)
       expect_same_lp_result(flatsos::test::random_feasible_lp(rng, n, rows), std::to_string(n) + " x " + std::to_string(rows));
 }
@@ -227,4 +231,20 @@ TEST(IpoptLinearSolvers, CollocationAgrees) {
   EXPECT_EQ(dense.linear_solver, kDense);
   EXPECT_EQ(mumps.linear_solver, kMumps);
   EXPECT_NEAR(dense.cost_N_s, mumps.cost_N_s, 1e-8 * mumps.cost_N_s);
+}
+
+TEST(IpoptLinearSolvers, TheJointPathNewtonMethodAgrees) {
+  // 6480 rows at most over 60 variables: condensed to the variables.
+  const flatsos::test::ArmPlanning arm;
+  const fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
+  auto o = flatsos::test::open_loop_options(3.0, 3, 12);
+  o.free_path.enabled = true;
+  o.free_path.method = fpl::FreePathMethod::JointNewton;
+  const auto dense = under(IpoptLinearSolver::DenseLdlt, [&] { return fpl::plan_open_loop(arm.flat, s0, o); });
+  const auto mumps = under(IpoptLinearSolver::Mumps, [&] { return fpl::plan_open_loop(arm.flat, s0, o); });
+  ASSERT_EQ(mumps.status, fpl::SolveStatus::Solved) << mumps.message;
+  EXPECT_EQ(dense.status, mumps.status) << dense.message;
+  EXPECT_EQ(dense.free_path.rounds, mumps.free_path.rounds);
+  EXPECT_EQ(dense.free_path.path_iterations, mumps.free_path.path_iterations);
+  EXPECT_NEAR(dense.free_path.cost_at_points_N_s, mumps.free_path.cost_at_points_N_s, 1e-8 * mumps.free_path.cost_at_points_N_s);
 }

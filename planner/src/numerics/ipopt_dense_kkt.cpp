@@ -10,6 +10,8 @@
 #include <mutex>
 #include <type_traits>
 
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
+#include "numerics/condensed_kkt.hpp"
 #include "numerics/dense_ldlt.hpp"
 
 namespace flatsos::planner::detail {
@@ -17,8 +19,18 @@ namespace {
 
 static_assert(std::is_same_v<ipfint, int>, "Ipopt's Fortran integer is not int: the slot's signatures differ");
 
-// Integer workspace: the factor's offset in the real workspace, n, then n pivots.
-constexpr int kHeader = 2;
+// Two ways to factor, chosen by the analysis and kept in ikeep[0] (ikeep lives from the analysis
+// to every factorization) and iw[0] (from a factorization to its solves):
+//   dense:     the whole matrix by the dense LDL^T; iw: mode, the factor's offset in the real
+//              workspace, n, then n pivots;
+//   condensed: above kDenseKktMaxDimension, when the matrix has inequality rows' slack and
+//              multiplier pairs, those eliminated first (numerics/condensed_kkt.hpp); ikeep:
+//              mode, core, pairs, couplings, then the n roles; iw: mode, the factor's offset,
+//              then the condensed factor's integers.
+enum Mode : int { kDense = 0, kCondensed = 1 };
+constexpr int kHeader = 3;
+constexpr int kCondensedHeader = 2;
+constexpr int kKeepHeader = 4;
 
 // A pivot column is zero when its largest entry is below this fraction of the matrix's largest:
 // only cancellation to rounding level of exactly dependent rows, as MUMPS (and MA27 with its
@@ -36,13 +48,12 @@ void dense_kkt_defaults(int* icntl, double* cntl) {
 }
 
 void dense_kkt_analyse(int* n, int* nz, const int* irn, const int* icn, int* /*iw*/, int* /*liw*/,
-                       int* /*ikeep*/, int* /*iw1*/, int* nsteps, int* iflag, int* /*icntl*/,
+                       int* ikeep, int* /*iw1*/, int* nsteps, int* iflag, int* /*icntl*/,
                        double* /*cntl*/, int* info, double* ops) {
   std::fill(info, info + 20, 0);
   *nsteps = 1;  // Ipopt sizes a scratch array by it; the dense solve needs none
   *ops = 0.0;
-  const std::int64_t need = real_workspace(*n, *nz);
-  if (*n < 1 || *nz < 0 || need > INT_MAX) {  // too large for one dense factor
+  if (*n < 1 || *nz < 0) {
     info[0] = *iflag = -1;
     info[1] = *n;
     return;
@@ -53,15 +64,76 @@ void dense_kkt_analyse(int* n, int* nz, const int* irn, const int* icn, int* /*i
       info[1] = e + 1;
       return;
     }
+  ikeep[0] = kDense;
+  if (*n > kDenseKktMaxDimension) {
+    CondensedPattern p = find_eliminable_pairs(*n, *nz, irn, icn);
+    const std::int64_t reals = *nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(*n, p);
+    if (p.pairs > 0 && reals <= INT_MAX && integers <= INT_MAX) {
+      ikeep[0] = kCondensed;
+      ikeep[1] = p.core;
+      ikeep[2] = p.pairs;
+      ikeep[3] = static_cast<int>(p.couplings);
+      std::copy(p.role.begin(), p.role.end(), ikeep + kKeepHeader);
+      info[4] = static_cast<int>(reals);
+      info[5] = static_cast<int>(integers);
+      *ops = static_cast<double>(p.core) * p.core * p.core / 3.0;
+      return;
+    }
+  }
+  const std::int64_t need = real_workspace(*n, *nz);
+  if (need > INT_MAX) {  // too large for one dense factor
+    info[0] = *iflag = -1;
+    info[1] = *n;
+    return;
+  }
   info[4] = static_cast<int>(need);
   info[5] = kHeader + *n;
   *ops = static_cast<double>(*n) * *n * *n / 3.0;
 }
 
+namespace {
+
+void factor_condensed_into(int n, int nz, const int* irn, const int* icn, double* a, int la, int* iw, int liw,
+                           const int* ikeep, int* maxfrt, int* info) {
+  CondensedPattern p;
+  p.core = ikeep[1];
+  p.pairs = ikeep[2];
+  p.couplings = ikeep[3];
+  p.role.assign(ikeep + kKeepHeader, ikeep + kKeepHeader + n);
+  const std::int64_t reals = nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(n, p);
+  if (liw < integers) {
+    info[0] = -3;
+    info[1] = static_cast<int>(integers);
+    return;
+  }
+  if (la < reals) {
+    info[0] = -4;
+    info[1] = static_cast<int>(reals);
+    return;
+  }
+  iw[0] = kCondensed;
+  iw[1] = nz;
+  Inertia inertia;
+  if (!factor_condensed(n, nz, irn, icn, a, p, iw + kCondensedHeader, a + nz, inertia)) {
+    info[0] = -1;  // the triplets are not the analysed pattern
+    return;
+  }
+  *maxfrt = std::max(1, p.core);  // Ipopt allocates the solve's scratch vector of this length
+  info[0] = inertia.zero > 0 ? 3 : 0;
+  info[1] = n - inertia.zero;
+  info[14] = inertia.negative;
+}
+
+}  // namespace
+
 void dense_kkt_factor(int* n, int* nz, const int* irn, const int* icn, double* a, int* la, int* iw,
-                      int* liw, int* /*ikeep*/, int* /*nsteps*/, int* maxfrt, int* /*iw1*/,
+                      int* liw, int* ikeep, int* /*nsteps*/, int* maxfrt, int* /*iw1*/,
                       int* /*icntl*/, double* /*cntl*/, int* info) {
   std::fill(info, info + 20, 0);
+  if (ikeep[0] == kCondensed) {
+    factor_condensed_into(*n, *nz, irn, icn, a, *la, iw, *liw, ikeep, maxfrt, info);
+    return;
+  }
   const int dim = *n, entries = *nz;
   const std::int64_t need = real_workspace(dim, entries);
   if (*liw < kHeader + dim) {
@@ -88,8 +160,9 @@ void dense_kkt_factor(int* n, int* nz, const int* irn, const int* icn, double* a
 
   int* pivots = iw + kHeader;
   const Inertia inertia = factor_ldlt_in_place(dense, dim, pivots, kRelativeZeroPivot * largest);
-  iw[0] = entries;
-  iw[1] = dim;
+  iw[0] = kDense;
+  iw[1] = entries;
+  iw[2] = dim;
   *maxfrt = dim;  // Ipopt allocates a scratch vector of this length for the solve
   info[0] = inertia.zero > 0 ? 3 : 0;
   info[1] = dim - inertia.zero;
@@ -98,10 +171,14 @@ void dense_kkt_factor(int* n, int* nz, const int* irn, const int* icn, double* a
   info[14] = inertia.negative;
 }
 
-void dense_kkt_solve(int* n, double* a, int* /*la*/, int* iw, int* /*liw*/, double* /*w*/,
+void dense_kkt_solve(int* n, double* a, int* /*la*/, int* iw, int* /*liw*/, double* w,
                      int* /*maxfrt*/, double* rhs, int* /*iw1*/, int* /*nsteps*/, int* /*icntl*/,
                      double* /*cntl*/) {
-  solve_ldlt_in_place(a + iw[0], *n, iw + kHeader, rhs);
+  if (iw[0] == kCondensed) {
+    solve_condensed(iw + kCondensedHeader, a + iw[1], rhs, w);
+    return;
+  }
+  solve_ldlt_in_place(a + iw[1], *n, iw + kHeader, rhs);
 }
 
 void register_dense_kkt_solver() {

@@ -62,8 +62,10 @@ void set_ipopt_linear_solver(IpoptLinearSolver solver) { process_linear_solver.s
 
 IpoptLinearSolver ipopt_linear_solver() { return process_linear_solver.load(); }
 
-IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension) {
-  return kkt_dimension <= kDenseKktMaxDimension ? IpoptLinearSolver::DenseLdlt : IpoptLinearSolver::Mumps;
+IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension, int condensed_dimension) {
+  return kkt_dimension <= kDenseKktMaxDimension || condensed_dimension <= kCondensedKktMaxDimension
+             ? IpoptLinearSolver::DenseLdlt
+             : IpoptLinearSolver::Mumps;
 }
 
 std::string ipopt_linear_solver_name(IpoptLinearSolver solver) {
@@ -88,22 +90,26 @@ void add_linear_solver_name(std::string& names, const std::string& name) {
 
 namespace detail {
 
-int kkt_dimension(Ipopt::TNLP& problem) {
+KktDimensions kkt_dimensions(Ipopt::TNLP& problem) {
   Ipopt::Index n = 0, m = 0, nnz_jac = 0, nnz_h = 0;
   Ipopt::TNLP::IndexStyleEnum style = Ipopt::TNLP::C_STYLE;
-  if (!problem.get_nlp_info(n, m, nnz_jac, nnz_h, style)) return 0;
+  if (!problem.get_nlp_info(n, m, nnz_jac, nnz_h, style)) return {};
   std::vector<double> x_lower(static_cast<std::size_t>(n)), x_upper(x_lower.size());
   std::vector<double> g_lower(static_cast<std::size_t>(m)), g_upper(g_lower.size());
-  if (!problem.get_bounds_info(n, x_lower.data(), x_upper.data(), m, g_lower.data(), g_upper.data())) return n + 2 * m;
+  if (!problem.get_bounds_info(n, x_lower.data(), x_upper.data(), m, g_lower.data(), g_upper.data()))
+    return {n + 2 * m, n + 2 * m};
   int equalities = 0;
   for (Ipopt::Index i = 0; i < m; ++i) equalities += g_lower[static_cast<std::size_t>(i)] == g_upper[static_cast<std::size_t>(i)];
-  return n + equalities + 2 * (m - equalities);
+  return {n + equalities + 2 * (m - equalities), n + equalities};
 }
 
 IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem) {
   static std::recursive_mutex mumps;
   IpoptLinearSolver solver = ipopt_linear_solver();
-  if (solver == IpoptLinearSolver::Automatic) solver = ipopt_linear_solver_for(kkt_dimension(problem));
+  if (solver == IpoptLinearSolver::Automatic) {
+    const KktDimensions kkt = kkt_dimensions(problem);
+    solver = ipopt_linear_solver_for(kkt.full, kkt.condensed);
+  }
   IpoptSession session{std::unique_lock<std::recursive_mutex>(mumps), IpoptApplicationFactory(), solver};
   Ipopt::IpoptApplication* app = Ipopt::GetRawPtr(session.app);
   app->Options()->SetIntegerValue("print_level", 0);

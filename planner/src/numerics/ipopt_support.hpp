@@ -32,10 +32,12 @@ struct IpoptSession {
 /// is read.
 IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem);
 
-/// Dimension of the KKT system Ipopt factors for `problem`: its variables, a multiplier per
-/// equality row, and a slack and a multiplier per other row (read from the problem's sizes and
-/// bounds).
-int kkt_dimension(Ipopt::TNLP& problem);
+/// Dimensions of the KKT system Ipopt factors for `problem` (read from its sizes and bounds).
+struct KktDimensions {
+  int full = 0;       ///< variables, a multiplier per equality row, a slack and a multiplier per other row
+  int condensed = 0;  ///< variables and a multiplier per equality row (the rest eliminated first)
+};
+KktDimensions kkt_dimensions(Ipopt::TNLP& problem);
 
 /// Ipopt's status as text, for messages.
 std::string ipopt_status_name(Ipopt::ApplicationReturnStatus status);

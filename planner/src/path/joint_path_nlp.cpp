@@ -190,10 +190,12 @@ JointPathNlpOutcome solve_joint_path_nlp(const SosSetup& setup, const FlatOutput
     app->Options()->SetNumericValue("warm_start_mult_bound_push", 1e-9);
   }
   // The KKT system is an arrow: thousands of rows, each coupling a slack and a multiplier to the
-  // few dozen variables of its point, around a dense block of the path's coefficients. MUMPS's
-  // automatic ordering (nested dissection) factored it in about 300 ms at 180 points; approximate
-  // minimum fill eliminates the rows first: the arm's free path in 14.1 s instead of 18.7 s (the
-  // same 143 iterations; docs/method/free_path.md, "Speed").
+  // few dozen variables of its point, around a dense block of the path's coefficients. By default
+  // the rows are eliminated first and the variables' dense Schur complement factored (the
+  // condensed dense LDL^T: a few milliseconds per iteration). When MUMPS serves it instead, its
+  // automatic ordering (nested dissection) took about 300 ms per factorization at 180 points;
+  // approximate minimum fill eliminates the rows first: 14.1 s instead of 18.7 s on the arm's
+  // free path (docs/method/free_path.md, "Speed").
   if (app.linear_solver == IpoptLinearSolver::Mumps) app->Options()->SetIntegerValue("mumps_pivot_order", 2);
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
   JointPathNlpOutcome out;

@@ -11,23 +11,33 @@
 namespace flatsos::planner {
 
 enum class IpoptLinearSolver {
-  Automatic,  ///< the dense LDL^T up to kDenseKktMaxDimension, MUMPS above (the default)
-  DenseLdlt,  ///< flatsos's dense Bunch-Kaufman LDL^T, whatever the size
-  Mumps,      ///< MUMPS (sparse multifrontal), whatever the size
+  /// The dense LDL^T up to kDenseKktMaxDimension, or when the condensed system is at most
+  /// kCondensedKktMaxDimension; MUMPS otherwise (the default).
+  Automatic,
+  /// flatsos's dense Bunch-Kaufman LDL^T, whatever the size. Above kDenseKktMaxDimension it
+  /// first eliminates each inequality row's slack and multiplier by their own 2x2 block and
+  /// factors the dense rest (the condensed system: variables and equality rows).
+  DenseLdlt,
+  Mumps,  ///< MUMPS (sparse multifrontal), whatever the size
 };
 
 /// Largest KKT dimension (variables + equality rows + 2 x inequality rows) that Automatic gives
 /// to the dense LDL^T: where, measured per Ipopt iteration on this project's problems, the two
 /// cost the same (docs/method/ipopt_linear_solver.md).
 inline constexpr int kDenseKktMaxDimension = 200;
+/// Largest condensed dimension (variables + equality rows) that Automatic gives to the dense
+/// LDL^T with the inequality rows eliminated first (docs/method/ipopt_linear_solver.md).
+inline constexpr int kCondensedKktMaxDimension = 400;
 
 /// Process-wide choice for every later Ipopt solve (tests and benchmarks compare the two;
 /// thread-safe, a solve already running keeps its solver).
 void set_ipopt_linear_solver(IpoptLinearSolver solver);
 IpoptLinearSolver ipopt_linear_solver();
 
-/// The solver Automatic picks for a KKT system of this dimension (the others pick themselves).
-IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension);
+/// The solver Automatic picks for a KKT system of this dimension whose condensed system (without
+/// the inequality rows' slacks and multipliers) has `condensed_dimension` (the others pick
+/// themselves).
+IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension, int condensed_dimension);
 
 /// Name for logs and summaries: "dense LDL^T (flatsos)" or "MUMPS" ("automatic" for Automatic).
 std::string ipopt_linear_solver_name(IpoptLinearSolver solver);

@@ -1,0 +1,233 @@
+// The condensed KKT solve (inequality rows' slack and multiplier pairs eliminated first, the rest
+// by the dense LDL^T) through Ipopt's ma27 calling convention, against Eigen on Ipopt-shaped
+// systems: the pairs it finds, the inertia (eigenvalues), the solution (pivoted LU), singular
+// pair blocks, patterns where a pair would touch another, and triplets that are not the analysed
+// pattern.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
+#include "numerics/condensed_kkt.hpp"
+#include "numerics/ipopt_dense_kkt.hpp"
+
+namespace fd = flatsos::planner::detail;
+
+namespace {
+
+struct Triplets {
+  int n = 0;
+  std::vector<int> irn, icn;  // 1-based
+  std::vector<double> values;
+  // Adds a(i, j) (0-based) in a random triangle, sometimes split into two duplicates.
+  void add(std::mt19937& rng, int i, int j, double v) {
+    std::uniform_int_distribution<int> coin(0, 3);
+    const bool upper = coin(rng) % 2 == 0;
+    const int r = upper ? std::min(i, j) : std::max(i, j), c = upper ? std::max(i, j) : std::min(i, j);
+    if (coin(rng) == 0) {
+      irn.insert(irn.end(), {r + 1, c + 1});
+      icn.insert(icn.end(), {c + 1, r + 1});
+      values.insert(values.end(), {0.25 * v, 0.75 * v});
+    } else {
+      irn.push_back(r + 1);
+      icn.push_back(c + 1);
+      values.push_back(v);
+    }
+  }
+  Eigen::MatrixXd dense() const {
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+    for (std::size_t e = 0; e < values.size(); ++e) {
+      const int i = irn[e] - 1, j = icn[e] - 1;
+      a(i, j) += values[e];
+      if (i != j) a(j, i) += values[e];
+    }
+    return a;
+  }
+};
+
+// Ipopt's augmented system in its order (x, s, c, d):
+//   [W + Sigma_x, 0, J_c^T, J_d^T; 0, Sigma_s, 0, -I; J_c, 0, -delta, 0; J_d, -I, 0, -delta]
+// with W dense (indefinite unless `convex`), sparse Jacobian rows, barrier diagonals spanning
+// 10^-spread to 10^spread (Ipopt's reach 1e-8 .. 1e8 near an optimum).
+Triplets ipopt_kkt(std::mt19937& rng, int nx, int equalities, int inequalities, double delta, bool convex,
+                   double spread = 8.0) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> exponent(-spread, spread), unit(0.0, 1.0);
+  Triplets t;
+  t.n = nx + inequalities + equalities + inequalities;
+  const int s0 = nx, c0 = nx + inequalities, d0 = c0 + equalities;
+  Eigen::MatrixXd W(nx, nx);
+  for (int j = 0; j < nx; ++j)
+    for (int i = j; i < nx; ++i) W(i, j) = W(j, i) = g(rng);
+  if (convex) W = (W * W.transpose()).eval();
+  for (int j = 0; j < nx; ++j)
+    for (int i = j; i < nx; ++i) t.add(rng, i, j, W(i, j) + (i == j ? std::pow(10.0, exponent(rng)) : 0.0));
+  auto jacobian_row = [&](int row) {
+    for (int j = 0; j < nx; ++j)
+      if (unit(rng) < 0.3) t.add(rng, row, j, g(rng));
+  };
+  for (int i = 0; i < inequalities; ++i) {
+    t.add(rng, s0 + i, s0 + i, std::pow(10.0, exponent(rng)));
+    t.add(rng, s0 + i, d0 + i, -1.0);
+    if (delta != 0.0) t.add(rng, d0 + i, d0 + i, -delta);
+    jacobian_row(d0 + i);
+  }
+  for (int i = 0; i < equalities; ++i) {
+    if (delta != 0.0) t.add(rng, c0 + i, c0 + i, -delta);
+    jacobian_row(c0 + i);
+  }
+  return t;
+}
+
+struct SlotResult {
+  int flag = 0, rank = 0, negative = 0;
+  Eigen::VectorXd x;
+};
+
+// Analyse, factor (workspace as asked) and solve through the slot.
+SlotResult through_slot(const Triplets& t, const Eigen::VectorXd& b) {
+  int dim = t.n, nz = static_cast<int>(t.values.size());
+  int icntl[30], info[20], nsteps = 0, iflag = 0, maxfrt = 0;
+  double cntl[5], ops = 0.0;
+  fd::dense_kkt_defaults(icntl, cntl);
+  std::vector<int> scratch(static_cast<std::size_t>(2 * nz + 3 * dim + 1)), ikeep(static_cast<std::size_t>(3 * dim)),
+      iw1(static_cast<std::size_t>(2 * dim));
+  int lscratch = static_cast<int>(scratch.size());
+  fd::dense_kkt_analyse(&dim, &nz, t.irn.data(), t.icn.data(), scratch.data(), &lscratch, ikeep.data(), iw1.data(), &nsteps,
+                        &iflag, icntl, cntl, info, &ops);
+  SlotResult r;
+  r.flag = info[0];
+  if (info[0] != 0) return r;
+  int la = info[4], liw = info[5];
+  std::vector<double> a(static_cast<std::size_t>(la));
+  std::copy(t.values.begin(), t.values.end(), a.begin());
+  std::vector<int> iw(static_cast<std::size_t>(liw));
+  fd::dense_kkt_factor(&dim, &nz, t.irn.data(), t.icn.data(), a.data(), &la, iw.data(), &liw, ikeep.data(), &nsteps, &maxfrt,
+                       iw1.data(), icntl, cntl, info);
+  r.flag = info[0];
+  r.rank = info[1];
+  r.negative = info[14];
+  if (info[0] != 0) return r;
+  r.x = b;
+  std::vector<double> w(static_cast<std::size_t>(maxfrt));
+  std::vector<int> iw1_solve(static_cast<std::size_t>(nsteps));
+  fd::dense_kkt_solve(&dim, a.data(), &la, iw.data(), &liw, w.data(), &maxfrt, r.x.data(), iw1_solve.data(), &nsteps, icntl,
+                      cntl);
+  return r;
+}
+
+int negative_eigenvalues(const Eigen::MatrixXd& a) {
+  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(a, Eigen::EigenvaluesOnly).eigenvalues();
+  return static_cast<int>((ev.array() < 0.0).count());
+}
+
+}  // namespace
+
+TEST(CondensedKkt, FindsEveryInequalityRowsPairAndKeepsVariablesAndEqualitiesInTheCore) {
+  std::mt19937 rng(3);
+  const int nx = 12, eq = 5, in = 150;
+  const Triplets t = ipopt_kkt(rng, nx, eq, in, 0.0, false);
+  const fd::CondensedPattern p = fd::find_eliminable_pairs(t.n, static_cast<int>(t.values.size()), t.irn.data(), t.icn.data());
+  EXPECT_EQ(p.pairs, in);
+  EXPECT_EQ(p.core, nx + eq);
+  for (int i = 0; i < nx; ++i) EXPECT_GE(p.role[static_cast<std::size_t>(i)], 0);
+  for (int i = 0; i < in; ++i) {
+    const int s = p.role[static_cast<std::size_t>(nx + i)], d = p.role[static_cast<std::size_t>(nx + in + eq + i)];
+    ASSERT_LT(s, 0);
+    EXPECT_EQ(d, s - 1) << "the slack and the multiplier of row " << i << " form one pair";
+  }
+}
+
+TEST(CondensedKkt, AgreesWithEigenOnIpoptShapedSystems) {
+  std::mt19937 rng(4);
+  struct Case {
+    int nx, eq, in;
+    double delta;
+    bool convex;
+  };
+  // Above kDenseKktMaxDimension, so the slot condenses: with and without equality rows and
+  // regularization, convex (the inertia Ipopt wants) and not.
+  for (const Case& c : {Case{20, 0, 150, 0.0, true}, Case{20, 0, 150, 0.0, false}, Case{15, 6, 120, 1e-8, false},
+                        Case{30, 4, 200, 0.0, true}})
+    for (const double spread : {1.0, 8.0}) {
+      const Triplets t = ipopt_kkt(rng, c.nx, c.eq, c.in, c.delta, c.convex, spread);
+      ASSERT_GT(t.n, flatsos::planner::kDenseKktMaxDimension);
+      const Eigen::MatrixXd A = t.dense();
+      const Eigen::VectorXd b = Eigen::VectorXd::Random(t.n);
+      const SlotResult r = through_slot(t, b);
+      ASSERT_EQ(r.flag, 0) << "n = " << t.n;
+      EXPECT_EQ(r.rank, t.n);
+      EXPECT_EQ(r.negative, negative_eigenvalues(A)) << "n = " << t.n << ", spread " << spread;
+      // Backward stable: the residual is rounding of the matrix times the solution. (With the
+      // barrier's spread the condition number reaches 1e14, where no forward comparison means
+      // anything: Eigen's full-pivoting LU then leaves a residual 1e7 times larger.)
+      const double backward = (A * r.x - b).norm() / (A.norm() * r.x.norm() + b.norm());
+      EXPECT_LT(backward, 1e-14) << "n = " << t.n << ", spread " << spread;
+      if (spread > 1.0) continue;
+      // Well conditioned: the same solution.
+      const Eigen::VectorXd reference = A.fullPivLu().solve(b);
+      EXPECT_LE((r.x - reference).cwiseAbs().maxCoeff(), 1e-9 * reference.cwiseAbs().maxCoeff()) << "n = " << t.n;
+    }
+}
+
+TEST(CondensedKkt, ASingularPairBlockIsReportedWithTheRank) {
+  std::mt19937 rng(5);
+  Triplets t = ipopt_kkt(rng, 10, 0, 120, 0.0, true);
+  // Row 7's block [1, -1; -1, 1]: singular whatever its coupling to the variables.
+  const int s = 10 + 7, d = 10 + 120 + 7;
+  for (std::size_t e = 0; e < t.values.size(); ++e)
+    if (t.irn[e] - 1 == s && t.icn[e] - 1 == s) t.values[e] = 0.0;
+  t.add(rng, s, s, 1.0);
+  t.add(rng, d, d, 1.0);
+  const SlotResult r = through_slot(t, Eigen::VectorXd::Ones(t.n));
+  EXPECT_EQ(r.flag, 3);
+  EXPECT_EQ(r.rank, t.n - 1);
+}
+
+TEST(CondensedKkt, APairThatWouldTouchAnotherStaysInTheCore) {
+  // s1 - d1 - d2 - s2 (d1 and d2 coupled, as no Ipopt system has them): the first pair is
+  // eliminated, the second stays in the core, and the solve is still exact.
+  std::mt19937 rng(6);
+  Triplets t = ipopt_kkt(rng, 8, 0, 110, 0.0, true, 1.0);
+  const int d1 = 8 + 110 + 3, d2 = 8 + 110 + 4;
+  t.add(rng, d1, d2, 0.5);
+  const fd::CondensedPattern p = fd::find_eliminable_pairs(t.n, static_cast<int>(t.values.size()), t.irn.data(), t.icn.data());
+  EXPECT_EQ(p.pairs, 109);
+  EXPECT_LT(p.role[static_cast<std::size_t>(d1)], 0);
+  EXPECT_GE(p.role[static_cast<std::size_t>(d2)], 0);
+  EXPECT_GE(p.role[static_cast<std::size_t>(8 + 4)], 0);  // d2's slack
+  const Eigen::MatrixXd A = t.dense();
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(t.n, -1.0, 1.0);
+  const SlotResult r = through_slot(t, b);
+  ASSERT_EQ(r.flag, 0);
+  EXPECT_EQ(r.negative, negative_eigenvalues(A));
+  EXPECT_LE((r.x - A.fullPivLu().solve(b)).cwiseAbs().maxCoeff(), 1e-8 * r.x.cwiseAbs().maxCoeff());
+}
+
+TEST(CondensedKkt, TripletsThatAreNotTheAnalysedPatternAreRefused) {
+  std::mt19937 rng(7);
+  const int nx = 6, in = 100, d0 = nx + in;
+  const Triplets t = ipopt_kkt(rng, nx, 0, in, 0.0, true);
+  const fd::CondensedPattern p = fd::find_eliminable_pairs(t.n, static_cast<int>(t.values.size()), t.irn.data(), t.icn.data());
+  std::vector<int> iw(static_cast<std::size_t>(fd::condensed_integer_workspace(t.n, p)));
+  std::vector<double> real(static_cast<std::size_t>(fd::condensed_real_workspace(p)));
+  fd::Inertia inertia;
+  EXPECT_TRUE(fd::factor_condensed(t.n, static_cast<int>(t.values.size()), t.irn.data(), t.icn.data(), t.values.data(), p,
+                                   iw.data(), real.data(), inertia));
+  // A coupling of row 0's multiplier to a variable its Jacobian row does not have.
+  const Eigen::MatrixXd A = t.dense();
+  int missing = -1;
+  for (int j = 0; j < nx && missing < 0; ++j)
+    if (A(d0, j) == 0.0) missing = j;
+  ASSERT_GE(missing, 0);
+  Triplets more = t;
+  more.irn.push_back(d0 + 1);
+  more.icn.push_back(missing + 1);
+  more.values.push_back(1.0);
+  EXPECT_FALSE(fd::factor_condensed(more.n, static_cast<int>(more.values.size()), more.irn.data(), more.icn.data(),
+                                    more.values.data(), p, iw.data(), real.data(), inertia));
+}
