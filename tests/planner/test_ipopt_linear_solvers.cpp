@@ -56,9 +56,11 @@ TEST(IpoptLinearSolvers, AutomaticPicksTheDenseSolverForSmallOrCondensableSystem
   EXPECT_EQ(fpl::ipopt_linear_solver(), IpoptLinearSolver::Automatic);
   constexpr int kDenseMax = fpl::kDenseKktMaxDimension, kCondensedMax = fpl::kCondensedKktMaxDimension;
   EXPECT_EQ(fpl::ipopt_linear_solver_for(kDenseMax, kDenseMax), IpoptLinearSolver::DenseLdlt);
-  EXPECT_EQ(fpl::ipopt_linear_solver_for(kDenseMax + 1, kDenseMax + 1), IpoptLinearSolver::DenseLdlt);
+  EXPECT_EQ(fpl::ipopt_linear_solver_for(kDenseMax + 1, kDenseMax / 4), IpoptLinearSolver::DenseLdlt);
   EXPECT_EQ(fpl::ipopt_linear_solver_for(100 * kCondensedMax, kCondensedMax), IpoptLinearSolver::DenseLdlt);
-  EXPECT_EQ(fpl::ipopt_linear_solver_for(kCondensedMax + 1, kCondensedMax + 1), IpoptLinearSolver::Mumps);
+  EXPECT_EQ(fpl::ipopt_linear_solver_for(100 * kCondensedMax, kCondensedMax + 1), IpoptLinearSolver::Mumps);
+  // Mostly equality rows (the collocation's shape): little to condense.
+  EXPECT_EQ(fpl::ipopt_linear_solver_for(kDenseMax + 1, kDenseMax - 10), IpoptLinearSolver::Mumps);
   // An LP with 4 variables and 22 rows (the SLP's shape): KKT dimension 48.
   std::mt19937 rng(1);
   EXPECT_EQ(fpl::solve_linear_program(flatsos::test::random_feasible_lp(rng, 4, 22)).linear_solver, kDense);

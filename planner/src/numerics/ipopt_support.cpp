@@ -63,9 +63,10 @@ void set_ipopt_linear_solver(IpoptLinearSolver solver) { process_linear_solver.s
 IpoptLinearSolver ipopt_linear_solver() { return process_linear_solver.load(); }
 
 IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension, int condensed_dimension) {
-  return kkt_dimension <= kDenseKktMaxDimension || condensed_dimension <= kCondensedKktMaxDimension
-             ? IpoptLinearSolver::DenseLdlt
-             : IpoptLinearSolver::Mumps;
+  // Condensed only when the pairs are most of the system: a sparse system of mostly equality
+  // rows (the collocation's) stays with MUMPS, which wins there from dimension 212 on.
+  const bool condensable = condensed_dimension <= kCondensedKktMaxDimension && 4 * condensed_dimension <= kkt_dimension;
+  return kkt_dimension <= kDenseKktMaxDimension || condensable ? IpoptLinearSolver::DenseLdlt : IpoptLinearSolver::Mumps;
 }
 
 std::string ipopt_linear_solver_name(IpoptLinearSolver solver) {

@@ -12,7 +12,7 @@ namespace flatsos::planner {
 
 enum class IpoptLinearSolver {
   /// The dense LDL^T up to kDenseKktMaxDimension, or when the condensed system is at most
-  /// kCondensedKktMaxDimension; MUMPS otherwise (the default).
+  /// kCondensedKktMaxDimension and a quarter of the whole; MUMPS otherwise (the default).
   Automatic,
   /// flatsos's dense Bunch-Kaufman LDL^T, whatever the size. Above kDenseKktMaxDimension it
   /// first eliminates each inequality row's slack and multiplier by their own 2x2 block and
@@ -26,7 +26,8 @@ enum class IpoptLinearSolver {
 /// cost the same (docs/method/ipopt_linear_solver.md).
 inline constexpr int kDenseKktMaxDimension = 200;
 /// Largest condensed dimension (variables + equality rows) that Automatic gives to the dense
-/// LDL^T with the inequality rows eliminated first (docs/method/ipopt_linear_solver.md).
+/// LDL^T with the inequality rows eliminated first, when that is at most a quarter of the KKT
+/// dimension (docs/method/ipopt_linear_solver.md).
 inline constexpr int kCondensedKktMaxDimension = 400;
 
 /// Process-wide choice for every later Ipopt solve (tests and benchmarks compare the two;
