@@ -64,6 +64,7 @@ json break_even(const json& sweep) {
 json ipopt_linear_solver_study(const LinearSolverStudyInputs& in, int reps) {
   json out;
   out["threshold_of_automatic"] = fpl::kDenseKktMaxDimension;
+  out["condensed_threshold_of_automatic"] = fpl::kCondensedKktMaxDimension;
 
   // Dense LP rows: 4 coefficients (the SLP's and the quartic's exchange) and 20.
   json lp_sweep = json::array();
