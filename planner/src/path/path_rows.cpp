@@ -131,23 +131,38 @@ PathRows::PathRows(const FlatOutputMap& flat, const PathVariables& v, const std:
     throw std::logic_error("free path rows: the model's moment arms vary with the posture (not supported)");
 }
 
+const PathRows::TorqueJetAt& PathRows::torqueJetAt(std::size_t k, const Eigen::VectorXd& c) const {
+  if (cached_c_.size() != c.size() || cached_c_ != c) {
+    cached_c_ = c;
+    cached_.resize(points_.size());
+    cached_at_.assign(points_.size(), false);
+  }
+  if (!cached_at_[k]) {
+    TorqueJetAt& at = cached_[k];
+    at.tau = flat_.model().pinTree().torqueJet(joint_jet(points_[k], c), at.gradient);
+    cached_at_[k] = true;
+  }
+  return cached_[k];
+}
+
 BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const {
   const int n = flat_.numJoints(), m = flat_.numMuscles();
   const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
   BoundRowsAt out;
   out.value.reserve(points_.size() * static_cast<std::size_t>(m * kRows));
-  Eigen::MatrixXd tau_gradient, dq, path_gradient(3, kOrders * n);
+  Eigen::MatrixXd dq, path_gradient(3, kOrders * n);
   int row = 0;
-  for (const PathPoint& pt : points_) {
+  for (std::size_t point = 0; point < points_.size(); ++point) {
+    const PathPoint& pt = points_[point];
     const Eigen::MatrixXd q_jet = joint_jet(pt, c);
-    const Eigen::MatrixXd tau = jacobian ? flat_.model().pinTree().torqueJet(q_jet, tau_gradient)
-                                         : flat_.model().pinTree().torqueJet(q_jet);
+    const TorqueJetAt* torque = jacobian ? &torqueJetAt(point, c) : nullptr;
+    const Eigen::MatrixXd tau = jacobian ? torque->tau : flat_.model().pinTree().torqueJet(q_jet);
     const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), tau, theta);
     const auto path_columns = static_cast<int>(pt.path_columns.size());
     std::array<Eigen::MatrixXd, 3> dF_dc;  // m x path columns (per unit z)
     if (jacobian) {
       dq = joint_jet_slope(pt, n);
-      const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x path columns, row 3 i + k
+      const Eigen::MatrixXd dtau = torque->gradient * dq;  // 3N x path columns, row 3 i + k
       for (int k = 0; k < 3; ++k) {
         Eigen::MatrixXd dtau_k(n, path_columns);
         for (int i = 0; i < n; ++i) dtau_k.row(i) = dtau.row(3 * i + k);
@@ -205,17 +220,17 @@ std::vector<int> PathRows::localVariables(const PathPoint& pt) const {
   return out;
 }
 
-Eigen::MatrixXd PathRows::pointHessian(const PathPoint& pt, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
+Eigen::MatrixXd PathRows::pointHessian(std::size_t point, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
                                        const double* lambda) const {
+  const PathPoint& pt = points_[point];
   const int n = flat_.numJoints(), m = flat_.numMuscles(), paths = static_cast<int>(pt.path_columns.size());
   const int cols = static_cast<int>(pt.flat.columns.size()), local = cols + paths;
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(local, local);
   const Eigen::MatrixXd q_jet = joint_jet(pt, c);
-  Eigen::MatrixXd tau_gradient;
-  const Eigen::MatrixXd tau = flat_.model().pinTree().torqueJet(q_jet, tau_gradient);
+  const TorqueJetAt& torque = torqueJetAt(point, c);
   const Eigen::MatrixXd dq = joint_jet_slope(pt, n);
-  const Eigen::MatrixXd dtau = tau_gradient * dq;  // 3N x path columns, row 3 i + k
-  const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), tau, theta);
+  const Eigen::MatrixXd dtau = torque.gradient * dq;  // 3N x path columns, row 3 i + k
+  const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), torque.tau, theta);
 
   // Per muscle: the multiplier-weighted gradient w of its rows in u = (F jet, L jet), and the
   // curvature in u, J_u^T (d w / du) J_u.
@@ -288,7 +303,7 @@ std::vector<Eigen::Triplet<double>> PathRows::lagrangianHessian(const Eigen::Vec
   for (std::size_t k = 0; k < points_.size(); ++k) {
     const PathPoint& pt = points_[k];
     const std::vector<int> vars = localVariables(pt);
-    const Eigen::MatrixXd H = pointHessian(pt, theta, c, lambda.data() + k * per_point);
+    const Eigen::MatrixXd H = pointHessian(k, theta, c, lambda.data() + k * per_point);
     for (std::size_t a = 0; a < vars.size(); ++a)
       for (std::size_t b = 0; b <= a; ++b)
         out.emplace_back(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]),

@@ -108,7 +108,14 @@ class PathRows {
  private:
   // A point's local variables: its theta columns, then its path columns (indices into z).
   std::vector<int> localVariables(const PathPoint& pt) const;
-  Eigen::MatrixXd pointHessian(const PathPoint& pt, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
+  // The torque jet at point k along the path of c and its gradient in the joint jet (3N x 5N),
+  // computed once per c: Ipopt asks for the Jacobian and the Hessian at the same iterate, and
+  // this gradient (dual numbers through the pin tree) was half of either's time.
+  struct TorqueJetAt {
+    Eigen::MatrixXd tau, gradient;
+  };
+  const TorqueJetAt& torqueJetAt(std::size_t k, const Eigen::VectorXd& c) const;
+  Eigen::MatrixXd pointHessian(std::size_t k, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
                                const double* lambda) const;
 
   const FlatOutputMap& flat_;
@@ -117,6 +124,10 @@ class PathRows {
   const Eigen::VectorXd& reserves_;
   const Eigen::VectorXd& a_min_;
   TorqueCurvature curvature_;
+  // torqueJetAt's memory: the c it holds the points' jets for, and which points it has.
+  mutable Eigen::VectorXd cached_c_;
+  mutable std::vector<TorqueJetAt> cached_;
+  mutable std::vector<bool> cached_at_;
 };
 
 /// The plan on a dense grid: per time the reserve deficit (N) and the bounds' excess, and their worst.
