@@ -213,7 +213,7 @@ TEST(CondensedKkt, TripletsThatAreNotTheAnalysedPatternAreRefused) {
   const int nx = 6, in = 100, d0 = nx + in;
   const Triplets t = ipopt_kkt(rng, nx, 0, in, 0.0, true);
   const fd::CondensedPattern p = fd::find_eliminable_pairs(t.n, static_cast<int>(t.values.size()), t.irn.data(), t.icn.data());
-  std::vector<int> iw(static_cast<std::size_t>(fd::condensed_integer_workspace(t.n, p)));
+  std::vector<int> iw(static_cast<std::size_t>(fd::condensed_integer_workspace(p)));
   std::vector<double> real(static_cast<std::size_t>(fd::condensed_real_workspace(p)));
   fd::Inertia inertia;
   EXPECT_TRUE(fd::factor_condensed(t.n, static_cast<int>(t.values.size()), t.irn.data(), t.icn.data(), t.values.data(), p,

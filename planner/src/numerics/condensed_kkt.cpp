@@ -88,7 +88,7 @@ CondensedPattern find_eliminable_pairs(int n, int nz, const int* irn, const int*
   return p;
 }
 
-std::int64_t condensed_integer_workspace(int /*n*/, const CondensedPattern& p) {
+std::int64_t condensed_integer_workspace(const CondensedPattern& p) {
   return IntegerLayout(p.core, p.pairs, p.couplings).size;
 }
 

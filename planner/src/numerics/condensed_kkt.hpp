@@ -35,7 +35,7 @@ struct CondensedPattern {
 CondensedPattern find_eliminable_pairs(int n, int nz, const int* irn, const int* icn);
 
 /// Workspace of a condensed factor: integers and reals.
-std::int64_t condensed_integer_workspace(int n, const CondensedPattern& p);
+std::int64_t condensed_integer_workspace(const CondensedPattern& p);
 std::int64_t condensed_real_workspace(const CondensedPattern& p);
 
 /// Factors the matrix (triplets with `values`, the pattern `p` was found from) into `iw` and

@@ -67,7 +67,7 @@ void dense_kkt_analyse(int* n, int* nz, const int* irn, const int* icn, int* /*i
   ikeep[0] = kDense;
   if (*n > kDenseKktMaxDimension) {
     CondensedPattern p = find_eliminable_pairs(*n, *nz, irn, icn);
-    const std::int64_t reals = *nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(*n, p);
+    const std::int64_t reals = *nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(p);
     if (p.pairs > 0 && reals <= INT_MAX && integers <= INT_MAX) {
       ikeep[0] = kCondensed;
       ikeep[1] = p.core;
@@ -100,7 +100,7 @@ void factor_condensed_into(int n, int nz, const int* irn, const int* icn, double
   p.pairs = ikeep[2];
   p.couplings = ikeep[3];
   p.role.assign(ikeep + kKeepHeader, ikeep + kKeepHeader + n);
-  const std::int64_t reals = nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(n, p);
+  const std::int64_t reals = nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(p);
   if (liw < integers) {
     info[0] = -3;
     info[1] = static_cast<int>(integers);
