@@ -14,6 +14,7 @@
 #include "path/free_path.hpp"
 #include "period_bounds.hpp"
 #include "sos/bound_rows.hpp"
+#include "sos/sos_bounds.hpp"
 #include "sos/sos_setup.hpp"
 
 namespace flatsos::planner {
@@ -47,9 +48,9 @@ void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, co
 }
 
 // The plan along plan.path (torque model, SOS program with the bounds, dense check): sets every
-// field but the path, the warnings and the free-path report.
+// field but the path, the warnings and the free-path report. `warm`: the bounded exchange's start.
 void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const FlatOutputBoundary& bc,
-                     const OpenLoopOptions& o, OpenLoopPlan& plan) {
+                     const OpenLoopOptions& o, OpenLoopPlan& plan, const detail::BoundsWarmStart* warm = nullptr) {
   const Stopwatch setup;
   if (!flat.hasConstantMomentArms()) {
     // C(q(t)) must satisfy Assumption 1 all along the path, not only in the ranges' grid: checked
@@ -68,7 +69,8 @@ void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   plan.torque = build_torque_model(flat, workspace, plan.path, o.torque);
   const double before_sos = setup.seconds();
   const MusclesAlongPath muscles{flat, plan.path, workspace};
-  plan.sos = solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
+  plan.sos = warm ? detail::solve_sos_program_from(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, muscles, *warm)
+                  : solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
   plan.setup_seconds = before_sos + plan.sos.setup_seconds;
   plan.solve_seconds = plan.sos.solve_seconds;
   plan.certify_seconds = plan.sos.certify_seconds;
@@ -293,7 +295,10 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   plan.path = free.path;
   plan.Y.reset();
   plan.check = PlanCheck{};
-  plan_along_path(flat, workspace, bc, o, plan);
+  // The path stage's plan and points are where the bounded exchange along the new path starts
+  // (it is certified there like any plan along a path).
+  const detail::BoundsWarmStart warm{free.theta, free.times_s};
+  plan_along_path(flat, workspace, bc, o, plan, &warm);
   report.optimized = true;
   report.seconds = free_path.seconds();
   return plan;

@@ -24,9 +24,11 @@ SosProgramMethod sos_program_method(const std::string& name) {
   throw std::invalid_argument("SOS program method '" + name + "': expected 'exchange' or 'whole_program_nlp'");
 }
 
-SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
-                                   const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
-                                   const SosProgramOptions& options, const MusclesAlongPath* muscles) {
+namespace {
+SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
+                       const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
+                       const SosProgramOptions& options, const MusclesAlongPath* muscles,
+                       const detail::BoundsWarmStart* warm) {
   const Stopwatch setup_time;
   detail::SosSetup setup = detail::set_up_sos_program(flat, torque, duration_s, boundary, reserves_N, options);
   SosProgramResult result;
@@ -49,7 +51,7 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
   const double tolerance_N = bounds ? detail::kLooseConstraintTolerance_N : detail::kConstraintTolerance_N;
   if (!detail::solve_by_exchange(setup, options, theta, result, &basis, tolerance_N)) return result;
   if (bounds) {
-    const bool bounded = detail::impose_excitation_bounds(setup, *muscles, options, theta, result, std::move(basis));
+    const bool bounded = detail::impose_excitation_bounds(setup, *muscles, options, theta, result, std::move(basis), warm);
     result.solve_seconds += result.bounds_seconds;
     if (!bounded) return result;
   }
@@ -57,5 +59,21 @@ SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel&
   if (options.certify) detail::certify_near_active_pieces(setup, theta, options, result);
   return result;
 }
+}  // namespace
+
+SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
+                                   const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
+                                   const SosProgramOptions& options, const MusclesAlongPath* muscles) {
+  return solve(flat, torque, duration_s, boundary, reserves_N, options, muscles, nullptr);
+}
+
+namespace detail {
+SosProgramResult solve_sos_program_from(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
+                                        const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
+                                        const SosProgramOptions& options, const MusclesAlongPath& muscles,
+                                        const BoundsWarmStart& warm) {
+  return solve(flat, torque, duration_s, boundary, reserves_N, options, &muscles, &warm);
+}
+}  // namespace detail
 
 }  // namespace flatsos::planner

@@ -14,6 +14,7 @@
 #include "path/path_rows.hpp"
 #include "scenario_fixture.hpp"
 #include "sos/bound_rows.hpp"
+#include "sos/sos_bounds.hpp"
 #include "sos/sos_setup.hpp"
 
 namespace fpl = flatsos::planner;
@@ -239,6 +240,57 @@ TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   EXPECT_LT(newton.cost_N_s, 0.8 * p.prescribed.sos.cost_N_s);
   EXPECT_NEAR(newton.cost_N_s, quasi.cost_N_s, 2e-3 * quasi.cost_N_s);
   EXPECT_LE(newton.cost_N_s, quasi.cost_N_s * (1.0 + 1e-5));
+}
+
+TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsAColdPlan) {
+  // The bounded exchange along the optimized path starts from the path stage's plan and points:
+  // the same certified optimum as from the reserves' optimum, in fewer rounds.
+  // Cubic splines on 24 spans growing by 1.06, the path on 12 growing by 1.4: along the optimized
+  // path the bounds bind (along the fixture's, the reserves' optimum meets them).
+  o = open_loop_options(kDuration_s, kDegree, 24);
+  o.sos.flat_output_span_growth = 1.06;
+  o.torque.pieces = 24;
+  o.torque.piece_growth = 1.06;
+  o.free_path.enabled = true;
+  o.free_path.method = fpl::FreePathMethod::JointNewton;
+  o.free_path.spans = 12;
+  o.free_path.span_growth = 1.4;
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  ASSERT_TRUE(plan.free_path.optimized);
+  auto ws = arm.flat.makeWorkspace();
+  const fpl::FlatState y0 = arm.flat.forward(ws, s0);
+  fpl::FlatOutputBoundary bc;
+  bc.initial = y0.Y;
+  bc.terminal = Eigen::MatrixXd::Zero(arm.flat.numFlatOutputs(), 2);
+  bc.terminal_first_order = 1;
+  const fpl::TorqueModel torque = fpl::build_torque_model(arm.flat, ws, plan.path, o.torque);
+  const fpl::MusclesAlongPath muscles{arm.flat, plan.path, ws};
+  const fpl::SosProgramResult cold = fpl::solve_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
+  ASSERT_EQ(cold.status, fpl::SolveStatus::Solved) << cold.message;
+  std::cout << "[ measure  ] along the optimized path: from the path stage " << plan.sos.cost_N_s << " N s in "
+            << plan.sos.bound_rounds << " bounded rounds, from the reserves' optimum " << cold.cost_N_s << " N s in "
+            << cold.bound_rounds << "\n";
+  EXPECT_TRUE(plan.sos.certified && cold.certified);
+  EXPECT_NEAR(plan.sos.cost_N_s, cold.cost_N_s, 1e-6 * cold.cost_N_s);
+  EXPECT_LT(plan.sos.bound_rounds, cold.bound_rounds);
+
+  // A warm start that is not the program's is named.
+  fpd::BoundsWarmStart warm{fpd::theta_of(fpd::set_up_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos),
+                                          *plan.Y),
+                            {0.5, 4.0}};
+  auto rejects = [&](const fpd::BoundsWarmStart& bad, const std::string& what) {
+    try {
+      fpd::solve_sos_program_from(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, muscles, bad);
+      ADD_FAILURE() << "accepted " << what;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  rejects(warm, "outside [0, T]");
+  warm.times_s = {0.5};
+  warm.theta.conservativeResize(warm.theta.size() - 1);
+  rejects(warm, "coefficients");
 }
 
 TEST_F(FreePath, BadOptionsAreNamed) {

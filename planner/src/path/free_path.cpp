@@ -315,6 +315,7 @@ FreePathOutcome optimize_by_joint_newton(const SosSetup& setup, const FlatOutput
   if (!out.converged && out.failure.empty())
     out.failure = "the joint path's exchange did not converge in " + std::to_string(out.rounds) + " rounds";
   out.theta = v.theta(at.z);
+  out.times_s = pts.times;
   out.path = P.path(v.c(at.z));
   out.cost_N_s = setup.cost_constant + setup.lp.cost.dot(out.theta);
   return out;
@@ -355,6 +356,7 @@ FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutput
   out.evaluations = V.evaluations;
   out.slp_iterations = V.slp_iterations;
   if (at.theta.size()) out.theta = at.theta;
+  out.times_s = pts.times;
   if (at.c.size()) out.path = P.path(at.c);
   out.cost_N_s = at.cost_N_s;
   return out;

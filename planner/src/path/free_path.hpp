@@ -34,6 +34,7 @@ struct FreePathOutcome {
   double cost_N_s = 0.0;         // at the exchange points (the planner's final cost certifies it)
   bool infeasible = false;       // no plan at the points even along the start path
   int rounds = 0, points = 0;
+  std::vector<double> times_s;   // the exchange's time points
   int path_iterations = 0, evaluations = 0, slp_iterations = 0;
   double worst_bound_excess = 0.0, min_reserve_margin_N = 0.0;  // on the dense grid at the end
 };

@@ -48,8 +48,16 @@ bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, 
 }
 
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosProgramOptions& o,
-                              Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis) {
+                              Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis,
+                              const BoundsWarmStart* warm) {
   const Stopwatch wall;
+  if (warm) {
+    if (warm->theta.size() != setup.free_coefficients || !warm->theta.allFinite())
+      throw std::invalid_argument("SOS program: the warm start's coefficients are not finite or not in the program's basis");
+    for (double t : warm->times_s)
+      if (!(t >= 0.0 && t <= setup.duration_s))
+        throw std::invalid_argument("SOS program: the warm start's time " + std::to_string(t) + " s is outside [0, T]");
+  }
   const ExcitationBoundsOptions& bo = o.bounds;
   const FlatOutputMap& flat = mp.flat;
   const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, bo);
@@ -98,6 +106,10 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
   for (double t : setup.basis.pointsPerSpan(bo.initial_points_per_span)) add_point(t);
   if (bo.initial_points_per_span > 0) add_point(setup.duration_s);
   for (double t : violated_times(excess, h, bo.tolerance)) add_point(t);
+  if (warm) {
+    for (double t : warm->times_s) add_point(t);
+    theta = warm->theta;
+  }
 
   double radius = 0.1 * (1.0 + theta.cwiseAbs().maxCoeff());
   bool last_rows_violated = false;
