@@ -42,3 +42,38 @@ TEST(ExchangeRows, AViolationAtAnImposedPointRaisesThatPointsMargin) {
   ASSERT_FALSE(fpl::detail::add_violated_points(setup, Eigen::VectorXd::Constant(1, 1e-5), 1e-9, min_value));
   EXPECT_EQ(after.extra_margin.size(), 1u);
 }
+
+TEST(ExchangeRows, AShallowNewViolationIsImposedWithItsDepthAsMargin) {
+  // g(s; theta) = (s - 0.5)^2 - depth + theta s, violated by `depth` at s = 0.5 for theta = 0.
+  auto setup_with = [](double depth) {
+    fpl::detail::SosSetup setup(1.0, fpl::BSplineBasis(4, 1, 1.0));
+    setup.free_coefficients = 1;
+    fpl::detail::ConstraintPolynomial c;
+    c.base = Eigen::Vector3d(0.25 - depth, -1.0, 1.0);
+    c.G = Eigen::Vector3d(0.0, 1.0, 0.0);
+    c.points = {0.0, 1.0};
+    c.sticky = {false, false};
+    setup.constraints.push_back(c);
+    return setup;
+  };
+  const Eigen::VectorXd theta = Eigen::VectorXd::Zero(1);
+  double min_value = 0.0;
+  // Within the lift: the new point's row asks for the depth on top of the margin.
+  auto shallow = setup_with(1e-4);
+  ASSERT_TRUE(fpl::detail::add_violated_points(shallow, theta, 1e-9, min_value, 1e-9, 1e-3));
+  const auto& lifted = shallow.constraints[0];
+  ASSERT_EQ(lifted.points.size(), 3u);
+  ASSERT_EQ(lifted.extra_margin.size(), 1u);
+  EXPECT_EQ(lifted.extra_margin[0].first, lifted.points[2]);
+  EXPECT_NEAR(lifted.extra_margin[0].second, 1e-4, 1e-15);
+  fpl::detail::build_exchange_rows(shallow, 1e-9);
+  // Row 2 (s = 0.5): theta/2 >= 1e-9 + 1e-4 - (0.25 - 1e-4 - 0.5 + 0.25) = 1e-9 + 2e-4.
+  EXPECT_NEAR(shallow.lp.row_lower[2], 1e-9 + 2e-4, 1e-15);
+  // Deeper than the lift, or without one: the point alone, as in the reserves-only exchange.
+  for (const double lift : {1e-5, 0.0}) {
+    auto plain = setup_with(1e-4);
+    ASSERT_TRUE(fpl::detail::add_violated_points(plain, theta, 1e-9, min_value, 1e-9, lift));
+    EXPECT_EQ(plain.constraints[0].points.size(), 3u);
+    EXPECT_TRUE(plain.constraints[0].extra_margin.empty()) << "lift " << lift;
+  }
+}

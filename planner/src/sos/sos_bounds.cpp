@@ -153,7 +153,8 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       theta = nlp.x;
     }
     double min_reserve = 0.0;
-    const bool reserves_added = add_violated_points(setup, theta, o.feasibility_margin_N, min_reserve);
+    const bool reserves_added =
+        add_violated_points(setup, theta, o.feasibility_margin_N, min_reserve, kConstraintTolerance_N, kLiftBelow_N);
     result.min_constraint_value_N = min_reserve;
     excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points, stride);
     bool bounds_added = false;

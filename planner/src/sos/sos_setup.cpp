@@ -317,7 +317,7 @@ int build_exchange_rows(SosSetup& setup, double margin_N) {
 }
 
 bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double margin_N, double& min_value_N,
-                         double tolerance_N) {
+                         double tolerance_N, double lift_below_N) {
   bool added = false;
   min_value_N = 1e300;
   for (auto& c : setup.constraints) {
@@ -328,6 +328,7 @@ bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double m
       if (known == c.points.end()) {
         c.points.push_back(mn.at);
         c.sticky.push_back(true);
+        if (-mn.value <= lift_below_N) c.extra_margin.emplace_back(mn.at, -mn.value);
       } else {
         // Violated at a point the LP already imposes: it met the row only to its own precision
         // (near t = 0 the margin s^order vanishes, and the bounds' sequential LP holds rows to
