@@ -32,11 +32,11 @@ constexpr double kConstraintTolerance_N = 1e-9;
 /// reserves' anyway (on the arm at T = 1.5 s: 13 rounds from 0.56 N, 9 of them below 1e-2 N).
 constexpr double kLooseConstraintTolerance_N = 1e-2;
 /// Where the bounds bind, the reserves' dips near the optimum shrink only fourfold per round: the
-/// minimum moves a little between rounds and each new point halves the gap to it (the arm at
-/// T = 1.5 s: 17 bounded rounds, 8 of them from 1e-3 N down to 1e-9 N). A new point whose dip is
+/// minimum moves a little between rounds and each new point halves the gap to it, so a dip of
+/// 1e-3 N took about seven more rounds to reach kConstraintTolerance_N. A new point whose dip is
 /// at most this is imposed with the dip's depth as extra margin, which lifts the row past it at
-/// a cost of at most the row's multiplier times this (the bench's rows: +2e-6 of the effort,
-/// 17 -> 9 rounds). Not in the reserves-only exchange, whose optimum other solvers must match
+/// a cost of at most the row's multiplier times this (the arm at T = 1.5 s: 17 -> 9 bounded
+/// rounds, +2e-6 of the effort). Not in the reserves-only exchange, whose optimum other solvers must match
 /// to 1e-6 (the paper's quartic: +3e-5 with it).
 constexpr double kLiftBelow_N = 1e-3;
 
