@@ -69,7 +69,8 @@ void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   plan.torque = build_torque_model(flat, workspace, plan.path, o.torque);
   const double before_sos = setup.seconds();
   const MusclesAlongPath muscles{flat, plan.path, workspace};
-  plan.sos = warm ? detail::solve_sos_program_from(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, muscles, *warm)
+  plan.sos = warm ? detail::solve_sos_program_from(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, muscles,
+                                                   *warm)
                   : solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
   plan.setup_seconds = before_sos + plan.sos.setup_seconds;
   plan.solve_seconds = plan.sos.solve_seconds;

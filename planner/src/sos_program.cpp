@@ -51,7 +51,8 @@ SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, dou
   const double tolerance_N = bounds ? detail::kLooseConstraintTolerance_N : detail::kConstraintTolerance_N;
   if (!detail::solve_by_exchange(setup, options, theta, result, &basis, tolerance_N)) return result;
   if (bounds) {
-    const bool bounded = detail::impose_excitation_bounds(setup, *muscles, options, theta, result, std::move(basis), warm);
+    const bool bounded =
+        detail::impose_excitation_bounds(setup, *muscles, options, theta, result, std::move(basis), warm);
     result.solve_seconds += result.bounds_seconds;
     if (!bounded) return result;
   }

@@ -40,17 +40,21 @@ class FreePath : public ::testing::Test {
     Eigen::MatrixXd initial_q_jet;
     Eigen::VectorXd a_min;
   };
+  // The flat outputs' boundary conditions plan_open_loop imposes: the initial state's, rest at T.
+  fpl::FlatOutputBoundary boundary() const {
+    auto ws = arm.flat.makeWorkspace();
+    fpl::FlatOutputBoundary bc;
+    bc.initial = arm.flat.forward(ws, s0).Y;
+    bc.terminal = Eigen::MatrixXd::Zero(arm.flat.numFlatOutputs(), 2);
+    bc.terminal_first_order = 1;
+    return bc;
+  }
   Problem problem() {
     Problem p;
     p.prescribed = fpl::plan_open_loop(arm.flat, s0, o);
     auto ws = arm.flat.makeWorkspace();
-    const fpl::FlatState y0 = arm.flat.forward(ws, s0);
-    fpl::FlatOutputBoundary bc;
-    bc.initial = y0.Y;
-    bc.terminal = Eigen::MatrixXd::Zero(arm.flat.numFlatOutputs(), 2);
-    bc.terminal_first_order = 1;
-    p.setup.emplace(fpd::set_up_sos_program(arm.flat, p.prescribed.torque, o.duration_s, bc, o.reserves_N, o.sos));
-    p.initial_q_jet = y0.q;
+    p.setup.emplace(fpd::set_up_sos_program(arm.flat, p.prescribed.torque, o.duration_s, boundary(), o.reserves_N, o.sos));
+    p.initial_q_jet = arm.flat.forward(ws, s0).q;
     p.a_min = fpd::activation_minima(arm.flat, o.sos.bounds);
     return p;
   }
@@ -259,14 +263,11 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsACo
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   ASSERT_TRUE(plan.free_path.optimized);
   auto ws = arm.flat.makeWorkspace();
-  const fpl::FlatState y0 = arm.flat.forward(ws, s0);
-  fpl::FlatOutputBoundary bc;
-  bc.initial = y0.Y;
-  bc.terminal = Eigen::MatrixXd::Zero(arm.flat.numFlatOutputs(), 2);
-  bc.terminal_first_order = 1;
+  const fpl::FlatOutputBoundary bc = boundary();
   const fpl::TorqueModel torque = fpl::build_torque_model(arm.flat, ws, plan.path, o.torque);
   const fpl::MusclesAlongPath muscles{arm.flat, plan.path, ws};
-  const fpl::SosProgramResult cold = fpl::solve_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
+  const fpl::SosProgramResult cold =
+      fpl::solve_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
   ASSERT_EQ(cold.status, fpl::SolveStatus::Solved) << cold.message;
   std::cout << "[ measure  ] along the optimized path: from the path stage " << plan.sos.cost_N_s << " N s in "
             << plan.sos.bound_rounds << " bounded rounds, from the reserves' optimum " << cold.cost_N_s << " N s in "
@@ -276,9 +277,8 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsACo
   EXPECT_LT(plan.sos.bound_rounds, cold.bound_rounds);
 
   // A warm start that is not the program's is named.
-  fpd::BoundsWarmStart warm{fpd::theta_of(fpd::set_up_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos),
-                                          *plan.Y),
-                            {0.5, 4.0}};
+  const fpd::SosSetup program = fpd::set_up_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos);
+  fpd::BoundsWarmStart warm{fpd::theta_of(program, *plan.Y), {0.5, 4.0}};
   auto rejects = [&](const fpd::BoundsWarmStart& bad, const std::string& what) {
     try {
       fpd::solve_sos_program_from(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, muscles, bad);

@@ -53,7 +53,8 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
   const Stopwatch wall;
   if (warm) {
     if (warm->theta.size() != setup.free_coefficients || !warm->theta.allFinite())
-      throw std::invalid_argument("SOS program: the warm start's coefficients are not finite or not in the program's basis");
+      throw std::invalid_argument(
+          "SOS program: the warm start's coefficients are not finite or not in the program's basis");
     for (double t : warm->times_s)
       if (!(t >= 0.0 && t <= setup.duration_s))
         throw std::invalid_argument("SOS program: the warm start's time " + std::to_string(t) + " s is outside [0, T]");

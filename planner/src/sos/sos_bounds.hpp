@@ -16,7 +16,8 @@ namespace flatsos::planner::detail {
 /// An earlier plan of the same transfer along a nearby joint path (the free path's): the bounded
 /// exchange starts from its flat outputs' coefficients (the program's basis) with its time points
 /// imposed from the first round, instead of finding the points round by round from the reserves'
-/// optimum (the arm's free path: 24 rounds and 0.40 s instead of 31 and 0.74 s).
+/// optimum (the arm's free path, before kLiftBelow_N: 24 rounds and 0.40 s instead of 31 and
+/// 0.74 s).
 struct BoundsWarmStart {
   Eigen::VectorXd theta;
   std::vector<double> times_s;  // within [0, T]

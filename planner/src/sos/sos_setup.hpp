@@ -36,8 +36,8 @@ constexpr double kLooseConstraintTolerance_N = 1e-2;
 /// 1e-3 N took about seven more rounds to reach kConstraintTolerance_N. A new point whose dip is
 /// at most this is imposed with the dip's depth as extra margin, which lifts the row past it at
 /// a cost of at most the row's multiplier times this (the arm at T = 1.5 s: 17 -> 9 bounded
-/// rounds, +2e-6 of the effort). Not in the reserves-only exchange, whose optimum other solvers must match
-/// to 1e-6 (the paper's quartic: +3e-5 with it).
+/// rounds, +2e-6 of the effort). Not in the reserves-only exchange, whose optimum other solvers
+/// must match to 1e-6 (the paper's quartic: +3e-5 with it).
 constexpr double kLiftBelow_N = 1e-3;
 
 /// One constraint polynomial on one segment [t0, t1], in the segment's scaled time s in [0, 1],
