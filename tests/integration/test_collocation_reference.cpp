@@ -225,14 +225,7 @@ TEST_F(CollocationReference, TheFlatnessFreePathComesWithinTwoPercentWithAnExecu
   // (6 x 10 N x 3 s = 180 N s of the 185): its effort is in the first 0.36 s. Short spans there
   // for the flat outputs and the torque pieces (48, growing by 1.06) and for the path (12,
   // growing by 1.4). With uniform flat-output spans the plan stays at 192.8 N s (4.2 % above).
-  auto o = open_loop_options(3.0, 5, 48);
-  o.sos.flat_output_span_growth = 1.06;
-  o.torque.pieces = 48;
-  o.torque.piece_growth = 1.06;
-  o.free_path.enabled = true;
-  o.free_path.method = fpl::FreePathMethod::JointNewton;
-  o.free_path.spans = 12;
-  o.free_path.span_growth = 1.4;
+  const auto o = flatsos::test::graded_free_path_options(3.0, 5, 48);
   const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
   const auto reference = collocate(path(3.0), 100, true);
   ASSERT_EQ(reference.status, fpl::SolveStatus::Solved) << reference.message;

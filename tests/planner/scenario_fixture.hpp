@@ -47,4 +47,19 @@ inline planner::OpenLoopOptions open_loop_options(double T, int degree = 4, int 
   return o;
 }
 
+/// The transfer with the joint path free (the joint Newton method): flat outputs and torque
+/// pieces on `spans` spans growing by 1.06, the path on 12 spans growing by 1.4. A low-effort
+/// transfer throws the arm up in its first few tenths of a second: short spans there.
+inline planner::OpenLoopOptions graded_free_path_options(double T, int degree, int spans) {
+  planner::OpenLoopOptions o = open_loop_options(T, degree, spans);
+  o.sos.flat_output_span_growth = 1.06;
+  o.torque.pieces = spans;
+  o.torque.piece_growth = 1.06;
+  o.free_path.enabled = true;
+  o.free_path.method = planner::FreePathMethod::JointNewton;
+  o.free_path.spans = 12;
+  o.free_path.span_growth = 1.4;
+  return o;
+}
+
 }  // namespace flatsos::test

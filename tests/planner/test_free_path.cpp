@@ -251,14 +251,7 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsACo
   // the same certified optimum as from the reserves' optimum, in fewer rounds.
   // Cubic splines on 24 spans growing by 1.06, the path on 12 growing by 1.4: along the optimized
   // path the bounds bind (along the fixture's, the reserves' optimum meets them).
-  o = open_loop_options(kDuration_s, kDegree, 24);
-  o.sos.flat_output_span_growth = 1.06;
-  o.torque.pieces = 24;
-  o.torque.piece_growth = 1.06;
-  o.free_path.enabled = true;
-  o.free_path.method = fpl::FreePathMethod::JointNewton;
-  o.free_path.spans = 12;
-  o.free_path.span_growth = 1.4;
+  o = flatsos::test::graded_free_path_options(kDuration_s, kDegree, 24);
   const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   ASSERT_TRUE(plan.free_path.optimized);
