@@ -10,7 +10,7 @@ namespace {
 
 // Integer factor layout: a header, then the core's indices, the pairs' s and d indices, each
 // pair's coupling range, the couplings' core positions, and S's pivots.
-enum Header { kN, kCore, kPairs, kCouplings, kHeaderSize };
+enum Header { kCore, kPairs, kCouplings, kHeaderSize };
 struct IntegerLayout {
   std::int64_t core_index, pair_s, pair_d, start, position, pivots, size;
   IntegerLayout(std::int64_t core, std::int64_t pairs, std::int64_t couplings) {
@@ -144,7 +144,6 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
   if (distinct != p.couplings) return false;
   std::fill(slot_of.begin(), slot_of.end(), -1);
   const IntegerLayout L(core, pairs, p.couplings);
-  iw[kN] = n;
   iw[kCore] = core;
   iw[kPairs] = pairs;
   for (int i = 0; i < n; ++i) {
