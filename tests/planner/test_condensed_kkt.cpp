@@ -52,9 +52,10 @@ struct Triplets {
 // Ipopt's augmented system in its order (x, s, c, d):
 //   [W + Sigma_x, 0, J_c^T, J_d^T; 0, Sigma_s, 0, -I; J_c, 0, -delta, 0; J_d, -I, 0, -delta]
 // with W dense (indefinite unless `convex`), sparse Jacobian rows, barrier diagonals spanning
-// 10^-spread to 10^spread (Ipopt's reach 1e-8 .. 1e8 near an optimum).
+// 10^-spread to 10^spread (Ipopt's reach 1e-8 .. 1e8 near an optimum). Runs of `shared`
+// consecutive inequality rows use the same columns (as the rows of one time point do).
 Triplets ipopt_kkt(std::mt19937& rng, int nx, int equalities, int inequalities, double delta, bool convex,
-                   double spread = 8.0) {
+                   double spread = 8.0, int shared = 1) {
   std::normal_distribution<double> g(0.0, 1.0);
   std::uniform_real_distribution<double> exponent(-spread, spread), unit(0.0, 1.0);
   Triplets t;
@@ -66,19 +67,26 @@ Triplets ipopt_kkt(std::mt19937& rng, int nx, int equalities, int inequalities, 
   if (convex) W = (W * W.transpose()).eval();
   for (int j = 0; j < nx; ++j)
     for (int i = j; i < nx; ++i) t.add(rng, i, j, W(i, j) + (i == j ? std::pow(10.0, exponent(rng)) : 0.0));
-  auto jacobian_row = [&](int row) {
+  auto random_columns = [&] {
+    std::vector<int> columns;
     for (int j = 0; j < nx; ++j)
-      if (unit(rng) < 0.3) t.add(rng, row, j, g(rng));
+      if (unit(rng) < 0.3) columns.push_back(j);
+    return columns;
   };
+  auto jacobian_row = [&](int row, const std::vector<int>& columns) {
+    for (int j : columns) t.add(rng, row, j, g(rng));
+  };
+  std::vector<int> columns;
   for (int i = 0; i < inequalities; ++i) {
     t.add(rng, s0 + i, s0 + i, std::pow(10.0, exponent(rng)));
     t.add(rng, s0 + i, d0 + i, -1.0);
     if (delta != 0.0) t.add(rng, d0 + i, d0 + i, -delta);
-    jacobian_row(d0 + i);
+    if (i % shared == 0) columns = random_columns();
+    jacobian_row(d0 + i, columns);
   }
   for (int i = 0; i < equalities; ++i) {
     if (delta != 0.0) t.add(rng, c0 + i, c0 + i, -delta);
-    jacobian_row(c0 + i);
+    jacobian_row(c0 + i, random_columns());
   }
   return t;
 }
@@ -148,20 +156,24 @@ TEST(CondensedKkt, AgreesWithEigenOnIpoptShapedSystems) {
     int nx, eq, in;
     double delta;
     bool convex;
+    int shared = 1;
   };
   // Above kDenseKktMaxDimension, so the slot condenses: with and without equality rows and
-  // regularization, convex (the inertia Ipopt wants) and not.
+  // regularization, convex (the inertia Ipopt wants) and not; rows with columns of their own,
+  // and runs of rows sharing theirs (summed as one dense update: 2 and 3 rows pair by pair, 6
+  // and 30 together, 7 as a run and a remainder).
   for (const Case& c : {Case{20, 0, 150, 0.0, true}, Case{20, 0, 150, 0.0, false}, Case{15, 6, 120, 1e-8, false},
-                        Case{30, 4, 200, 0.0, true}})
+                        Case{30, 4, 200, 0.0, true}, Case{20, 0, 150, 0.0, false, 2}, Case{15, 6, 120, 1e-8, false, 3},
+                        Case{30, 4, 200, 0.0, true, 6}, Case{25, 0, 240, 0.0, false, 30}, Case{20, 3, 150, 1e-8, false, 7}})
     for (const double spread : {1.0, 8.0}) {
-      const Triplets t = ipopt_kkt(rng, c.nx, c.eq, c.in, c.delta, c.convex, spread);
+      const Triplets t = ipopt_kkt(rng, c.nx, c.eq, c.in, c.delta, c.convex, spread, c.shared);
       ASSERT_GT(t.n, flatsos::planner::kDenseKktMaxDimension);
       const Eigen::MatrixXd A = t.dense();
       const Eigen::VectorXd b = Eigen::VectorXd::Random(t.n);
       const SlotResult r = through_slot(t, b);
       ASSERT_EQ(r.flag, 0) << "n = " << t.n;
       EXPECT_EQ(r.rank, t.n);
-      EXPECT_EQ(r.negative, negative_eigenvalues(A)) << "n = " << t.n << ", spread " << spread;
+      EXPECT_EQ(r.negative, negative_eigenvalues(A)) << "n = " << t.n << ", spread " << spread << ", shared " << c.shared;
       // Backward stable: the residual is rounding of the matrix times the solution. (With the
       // barrier's spread the condition number reaches 1e14, where no forward comparison means
       // anything: Eigen's full-pivoting LU then leaves a residual 1e7 times larger.)

@@ -5,6 +5,8 @@
 #include <limits>
 #include <utility>
 
+#include <Eigen/Core>
+
 namespace flatsos::planner::detail {
 namespace {
 
@@ -33,6 +35,9 @@ struct RealLayout {
     size = coupling + couplings;
   }
 };
+
+// Runs of pairs with the same couplings shorter than this update the core pair by pair.
+constexpr int kSmallestDenseRun = 4;
 
 // As the dense slot: only exact cancellation counts as zero.
 const double kRelativeZero = std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
@@ -173,7 +178,7 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
   start[pairs] = kept;
   iw[kCouplings] = kept;
 
-  // Each pair's block inverted (its inertia counted), and its Schur update of the core.
+  // Each pair's block inverted (its inertia counted).
   inertia = Inertia{};
   double* inverse = real + R.inverse;
   for (int q = 0; q < pairs; ++q) {
@@ -195,15 +200,51 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
     inv[0] = dd / det;
     inv[1] = -sd / det;
     inv[2] = ss / det;
-    const double gamma = inv[2];
-    for (int a = start[q]; a < start[q + 1]; ++a) {
-      const double ga = gamma * coupling[a];
-      const int pa = position[a];
-      for (int b = start[q]; b <= a; ++b) {
-        const int pb = position[b];
-        S[static_cast<std::int64_t>(std::min(pa, pb)) * core + std::max(pa, pb)] -= ga * coupling[b];
+  }
+  // Their Schur updates of the core, S -= sum_q gamma_q b_q b_q^T (gamma_q = (P_q^-1)_dd). Runs
+  // of pairs that couple to the same core positions in the same order (the rows of one time
+  // point: a few dozen) are summed as one dense product, B diag(gamma) B^T, and scattered once:
+  // row by row, the scattered rank-one updates were most of the factorization's time.
+  Eigen::MatrixXd B, weighted, sum;
+  for (int q = 0; q < pairs;) {
+    const int first = start[q], count = start[q + 1] - start[q];
+    int end = q + 1;
+    while (end < pairs && start[end + 1] - start[end] == count &&
+           std::equal(position + first, position + first + count, position + start[end]))
+      ++end;
+    const int run = end - q;
+    if (run < kSmallestDenseRun) {
+      for (; q < end; ++q) {
+        const double gamma = inverse[3 * static_cast<std::int64_t>(q) + 2];
+        for (int a = start[q]; a < start[q + 1]; ++a) {
+          const double ga = gamma * coupling[a];
+          const int pa = position[a];
+          for (int b = start[q]; b <= a; ++b) {
+            const int pb = position[b];
+            S[static_cast<std::int64_t>(std::min(pa, pb)) * core + std::max(pa, pb)] -= ga * coupling[b];
+          }
+        }
+      }
+      continue;
+    }
+    B.resize(count, run);
+    weighted.resize(count, run);
+    for (int r = 0; r < run; ++r) {
+      const double gamma = inverse[3 * static_cast<std::int64_t>(q + r) + 2];
+      for (int a = 0; a < count; ++a) {
+        B(a, r) = coupling[start[q + r] + a];
+        weighted(a, r) = gamma * B(a, r);
       }
     }
+    sum.noalias() = B * weighted.transpose();
+    for (int a = 0; a < count; ++a) {
+      const int pa = position[first + a];
+      for (int b = 0; b <= a; ++b) {
+        const int pb = position[first + b];
+        S[static_cast<std::int64_t>(std::min(pa, pb)) * core + std::max(pa, pb)] -= sum(a, b);
+      }
+    }
+    q = end;
   }
   double largest = 0.0;
   for (int j = 0; j < core; ++j)
