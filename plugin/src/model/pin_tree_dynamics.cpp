@@ -169,16 +169,13 @@ namespace {
 
 // tau along a motion as a second-order dual number: each of q, qd, qdd is x + e1 x' + e2 x' +
 // e1 e2 x'' with (x, x', x'') read from the jet, so the product terms of tau are d/dt and
-// d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)) (chain rule: ID'' [x', x'] + ID' x'').
-template <class S, class JetAt>
-void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>& tau_out) {
+// d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)) (chain rule: ID'' [x', x'] + ID' x''). `seed(joint,
+// block)` gives that number for q (block 0), qd (1) or qdd (2) of a joint.
+template <class S, class SeedAt>
+void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std::vector<S>& tau_out) {
   using H = Dual<Dual<S>>;
   const int n = tree.numJoints();
   std::vector<H> q(static_cast<std::size_t>(n)), qd(q), qdd(q), tau(q);
-  auto seed = [&](int joint, int order) {
-    const S x = jet(joint, order), x1 = jet(joint, order + 1), x2 = jet(joint, order + 2);
-    return H(Dual<S>(x, x1), Dual<S>(x1, x2));
-  };
   for (int i = 0; i < n; ++i) {
     q[static_cast<std::size_t>(i)] = seed(i, 0);
     qd[static_cast<std::size_t>(i)] = seed(i, 1);
@@ -193,6 +190,18 @@ void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>
     tau_out[static_cast<std::size_t>(3 * i + 1)] = t.derivative.value;
     tau_out[static_cast<std::size_t>(3 * i + 2)] = t.derivative.derivative;
   }
+}
+
+// The same with every seed read from the jet: jet(joint, order), orders 0..4.
+template <class S, class JetAt>
+void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>& tau_out) {
+  torque_jet_from_seeds<S>(
+      tree,
+      [&](int joint, int block) {
+        const S x = jet(joint, block), x1 = jet(joint, block + 1), x2 = jet(joint, block + 2);
+        return Dual<Dual<S>>(Dual<S>(x, x1), Dual<S>(x1, x2));
+      },
+      tau_out);
 }
 
 void require_jet(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::MatrixXd>& q_jet) {
@@ -218,16 +227,30 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
                                            Eigen::MatrixXd& gradient) const {
   require_jet(*this, q_jet);
   const int n = numJoints();
-  gradient.resize(3 * n, 5 * n);
+  gradient.setZero(3 * n, 5 * n);
   Eigen::MatrixXd out(n, 3);
   std::vector<Dual<double>> tau;
-  // One pass per jet entry, with a third infinitesimal on that entry.
+  // tau(t) = ID(x(t)) with x = (q, qd, qdd): the derivatives of tau's time derivatives in x's
+  // are d tau^(k) / d x^(j) = binom(k, j) A^(k-j), where A(t) = dID/dx along the motion (the
+  // Jacobian of a Taylor expansion is lower block-Toeplitz in the Jacobian's own expansion). So
+  // one pass per entry of x, 3N, with a third infinitesimal constant in time on that entry,
+  // gives A e and its first two time derivatives; q^(l) is entry block l - j of x^(j). (One pass
+  // per entry of the jet, 5N, differentiated the same function twice over.)
+  constexpr double kBinomial[3][3] = {{1.0, 0.0, 0.0}, {1.0, 1.0, 0.0}, {1.0, 2.0, 1.0}};
+  using D = Dual<double>;
   for (int r = 0; r < n; ++r)
-    for (int l = 0; l < 5; ++l) {
-      torque_jet_of<Dual<double>>(
-          *this, [&](int joint, int order) { return Dual<double>(q_jet(joint, order), joint == r && order == l ? 1.0 : 0.0); },
+    for (int b = 0; b < 3; ++b) {
+      torque_jet_from_seeds<D>(
+          *this,
+          [&](int joint, int block) {
+            const double x = q_jet(joint, block), x1 = q_jet(joint, block + 1), x2 = q_jet(joint, block + 2);
+            return Dual<Dual<D>>(Dual<D>(D(x, joint == r && block == b ? 1.0 : 0.0), D(x1)), Dual<D>(D(x1), D(x2)));
+          },
           tau);
-      for (int row = 0; row < 3 * n; ++row) gradient(row, 5 * r + l) = tau[static_cast<std::size_t>(row)].derivative;
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k)
+          for (int j = 0; j <= k; ++j)
+            gradient(3 * i + k, 5 * r + b + j) += kBinomial[k][j] * tau[static_cast<std::size_t>(3 * i + k - j)].derivative;
     }
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) out(i, k) = tau[static_cast<std::size_t>(3 * i + k)].value;
