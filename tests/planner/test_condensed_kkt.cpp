@@ -164,7 +164,8 @@ TEST(CondensedKkt, AgreesWithEigenOnIpoptShapedSystems) {
   // and 30 together, 7 as a run and a remainder).
   for (const Case& c : {Case{20, 0, 150, 0.0, true}, Case{20, 0, 150, 0.0, false}, Case{15, 6, 120, 1e-8, false},
                         Case{30, 4, 200, 0.0, true}, Case{20, 0, 150, 0.0, false, 2}, Case{15, 6, 120, 1e-8, false, 3},
-                        Case{30, 4, 200, 0.0, true, 6}, Case{25, 0, 240, 0.0, false, 30}, Case{20, 3, 150, 1e-8, false, 7}})
+                        Case{30, 4, 200, 0.0, true, 6}, Case{25, 0, 240, 0.0, false, 30},
+                        Case{20, 3, 150, 1e-8, false, 7}})
     for (const double spread : {1.0, 8.0}) {
       const Triplets t = ipopt_kkt(rng, c.nx, c.eq, c.in, c.delta, c.convex, spread, c.shared);
       ASSERT_GT(t.n, flatsos::planner::kDenseKktMaxDimension);
@@ -173,7 +174,8 @@ TEST(CondensedKkt, AgreesWithEigenOnIpoptShapedSystems) {
       const SlotResult r = through_slot(t, b);
       ASSERT_EQ(r.flag, 0) << "n = " << t.n;
       EXPECT_EQ(r.rank, t.n);
-      EXPECT_EQ(r.negative, negative_eigenvalues(A)) << "n = " << t.n << ", spread " << spread << ", shared " << c.shared;
+      EXPECT_EQ(r.negative, negative_eigenvalues(A))
+          << "n = " << t.n << ", spread " << spread << ", shared " << c.shared;
       // Backward stable: the residual is rounding of the matrix times the solution. (With the
       // barrier's spread the condition number reaches 1e14, where no forward comparison means
       // anything: Eigen's full-pivoting LU then leaves a residual 1e7 times larger.)

@@ -230,12 +230,11 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
   gradient.setZero(3 * n, 5 * n);
   Eigen::MatrixXd out(n, 3);
   std::vector<Dual<double>> tau;
-  // tau(t) = ID(x(t)) with x = (q, qd, qdd): the derivatives of tau's time derivatives in x's
-  // are d tau^(k) / d x^(j) = binom(k, j) A^(k-j), where A(t) = dID/dx along the motion (the
-  // Jacobian of a Taylor expansion is lower block-Toeplitz in the Jacobian's own expansion). So
-  // one pass per entry of x, 3N, with a third infinitesimal constant in time on that entry,
-  // gives A e and its first two time derivatives; q^(l) is entry block l - j of x^(j). (One pass
-  // per entry of the jet, 5N, differentiated the same function twice over.)
+  // tau(t) = ID(x(t)) with x = (q, qd, qdd), so d tau^(k) / d x^(j) = binom(k, j) A^(k-j),
+  // where A(t) = dID/dx along the motion (the Jacobian of a Taylor expansion is lower
+  // block-Toeplitz in the Jacobian's own expansion). One pass per entry of x (3N), with a third
+  // infinitesimal constant in time on that entry, gives A e and its first two time derivatives;
+  // q^(l) is block l - j of x^(j). One pass per entry of the jet took 5N.
   constexpr double kBinomial[3][3] = {{1.0, 0.0, 0.0}, {1.0, 1.0, 0.0}, {1.0, 2.0, 1.0}};
   using D = Dual<double>;
   for (int r = 0; r < n; ++r)
@@ -250,7 +249,8 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
       for (int i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k)
           for (int j = 0; j <= k; ++j)
-            gradient(3 * i + k, 5 * r + b + j) += kBinomial[k][j] * tau[static_cast<std::size_t>(3 * i + k - j)].derivative;
+            gradient(3 * i + k, 5 * r + b + j) +=
+                kBinomial[k][j] * tau[static_cast<std::size_t>(3 * i + k - j)].derivative;
     }
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) out(i, k) = tau[static_cast<std::size_t>(3 * i + k)].value;
