@@ -164,6 +164,44 @@ TEST_F(FreePath, TheRowsHessianIsTheDerivativeOfTheirWeightedGradient) {
   const auto thetas = Eigen::seqN(0, v.thetas), all = Eigen::seqN(0, z.size());
   EXPECT_LT((L - twin)(thetas, all).cwiseAbs().maxCoeff(), 1e-5 * scale);
   EXPECT_GT((L - twin)(paths, paths).cwiseAbs().maxCoeff(), 1e-2 * twin(paths, paths).cwiseAbs().maxCoeff());
+
+  // With a floor for the inverse's curvature (what the joint Newton method uses): muscles whose
+  // bound rows' multipliers all stay at or below the floor times the largest add none, exactly as
+  // if those multipliers were 0; every other muscle adds its own. Here muscles 0 and 3 at every
+  // point get multipliers of at most 0.3, every other muscle one of at least 0.9, all at most 1,
+  // under a floor of 0.4.
+  const int m = arm.flat.numMuscles();
+  std::vector<double> small = lambda, zeroed = lambda;
+  for (std::size_t k = 0; k < points.size(); ++k)
+    for (int j = 0; j < m; ++j)
+      for (int r = 1; r < fpd::PathRows::kRows; ++r) {
+        const std::size_t row = (k * static_cast<std::size_t>(m) + static_cast<std::size_t>(j)) * fpd::PathRows::kRows +
+                                static_cast<std::size_t>(r);
+        if (j == 0 || j == 3) {
+          small[row] *= 0.3;
+          zeroed[row] = 0.0;
+        } else if (r == 1) {
+          small[row] = zeroed[row] = std::max(small[row], 0.9);
+        }
+      }
+  auto dense = [&](const fpd::PathRows& of, const std::vector<double>& weights) {
+    Eigen::MatrixXd D = Eigen::MatrixXd::Zero(z.size(), z.size());
+    for (const auto& t : of.lagrangianHessian(z, weights)) {
+      D(t.row(), t.col()) += t.value();
+      if (t.row() != t.col()) D(t.col(), t.row()) += t.value();
+    }
+    return D;
+  };
+  const fpd::PathRows floored(arm.flat, v, points, o.reserves_N, p.a_min, fpd::TorqueCurvature::Linearized, 0.4);
+  const Eigen::MatrixXd with_floor = dense(floored, small), without_them = dense(linearized, zeroed);
+  const Eigen::MatrixXd exact = dense(linearized, small);
+  EXPECT_LT((with_floor - without_them).cwiseAbs().maxCoeff(), 1e-12 * scale);
+  EXPECT_GT((with_floor - exact).cwiseAbs().maxCoeff(), 1e-4 * scale);  // their curvature was there
+  // A floor of 0 leaves the Hessian exact; a negative floor is refused.
+  const fpd::PathRows zero_floor(arm.flat, v, points, o.reserves_N, p.a_min, fpd::TorqueCurvature::Linearized, 0.0);
+  EXPECT_EQ(dense(zero_floor, small), exact);
+  EXPECT_THROW(fpd::PathRows(arm.flat, v, points, o.reserves_N, p.a_min, fpd::TorqueCurvature::Linearized, -1.0),
+               std::invalid_argument);
 }
 
 TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost) {

@@ -125,8 +125,17 @@ Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c) {
 }
 
 PathRows::PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
-                   const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, TorqueCurvature curvature)
-    : flat_(flat), v_(v), points_(points), reserves_(reserves), a_min_(a_min), curvature_(curvature) {
+                   const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, TorqueCurvature curvature,
+                   double inverse_curvature_floor)
+    : flat_(flat),
+      v_(v),
+      points_(points),
+      reserves_(reserves),
+      a_min_(a_min),
+      curvature_(curvature),
+      inverse_curvature_floor_(inverse_curvature_floor) {
+  if (!(inverse_curvature_floor >= 0.0))
+    throw std::invalid_argument("free path rows: the inverse's curvature floor must be >= 0");
   if (!flat.hasConstantMomentArms())
     throw std::logic_error("free path rows: the model's moment arms vary with the posture (not supported)");
 }
@@ -221,7 +230,7 @@ std::vector<int> PathRows::localVariables(const PathPoint& pt) const {
 }
 
 Eigen::MatrixXd PathRows::pointHessian(std::size_t point, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
-                                       const double* lambda) const {
+                                       const double* lambda, double skip_below) const {
   const PathPoint& pt = points_[point];
   const int n = flat_.numJoints(), m = flat_.numMuscles(), paths = static_cast<int>(pt.path_columns.size());
   const int cols = static_cast<int>(pt.flat.columns.size()), local = cols + paths;
@@ -256,6 +265,7 @@ Eigen::MatrixXd PathRows::pointHessian(std::size_t point, const Eigen::VectorXd&
     const Vector6 w = weighted_gradient(u);
     wF.row(j) = w.head<3>().transpose();
     wF(j, 0) += l[0];  // the reserve row is F_j itself
+    if (std::max({std::abs(l[1]), std::abs(l[2]), std::abs(l[3]), std::abs(l[4])}) <= skip_below) continue;
     Eigen::Matrix<double, 6, 6> Hu;
     for (int i = 0; i < 6; ++i) {
       const double h = kForceJetStep * (1.0 + std::abs(u[i]));
@@ -299,11 +309,15 @@ std::vector<Eigen::Triplet<double>> PathRows::hessianPattern() const {
 std::vector<Eigen::Triplet<double>> PathRows::lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const {
   const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
   const std::size_t per_point = static_cast<std::size_t>(flat_.numMuscles() * kRows);
+  double largest = 0.0;  // of the bound rows' multipliers (each muscle's rows after its reserve row)
+  for (std::size_t r = 0; r < lambda.size(); ++r)
+    if (r % kRows != 0) largest = std::max(largest, std::abs(lambda[r]));
+  const double skip_below = inverse_curvature_floor_ * largest;
   std::vector<Eigen::Triplet<double>> out;
   for (std::size_t k = 0; k < points_.size(); ++k) {
     const PathPoint& pt = points_[k];
     const std::vector<int> vars = localVariables(pt);
-    const Eigen::MatrixXd H = pointHessian(k, theta, c, lambda.data() + k * per_point);
+    const Eigen::MatrixXd H = pointHessian(k, theta, c, lambda.data() + k * per_point, skip_below);
     for (std::size_t a = 0; a < vars.size(); ++a)
       for (std::size_t b = 0; b <= a; ++b)
         out.emplace_back(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]),

@@ -82,9 +82,14 @@ class PathRows {
  public:
   /// Throws std::logic_error for a model whose moment arms vary with the posture: the Hessian
   /// leaves out the path lengths' curvature, which only they have.
+  ///
+  /// `inverse_curvature_floor`: in lagrangianHessian, a muscle at a point whose four bound rows'
+  /// multipliers are all at most this fraction of the largest bound-row multiplier (in
+  /// magnitude) adds no curvature of its muscle inverse (the term J_u^T (Hessian of h in u) J_u,
+  /// twelve gradients of the inverse). 0: only exactly zero multipliers, the exact Hessian.
   PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,
            const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
-           TorqueCurvature curvature = TorqueCurvature::Exact);
+           TorqueCurvature curvature = TorqueCurvature::Exact, double inverse_curvature_floor = 0.0);
 
   static constexpr int kRows = 1 + kRowsPerMuscle;
   int rows() const { return static_cast<int>(points_.size()) * flat_.numMuscles() * kRows; }
@@ -115,8 +120,9 @@ class PathRows {
     Eigen::MatrixXd tau, gradient;
   };
   const TorqueJetAt& torqueJetAt(std::size_t k, const Eigen::VectorXd& c) const;
+  // `skip_below`: a muscle whose bound-row multipliers are all at most this adds no inverse curvature.
   Eigen::MatrixXd pointHessian(std::size_t k, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
-                               const double* lambda) const;
+                               const double* lambda, double skip_below) const;
 
   const FlatOutputMap& flat_;
   const PathVariables& v_;
@@ -124,6 +130,7 @@ class PathRows {
   const Eigen::VectorXd& reserves_;
   const Eigen::VectorXd& a_min_;
   TorqueCurvature curvature_;
+  double inverse_curvature_floor_;
   // torqueJetAt's memory: the c it holds the points' jets for, and which points it has.
   mutable Eigen::VectorXd cached_c_;
   mutable std::vector<TorqueJetAt> cached_;
