@@ -202,6 +202,23 @@ TEST_F(FreePath, TheRowsHessianIsTheDerivativeOfTheirWeightedGradient) {
   EXPECT_EQ(dense(zero_floor, small), exact);
   EXPECT_THROW(fpd::PathRows(arm.flat, v, points, o.reserves_N, p.a_min, fpd::TorqueCurvature::Linearized, -1.0),
                std::invalid_argument);
+
+  // In place (what Ipopt is given): the same values as the triplets, in their order.
+  const fpd::BoundRowsAt at = rows(z, true);
+  ASSERT_EQ(at.jacobian.size(), rows.jacobianEntries());
+  std::vector<double> values(static_cast<std::size_t>(rows.rows())), only_values(values.size()), jacobian(rows.jacobianEntries());
+  rows.evaluateInto(z, values.data(), jacobian.data());
+  rows.evaluateInto(z, only_values.data(), nullptr);
+  for (std::size_t r = 0; r < values.size(); ++r) {
+    EXPECT_EQ(values[r], at.value[r]) << "row " << r;
+    EXPECT_NEAR(only_values[r], at.value[r], 1e-12 * (1.0 + std::abs(at.value[r]))) << "row " << r;
+  }
+  for (std::size_t k = 0; k < jacobian.size(); ++k) EXPECT_EQ(jacobian[k], at.jacobian[k].value()) << "entry " << k;
+  const auto triplets = linearized.lagrangianHessian(z, lambda);
+  std::vector<double> hessian(triplets.size());
+  linearized.lagrangianHessianInto(z, lambda.data(), hessian.data());
+  for (std::size_t k = 0; k < hessian.size(); ++k) EXPECT_EQ(hessian[k], triplets[k].value()) << "entry " << k;
+  EXPECT_THROW(rows.lagrangianHessian(z, std::vector<double>(3, 1.0)), std::invalid_argument);
 }
 
 TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost) {

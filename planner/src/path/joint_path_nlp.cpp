@@ -95,7 +95,7 @@ class JointPathNlp : public Ipopt::TNLP {
       for (std::size_t k = 0; k < row.columns.size(); ++k) s += row.values[k] * z[row.columns[k]];
       g[r++] = s;
     }
-    for (double value : rows_(z, false).value) g[r++] = value;
+    rows_.evaluateInto(z, g + r, nullptr);
     return true;
   }
   bool eval_jac_g(Index n, const Number* x, bool, Index, Index, Index* irow, Index* jcol, Number* values) override {
@@ -109,8 +109,8 @@ class JointPathNlp : public Ipopt::TNLP {
     }
     for (const auto& row : linear_)
       for (double v : row.values) values[k++] = v;
-    const BoundRowsAt at = rows_(Eigen::Map<const Eigen::VectorXd>(x, n), true);
-    for (const auto& t : at.jacobian) values[k++] = t.value();
+    row_values_.resize(static_cast<std::size_t>(rows_.rows()));
+    rows_.evaluateInto(Eigen::Map<const Eigen::VectorXd>(x, n), row_values_.data(), values + k);
     return true;
   }
   bool eval_h(Index n, const Number* x, bool, Number, Index, const Number* lambda, bool, Index, Index* irow, Index* jcol,
@@ -121,9 +121,7 @@ class JointPathNlp : public Ipopt::TNLP {
       return true;
     }
     // The cost and the linear rows have no curvature.
-    const std::vector<double> multipliers(lambda + linear_.size(), lambda + linear_.size() + static_cast<std::size_t>(rows_.rows()));
-    Index k = 0;
-    for (const auto& t : rows_.lagrangianHessian(Eigen::Map<const Eigen::VectorXd>(x, n), multipliers)) values[k++] = t.value();
+    rows_.lagrangianHessianInto(Eigen::Map<const Eigen::VectorXd>(x, n), lambda + linear_.size(), values);
     return true;
   }
   void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number* z_L, const Number* z_U, Index m,
@@ -144,6 +142,7 @@ class JointPathNlp : public Ipopt::TNLP {
   std::vector<LinearRow> linear_;
   JointPathNlpPoint at_;
   std::vector<std::pair<int, int>> jacobian_pattern_, hessian_pattern_;
+  std::vector<double> row_values_;  // eval_jac_g's rows, computed alongside their Jacobian
 };
 
 // The last round's row multipliers laid out for `count` points, of which the first `known` are

@@ -154,67 +154,86 @@ const PathRows::TorqueJetAt& PathRows::torqueJetAt(std::size_t k, const Eigen::V
   return cached_[k];
 }
 
-BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const {
+// The rows at z into `values` (point-major, per muscle the reserve row then the four bound rows),
+// and with `jacobian` their derivatives through emit(row, column, value) in the pattern's order.
+// Buffers sized once per call: the Jacobian is what Ipopt asks for at every iterate.
+template <class Emit>
+void PathRows::emitRows(const Eigen::VectorXd& z, bool jacobian, double* values, Emit&& emit) const {
   const int n = flat_.numJoints(), m = flat_.numMuscles();
   const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
-  BoundRowsAt out;
-  out.value.reserve(points_.size() * static_cast<std::size_t>(m * kRows));
-  Eigen::MatrixXd dq, path_gradient(3, kOrders * n);
+  Eigen::Index widest = 0;
+  for (const PathPoint& pt : points_) widest = std::max(widest, static_cast<Eigen::Index>(pt.path_columns.size()));
+  // Per point: d(joint jet)/dc, d(torque jet)/dc and d(force jet)/dc (row k m + j: d F_j^(k)), and
+  // per muscle d(length jet)/dc; over the point's path columns.
+  Eigen::MatrixXd dq(kOrders * n, widest), dtau(3 * n, widest), dtau_k(n, widest), dF(3 * m, widest), dL(3, widest);
+  Eigen::MatrixXd path_gradient(3, kOrders * n), tau_plain;
   int row = 0;
   for (std::size_t point = 0; point < points_.size(); ++point) {
     const PathPoint& pt = points_[point];
     const Eigen::MatrixXd q_jet = joint_jet(pt, c);
     const TorqueJetAt* torque = jacobian ? &torqueJetAt(point, c) : nullptr;
-    const Eigen::MatrixXd tau = jacobian ? torque->tau : flat_.model().pinTree().torqueJet(q_jet);
-    const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), tau, theta);
-    const auto path_columns = static_cast<int>(pt.path_columns.size());
-    std::array<Eigen::MatrixXd, 3> dF_dc;  // m x path columns (per unit z)
+    if (!jacobian) tau_plain = flat_.model().pinTree().torqueJet(q_jet);
+    const Eigen::MatrixXd F = force_jet(pt, flat_.Ctau(), jacobian ? torque->tau : tau_plain, theta);
+    const auto paths = static_cast<Eigen::Index>(pt.path_columns.size());
+    const auto thetas = pt.flat.columns.size();
     if (jacobian) {
-      dq = joint_jet_slope(pt, n);
-      const Eigen::MatrixXd dtau = torque->gradient * dq;  // 3N x path columns, row 3 i + k
+      for (int r = 0; r < n; ++r)
+        for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l).head(paths) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+      dtau.leftCols(paths).noalias() = torque->gradient * dq.leftCols(paths);  // row 3 i + k
       for (int k = 0; k < 3; ++k) {
-        Eigen::MatrixXd dtau_k(n, path_columns);
-        for (int i = 0; i < n; ++i) dtau_k.row(i) = dtau.row(3 * i + k);
-        dF_dc[static_cast<std::size_t>(k)] = flat_.Ctau() * dtau_k;
+        for (int i = 0; i < n; ++i) dtau_k.row(i).head(paths) = dtau.row(3 * i + k).head(paths);
+        dF.block(k * m, 0, m, paths).noalias() = flat_.Ctau() * dtau_k.leftCols(paths);
       }
     }
     for (int j = 0; j < m; ++j) {
       const muscles::SecondOrderJet path = flat_.pathLengthJet(j, q_jet);
       const MuscleBoundRows bounds = muscle_bound_rows(flat_.model().muscle(j).getParameters(), {F(j, 0), F(j, 1), F(j, 2)},
                                                        path, a_min_[j], jacobian);
-      const double reserve_value = F(j, 0) - reserves_[j] - kReserveMargin_N;
-      out.value.push_back(reserve_value);
-      out.violation += std::max(0.0, -reserve_value);
-      for (int k = 0; k < kRowsPerMuscle; ++k) {
-        const double v = bounds.value[static_cast<std::size_t>(k)];
-        out.value.push_back(v);
-        out.violation += std::max(0.0, -v);
-      }
+      values[row] = F(j, 0) - reserves_[j] - kReserveMargin_N;
+      for (int k = 0; k < kRowsPerMuscle; ++k) values[row + 1 + k] = bounds.value[static_cast<std::size_t>(k)];
       if (jacobian) {
         // The reserve row: dF / d(theta, c).
-        for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
-          out.jacobian.emplace_back(row, pt.flat.columns[col], pt.flat.slope[0](j, static_cast<Eigen::Index>(col)));
-        for (int col = 0; col < path_columns; ++col)
-          out.jacobian.emplace_back(row, v_.thetas + pt.path_columns[static_cast<std::size_t>(col)], dF_dc[0](j, col));
+        for (std::size_t col = 0; col < thetas; ++col)
+          emit(row, pt.flat.columns[col], pt.flat.slope[0](j, static_cast<Eigen::Index>(col)));
+        for (Eigen::Index col = 0; col < paths; ++col)
+          emit(row, v_.thetas + pt.path_columns[static_cast<std::size_t>(col)], dF(j, col));
         flat_.pathLengthJetGradient(j, q_jet, path_gradient);
-        const Eigen::MatrixXd dL = path_gradient * dq;  // 3 x path columns
+        dL.leftCols(paths).noalias() = path_gradient * dq.leftCols(paths);
         for (int k = 0; k < kRowsPerMuscle; ++k) {
           const auto& g = bounds.gradient[static_cast<std::size_t>(k)];
           const auto& pg = bounds.path_gradient[static_cast<std::size_t>(k)];
-          for (std::size_t col = 0; col < pt.flat.columns.size(); ++col)
-            out.jacobian.emplace_back(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
-          for (int col = 0; col < path_columns; ++col) {
+          for (std::size_t col = 0; col < thetas; ++col)
+            emit(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
+          for (Eigen::Index col = 0; col < paths; ++col) {
             double d = 0.0;
-            for (std::size_t o = 0; o < 3; ++o)
-              d += g[o] * dF_dc[o](j, col) + pg[o] * dL(static_cast<Eigen::Index>(o), col);
-            out.jacobian.emplace_back(row + 1 + k, v_.thetas + pt.path_columns[static_cast<std::size_t>(col)], d);
+            for (int o = 0; o < 3; ++o) d += g[static_cast<std::size_t>(o)] * dF(o * m + j, col) + pg[static_cast<std::size_t>(o)] * dL(o, col);
+            emit(row + 1 + k, v_.thetas + pt.path_columns[static_cast<std::size_t>(col)], d);
           }
         }
       }
       row += kRows;
     }
   }
+}
+
+std::size_t PathRows::jacobianEntries() const {
+  std::size_t entries = 0;
+  for (const PathPoint& pt : points_)
+    entries += static_cast<std::size_t>(flat_.numMuscles() * kRows) * (pt.flat.columns.size() + pt.path_columns.size());
+  return entries;
+}
+
+BoundRowsAt PathRows::operator()(const Eigen::VectorXd& z, bool jacobian) const {
+  BoundRowsAt out;
+  out.value.resize(static_cast<std::size_t>(rows()));
+  if (jacobian) out.jacobian.reserve(jacobianEntries());
+  emitRows(z, jacobian, out.value.data(), [&](int row, int col, double v) { out.jacobian.emplace_back(row, col, v); });
+  for (double v : out.value) out.violation += std::max(0.0, -v);
   return out;
+}
+
+void PathRows::evaluateInto(const Eigen::VectorXd& z, double* values, double* jacobian) const {
+  emitRows(z, jacobian != nullptr, values, [&jacobian](int, int, double v) { *jacobian++ = v; });
 }
 
 namespace {
@@ -306,24 +325,35 @@ std::vector<Eigen::Triplet<double>> PathRows::hessianPattern() const {
   return out;
 }
 
-std::vector<Eigen::Triplet<double>> PathRows::lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const {
+// The lower triangle of each point's block, point after point, through emit(row, column, value).
+template <class Emit>
+void PathRows::emitLagrangianHessian(const Eigen::VectorXd& z, const double* lambda, Emit&& emit) const {
   const Eigen::VectorXd theta = v_.theta(z), c = v_.c(z);
   const std::size_t per_point = static_cast<std::size_t>(flat_.numMuscles() * kRows);
   double largest = 0.0;  // of the bound rows' multipliers (each muscle's rows after its reserve row)
-  for (std::size_t r = 0; r < lambda.size(); ++r)
+  for (std::size_t r = 0; r < per_point * points_.size(); ++r)
     if (r % kRows != 0) largest = std::max(largest, std::abs(lambda[r]));
   const double skip_below = inverse_curvature_floor_ * largest;
-  std::vector<Eigen::Triplet<double>> out;
   for (std::size_t k = 0; k < points_.size(); ++k) {
     const PathPoint& pt = points_[k];
     const std::vector<int> vars = localVariables(pt);
-    const Eigen::MatrixXd H = pointHessian(k, theta, c, lambda.data() + k * per_point, skip_below);
+    const Eigen::MatrixXd H = pointHessian(k, theta, c, lambda + k * per_point, skip_below);
     for (std::size_t a = 0; a < vars.size(); ++a)
       for (std::size_t b = 0; b <= a; ++b)
-        out.emplace_back(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]),
-                         H(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
+        emit(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]), H(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
   }
+}
+
+std::vector<Eigen::Triplet<double>> PathRows::lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const {
+  if (lambda.size() != static_cast<std::size_t>(rows()))
+    throw std::invalid_argument("free path rows: one multiplier per row expected");
+  std::vector<Eigen::Triplet<double>> out;
+  emitLagrangianHessian(z, lambda.data(), [&](int row, int col, double v) { out.emplace_back(row, col, v); });
   return out;
+}
+
+void PathRows::lagrangianHessianInto(const Eigen::VectorXd& z, const double* lambda, double* values) const {
+  emitLagrangianHessian(z, lambda, [&values](int, int, double v) { *values++ = v; });
 }
 
 GridViolations check_grid(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& path,

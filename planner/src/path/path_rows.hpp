@@ -95,6 +95,12 @@ class PathRows {
   int rows() const { return static_cast<int>(points_.size()) * flat_.numMuscles() * kRows; }
 
   BoundRowsAt operator()(const Eigen::VectorXd& z, bool jacobian) const;
+  /// The Jacobian's entries: per row, its point's theta columns, then its path columns.
+  std::size_t jacobianEntries() const;
+  /// The rows' values (rows() of them) and, unless `jacobian` is null, the Jacobian's values in
+  /// the order of operator()'s triplets (jacobianEntries() of them), written in place: what Ipopt
+  /// asks for at every iterate, without building the triplets.
+  void evaluateInto(const Eigen::VectorXd& z, double* values, double* jacobian) const;
 
   /// The lower triangle of sum_k lambda_k (Hessian of row k) in z, as triplets in a fixed order
   /// (repeated entries add up): per point, its block over (its theta columns, its path columns).
@@ -107,10 +113,17 @@ class PathRows {
   /// laws); the torque jet's Hessian in the joint jet is exact (PinTreeDynamics::torqueJetHessian)
   /// or left out (TorqueCurvature); the path lengths are affine in q (constant moment arms).
   std::vector<Eigen::Triplet<double>> lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const;
+  /// The same values written in place (`lambda`: rows() multipliers): what Ipopt asks for at
+  /// every iterate, without building the triplets.
+  void lagrangianHessianInto(const Eigen::VectorXd& z, const double* lambda, double* values) const;
   /// The same pattern (values 0).
   std::vector<Eigen::Triplet<double>> hessianPattern() const;
 
  private:
+  template <class Emit>
+  void emitRows(const Eigen::VectorXd& z, bool jacobian, double* values, Emit&& emit) const;
+  template <class Emit>
+  void emitLagrangianHessian(const Eigen::VectorXd& z, const double* lambda, Emit&& emit) const;
   // A point's local variables: its theta columns, then its path columns (indices into z).
   std::vector<int> localVariables(const PathPoint& pt) const;
   // The torque jet at point k along the path of c and its gradient in the joint jet (3N x 5N),
