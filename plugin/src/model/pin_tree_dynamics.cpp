@@ -79,9 +79,9 @@ void PinTreeDynamics::jointLimitTorques(const Eigen::Ref<const Eigen::VectorXd>&
 
 void PinTreeDynamics::jointLimitTorqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet,
                                           Eigen::Ref<Eigen::MatrixXd> out) const {
-  // Second-order dual numbers along the motion, as in torque_jet_of below; q''' enters through
-  // the damper's second derivative. Jet columns not given are 0.
-  using H = Dual<Dual<double>>;
+  // Time jets along the motion, as in torque_jet_of below; q''' enters through the damper's second
+  // derivative. Jet columns not given are 0.
+  using H = TimeJet<double>;
   auto column = [&](Eigen::Index i, Eigen::Index order) { return order < q_jet.cols() ? q_jet(i, order) : 0.0; };
   for (std::size_t i = 0; i < joints_.size(); ++i) {
     const Joint& j = joints_[i];
@@ -90,12 +90,12 @@ void PinTreeDynamics::jointLimitTorqueJet(const Eigen::Ref<const Eigen::MatrixXd
       out.row(k).setZero();
       continue;
     }
-    const H q(Dual<double>(column(k, 0), column(k, 1)), Dual<double>(column(k, 1), column(k, 2)));
-    const H qd(Dual<double>(column(k, 1), column(k, 2)), Dual<double>(column(k, 2), column(k, 3)));
+    const H q(column(k, 0), column(k, 1), column(k, 2));
+    const H qd(column(k, 1), column(k, 2), column(k, 3));
     const H t = joint_limit_torque(j.limit, j.range_rad[0], j.range_rad[1], q, qd);
-    out(k, 0) = t.value.value;
-    out(k, 1) = t.derivative.value;
-    out(k, 2) = t.derivative.derivative;
+    out(k, 0) = t.value;
+    out(k, 1) = t.rate;
+    out(k, 2) = t.acceleration;
   }
 }
 
@@ -167,13 +167,12 @@ void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, cons
 
 namespace {
 
-// tau along a motion as a second-order dual number: each of q, qd, qdd is x + e1 x' + e2 x' +
-// e1 e2 x'' with (x, x', x'') read from the jet, so the product terms of tau are d/dt and
-// d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)) (chain rule: ID'' [x', x'] + ID' x''). `seed(joint,
-// block)` gives that number for q (block 0), qd (1) or qdd (2) of a joint.
+// tau along a motion as a time jet: each of q, qd, qdd is (x, x', x'') read from the jet, so tau
+// comes out with d/dt and d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)). `seed(joint, block)` gives
+// that jet for q (block 0), qd (1) or qdd (2) of a joint.
 template <class S, class SeedAt>
 void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std::vector<S>& tau_out) {
-  using H = Dual<Dual<S>>;
+  using H = TimeJet<S>;
   const int n = tree.numJoints();
   std::vector<H> q(static_cast<std::size_t>(n)), qd(q), qdd(q), tau(q);
   for (int i = 0; i < n; ++i) {
@@ -186,9 +185,9 @@ void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std:
   tau_out.resize(static_cast<std::size_t>(3 * n));
   for (int i = 0; i < n; ++i) {
     const H& t = tau[static_cast<std::size_t>(i)];
-    tau_out[static_cast<std::size_t>(3 * i)] = t.value.value;
-    tau_out[static_cast<std::size_t>(3 * i + 1)] = t.derivative.value;
-    tau_out[static_cast<std::size_t>(3 * i + 2)] = t.derivative.derivative;
+    tau_out[static_cast<std::size_t>(3 * i)] = t.value;
+    tau_out[static_cast<std::size_t>(3 * i + 1)] = t.rate;
+    tau_out[static_cast<std::size_t>(3 * i + 2)] = t.acceleration;
   }
 }
 
@@ -198,8 +197,7 @@ void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>
   torque_jet_from_seeds<S>(
       tree,
       [&](int joint, int block) {
-        const S x = jet(joint, block), x1 = jet(joint, block + 1), x2 = jet(joint, block + 2);
-        return Dual<Dual<S>>(Dual<S>(x, x1), Dual<S>(x1, x2));
+        return TimeJet<S>(jet(joint, block), jet(joint, block + 1), jet(joint, block + 2));
       },
       tau_out);
 }
@@ -243,7 +241,7 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
           *this,
           [&](int joint, int block) {
             const double x = q_jet(joint, block), x1 = q_jet(joint, block + 1), x2 = q_jet(joint, block + 2);
-            return Dual<Dual<D>>(Dual<D>(D(x, joint == r && block == b ? 1.0 : 0.0), D(x1)), Dual<D>(D(x1), D(x2)));
+            return TimeJet<D>(D(x, joint == r && block == b ? 1.0 : 0.0), D(x1), D(x2));
           },
           tau);
       for (int i = 0; i < n; ++i)

@@ -1,10 +1,10 @@
 #pragma once
 // Dual numbers x + e x' (e^2 = 0) for exact derivatives by forward-mode differentiation, nestable:
-// Dual<Dual<double>> carries two independent infinitesimals and their product, which gives a
-// function's second derivative along a curve (the torque jets along a joint motion), and one
-// more level gives the derivatives of those with respect to the motion. Only what the pin-tree
-// inverse dynamics needs: arithmetic, sin, cos, and Eigen's NumTraits so that Eigen's fixed-size
-// vectors and matrices can hold them.
+// Dual<Dual<double>> carries two independent infinitesimals and their product (second
+// derivatives). TimeJet carries a function's first two derivatives along a curve (the torque jets
+// along a joint motion); with dual numbers inside, it also gives the derivatives of those with
+// respect to the motion. Only what the pin-tree inverse dynamics needs: arithmetic, sin, cos, and
+// Eigen's NumTraits so that Eigen's fixed-size vectors and matrices can hold them.
 
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
@@ -54,10 +54,68 @@ struct Dual {
   friend bool operator!=(const Dual& a, const Dual& b) { return !(a == b); }
 };
 
-/// The plain value of a (nested) dual number: for branches, which follow the value.
+/// A function of time t and its first two derivatives (f, f', f''), carried through arithmetic by
+/// the product and chain rules: what Dual<Dual<T>> gives with both infinitesimals on the same
+/// motion, in three entries instead of four ((fg)'' = f'' g + 2 f' g' + f g'' is six products of
+/// T, the nested duals' is nine). The torque jets along a joint motion use it.
+template <class T>
+struct TimeJet {
+  T value{}, rate{}, acceleration{};  ///< f, f', f''
+
+  TimeJet() = default;
+  TimeJet(double v) : value(v), rate(0.0), acceleration(0.0) {}  // NOLINT: constants mix implicitly
+  TimeJet(const T& v, const T& d, const T& dd) : value(v), rate(d), acceleration(dd) {}
+
+  TimeJet& operator+=(const TimeJet& b) { value += b.value; rate += b.rate; acceleration += b.acceleration; return *this; }
+  TimeJet& operator-=(const TimeJet& b) { value -= b.value; rate -= b.rate; acceleration -= b.acceleration; return *this; }
+  TimeJet& operator*=(const TimeJet& b) { return *this = *this * b; }
+  TimeJet& operator/=(const TimeJet& b) { return *this = *this / b; }
+
+  friend TimeJet operator+(const TimeJet& a, const TimeJet& b) {
+    return {a.value + b.value, a.rate + b.rate, a.acceleration + b.acceleration};
+  }
+  friend TimeJet operator-(const TimeJet& a, const TimeJet& b) {
+    return {a.value - b.value, a.rate - b.rate, a.acceleration - b.acceleration};
+  }
+  friend TimeJet operator-(const TimeJet& a) { return {-a.value, -a.rate, -a.acceleration}; }
+  friend TimeJet operator*(const TimeJet& a, const TimeJet& b) {
+    const T cross = a.rate * b.rate;
+    return {a.value * b.value, a.value * b.rate + a.rate * b.value,
+            a.value * b.acceleration + (cross + cross) + a.acceleration * b.value};
+  }
+  friend TimeJet operator/(const TimeJet& a, const TimeJet& b) {
+    // a = q b, so a' = q' b + q b' and a'' = q'' b + 2 q' b' + q b''.
+    const T q = a.value / b.value;
+    const T q1 = (a.rate - q * b.rate) / b.value;
+    const T twice = q1 * b.rate;
+    return {q, q1, (a.acceleration - (twice + twice) - q * b.acceleration) / b.value};
+  }
+  friend TimeJet sin(const TimeJet& a) {
+    using std::cos;
+    using std::sin;
+    const T s = sin(a.value), c = cos(a.value);
+    return {s, c * a.rate, c * a.acceleration - s * (a.rate * a.rate)};
+  }
+  friend TimeJet cos(const TimeJet& a) {
+    using std::cos;
+    using std::sin;
+    const T s = sin(a.value), c = cos(a.value);
+    return {c, -(s * a.rate), -(s * a.acceleration) - c * (a.rate * a.rate)};
+  }
+  friend bool operator==(const TimeJet& a, const TimeJet& b) {
+    return a.value == b.value && a.rate == b.rate && a.acceleration == b.acceleration;
+  }
+  friend bool operator!=(const TimeJet& a, const TimeJet& b) { return !(a == b); }
+};
+
+/// The plain value of a (nested) dual number or time jet: for branches, which follow the value.
 inline double primal(double x) { return x; }
 template <class T>
 double primal(const Dual<T>& x) {
+  return primal(x.value);
+}
+template <class T>
+double primal(const TimeJet<T>& x) {
   return primal(x.value);
 }
 
@@ -78,6 +136,25 @@ struct NumTraits<flatsos::plugin::Dual<T>> : GenericNumTraits<flatsos::plugin::D
     ReadCost = 2 * NumTraits<T>::ReadCost,
     AddCost = 2 * NumTraits<T>::AddCost,
     MulCost = 3 * NumTraits<T>::MulCost,
+  };
+  static inline Real epsilon() { return Real(NumTraits<double>::epsilon()); }
+  static inline Real dummy_precision() { return Real(NumTraits<double>::dummy_precision()); }
+  static inline int digits10() { return NumTraits<double>::digits10(); }
+};
+template <class T>
+struct NumTraits<flatsos::plugin::TimeJet<T>> : GenericNumTraits<flatsos::plugin::TimeJet<T>> {
+  using Real = flatsos::plugin::TimeJet<T>;
+  using NonInteger = flatsos::plugin::TimeJet<T>;
+  using Nested = flatsos::plugin::TimeJet<T>;
+  using Literal = flatsos::plugin::TimeJet<T>;
+  enum {
+    IsComplex = 0,
+    IsInteger = 0,
+    IsSigned = 1,
+    RequireInitialization = 1,
+    ReadCost = 3 * NumTraits<T>::ReadCost,
+    AddCost = 3 * NumTraits<T>::AddCost,
+    MulCost = 6 * NumTraits<T>::MulCost,
   };
   static inline Real epsilon() { return Real(NumTraits<double>::epsilon()); }
   static inline Real dummy_precision() { return Real(NumTraits<double>::dummy_precision()); }
