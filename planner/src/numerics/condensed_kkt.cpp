@@ -236,7 +236,9 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
         weighted(a, r) = gamma * B(a, r);
       }
     }
-    sum.noalias() = B * weighted.transpose();
+    // The lower triangle only: half the product's work.
+    sum.resize(count, count);
+    sum.triangularView<Eigen::Lower>() = B * weighted.transpose();
     for (int a = 0; a < count; ++a) {
       const int pa = position[first + a];
       for (int b = 0; b <= a; ++b) {
