@@ -135,6 +135,8 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
   if (!(f.tolerance >= 0.0) || !(f.tolerance_N >= 0.0))
     throw std::invalid_argument("open-loop plan: free_path tolerances must be >= 0");
   if (!(f.relative_tolerance > 0.0)) throw std::invalid_argument("open-loop plan: free_path.relative_tolerance must be > 0");
+  if (!(f.exchange_relative_tolerance >= 0.0) || !std::isfinite(f.exchange_relative_tolerance))
+    throw std::invalid_argument("open-loop plan: free_path.exchange_relative_tolerance must be finite and >= 0");
   if (f.max_rounds < 1 || f.max_path_iterations < 1 || f.max_slp_iterations < 1)
     throw std::invalid_argument("open-loop plan: free_path.max_rounds, max_path_iterations and max_slp_iterations must be >= 1");
 }

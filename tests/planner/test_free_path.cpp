@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -281,14 +282,16 @@ TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   const Problem p = problem();
   ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
   const Eigen::VectorXd theta = fpd::theta_of(*p.setup, *p.prescribed.Y);
-  auto optimize = [&](fpl::FreePathMethod method) {
+  // Both with the exchange run until the grid holds.
+  auto optimize = [&](fpl::FreePathMethod method, double exchange_relative_tolerance) {
     fpl::FreeJointPathOptions f = o.free_path;
     f.method = method;
+    f.exchange_relative_tolerance = exchange_relative_tolerance;
     return fpd::optimize_joint_path(*p.setup, arm.flat, p.prescribed.path, p.initial_q_jet, o.target_q_rad, theta,
                                     o.reserves_N, p.a_min, f);
   };
-  const fpd::FreePathOutcome newton = optimize(fpl::FreePathMethod::JointNewton);
-  const fpd::FreePathOutcome quasi = optimize(fpl::FreePathMethod::ReducedQuasiNewton);
+  const fpd::FreePathOutcome newton = optimize(fpl::FreePathMethod::JointNewton, 0.0);
+  const fpd::FreePathOutcome quasi = optimize(fpl::FreePathMethod::ReducedQuasiNewton, 0.0);
   ASSERT_TRUE(newton.converged) << newton.failure;
   ASSERT_TRUE(quasi.converged) << quasi.failure;
   std::cout << "[ measure  ] free path at its points: joint Newton " << newton.cost_N_s << " N s (" << newton.path_iterations
@@ -299,6 +302,20 @@ TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   EXPECT_LT(newton.cost_N_s, 0.8 * p.prescribed.sos.cost_N_s);
   EXPECT_NEAR(newton.cost_N_s, quasi.cost_N_s, 2e-3 * quasi.cost_N_s);
   EXPECT_LE(newton.cost_N_s, quasi.cost_N_s * (1.0 + 1e-5));
+
+  // The joint method's exchange ending once a round changes the cost by at most 1e-4 of it (the
+  // default): fewer rounds, and the cost at the points where the full exchange ends within a few
+  // times that tolerance (each later round changes it by less).
+  const double settle = fpl::FreeJointPathOptions{}.exchange_relative_tolerance;
+  ASSERT_GT(settle, 0.0);
+  const fpd::FreePathOutcome settled = optimize(fpl::FreePathMethod::JointNewton, settle);
+  ASSERT_TRUE(settled.converged) << settled.failure;
+  std::cout << "[ measure  ] settled exchange: " << settled.cost_N_s << " N s in " << settled.rounds << " rounds ("
+            << settled.path_iterations << " Ipopt iterations), full: " << newton.cost_N_s << " N s in " << newton.rounds
+            << " rounds (" << newton.path_iterations << ")\n";
+  EXPECT_LT(settled.rounds, newton.rounds);
+  EXPECT_LT(settled.path_iterations, newton.path_iterations);
+  EXPECT_NEAR(settled.cost_N_s, newton.cost_N_s, 5.0 * settle * newton.cost_N_s);
 }
 
 TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsAColdPlan) {
@@ -368,4 +385,9 @@ TEST_F(FreePath, BadOptionsAreNamed) {
   bad = o;
   bad.free_path.relative_tolerance = 0.0;
   rejects(bad, "free_path.relative_tolerance");
+  bad = o;
+  bad.free_path.exchange_relative_tolerance = -1e-4;
+  rejects(bad, "free_path.exchange_relative_tolerance");
+  bad.free_path.exchange_relative_tolerance = std::numeric_limits<double>::infinity();
+  rejects(bad, "free_path.exchange_relative_tolerance");
 }

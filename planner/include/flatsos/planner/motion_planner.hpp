@@ -78,6 +78,12 @@ struct FreeJointPathOptions {
   /// path's points suffice (a deficit of 1e-3 N moves the cost by far less than 1e-6).
   double tolerance = 1e-4;
   double tolerance_N = 1e-3;
+  /// JointNewton: the exchange also ends once a round (after the first) changed the cost at the
+  /// points by at most this fraction. Later rounds move the path by little more (on the arm a
+  /// fourth round changed the cost at the points by 1e-5 of it, the certified plan along the path
+  /// by 1.4e-6), and the plan along the final path meets every row anyway. 0: only when the grid
+  /// holds.
+  double exchange_relative_tolerance = 1e-4;
   double relative_tolerance = 1e-6;  ///< stop when a step lowers the cost by less than this fraction
   int max_rounds = 20;
   int max_path_iterations = 200;  ///< quasi-Newton steps per exchange round
