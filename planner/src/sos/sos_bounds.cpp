@@ -19,6 +19,13 @@ constexpr double kRoundStartRadius = 0.01;  // of the largest coefficient
 // grid only once that finds nothing: each time costs an inverse map (an LU of the m x m C(q)),
 // and the 40-muscle leg took six rounds.
 constexpr int kCoarseStride = 10;
+// Each step LP starts from the violated rows and the last LP's active ones only; rows its step
+// would violate join, and it is solved again from its basis (the same step). The receding
+// horizon's 8 closest rows per coefficient (its 37 coefficients: about 300 rows) are, with the
+// open-loop plans' 200-odd coefficients, some 1500 rows that are never active and made each LP
+// slow: the arm's bounded plans at T = 3 s 138 -> 103 ms, at 1.5 s 96 -> 83 ms, the free path's
+// two plans along paths 0.53 -> 0.45 s, the same plans (docs/method/sos_program.md).
+constexpr int kClosestRowsPerCoefficient = 0;
 constexpr const char* kBoundsUnmet =
     "no flat outputs in this basis keep every excitation in [0, 1] and activation in [a_min, 1] with the reserves";
 }  // namespace
@@ -125,8 +132,11 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       radius = std::max(radius, kRoundStartRadius * (1.0 + theta.cwiseAbs().maxCoeff()));
       SlpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
       for (const auto& c : setup.constraints) linear.rows_per_group.push_back(c.points.size());
+      SlpSettings settings;
+      settings.max_iterations = bo.max_slp_iterations;
+      settings.closest_rows_per_coefficient = kClosestRowsPerCoefficient;
       const SlpOutcome slp = solve_bounds_by_slp(linear, bound_rows_of(flat, points, a_min, kBoundMargin), theta, radius,
-                                                 basis, {bo.max_slp_iterations});
+                                                 basis, settings);
       result.bound_slp_iterations += slp.iterations;
       result.simplex_pivots += slp.lp_pivots;
       if (!slp.converged) {
