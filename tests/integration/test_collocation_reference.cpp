@@ -248,9 +248,8 @@ TEST_F(CollocationReference, TheFlatnessFreePathComesWithinTwoPercentWithAnExecu
   // gain constant), and the seed is the integrator's down to a floor near 1e-11 rad: measured
   // 3.7e-9 rad at accuracy 1e-9, then 6.1e-12, 1.2e-11, 6.7e-12 and 5.7e-12 at 1e-10 .. 1e-13
   // (an earlier plan: 3.2e-9, 3.6e-11 at 1e-10, 3.7e-11 at 1e-11, 7.4e-12 at 1e-12). Below 1e-10
-  // the accuracy does not always show in it, and two replays at 1e-10 gave 2.0e-12 and 6.1e-12:
-  // the floor is the replay's own reproducibility, amplified 1e8-fold like any seed. So the
-  // comparison is 1e-9 against 1e-12.
+  // more accuracy does not lower it (the floor is not the integrator's; the replay itself is
+  // reproducible to the bit), so the comparison is 1e-9 against 1e-12.
   const auto coarse = flatsos::test::replay_open_loop(arm.flat, s0, plan, 1e-9, 0.05);
   const auto tight = flatsos::test::replay_open_loop(arm.flat, s0, plan, 1e-12, 0.05);
   auto shifted = s0;
