@@ -121,43 +121,35 @@ double primal(const TimeJet<T>& x) {
 
 }  // namespace flatsos::plugin
 
+namespace flatsos::plugin::detail {
+// What Eigen asks of a scalar made of `Entries` values of T whose product takes `Products`
+// products of T: a dual number 2 and 3, a time jet 3 and 6.
+template <class Scalar, class T, int Entries, int Products>
+struct JetNumTraits : Eigen::GenericNumTraits<Scalar> {
+  using Real = Scalar;
+  using NonInteger = Scalar;
+  using Nested = Scalar;
+  using Literal = Scalar;
+  enum {
+    IsComplex = 0,
+    IsInteger = 0,
+    IsSigned = 1,
+    RequireInitialization = 1,
+    ReadCost = Entries * Eigen::NumTraits<T>::ReadCost,
+    AddCost = Entries * Eigen::NumTraits<T>::AddCost,
+    MulCost = Products * Eigen::NumTraits<T>::MulCost,
+  };
+  static inline Real epsilon() { return Real(Eigen::NumTraits<double>::epsilon()); }
+  static inline Real dummy_precision() { return Real(Eigen::NumTraits<double>::dummy_precision()); }
+  static inline int digits10() { return Eigen::NumTraits<double>::digits10(); }
+};
+}  // namespace flatsos::plugin::detail
+
 namespace Eigen {
 template <class T>
-struct NumTraits<flatsos::plugin::Dual<T>> : GenericNumTraits<flatsos::plugin::Dual<T>> {
-  using Real = flatsos::plugin::Dual<T>;
-  using NonInteger = flatsos::plugin::Dual<T>;
-  using Nested = flatsos::plugin::Dual<T>;
-  using Literal = flatsos::plugin::Dual<T>;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 2 * NumTraits<T>::ReadCost,
-    AddCost = 2 * NumTraits<T>::AddCost,
-    MulCost = 3 * NumTraits<T>::MulCost,
-  };
-  static inline Real epsilon() { return Real(NumTraits<double>::epsilon()); }
-  static inline Real dummy_precision() { return Real(NumTraits<double>::dummy_precision()); }
-  static inline int digits10() { return NumTraits<double>::digits10(); }
-};
+struct NumTraits<flatsos::plugin::Dual<T>>
+    : flatsos::plugin::detail::JetNumTraits<flatsos::plugin::Dual<T>, T, 2, 3> {};
 template <class T>
-struct NumTraits<flatsos::plugin::TimeJet<T>> : GenericNumTraits<flatsos::plugin::TimeJet<T>> {
-  using Real = flatsos::plugin::TimeJet<T>;
-  using NonInteger = flatsos::plugin::TimeJet<T>;
-  using Nested = flatsos::plugin::TimeJet<T>;
-  using Literal = flatsos::plugin::TimeJet<T>;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 3 * NumTraits<T>::ReadCost,
-    AddCost = 3 * NumTraits<T>::AddCost,
-    MulCost = 6 * NumTraits<T>::MulCost,
-  };
-  static inline Real epsilon() { return Real(NumTraits<double>::epsilon()); }
-  static inline Real dummy_precision() { return Real(NumTraits<double>::dummy_precision()); }
-  static inline int digits10() { return NumTraits<double>::digits10(); }
-};
+struct NumTraits<flatsos::plugin::TimeJet<T>>
+    : flatsos::plugin::detail::JetNumTraits<flatsos::plugin::TimeJet<T>, T, 3, 6> {};
 }  // namespace Eigen
