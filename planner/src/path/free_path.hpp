@@ -36,7 +36,9 @@ struct FreePathOutcome {
   int rounds = 0, points = 0;
   std::vector<double> times_s;   // the exchange's time points
   int path_iterations = 0, evaluations = 0, slp_iterations = 0;
-  double worst_bound_excess = 0.0, min_reserve_margin_N = 0.0;  // on the dense grid at the end
+  // On the dense grid at the last check (before the last round when the exchange ended on a
+  // small change of cost: FreeJointPathOptions::exchange_relative_tolerance).
+  double worst_bound_excess = 0.0, min_reserve_margin_N = 0.0;
 };
 
 /// From theta (in setup's flat-output basis, on `start_path`), the joint path's spline from its
