@@ -178,7 +178,8 @@ void PathRows::emitRows(const Eigen::VectorXd& z, bool jacobian, double* values,
     const auto thetas = pt.flat.columns.size();
     if (jacobian) {
       for (int r = 0; r < n; ++r)
-        for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l).head(paths) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+        for (int l = 0; l < kOrders; ++l)
+          dq.row(kOrders * r + l).head(paths) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
       dtau.leftCols(paths).noalias() = torque->gradient * dq.leftCols(paths);  // row 3 i + k
       for (int k = 0; k < 3; ++k) {
         for (int i = 0; i < n; ++i) dtau_k.row(i).head(paths) = dtau.row(3 * i + k).head(paths);
@@ -206,7 +207,10 @@ void PathRows::emitRows(const Eigen::VectorXd& z, bool jacobian, double* values,
             emit(row + 1 + k, pt.flat.columns[col], column_derivative(pt.flat, g, j, col));
           for (Eigen::Index col = 0; col < paths; ++col) {
             double d = 0.0;
-            for (int o = 0; o < 3; ++o) d += g[static_cast<std::size_t>(o)] * dF(o * m + j, col) + pg[static_cast<std::size_t>(o)] * dL(o, col);
+            for (int o = 0; o < 3; ++o) {
+              const auto order = static_cast<std::size_t>(o);
+              d += g[order] * dF(o * m + j, col) + pg[order] * dL(o, col);
+            }
             emit(row + 1 + k, v_.thetas + pt.path_columns[static_cast<std::size_t>(col)], d);
           }
         }
@@ -340,11 +344,13 @@ void PathRows::emitLagrangianHessian(const Eigen::VectorXd& z, const double* lam
     const Eigen::MatrixXd H = pointHessian(k, theta, c, lambda + k * per_point, skip_below);
     for (std::size_t a = 0; a < vars.size(); ++a)
       for (std::size_t b = 0; b <= a; ++b)
-        emit(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]), H(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
+        emit(std::max(vars[a], vars[b]), std::min(vars[a], vars[b]),
+             H(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
   }
 }
 
-std::vector<Eigen::Triplet<double>> PathRows::lagrangianHessian(const Eigen::VectorXd& z, const std::vector<double>& lambda) const {
+std::vector<Eigen::Triplet<double>> PathRows::lagrangianHessian(const Eigen::VectorXd& z,
+                                                                const std::vector<double>& lambda) const {
   if (lambda.size() != static_cast<std::size_t>(rows()))
     throw std::invalid_argument("free path rows: one multiplier per row expected");
   std::vector<Eigen::Triplet<double>> out;

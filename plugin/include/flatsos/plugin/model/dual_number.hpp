@@ -66,8 +66,18 @@ struct TimeJet {
   TimeJet(double v) : value(v), rate(0.0), acceleration(0.0) {}  // NOLINT: constants mix implicitly
   TimeJet(const T& v, const T& d, const T& dd) : value(v), rate(d), acceleration(dd) {}
 
-  TimeJet& operator+=(const TimeJet& b) { value += b.value; rate += b.rate; acceleration += b.acceleration; return *this; }
-  TimeJet& operator-=(const TimeJet& b) { value -= b.value; rate -= b.rate; acceleration -= b.acceleration; return *this; }
+  TimeJet& operator+=(const TimeJet& b) {
+    value += b.value;
+    rate += b.rate;
+    acceleration += b.acceleration;
+    return *this;
+  }
+  TimeJet& operator-=(const TimeJet& b) {
+    value -= b.value;
+    rate -= b.rate;
+    acceleration -= b.acceleration;
+    return *this;
+  }
   TimeJet& operator*=(const TimeJet& b) { return *this = *this * b; }
   TimeJet& operator/=(const TimeJet& b) { return *this = *this / b; }
 
