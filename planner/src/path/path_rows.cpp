@@ -12,11 +12,18 @@ namespace flatsos::planner::detail {
 namespace {
 constexpr int kOrders = kPathOrders;
 
-// d (joint jet) / d (the point's path columns): 5N x columns, row kOrders r + l for d^l q_r / dt^l.
+// d (joint jet) / d (the point's path columns): 5N x columns, row kOrders r + l for d^l q_r / dt^l,
+// into the left columns of `dq` (at least 5N rows and as many columns as the point has).
+void joint_jet_slope_into(const PathPoint& pt, int joints, Eigen::MatrixXd& dq) {
+  const auto columns = static_cast<Eigen::Index>(pt.path_columns.size());
+  for (int r = 0; r < joints; ++r)
+    for (int l = 0; l < kOrders; ++l)
+      dq.row(kOrders * r + l).head(columns) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+}
+
 Eigen::MatrixXd joint_jet_slope(const PathPoint& pt, int joints) {
   Eigen::MatrixXd dq(kOrders * joints, static_cast<Eigen::Index>(pt.path_columns.size()));
-  for (int r = 0; r < joints; ++r)
-    for (int l = 0; l < kOrders; ++l) dq.row(kOrders * r + l) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+  joint_jet_slope_into(pt, joints, dq);
   return dq;
 }
 
@@ -177,9 +184,7 @@ void PathRows::emitRows(const Eigen::VectorXd& z, bool jacobian, double* values,
     const auto paths = static_cast<Eigen::Index>(pt.path_columns.size());
     const auto thetas = pt.flat.columns.size();
     if (jacobian) {
-      for (int r = 0; r < n; ++r)
-        for (int l = 0; l < kOrders; ++l)
-          dq.row(kOrders * r + l).head(paths) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
+      joint_jet_slope_into(pt, n, dq);
       dtau.leftCols(paths).noalias() = torque->gradient * dq.leftCols(paths);  // row 3 i + k
       for (int k = 0; k < 3; ++k) {
         for (int i = 0; i < n; ++i) dtau_k.row(i).head(paths) = dtau.row(3 * i + k).head(paths);
