@@ -1,8 +1,8 @@
 // The condensed KKT solve (inequality rows' slack and multiplier pairs eliminated first, the rest
 // by the dense LDL^T) through Ipopt's ma27 calling convention, against Eigen on Ipopt-shaped
 // systems: the pairs it finds, the inertia (eigenvalues), the solution (pivoted LU), singular
-// pair blocks, patterns where a pair would touch another, and triplets that are not the analysed
-// pattern.
+// pair blocks, patterns where a pair would touch another, triplets that are not the analysed
+// pattern, and the slot's scatter plans (one per analysis).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -96,25 +96,43 @@ struct SlotResult {
   Eigen::VectorXd x;
 };
 
-// Analyse, factor (workspace as asked) and solve through the slot.
-SlotResult through_slot(const Triplets& t, const Eigen::VectorXd& b) {
+// The slot's analysis of t's pattern: what Ipopt keeps for the factorizations.
+struct Analysis {
+  int flag = 0, la = 0, liw = 0, nsteps = 0;
+  std::vector<int> ikeep;
+};
+
+Analysis analyse(const Triplets& t) {
   int dim = t.n, nz = static_cast<int>(t.values.size());
-  int icntl[30], info[20], nsteps = 0, iflag = 0, maxfrt = 0;
+  int icntl[30], info[20], iflag = 0;
   double cntl[5], ops = 0.0;
   fd::dense_kkt_defaults(icntl, cntl);
-  std::vector<int> scratch(static_cast<std::size_t>(2 * nz + 3 * dim + 1)), ikeep(static_cast<std::size_t>(3 * dim)),
-      iw1(static_cast<std::size_t>(2 * dim));
+  Analysis an;
+  std::vector<int> scratch(static_cast<std::size_t>(2 * nz + 3 * dim + 1)), iw1(static_cast<std::size_t>(2 * dim));
+  an.ikeep.resize(static_cast<std::size_t>(3 * dim));
   int lscratch = static_cast<int>(scratch.size());
-  fd::dense_kkt_analyse(&dim, &nz, t.irn.data(), t.icn.data(), scratch.data(), &lscratch, ikeep.data(), iw1.data(), &nsteps,
-                        &iflag, icntl, cntl, info, &ops);
+  fd::dense_kkt_analyse(&dim, &nz, t.irn.data(), t.icn.data(), scratch.data(), &lscratch, an.ikeep.data(), iw1.data(),
+                        &an.nsteps, &iflag, icntl, cntl, info, &ops);
+  an.flag = info[0];
+  an.la = info[4];
+  an.liw = info[5];
+  return an;
+}
+
+// Factor (workspace as asked) and solve through the slot, after its analysis.
+SlotResult factor_and_solve(const Triplets& t, Analysis& an, const Eigen::VectorXd& b) {
+  int dim = t.n, nz = static_cast<int>(t.values.size());
+  int icntl[30], info[20], maxfrt = 0, nsteps = an.nsteps;
+  double cntl[5];
+  fd::dense_kkt_defaults(icntl, cntl);
+  std::vector<int> iw1(static_cast<std::size_t>(2 * dim));
   SlotResult r;
-  r.flag = info[0];
-  if (info[0] != 0) return r;
-  int la = info[4], liw = info[5];
+  int la = an.la, liw = an.liw;
+  int* ikeep = an.ikeep.data();
   std::vector<double> a(static_cast<std::size_t>(la));
   std::copy(t.values.begin(), t.values.end(), a.begin());
   std::vector<int> iw(static_cast<std::size_t>(liw));
-  fd::dense_kkt_factor(&dim, &nz, t.irn.data(), t.icn.data(), a.data(), &la, iw.data(), &liw, ikeep.data(), &nsteps, &maxfrt,
+  fd::dense_kkt_factor(&dim, &nz, t.irn.data(), t.icn.data(), a.data(), &la, iw.data(), &liw, ikeep, &nsteps, &maxfrt,
                        iw1.data(), icntl, cntl, info);
   r.flag = info[0];
   r.rank = info[1];
@@ -126,6 +144,17 @@ SlotResult through_slot(const Triplets& t, const Eigen::VectorXd& b) {
   fd::dense_kkt_solve(&dim, a.data(), &la, iw.data(), &liw, w.data(), &maxfrt, r.x.data(), iw1_solve.data(), &nsteps, icntl,
                       cntl);
   return r;
+}
+
+// Analyse, factor and solve through the slot.
+SlotResult through_slot(const Triplets& t, const Eigen::VectorXd& b) {
+  Analysis an = analyse(t);
+  if (an.flag != 0) {
+    SlotResult r;
+    r.flag = an.flag;
+    return r;
+  }
+  return factor_and_solve(t, an, b);
 }
 
 int negative_eigenvalues(const Eigen::MatrixXd& a) {
@@ -225,7 +254,7 @@ TEST(CondensedKkt, APairThatWouldTouchAnotherStaysInTheCore) {
 TEST(CondensedKkt, TripletsThatAreNotTheAnalysedPatternAreRefused) {
   std::mt19937 rng(7);
   const int nx = 6, in = 100, d0 = nx + in;
-  const Triplets t = ipopt_kkt(rng, nx, 0, in, 0.0, true);
+  const Triplets t = ipopt_kkt(rng, nx, 0, in, 0.0, true, 1.0);  // well conditioned: solutions compare
   const fd::CondensedPattern p = fd::find_eliminable_pairs(t.n, static_cast<int>(t.values.size()), t.irn.data(), t.icn.data());
   std::vector<int> iw(static_cast<std::size_t>(fd::condensed_integer_workspace(p)));
   std::vector<double> real(static_cast<std::size_t>(fd::condensed_real_workspace(p)));
@@ -244,4 +273,61 @@ TEST(CondensedKkt, TripletsThatAreNotTheAnalysedPatternAreRefused) {
   more.values.push_back(1.0);
   EXPECT_FALSE(fd::factor_condensed(more.n, static_cast<int>(more.values.size()), more.irn.data(), more.icn.data(),
                                     more.values.data(), p, iw.data(), real.data(), inertia));
+  // Through the slot, with the analysis of t: as many triplets, one coupling moved to that
+  // column. The slot's scatter plan is t's: the factorization must notice and build the moved
+  // pattern's (its roles still hold, so it is factored, as itself), and an added coupling is
+  // refused as above.
+  Analysis an = analyse(t);
+  ASSERT_EQ(an.flag, 0);
+  int present = -1;
+  for (int j = 0; j < nx && present < 0; ++j)
+    if (A(d0, j) != 0.0) present = j;
+  ASSERT_GE(present, 0);
+  Triplets moved = t;
+  std::size_t moved_entries = 0;  // every triplet of that coupling (it may be split in two)
+  for (std::size_t e = 0; e < moved.values.size(); ++e) {
+    const int i = moved.irn[e] - 1, j = moved.icn[e] - 1;
+    if ((i == d0 && j == present) || (j == d0 && i == present)) {
+      moved.irn[e] = d0 + 1;
+      moved.icn[e] = missing + 1;
+      ++moved_entries;
+    }
+  }
+  ASSERT_GT(moved_entries, 0u);
+  ASSERT_GT((moved.dense() - A).norm(), 0.0);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(t.n, -1.0, 1.0);
+  for (const Triplets* u : {static_cast<const Triplets*>(&moved), &t}) {
+    const SlotResult r = factor_and_solve(*u, an, b);
+    ASSERT_EQ(r.flag, 0);
+    const Eigen::VectorXd reference = u->dense().fullPivLu().solve(b);
+    EXPECT_LE((r.x - reference).cwiseAbs().maxCoeff(), 1e-9 * reference.cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(factor_and_solve(more, an, b).flag, 0);  // a triplet more: not factored
+}
+
+TEST(CondensedKkt, EachAnalysisFactorsWithItsOwnPlanAndADroppedPlanIsBuiltAgain) {
+  // The slot keeps the scatter plans of the last few analyses, keyed by a serial number in
+  // ikeep: twelve patterns analysed first (the first ones' plans dropped), then factored and
+  // solved newest first and again with new values, each against its own matrix.
+  std::mt19937 rng(8);
+  std::vector<Triplets> systems;
+  std::vector<Analysis> analyses;
+  for (int k = 0; k < 12; ++k) {
+    systems.push_back(ipopt_kkt(rng, 10 + k, k % 3, 110 + 7 * k, 0.0, k % 2 == 0, 1.0, 1 + k % 4));
+    analyses.push_back(analyse(systems.back()));
+    ASSERT_EQ(analyses.back().flag, 0);
+  }
+  for (int pass = 0; pass < 2; ++pass)
+    for (int k = 11; k >= 0; --k) {
+      Triplets& t = systems[static_cast<std::size_t>(k)];
+      if (pass == 1)
+        for (double& v : t.values) v *= 1.5;
+      const Eigen::MatrixXd A = t.dense();
+      const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(t.n, -1.0, 2.0);
+      const SlotResult r = factor_and_solve(t, analyses[static_cast<std::size_t>(k)], b);
+      ASSERT_EQ(r.flag, 0) << "system " << k << ", pass " << pass;
+      EXPECT_EQ(r.negative, negative_eigenvalues(A)) << "system " << k << ", pass " << pass;
+      EXPECT_LE((r.x - A.fullPivLu().solve(b)).cwiseAbs().maxCoeff(), 1e-8 * r.x.cwiseAbs().maxCoeff())
+          << "system " << k << ", pass " << pass;
+    }
 }

@@ -101,44 +101,42 @@ std::int64_t condensed_real_workspace(const CondensedPattern& p) { return RealLa
 
 int condensed_core(const int* iw) { return iw[kCore]; }
 
-bool factor_condensed(int n, int nz, const int* irn, const int* icn, const double* values, const CondensedPattern& p,
-                      int* iw, double* real, Inertia& inertia) {
+bool build_condensed_scatter(int n, int nz, const int* irn, const int* icn, const CondensedPattern& p,
+                             CondensedScatter& out) {
   const int* role = p.role.data();
   const int core = p.core, pairs = p.pairs;
+  auto pair_of_multiplier = [&](int i) { return role[i] < 0 && (-role[i]) % 2 == 0 ? (-role[i] - 2) / 2 : -1; };
   // The couplings as the triplets list them (a (d, core) pair may come more than once).
   std::vector<int> raw_start(static_cast<std::size_t>(pairs) + 1, 0);
-  auto pair_of_multiplier = [&](int i) { return role[i] < 0 && (-role[i]) % 2 == 0 ? (-role[i] - 2) / 2 : -1; };
   for (int e = 0; e < nz; ++e) {
     const int i = irn[e] - 1, j = icn[e] - 1;
     if (role[i] >= 0 && pair_of_multiplier(j) >= 0) ++raw_start[static_cast<std::size_t>(pair_of_multiplier(j)) + 1];
     else if (role[j] >= 0 && pair_of_multiplier(i) >= 0) ++raw_start[static_cast<std::size_t>(pair_of_multiplier(i)) + 1];
   }
   for (int q = 0; q < pairs; ++q) raw_start[static_cast<std::size_t>(q) + 1] += raw_start[static_cast<std::size_t>(q)];
-  std::vector<int> raw_position(static_cast<std::size_t>(raw_start.back()));
-  std::vector<double> raw_value(raw_position.size());
+  std::vector<int> raw_position(static_cast<std::size_t>(raw_start.back())), raw_entry(raw_position.size());
   std::vector<int> raw_fill(raw_start.begin(), raw_start.end() - 1);
-  std::vector<double> block(3 * static_cast<std::size_t>(pairs), 0.0);  // per pair: ss, sd, dd
-  double* S = real;
-  std::fill(S, S + static_cast<std::int64_t>(core) * core, 0.0);
+  const RealLayout R(core, pairs, p.couplings);
+  out.destination.assign(static_cast<std::size_t>(nz), 0);
   for (int e = 0; e < nz; ++e) {
     const int i = irn[e] - 1, j = icn[e] - 1, ri = role[i], rj = role[j];
-    const double v = values[e];
+    std::int64_t& to = out.destination[static_cast<std::size_t>(e)];
     if (ri >= 0 && rj >= 0) {
-      S[static_cast<std::int64_t>(std::min(ri, rj)) * core + std::max(ri, rj)] += v;
+      to = static_cast<std::int64_t>(std::min(ri, rj)) * core + std::max(ri, rj);  // S's lower triangle
     } else if (ri < 0 && rj < 0) {  // within one pair (the pattern allows no other case)
-      const auto q = static_cast<std::size_t>((-std::max(ri, rj) - 1) / 2);
+      const auto q = static_cast<std::int64_t>((-std::max(ri, rj) - 1) / 2);
       const int slot = i != j ? 1 : (-ri) % 2 == 1 ? 0 : 2;
-      block[3 * q + static_cast<std::size_t>(slot)] += v;
+      to = R.inverse + 3 * q + slot;  // the pair's block, summed where its inverse will be
     } else {
       const int q = pair_of_multiplier(ri < 0 ? i : j);
       const auto k = static_cast<std::size_t>(raw_fill[static_cast<std::size_t>(q)]++);
       raw_position[k] = ri < 0 ? rj : ri;
-      raw_value[k] = v;
+      raw_entry[k] = e;
     }
   }
 
-  // The factor: indices, then each pair's couplings with repeated positions summed (as many as
-  // the pattern has, unless the triplets are not the pattern's).
+  // Each pair's couplings with repeated positions summed into one slot (as many as the pattern
+  // has, unless the triplets are not the pattern's).
   std::vector<int> slot_of(static_cast<std::size_t>(core), -1);
   std::int64_t distinct = 0;
   for (int q = 0; q < pairs; ++q)
@@ -149,43 +147,80 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
   if (distinct != p.couplings) return false;
   std::fill(slot_of.begin(), slot_of.end(), -1);
   const IntegerLayout L(core, pairs, p.couplings);
+  out.integers.assign(static_cast<std::size_t>(L.pivots), 0);
+  int* iw = out.integers.data();
   iw[kCore] = core;
   iw[kPairs] = pairs;
+  iw[kCouplings] = static_cast<int>(p.couplings);
   for (int i = 0; i < n; ++i) {
     if (role[i] >= 0) iw[L.core_index + role[i]] = i;
     else if ((-role[i]) % 2 == 1) iw[L.pair_s + (-role[i] - 1) / 2] = i;
     else iw[L.pair_d + (-role[i] - 2) / 2] = i;
   }
-  const RealLayout R(core, pairs, p.couplings);
   int* start = iw + L.start;
   int* position = iw + L.position;
-  double* coupling = real + R.coupling;
   int kept = 0;
   for (int q = 0; q < pairs; ++q) {
     start[q] = kept;
     for (int k = raw_start[static_cast<std::size_t>(q)]; k < raw_start[static_cast<std::size_t>(q) + 1]; ++k) {
       const int pos = raw_position[static_cast<std::size_t>(k)];
       int& slot = slot_of[static_cast<std::size_t>(pos)];
-      if (slot >= start[q]) {
-        coupling[slot] += raw_value[static_cast<std::size_t>(k)];
-      } else {
+      if (slot < start[q]) {
         slot = kept++;
         position[slot] = pos;
-        coupling[slot] = raw_value[static_cast<std::size_t>(k)];
       }
+      out.destination[static_cast<std::size_t>(raw_entry[static_cast<std::size_t>(k)])] = R.coupling + slot;
     }
   }
   start[pairs] = kept;
-  iw[kCouplings] = kept;
 
-  // Each pair's block inverted (its inertia counted).
+  // Runs of pairs that couple to the same core positions in the same order (the rows of one time
+  // point: a few dozen), whose Schur updates are summed as one dense product.
+  out.run_start.clear();
+  for (int q = 0; q < pairs;) {
+    out.run_start.push_back(q);
+    const int first = start[q], count = start[q + 1] - start[q];
+    int end = q + 1;
+    while (end < pairs && start[end + 1] - start[end] == count &&
+           std::equal(position + first, position + first + count, position + start[end]))
+      ++end;
+    q = end;
+  }
+  out.run_start.push_back(pairs);
+  out.pattern = p;
+  out.triplets = nz;
+  out.rows.assign(irn, irn + nz);
+  out.columns.assign(icn, icn + nz);
+  return true;
+}
+
+bool same_pattern(const CondensedScatter& scatter, int nz, const int* irn, const int* icn) {
+  return nz == scatter.triplets && std::equal(scatter.rows.begin(), scatter.rows.end(), irn) &&
+         std::equal(scatter.columns.begin(), scatter.columns.end(), icn);
+}
+
+void factor_condensed(const CondensedScatter& scatter, const double* values, int* iw, double* real, Inertia& inertia) {
+  const int core = scatter.pattern.core, pairs = scatter.pattern.pairs;
+  const RealLayout R(core, pairs, scatter.pattern.couplings);
+  // The values summed into place: S's lower triangle, the pairs' blocks (where their inverses
+  // go), the couplings.
+  std::fill(real, real + R.size, 0.0);
+  const std::int64_t* to = scatter.destination.data();
+  for (int e = 0; e < scatter.triplets; ++e) real[to[e]] += values[e];
+  std::copy(scatter.integers.begin(), scatter.integers.end(), iw);
+  const IntegerLayout L(core, pairs, scatter.pattern.couplings);
+  const int* start = iw + L.start;
+  const int* position = iw + L.position;
+  const double* coupling = real + R.coupling;
+  double* S = real;
+
+  // Each pair's block inverted in place (its inertia counted).
   inertia = Inertia{};
   double* inverse = real + R.inverse;
   for (int q = 0; q < pairs; ++q) {
-    const double ss = block[3 * static_cast<std::size_t>(q)], sd = block[3 * static_cast<std::size_t>(q) + 1],
-                 dd = block[3 * static_cast<std::size_t>(q) + 2];
-    const double det = ss * dd - sd * sd;
     double* inv = inverse + 3 * static_cast<std::int64_t>(q);
+    const double ss = inv[0], sd = inv[1], dd = inv[2];
+    const double det = ss * dd - sd * sd;
     if (!(std::abs(det) > kRelativeZero * std::max(std::abs(ss * dd), sd * sd))) {
       inv[0] = inv[1] = inv[2] = 0.0;
       const double trace = ss + dd;
@@ -201,18 +236,15 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
     inv[1] = -sd / det;
     inv[2] = ss / det;
   }
-  // Their Schur updates of the core, S -= sum_q gamma_q b_q b_q^T (gamma_q = (P_q^-1)_dd). Runs
-  // of pairs that couple to the same core positions in the same order (the rows of one time
-  // point: a few dozen) are summed as one dense product, B diag(gamma) B^T, and scattered once:
-  // row by row, the scattered rank-one updates were most of the factorization's time.
+  // Their Schur updates of the core, S -= sum_q gamma_q b_q b_q^T (gamma_q = (P_q^-1)_dd). A run
+  // of pairs with the same couplings is summed as one dense product, B diag(gamma) B^T, and
+  // scattered once: row by row, the scattered rank-one updates were most of the factorization's
+  // time.
   Eigen::MatrixXd B, weighted, sum;
-  for (int q = 0; q < pairs;) {
+  for (std::size_t r = 0; r + 1 < scatter.run_start.size(); ++r) {
+    int q = scatter.run_start[r];
+    const int end = scatter.run_start[r + 1], run = end - q;
     const int first = start[q], count = start[q + 1] - start[q];
-    int end = q + 1;
-    while (end < pairs && start[end + 1] - start[end] == count &&
-           std::equal(position + first, position + first + count, position + start[end]))
-      ++end;
-    const int run = end - q;
     if (run < kSmallestDenseRun) {
       for (; q < end; ++q) {
         const double gamma = inverse[3 * static_cast<std::int64_t>(q) + 2];
@@ -229,11 +261,11 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
     }
     B.resize(count, run);
     weighted.resize(count, run);
-    for (int r = 0; r < run; ++r) {
-      const double gamma = inverse[3 * static_cast<std::int64_t>(q + r) + 2];
+    for (int k = 0; k < run; ++k) {
+      const double gamma = inverse[3 * static_cast<std::int64_t>(q + k) + 2];
       for (int a = 0; a < count; ++a) {
-        B(a, r) = coupling[start[q + r] + a];
-        weighted(a, r) = gamma * B(a, r);
+        B(a, k) = coupling[start[q + k] + a];
+        weighted(a, k) = gamma * B(a, k);
       }
     }
     // The lower triangle only: half the product's work.
@@ -246,7 +278,6 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
         S[static_cast<std::int64_t>(std::min(pa, pb)) * core + std::max(pa, pb)] -= sum(a, b);
       }
     }
-    q = end;
   }
   double largest = 0.0;
   for (int j = 0; j < core; ++j)
@@ -255,6 +286,13 @@ bool factor_condensed(int n, int nz, const int* irn, const int* icn, const doubl
   inertia.positive += of_core.positive;
   inertia.negative += of_core.negative;
   inertia.zero += of_core.zero;
+}
+
+bool factor_condensed(int n, int nz, const int* irn, const int* icn, const double* values, const CondensedPattern& p,
+                      int* iw, double* real, Inertia& inertia) {
+  CondensedScatter scatter;
+  if (!build_condensed_scatter(n, nz, irn, icn, p, scatter)) return false;
+  factor_condensed(scatter, values, iw, real, inertia);
   return true;
 }
 

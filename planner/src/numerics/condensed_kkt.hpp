@@ -38,9 +38,34 @@ CondensedPattern find_eliminable_pairs(int n, int nz, const int* irn, const int*
 std::int64_t condensed_integer_workspace(const CondensedPattern& p);
 std::int64_t condensed_real_workspace(const CondensedPattern& p);
 
-/// Factors the matrix (triplets with `values`, the pattern `p` was found from) into `iw` and
-/// `real` (sizes as above), its inertia into `inertia` (zero counts a singular pair block and
-/// a zero pivot of S). False, and nothing usable, when the triplets are not p's pattern.
+/// What a factorization does from the pattern alone, found once per pattern: where each
+/// triplet's value goes in the real workspace (S's lower triangle, a pair's block, a coupling;
+/// duplicates to the same place), the factor's integers but S's pivots, and the runs of pairs
+/// with the same couplings. Each factorization then only sums values into place (Ipopt factors
+/// the same pattern at every iterate: sorting the triplets anew was most of the condensed
+/// factorization's time besides the Schur updates).
+struct CondensedScatter {
+  CondensedPattern pattern;
+  int triplets = 0;
+  std::vector<int> rows, columns;         ///< the triplets' pattern it was built from (1-based)
+  std::vector<std::int64_t> destination;  ///< per triplet: its offset in the real workspace
+  std::vector<int> integers;              ///< the factor's integer part up to S's pivots
+  std::vector<int> run_start;             ///< runs of pairs [run_start[r], run_start[r + 1])
+};
+
+/// From the triplets' pattern (1-based, `p` found from it). False when the triplets are not p's
+/// pattern.
+bool build_condensed_scatter(int n, int nz, const int* irn, const int* icn, const CondensedPattern& p,
+                             CondensedScatter& out);
+
+/// Whether these triplets are the pattern the scatter was built from.
+bool same_pattern(const CondensedScatter& scatter, int nz, const int* irn, const int* icn);
+
+/// Factors the matrix (the scatter's triplets with `values`) into `iw` and `real` (sizes as
+/// above), its inertia into `inertia` (zero counts a singular pair block and a zero pivot of S).
+void factor_condensed(const CondensedScatter& scatter, const double* values, int* iw, double* real, Inertia& inertia);
+
+/// Both in one: false, and nothing usable, when the triplets are not p's pattern.
 bool factor_condensed(int n, int nz, const int* irn, const int* icn, const double* values, const CondensedPattern& p,
                       int* iw, double* real, Inertia& inertia);
 

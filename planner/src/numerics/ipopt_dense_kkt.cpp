@@ -7,7 +7,10 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <mutex>
+#include <utility>
+#include <vector>
 #include <type_traits>
 
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
@@ -30,7 +33,49 @@ static_assert(std::is_same_v<ipfint, int>, "Ipopt's Fortran integer is not int: 
 enum Mode : int { kDense = 0, kCondensed = 1 };
 constexpr int kHeader = 3;
 constexpr int kCondensedHeader = 2;
-constexpr int kKeepHeader = 4;
+constexpr int kKeepHeader = 5;  // mode, core, pairs, couplings, the analysis' serial number
+
+// The condensed factorizations' scatter plans (condensed_kkt.hpp), one per analysis, found by the
+// serial number the analysis leaves in ikeep (the slot's calls carry no other state). The most
+// recent few are kept; a factorization whose plan was dropped builds it again from the triplets.
+class ScatterPlans {
+ public:
+  int add(std::shared_ptr<const CondensedScatter> plan) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const int serial = next_serial_++;
+    if (next_serial_ == INT_MAX) next_serial_ = 0;
+    keep(serial, std::move(plan));
+    return serial;
+  }
+  std::shared_ptr<const CondensedScatter> find(int serial) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [s, plan] : plans_)
+      if (s == serial) return plan;
+    return nullptr;
+  }
+  void replace(int serial, std::shared_ptr<const CondensedScatter> plan) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    keep(serial, std::move(plan));
+  }
+
+ private:
+  // Enough for a few threads' solves at once; each plan holds about 12 bytes per triplet.
+  static constexpr std::size_t kKept = 8;
+  void keep(int serial, std::shared_ptr<const CondensedScatter> plan) {
+    plans_.erase(std::remove_if(plans_.begin(), plans_.end(), [&](const auto& e) { return e.first == serial; }),
+                 plans_.end());
+    plans_.emplace_back(serial, std::move(plan));
+    if (plans_.size() > kKept) plans_.erase(plans_.begin());
+  }
+  mutable std::mutex mutex_;
+  int next_serial_ = 0;
+  std::vector<std::pair<int, std::shared_ptr<const CondensedScatter>>> plans_;
+};
+
+ScatterPlans& scatter_plans() {
+  static ScatterPlans plans;
+  return plans;
+}
 
 // A pivot column is zero when its largest entry is below this fraction of the matrix's largest:
 // only cancellation to rounding level of exactly dependent rows, as MUMPS (and MA27 with its
@@ -68,11 +113,14 @@ void dense_kkt_analyse(int* n, int* nz, const int* irn, const int* icn, int* /*i
   if (*n > kDenseKktMaxDimension) {
     CondensedPattern p = find_eliminable_pairs(*n, *nz, irn, icn);
     const std::int64_t reals = *nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(p);
-    if (p.pairs > 0 && reals <= INT_MAX && integers <= INT_MAX) {
+    auto scatter = std::make_shared<CondensedScatter>();
+    if (p.pairs > 0 && reals <= INT_MAX && integers <= INT_MAX &&
+        build_condensed_scatter(*n, *nz, irn, icn, p, *scatter)) {
       ikeep[0] = kCondensed;
       ikeep[1] = p.core;
       ikeep[2] = p.pairs;
       ikeep[3] = static_cast<int>(p.couplings);
+      ikeep[4] = scatter_plans().add(std::move(scatter));
       std::copy(p.role.begin(), p.role.end(), ikeep + kKeepHeader);
       info[4] = static_cast<int>(reals);
       info[5] = static_cast<int>(integers);
@@ -99,7 +147,6 @@ void factor_condensed_into(int n, int nz, const int* irn, const int* icn, double
   p.core = ikeep[1];
   p.pairs = ikeep[2];
   p.couplings = ikeep[3];
-  p.role.assign(ikeep + kKeepHeader, ikeep + kKeepHeader + n);
   const std::int64_t reals = nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(p);
   if (liw < integers) {
     info[0] = -3;
@@ -113,11 +160,20 @@ void factor_condensed_into(int n, int nz, const int* irn, const int* icn, double
   }
   iw[0] = kCondensed;
   iw[1] = nz;
-  Inertia inertia;
-  if (!factor_condensed(n, nz, irn, icn, a, p, iw + kCondensedHeader, a + nz, inertia)) {
-    info[0] = -1;  // the triplets are not the analysed pattern
-    return;
+  std::shared_ptr<const CondensedScatter> scatter = scatter_plans().find(ikeep[4]);
+  // Built again when it was dropped; triplets that are not its pattern are refused by the build.
+  if (!scatter || !same_pattern(*scatter, nz, irn, icn)) {
+    auto rebuilt = std::make_shared<CondensedScatter>();
+    p.role.assign(ikeep + kKeepHeader, ikeep + kKeepHeader + n);
+    if (!build_condensed_scatter(n, nz, irn, icn, p, *rebuilt)) {
+      info[0] = -1;  // the triplets are not the analysed pattern
+      return;
+    }
+    scatter = rebuilt;
+    scatter_plans().replace(ikeep[4], std::move(rebuilt));
   }
+  Inertia inertia;
+  factor_condensed(*scatter, a, iw + kCondensedHeader, a + nz, inertia);
   *maxfrt = std::max(1, p.core);  // Ipopt allocates the solve's scratch vector of this length
   info[0] = inertia.zero > 0 ? 3 : 0;
   info[1] = n - inertia.zero;
