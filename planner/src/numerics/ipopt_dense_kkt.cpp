@@ -59,8 +59,10 @@ class ScatterPlans {
   }
 
  private:
-  // Enough for a few threads' solves at once; each plan holds about 12 bytes per triplet.
-  static constexpr std::size_t kKept = 8;
+  // Enough for a few threads' solves at once (more only rebuild plans). Each plan holds 16 bytes
+  // per triplet: about 5 MB for the arm's free path at 160 points, so at most a few tens of MB
+  // stay behind after the solves.
+  static constexpr std::size_t kKept = 4;
   void keep(int serial, std::shared_ptr<const CondensedScatter> plan) {
     plans_.erase(std::remove_if(plans_.begin(), plans_.end(), [&](const auto& e) { return e.first == serial; }),
                  plans_.end());
