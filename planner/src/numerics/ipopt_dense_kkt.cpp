@@ -9,9 +9,9 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <type_traits>
 #include <utility>
 #include <vector>
-#include <type_traits>
 
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "numerics/condensed_kkt.hpp"
