@@ -223,6 +223,8 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
                       {"rounds", f.rounds},
                       {"points", f.points},
                       {newton ? "ipopt_iterations" : "quasi_newton_steps", f.path_iterations},
+                      {"final_torque_pieces", f.final_torque_pieces},
+                      {"final_plans", f.final_plans},
                       {"seconds", f.seconds}};
     if (!newton) {
       j["free_path"]["evaluations"] = f.evaluations;

@@ -139,6 +139,11 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
     throw std::invalid_argument("open-loop plan: free_path.exchange_relative_tolerance must be finite and >= 0");
   if (f.max_rounds < 1 || f.max_path_iterations < 1 || f.max_slp_iterations < 1)
     throw std::invalid_argument("open-loop plan: free_path.max_rounds, max_path_iterations and max_slp_iterations must be >= 1");
+  if (f.max_torque_refinements < 0 || f.max_torque_refinements > 10)
+    throw std::invalid_argument("open-loop plan: free_path.max_torque_refinements must be in [0, 10] (each doubles "
+                                "the torque pieces)");
+  if (!(f.torque_model_relative_gap >= 0.0) || !std::isfinite(f.torque_model_relative_gap))
+    throw std::invalid_argument("open-loop plan: free_path.torque_model_relative_gap must be finite and >= 0");
 }
 
 }  // namespace
@@ -295,15 +300,45 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
     plan.Y.reset();
     return plan;
   }
-  plan.path = free.path;
-  plan.Y.reset();
-  plan.check = PlanCheck{};
   // The path stage's plan and points are where the bounded exchange along the new path starts
-  // (it is certified there like any plan along a path).
+  // (it is certified there like any plan along a path). Its torque model is refined while that
+  // plan fails or costs clearly more than the path stage's (FreeJointPathOptions::
+  // max_torque_refinements); the best plan made is kept.
   const detail::BoundsWarmStart warm{free.theta, free.times_s};
-  plan_along_path(flat, workspace, bc, o, plan, &warm);
+  const FreeJointPathOptions& f = o.free_path;
+  OpenLoopOptions along = o;
+  OpenLoopPlan best;
+  int best_pieces = 0;
+  for (int refinement = 0;; ++refinement) {
+    OpenLoopPlan attempt = plan;
+    attempt.path = free.path;
+    attempt.Y.reset();
+    attempt.check = PlanCheck{};
+    plan_along_path(flat, workspace, bc, along, attempt, &warm);
+    report.final_plans = refinement + 1;
+    // A solved plan beats a failed one and a cheaper one a dearer one; among failures the last
+    // (finest torque model) says why.
+    const bool solved = attempt.status == SolveStatus::Solved, best_solved = best.status == SolveStatus::Solved;
+    if (refinement == 0 || (solved && (!best_solved || attempt.sos.cost_N_s < best.sos.cost_N_s)) ||
+        (!solved && !best_solved)) {
+      best = std::move(attempt);
+      best_pieces = along.torque.pieces;
+    }
+    const bool close = best.status == SolveStatus::Solved &&
+                       best.sos.cost_N_s <= (1.0 + f.torque_model_relative_gap) * free.cost_N_s;
+    if (close || refinement == f.max_torque_refinements) break;
+    along.torque.pieces *= 2;
+    along.torque.piece_growth = std::sqrt(along.torque.piece_growth);
+  }
+  report.final_torque_pieces = best_pieces;
   report.optimized = true;
   report.seconds = free_path.seconds();
+  const FreePathReport kept = report;
+  plan = std::move(best);
+  plan.free_path = kept;
+  if (plan.status != SolveStatus::Solved && kept.final_plans > 1)
+    plan.message += " (along the optimized path with torque models of " + std::to_string(o.torque.pieces) + " to " +
+                    std::to_string(along.torque.pieces) + " pieces)";
   return plan;
 }
 

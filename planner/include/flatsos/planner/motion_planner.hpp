@@ -89,6 +89,14 @@ struct FreeJointPathOptions {
   int max_path_iterations = 200;  ///< quasi-Newton steps per exchange round
   int max_slp_iterations = 200;   ///< sequential-LP steps per evaluation of V(c)
   int max_newton_iterations = 1000;  ///< Ipopt iterations per exchange round (JointNewton)
+  /// The plan along the optimized path gets its own torque model, and the optimized path is
+  /// faster than the prescribed one: the pieces chosen for that (OpenLoopOptions::torque) may not
+  /// follow it, and their remainders then leave no room for the reserves (the plan fails) or cost
+  /// effort. The pieces double (their growth its square root, keeping the grading), at most
+  /// `max_torque_refinements` times, while that plan fails or costs more than
+  /// `torque_model_relative_gap` above the path stage's cost at its points (exact torques).
+  int max_torque_refinements = 3;
+  double torque_model_relative_gap = 5e-3;
 };
 
 /// What optimizing the joint path did (OpenLoopOptions::free_path).
@@ -102,6 +110,9 @@ struct FreePathReport {
   /// Quasi-Newton steps (ReducedQuasiNewton) or Ipopt iterations (JointNewton), then V(c)
   /// evaluations and their LP steps (ReducedQuasiNewton only).
   int path_iterations = 0, evaluations = 0, slp_iterations = 0;
+  /// The torque model of the plan along the optimized path: its pieces (torque.pieces, doubled
+  /// max_torque_refinements times at most) and how many plans along the path were made.
+  int final_torque_pieces = 0, final_plans = 0;
   double seconds = 0.0;
 };
 
