@@ -61,6 +61,10 @@ int main(int argc, char** argv) {
                  "each of the free path's spans this many times as long as the one before (1: uniform; above 1: "
                  "short spans at the start, where a low-effort transfer moves fast)")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--free-path-torque-refinements", options.free_path.max_torque_refinements,
+                 "at most this many doublings of the torque pieces for the plan along the optimized path, while it "
+                 "fails or costs more than 0.5 % above the path stage's cost at its points (0: none)")
+      ->capture_default_str()->check(CLI::Range(0, 10));
   std::string free_path_method = fpl::to_string(options.free_path.method);
   app.add_option("--free-path-method", free_path_method,
                  "how the free joint path moves: reduced_quasi_newton (BFGS on the bounded plan's cost as a "

@@ -93,7 +93,7 @@ struct FreeJointPathOptions {
   /// faster than the prescribed one: the pieces chosen for that (OpenLoopOptions::torque) may not
   /// follow it, and their remainders then leave no room for the reserves (the plan fails) or cost
   /// effort. The pieces double (their growth its square root, keeping the grading), at most
-  /// `max_torque_refinements` times, while that plan fails or costs more than
+  /// `max_torque_refinements` (0 to 10) times, while that plan fails or costs more than
   /// `torque_model_relative_gap` above the path stage's cost at its points (exact torques).
   int max_torque_refinements = 3;
   double torque_model_relative_gap = 5e-3;
