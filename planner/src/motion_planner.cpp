@@ -319,8 +319,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
     // A solved plan beats a failed one and a cheaper one a dearer one; among failures the last
     // (finest torque model) says why.
     const bool solved = attempt.status == SolveStatus::Solved, best_solved = best.status == SolveStatus::Solved;
-    if (refinement == 0 || (solved && (!best_solved || attempt.sos.cost_N_s < best.sos.cost_N_s)) ||
-        (!solved && !best_solved)) {
+    if ((solved && (!best_solved || attempt.sos.cost_N_s < best.sos.cost_N_s)) || (!solved && !best_solved)) {
       best = std::move(attempt);
       best_pieces = along.torque.pieces;
     }

@@ -188,14 +188,13 @@ bool build_condensed_scatter(int n, int nz, const int* irn, const int* icn, cons
   }
   out.run_start.push_back(pairs);
   out.pattern = p;
-  out.triplets = nz;
   out.rows.assign(irn, irn + nz);
   out.columns.assign(icn, icn + nz);
   return true;
 }
 
 bool same_pattern(const CondensedScatter& scatter, int nz, const int* irn, const int* icn) {
-  return nz == scatter.triplets && std::equal(scatter.rows.begin(), scatter.rows.end(), irn) &&
+  return static_cast<std::size_t>(nz) == scatter.rows.size() && std::equal(scatter.rows.begin(), scatter.rows.end(), irn) &&
          std::equal(scatter.columns.begin(), scatter.columns.end(), icn);
 }
 
@@ -206,7 +205,7 @@ void factor_condensed(const CondensedScatter& scatter, const double* values, int
   // go), the couplings.
   std::fill(real, real + R.size, 0.0);
   const std::int64_t* to = scatter.destination.data();
-  for (int e = 0; e < scatter.triplets; ++e) real[to[e]] += values[e];
+  for (std::size_t e = 0; e < scatter.destination.size(); ++e) real[to[e]] += values[e];
   std::copy(scatter.integers.begin(), scatter.integers.end(), iw);
   const IntegerLayout L(core, pairs, scatter.pattern.couplings);
   const int* start = iw + L.start;

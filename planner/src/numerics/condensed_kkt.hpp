@@ -46,7 +46,6 @@ std::int64_t condensed_real_workspace(const CondensedPattern& p);
 /// factorization's time besides the Schur updates).
 struct CondensedScatter {
   CondensedPattern pattern;
-  int triplets = 0;
   std::vector<int> rows, columns;         ///< the triplets' pattern it was built from (1-based)
   std::vector<std::int64_t> destination;  ///< per triplet: its offset in the real workspace
   std::vector<int> integers;              ///< the factor's integer part up to S's pivots
