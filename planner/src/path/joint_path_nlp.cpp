@@ -180,18 +180,28 @@ JointPathNlpOutcome solve_joint_path_nlp(const SosSetup& setup, const FlatOutput
   // The effort in N s is O(100-1000): scaled to O(1).
   app->Options()->SetNumericValue("obj_scaling_factor",
                                   1.0 / (1.0 + std::abs(setup.cost_constant + setup.lp.cost.dot(start.z.head(v.thetas)))));
-  // The start is a plan whose active rows are at their bounds: Ipopt's default barrier (mu = 0.1)
-  // and push into the interior (1e-2) moved it far away, to a worse local optimum (254 against
-  // 205 N s on the arm); a small barrier and push keep it near. A later round starts from the
-  // last round's primal-dual optimum.
-  app->Options()->SetNumericValue("mu_init", warm ? 1e-7 : 1e-4);
+  // The start is a plan whose active rows are at their bounds. Ipopt's default barrier (mu = 0.1)
+  // moved it far away, to a worse local optimum (254 against 205 N s on the arm). A small
+  // barrier keeps it near. The rows' slacks start 1e-2 off their bounds: with a push of 1e-6
+  // the first dozen iterations only crept away from the start's active rows (steps growing
+  // about twofold per iteration). A later round starts from the last round's primal-dual
+  // optimum, its slacks again pushed off their bounds (3e-2) and every multiplier at least 1e-3:
+  // the new points' rows start violated, and with the last optimum's active slacks at 1e-9 the
+  // first 15-20 steps were cut to 1e-6..1e-2 of their length by the fraction to the boundary.
+  // On the arm's free path 81 -> 59 iterations, on seven configurations 796 -> 596, each to the
+  // same plan (docs/method/free_path.md, "Speed").
+  app->Options()->SetNumericValue("mu_init", warm ? 1e-7 : 1e-5);
   app->Options()->SetNumericValue("bound_push", 1e-6);
   app->Options()->SetNumericValue("bound_frac", 1e-6);
+  app->Options()->SetNumericValue("slack_bound_push", 1e-2);
+  app->Options()->SetNumericValue("slack_bound_frac", 1e-2);
   if (warm) {
     app->Options()->SetStringValue("warm_start_init_point", "yes");
     app->Options()->SetNumericValue("warm_start_bound_push", 1e-9);
     app->Options()->SetNumericValue("warm_start_bound_frac", 1e-9);
-    app->Options()->SetNumericValue("warm_start_mult_bound_push", 1e-9);
+    app->Options()->SetNumericValue("warm_start_slack_bound_push", 3e-2);
+    app->Options()->SetNumericValue("warm_start_slack_bound_frac", 3e-2);
+    app->Options()->SetNumericValue("warm_start_mult_bound_push", 1e-3);
   }
   // The KKT system is an arrow: thousands of rows, each coupling a slack and a multiplier to the
   // few dozen variables of its point, around a dense block of the path's coefficients. By default
