@@ -173,6 +173,13 @@ int main(int argc, char** argv) try {
     const fpl::Jet qj = plan.jointJet(t), yj = plan.flatOutputJet(t);
     j["inverse_map_one_time"] = stats(repeat(reps * 20, [&] { flat.inverse(ws, qj, yj); }), 1e6, "us");
     j["inverse_dynamics_one_call"] = stats(repeat(reps * 50, [&] { flat.torque(ws, qj.col(0), qj.col(1), qj.col(2)); }), 1e6, "us");
+    // The torques' jet along the motion (tau, tau', tau'') and its gradient in the joint jet (q ..
+    // q''''), which the free path needs at every point and iterate.
+    const fpl::Jet path_jet = plan.path.jet(t, 5);
+    const auto& tree = flat.model().pinTree();
+    Eigen::MatrixXd gradient;
+    j["torque_jet_one_time"] = stats(repeat(reps * 50, [&] { tree.torqueJet(path_jet); }), 1e6, "us");
+    j["torque_jet_gradient_one_time"] = stats(repeat(reps * 20, [&] { tree.torqueJet(path_jet, gradient); }), 1e6, "us");
   };
   if (open_loop_only) {
     time_check_and_inverse_map();

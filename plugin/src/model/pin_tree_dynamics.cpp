@@ -109,48 +109,110 @@ void PinTreeDynamics::inverseDynamicsOf(ScratchOf<S>& scratch, const S* q, const
   }
 }
 
+namespace {
+// Products of S-valued vectors and matrices with the model's constants (axes, offsets, mass
+// centres, inertias): each such product scales an entry (scaled, dual_number.hpp) instead of
+// multiplying two jets, and the constants' zeros (axes and offsets along a frame axis, diagonal
+// inertias) are skipped. The dual passes of the free path's torque-jet gradient spend their time
+// here.
+template <class S>
+using Vec3 = Eigen::Matrix<S, 3, 1>;
+template <class S>
+using Mat3 = Eigen::Matrix<S, 3, 3>;
+
+// A v for a constant v.
+template <class S>
+Vec3<S> times_constant(const Mat3<S>& A, const Eigen::Vector3d& v) {
+  Vec3<S> out = Vec3<S>::Zero();
+  for (int k = 0; k < 3; ++k)
+    if (v[k] != 0.0)
+      for (int i = 0; i < 3; ++i) out[i] += scaled(A(i, k), v[k]);
+  return out;
+}
+
+// A B for a constant B.
+template <class S>
+Mat3<S> times_constant(const Mat3<S>& A, const Eigen::Matrix3d& B) {
+  Mat3<S> out = Mat3<S>::Zero();
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      if (B(k, j) != 0.0)
+        for (int i = 0; i < 3; ++i) out(i, j) += scaled(A(i, k), B(k, j));
+  return out;
+}
+
+// B v for a constant B.
+template <class S>
+Vec3<S> constant_times(const Eigen::Matrix3d& B, const Vec3<S>& v) {
+  Vec3<S> out = Vec3<S>::Zero();
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (B(i, k) != 0.0) out[i] += scaled(v[k], B(i, k));
+  return out;
+}
+
+// x v for a constant v.
+template <class S>
+Vec3<S> along_constant(const S& x, const Eigen::Vector3d& v) {
+  Vec3<S> out = Vec3<S>::Zero();
+  for (int i = 0; i < 3; ++i)
+    if (v[i] != 0.0) out[i] = scaled(x, v[i]);
+  return out;
+}
+}  // namespace
+
 template <class S>
 void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const {
-  using Vec = Eigen::Matrix<S, 3, 1>;
-  using Mat = Eigen::Matrix<S, 3, 3>;
+  using Vec = Vec3<S>;
+  using std::cos;
+  using std::sin;
   const int n = numJoints();
   scratch.bodies.resize(joints_.size());  // no allocation once sized
-  const Vec gravity = gravity_m_per_s2_.cast<S>();
   // Outward: kinematics of each body from its parent's (parents come first), and the body's own
   // inertial and gravity load.
   for (int i = 0; i < n; ++i) {
     const Joint& j = joints_[static_cast<std::size_t>(i)];
     auto& b = scratch.bodies[static_cast<std::size_t>(i)];
-    Mat parent_rotation = Mat::Identity();
-    Vec parent_origin = Vec::Zero(), w = Vec::Zero(), wd = Vec::Zero(), a = Vec::Zero();
-    if (j.parent >= 0) {
+    // Rodrigues: the rotation by q about the unit axis, R = I + sin q K + (1 - cos q) K^2, turned
+    // by the parent's rotation P: P R = P + sin q (P K) + (1 - cos q) (P K^2).
+    const S sin_q = sin(q[i]), one_minus_cos_q = S(1.0) - cos(q[i]);
+    if (j.parent < 0) {  // on the ground: the parent's frame is the ground's, at rest
+      b.origin_m = j.location_in_parent_m.cast<S>();
+      b.axis = j.axis.cast<S>();
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          S entry(r == c ? 1.0 : 0.0);
+          if (j.axis_cross(r, c) != 0.0) entry += scaled(sin_q, j.axis_cross(r, c));
+          if (j.axis_cross_squared(r, c) != 0.0) entry += scaled(one_minus_cos_q, j.axis_cross_squared(r, c));
+          b.rotation(r, c) = entry;
+        }
+      b.origin_acceleration = Vec::Zero();
+      b.angular_velocity = along_constant(qd[i], j.axis);
+      b.angular_acceleration = along_constant(qdd[i], j.axis);
+    } else {
       const auto& p = scratch.bodies[static_cast<std::size_t>(j.parent)];
-      parent_rotation = p.rotation;
-      parent_origin = p.origin_m;
-      w = p.angular_velocity;
-      wd = p.angular_acceleration;
-      a = p.origin_acceleration;
+      const Vec r = times_constant(p.rotation, j.location_in_parent_m);  // parent origin -> joint
+      b.axis = times_constant(p.rotation, j.axis);
+      b.rotation = p.rotation + sin_q * times_constant(p.rotation, j.axis_cross) +
+                   one_minus_cos_q * times_constant(p.rotation, j.axis_cross_squared);
+      b.origin_m = p.origin_m + r;
+      const Vec& w = p.angular_velocity;
+      b.origin_acceleration = p.origin_acceleration + p.angular_acceleration.cross(r) + w.cross(w.cross(r));
+      b.angular_velocity = w + b.axis * qd[i];
+      // The axis is fixed in the parent, so it turns with the parent's angular velocity.
+      b.angular_acceleration = p.angular_acceleration + b.axis * qdd[i] + w.cross(b.axis) * qd[i];
     }
-    const Vec r = parent_rotation * j.location_in_parent_m.cast<S>();  // parent origin -> joint
-    b.axis = parent_rotation * j.axis.cast<S>();
-    // Rodrigues: the rotation by q about the unit axis, R = I + sin q K + (1 - cos q) K^2.
-    using std::cos;
-    using std::sin;
-    const Mat joint_rotation = Mat::Identity() + sin(q[i]) * j.axis_cross.cast<S>() +
-                               (S(1.0) - cos(q[i])) * j.axis_cross_squared.cast<S>();
-    b.rotation = parent_rotation * joint_rotation;
-    b.origin_m = parent_origin + r;
-    b.origin_acceleration = a + wd.cross(r) + w.cross(w.cross(r));
-    b.angular_velocity = w + b.axis * qd[i];
-    // The axis is fixed in the parent, so it turns with the parent's angular velocity.
-    b.angular_acceleration = wd + b.axis * qdd[i] + w.cross(b.axis) * qd[i];
-
     const Vec& wb = b.angular_velocity;
-    const Vec c = b.rotation * j.mass_center_m.cast<S>();  // origin -> mass center
+    const Vec c = times_constant(b.rotation, j.mass_center_m);  // origin -> mass center
     const Vec com_acceleration = b.origin_acceleration + b.angular_acceleration.cross(c) + wb.cross(wb.cross(c));
-    const Mat inertia = b.rotation * j.inertia_about_com_kg_m2.cast<S>() * b.rotation.transpose();
-    b.force_N = S(j.mass_kg) * (com_acceleration - gravity);
-    b.moment_N_m = inertia * b.angular_acceleration + wb.cross(inertia * wb) + c.cross(b.force_N);
+    // The inertia about the mass center acts in the body's frame: R I R^T v = R (I (R^T v)).
+    const auto inertia_times = [&](const Vec& v) {
+      return Vec(b.rotation * constant_times(j.inertia_about_com_kg_m2, Vec(b.rotation.transpose() * v)));
+    };
+    Vec load = com_acceleration;
+    for (int k = 0; k < 3; ++k) load[k] -= S(gravity_m_per_s2_[k]);
+    for (int k = 0; k < 3; ++k) b.force_N[k] = scaled(load[k], j.mass_kg);
+    b.moment_N_m = inertia_times(b.angular_acceleration) + wb.cross(inertia_times(wb)) + c.cross(b.force_N);
   }
   // Inward: children add their loads to their parents (children come after their parents).
   for (int i = n - 1; i >= 0; --i) {
@@ -170,21 +232,29 @@ namespace {
 // tau along a motion as a time jet: each of q, qd, qdd is (x, x', x'') read from the jet, so tau
 // comes out with d/dt and d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)). `seed(joint, block)` gives
 // that jet for q (block 0), qd (1) or qdd (2) of a joint.
+// The buffers of torque_jet_from_seeds, kept across the passes of one gradient or Hessian.
+template <class S>
+struct TorqueJetBuffers {
+  std::vector<TimeJet<S>> q, qd, qdd, tau;
+  PinTreeDynamics::ScratchOf<TimeJet<S>> scratch;
+};
+
 template <class S, class SeedAt>
-void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std::vector<S>& tau_out) {
+void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std::vector<S>& tau_out,
+                           TorqueJetBuffers<S>& buffers) {
   using H = TimeJet<S>;
   const int n = tree.numJoints();
-  std::vector<H> q(static_cast<std::size_t>(n)), qd(q), qdd(q), tau(q);
+  const auto size = static_cast<std::size_t>(n);
+  buffers.q.resize(size), buffers.qd.resize(size), buffers.qdd.resize(size), buffers.tau.resize(size);
   for (int i = 0; i < n; ++i) {
-    q[static_cast<std::size_t>(i)] = seed(i, 0);
-    qd[static_cast<std::size_t>(i)] = seed(i, 1);
-    qdd[static_cast<std::size_t>(i)] = seed(i, 2);
+    buffers.q[static_cast<std::size_t>(i)] = seed(i, 0);
+    buffers.qd[static_cast<std::size_t>(i)] = seed(i, 1);
+    buffers.qdd[static_cast<std::size_t>(i)] = seed(i, 2);
   }
-  PinTreeDynamics::ScratchOf<H> scratch;
-  tree.inverseDynamicsOf<H>(scratch, q.data(), qd.data(), qdd.data(), tau.data());
+  tree.inverseDynamicsOf<H>(buffers.scratch, buffers.q.data(), buffers.qd.data(), buffers.qdd.data(), buffers.tau.data());
   tau_out.resize(static_cast<std::size_t>(3 * n));
   for (int i = 0; i < n; ++i) {
-    const H& t = tau[static_cast<std::size_t>(i)];
+    const H& t = buffers.tau[static_cast<std::size_t>(i)];
     tau_out[static_cast<std::size_t>(3 * i)] = t.value;
     tau_out[static_cast<std::size_t>(3 * i + 1)] = t.rate;
     tau_out[static_cast<std::size_t>(3 * i + 2)] = t.acceleration;
@@ -193,13 +263,13 @@ void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std:
 
 // The same with every seed read from the jet: jet(joint, order), orders 0..4.
 template <class S, class JetAt>
-void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>& tau_out) {
+void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>& tau_out, TorqueJetBuffers<S>& buffers) {
   torque_jet_from_seeds<S>(
       tree,
       [&](int joint, int block) {
         return TimeJet<S>(jet(joint, block), jet(joint, block + 1), jet(joint, block + 2));
       },
-      tau_out);
+      tau_out, buffers);
 }
 
 void require_jet(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::MatrixXd>& q_jet) {
@@ -214,7 +284,8 @@ void require_jet(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::Matr
 Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet) const {
   require_jet(*this, q_jet);
   std::vector<double> tau;
-  torque_jet_of<double>(*this, [&](int r, int l) { return q_jet(r, l); }, tau);
+  TorqueJetBuffers<double> buffers;
+  torque_jet_of<double>(*this, [&](int r, int l) { return q_jet(r, l); }, tau, buffers);
   Eigen::MatrixXd out(numJoints(), 3);
   for (int i = 0; i < numJoints(); ++i)
     for (int k = 0; k < 3; ++k) out(i, k) = tau[static_cast<std::size_t>(3 * i + k)];
@@ -228,6 +299,7 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
   gradient.setZero(3 * n, 5 * n);
   Eigen::MatrixXd out(n, 3);
   std::vector<Dual<double>> tau;
+  TorqueJetBuffers<Dual<double>> buffers;
   // tau(t) = ID(x(t)) with x = (q, qd, qdd), so d tau^(k) / d x^(j) = binom(k, j) A^(k-j),
   // where A(t) = dID/dx along the motion (the Jacobian of a Taylor expansion is lower
   // block-Toeplitz in the Jacobian's own expansion). One pass per entry of x (3N), with a third
@@ -243,7 +315,7 @@ Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixX
             const double x = q_jet(joint, block), x1 = q_jet(joint, block + 1), x2 = q_jet(joint, block + 2);
             return TimeJet<D>(D(x, joint == r && block == b ? 1.0 : 0.0), D(x1), D(x2));
           },
-          tau);
+          tau, buffers);
       for (int i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k)
           for (int j = 0; j <= k; ++j)
@@ -264,6 +336,7 @@ Eigen::MatrixXd PinTreeDynamics::torqueJetHessian(const Eigen::Ref<const Eigen::
                                 std::to_string(weights.rows()) + " x " + std::to_string(weights.cols()));
   using S = Dual<Dual<double>>;
   std::vector<S> tau;
+  TorqueJetBuffers<S> buffers;
   Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(5 * n, 5 * n);
   for (int a = 0; a < 5 * n; ++a)
     for (int b = 0; b <= a; ++b) {
@@ -276,7 +349,7 @@ Eigen::MatrixXd PinTreeDynamics::torqueJetHessian(const Eigen::Ref<const Eigen::
             const int entry = 5 * joint + order;
             return S(Dual<double>(q_jet(joint, order), entry == b ? 1.0 : 0.0), Dual<double>(entry == a ? 1.0 : 0.0, 0.0));
           },
-          tau);
+          tau, buffers);
       double sum = 0.0;
       for (int i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k) sum += weights(i, k) * tau[static_cast<std::size_t>(3 * i + k)].derivative.derivative;
