@@ -273,6 +273,8 @@ Eigen::MatrixXd PathRows::pointHessian(std::size_t point, const Eigen::VectorXd&
   // curvature in u, J_u^T (d w / du) J_u.
   Eigen::MatrixXd wF = Eigen::MatrixXd::Zero(m, 3);
   Eigen::MatrixXd path_gradient(3, kOrders * n);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> J_theta(3, cols);
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J_path(6, paths), Hu_J_theta(6, cols), Hu_J_path(6, paths);
   using Vector6 = Eigen::Matrix<double, 6, 1>;
   for (int j = 0; j < m; ++j) {
     const double* l = lambda + j * kRows;
@@ -303,14 +305,22 @@ Eigen::MatrixXd PathRows::pointHessian(std::size_t point, const Eigen::VectorXd&
       Hu.col(i) = (weighted_gradient(up) - weighted_gradient(down)) / (2.0 * h);
     }
     Hu = 0.5 * (Hu + Hu.transpose()).eval();
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(6, local);  // du / d(local variables)
+    // du / d(local variables), by blocks: the force jet over theta (3 x cols; the length jet has
+    // no theta columns), and u over the path (6 x paths). Only H's lower triangle is read
+    // (emitLagrangianHessian), so its theta-theta, path-theta and path-path blocks are summed,
+    // by coefficient-wise products (these blocks are too small for blocked ones to pay).
     for (int k = 0; k < 3; ++k) {
-      J.block(k, 0, 1, cols) = pt.flat.slope[static_cast<std::size_t>(k)].row(j);
-      for (int i = 0; i < n; ++i) J.block(k, cols, 1, paths) += flat_.Ctau()(j, i) * dtau.row(3 * i + k);
+      J_theta.row(k) = pt.flat.slope[static_cast<std::size_t>(k)].row(j);
+      J_path.row(k).setZero();
+      for (int i = 0; i < n; ++i) J_path.row(k) += flat_.Ctau()(j, i) * dtau.row(3 * i + k);
     }
     flat_.pathLengthJetGradient(j, q_jet, path_gradient);
-    J.bottomRightCorner(3, paths) = path_gradient * dq;
-    H.noalias() += J.transpose() * Hu * J;
+    J_path.bottomRows<3>() = path_gradient * dq;
+    Hu_J_theta = Hu.leftCols<3>() * J_theta;
+    H.topLeftCorner(cols, cols) += J_theta.transpose().lazyProduct(Hu_J_theta.topRows<3>());
+    H.bottomLeftCorner(paths, cols) += J_path.transpose().lazyProduct(Hu_J_theta);
+    Hu_J_path = Hu * J_path;
+    H.bottomRightCorner(paths, paths) += J_path.transpose().lazyProduct(Hu_J_path);
   }
 
   // The torque jet's own curvature in the joint jet, weighted by w: the Hessian of
