@@ -60,11 +60,18 @@ CondensedPattern find_eliminable_pairs(int n, int nz, const int* irn, const int*
     neighbour[static_cast<std::size_t>(fill[static_cast<std::size_t>(i)]++)] = j;
     neighbour[static_cast<std::size_t>(fill[static_cast<std::size_t>(j)]++)] = i;
   }
-  std::vector<int> degree(static_cast<std::size_t>(n));
+  // Duplicates out, by the last index that saw each neighbour (no sort: the core's indices have
+  // thousands of neighbours each, and only their count and membership matter below).
+  std::vector<int> degree(static_cast<std::size_t>(n)), seen_by(static_cast<std::size_t>(n), -1);
   for (int i = 0; i < n; ++i) {
-    auto first = neighbour.begin() + start[static_cast<std::size_t>(i)], last = neighbour.begin() + start[static_cast<std::size_t>(i) + 1];
-    std::sort(first, last);
-    degree[static_cast<std::size_t>(i)] = static_cast<int>(std::unique(first, last) - first);
+    std::int64_t distinct = start[static_cast<std::size_t>(i)];
+    for (std::int64_t k = start[static_cast<std::size_t>(i)]; k < start[static_cast<std::size_t>(i) + 1]; ++k) {
+      const int j = neighbour[static_cast<std::size_t>(k)];
+      if (seen_by[static_cast<std::size_t>(j)] == i) continue;
+      seen_by[static_cast<std::size_t>(j)] = i;
+      neighbour[static_cast<std::size_t>(distinct++)] = j;
+    }
+    degree[static_cast<std::size_t>(i)] = static_cast<int>(distinct - start[static_cast<std::size_t>(i)]);
   }
   auto neighbours_of = [&](int i) {
     const int* first = neighbour.data() + start[static_cast<std::size_t>(i)];
