@@ -1,7 +1,6 @@
 #include "path/joint_path_nlp.hpp"
 
 #include <cmath>
-#include <cstdlib>
 #include <utility>
 
 #include "numerics/ipopt_support.hpp"
@@ -217,7 +216,6 @@ JointPathNlpOutcome solve_joint_path_nlp(const SosSetup& setup, const FlatOutput
   // error is near rounding, docs/method/ipopt_linear_solver.md); Ipopt still refines a direction
   // whose residual is large. The same iterations, the path stage about 6 % faster on the arm.
   if (app.linear_solver == IpoptLinearSolver::DenseLdlt) app->Options()->SetIntegerValue("min_refinement_steps", 0);
-  if (std::getenv("IPL")) app->Options()->SetIntegerValue("print_level", std::atoi(std::getenv("IPL")));
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
   JointPathNlpOutcome out;
   out.solved = ipopt_solved(status);

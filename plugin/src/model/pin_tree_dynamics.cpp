@@ -229,9 +229,6 @@ void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, cons
 
 namespace {
 
-// tau along a motion as a time jet: each of q, qd, qdd is (x, x', x'') read from the jet, so tau
-// comes out with d/dt and d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)). `seed(joint, block)` gives
-// that jet for q (block 0), qd (1) or qdd (2) of a joint.
 // The buffers of torque_jet_from_seeds, kept across the passes of one gradient or Hessian.
 template <class S>
 struct TorqueJetBuffers {
@@ -239,6 +236,9 @@ struct TorqueJetBuffers {
   PinTreeDynamics::ScratchOf<TimeJet<S>> scratch;
 };
 
+// tau along a motion as a time jet: each of q, qd, qdd is (x, x', x'') read from the jet, so tau
+// comes out with d/dt and d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)). `seed(joint, block)` gives
+// that jet for q (block 0), qd (1) or qdd (2) of a joint.
 template <class S, class SeedAt>
 void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std::vector<S>& tau_out,
                            TorqueJetBuffers<S>& buffers) {
