@@ -336,7 +336,9 @@ bool add_violated_points(SosSetup& setup, const Eigen::VectorXd& theta, double m
   segments.reserve(setup.constraints.size());
   for (std::size_t k = 0; k < setup.constraints.size(); ++k) {
     Polynomial p = setup.constraints[k].at(theta);
-    const double lower = from_monomial(GramBasis::Bernstein, p.coefficients()).minCoeff();
+    // Less the conversion's rounding (sums of the coefficients' size), so that the bound stays one.
+    const double lower = from_monomial(GramBasis::Bernstein, p.coefficients()).minCoeff() -
+                         1e-13 * (1.0 + p.coefficients().cwiseAbs().sum());
     segments.push_back({std::isnan(lower) ? -std::numeric_limits<double>::infinity() : lower, k, std::move(p)});
   }
   std::sort(segments.begin(), segments.end(), [](const Segment& a, const Segment& b) { return a.lower < b.lower; });
