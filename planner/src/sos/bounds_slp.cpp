@@ -269,7 +269,8 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     // A step that removes a tenth of the linearized violation removes a tenth of what the
     // violation's own LP can (never more than all of it): the penalty stays, and that LP, which
     // could only confirm it, is not solved (the arm's free path: 182 -> 142 LPs, the same plans).
-    const bool step_steers = violation_now - linear_violation(d) >= 0.1 * violation_now;
+    double step_violation = linear_violation(d);  // the linearized rows' at d (kept while d is)
+    const bool step_steers = violation_now - step_violation >= 0.1 * violation_now;
     if (settings.steering && violation_now > kBoundMargin && !step_steers) {
       // Steering (Byrd, Nocedal and Waltz): the step must remove a tenth of what the
       // violation's own LP can remove in this box, or the penalty rises now, not after the
@@ -290,11 +291,12 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
         out.rows_violated = !rows_hold();
         return out;
       }
-      while (violation_now - linear_violation(d) < 0.1 * best && penalty < kMaxPenalty) {
+      while (violation_now - step_violation < 0.1 * best && penalty < kMaxPenalty) {
         penalty *= 10.0;
         phi = merit(theta, rows);
         cost_scale = 1.0 / penalty;
         if (!solve_over_candidates(step, d)) return out;
+        step_violation = linear_violation(d);
         step_row = lp_row;
       }
       cost_scale = 1.0 / penalty;
@@ -311,7 +313,7 @@ SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows&
     // The predicted decrease from the linearized rows at d itself, not from the LP's slacks:
     // those carry the LP's own feasibility tolerance, which the penalty would magnify. The rows
     // left out are >= 0 at 0 and at d in the linearization: they add nothing.
-    const double predicted = penalty * (violation_now - linear_violation(d)) - lp.cost.dot(d);
+    const double predicted = penalty * (violation_now - step_violation) - lp.cost.dot(d);
     const double step_size = d.size() ? d.cwiseAbs().maxCoeff() : 0.0;
     // Settled: nothing left to gain, or steps far below any meaningful force. Done when every
     // imposed row holds (bound rows to their margin, so that a and n are inside at the point;
