@@ -50,6 +50,8 @@ int main(int argc, char** argv) {
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-2));
   app.add_option("--report-interval-s", report_interval, "time between rows of states.sto, s")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  long max_steps = 1000000;
+  ex::add_max_steps_option(app, max_steps);
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,
                             "rkm (Runge-Kutta-Merson), bdf (CPodes) or rosenbrock (implicit in the muscles); the "
@@ -99,6 +101,7 @@ int main(int argc, char** argv) {
     options.accuracy = accuracy;
     options.integrator = fp::integrator_from_name(integrator);
     options.report_interval_s = report_interval;
+    options.max_steps = max_steps;
     const auto result = fp::simulate(*model, s, options);
 
     std::filesystem::create_directories(out_dir);
@@ -107,8 +110,8 @@ int main(int argc, char** argv) {
                       {"accuracy", ex::format(accuracy)},
                       {"integrator", integrator},
                       {"integrator_steps", std::to_string(result.integrator_steps)},
-                      {"success", result.finite ? "true" : "false"}};
-    if (!result.finite) table.metadata.emplace_back("status", result.message);
+                      {"success", result.completed() ? "true" : "false"}};
+    if (!result.completed()) table.metadata.emplace_back("status", result.message);
     const std::string out_file = (std::filesystem::path(out_dir) / "states.sto").string();
     fp::write_sto(out_file, table);
     fp::write_sto((std::filesystem::path(out_dir) / "controls.sto").string(), result.controls);
@@ -118,7 +121,7 @@ int main(int argc, char** argv) {
               << result.integrator_steps << " integrator steps\n  final joint angles (deg):";
     for (int i = 0; i < n; ++i) std::cout << ' ' << model->description().joints[i].name << '=' << q[i];
     std::cout << "\n  wrote " << out_file << " and controls.sto\n";
-    if (!result.finite) {
+    if (!result.completed()) {
       std::cerr << "arm_forward: simulation failed: " << result.message << "\n";
       return 1;
     }

@@ -97,6 +97,8 @@ int main(int argc, char** argv) {
   app.add_option("--shortest-time-tolerance-s", shortest.tolerance_s, "the bisection's resolution, s")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
+  long max_steps = 1000000;  // about a minute of Runge-Kutta-Merson; a replay takes 5-10 thousand at 1e-10
+  ex::add_max_steps_option(app, max_steps);
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,
                             "integrator of the open-loop simulation: rkm (Runge-Kutta-Merson), bdf (CPodes) or "
@@ -162,13 +164,15 @@ int main(int argc, char** argv) {
     so.accuracy = accuracy;
     so.integrator = fp::integrator_from_name(integrator);
     so.report_interval_s = duration_s / 300.0;
+    so.max_steps = max_steps;
     const flatsos::Stopwatch sim_wall;
     const fp::SimulationResult sim = fp::simulate(*model, s, so);
     const double sim_seconds = sim_wall.seconds();
 
     const ex::PlanTables planned = ex::plan_tables(flat, plan, sim.states);
     const ex::Tracking err = ex::compare(*model, planned.states, sim.states);
-    summary["simulation"] = {{"success", sim.finite},
+    summary["simulation"] = {{"success", sim.completed()},
+                             {"step_limit_reached", sim.step_limit_reached},
                              {"message", sim.message},
                              {"integrator", integrator},
                              {"accuracy", accuracy},
@@ -180,7 +184,7 @@ int main(int argc, char** argv) {
 
     auto sim_table = sim.states;
     sim_table.name = "simulation";
-    sim_table.metadata = {{"success", sim.finite ? "true" : "false"}, {"integrator_accuracy", ex::format(accuracy)}};
+    sim_table.metadata = {{"success", sim.completed() ? "true" : "false"}, {"integrator_accuracy", ex::format(accuracy)}};
     auto sim_controls = sim.controls;
     sim_controls.name = "simulation_controls";
     fp::write_sto(out_dir + "/plan.sto", planned.states);
@@ -188,10 +192,16 @@ int main(int argc, char** argv) {
     fp::write_sto(out_dir + "/simulation.sto", sim_table);
     fp::write_sto(out_dir + "/simulation_controls.sto", sim_controls);
     ex::write_json(out_dir + "/summary.json", summary);
-    std::cout << "  simulated open loop " << duration_s << " s in " << sim_seconds << " s: max |q error| "
+    const double simulated_s = sim.final_state.getTime() - s.getTime();
+    std::cout << "  simulated open loop " << simulated_s << (sim.completed() ? "" : " of " + ex::format(duration_s)) << " s in "
+              << sim_seconds << " s: max |q error| "
               << err.max_q_error_rad / ex::kRadPerDeg << " deg, max |a error| " << err.max_activation_error
               << ", max |L_S error| " << err.max_tendon_length_error_m << " m\n  wrote " << out_dir << "/{plan.sto, plan_controls.sto, simulation.sto, simulation_controls.sto, summary.json}\n";
-    return sim.finite ? 0 : 1;
+    if (!sim.completed()) {
+      std::cerr << "arm_open_loop: simulation failed: " << sim.message << "\n";
+      return 1;
+    }
+    return 0;
   } catch (const CLI::ValidationError& e) {
     std::cerr << "arm_open_loop: " << e.what() << "\n";
     return 2;

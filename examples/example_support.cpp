@@ -34,6 +34,15 @@ CLI::Option* add_integrator_option(CLI::App& app, std::string& name, const std::
   return app.add_option("--integrator", name, help)->capture_default_str()->check(CLI::IsMember(names));
 }
 
+CLI::Option* add_max_steps_option(CLI::App& app, long& max_steps) {
+  return app
+      .add_option("--max-integrator-steps", max_steps,
+                  "stop the simulation after this many integrator steps and fail (0: no limit); an explicit "
+                  "integrator can take millions of tiny steps where the muscles' states are stiff")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+}
+
 Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option) {
   if (v.size() == 1) return Eigen::VectorXd::Constant(m, v[0]);
   require_count(v, m, option);

@@ -20,6 +20,13 @@ grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box 
 expect 2 "--integrator" -- "$ol" --integrator euler --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
 grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
+# A replay past its step limit fails the task, says why, and keeps what it simulated (an unstable
+# plan's explicit replay can otherwise run for hours).
+expect 2 "--max-integrator-steps" -- "$ol" --max-integrator-steps -1 --out "$tmp/o"
+expect 1 "the step limit" -- "$ol" --max-integrator-steps 100 --out "$tmp/olsl"
+grep -q '"step_limit_reached": true' "$tmp/olsl/summary.json" || { echo "FAILED: the summary does not say the step limit stopped the replay"; fail=1; }
+grep -q '"success": false' "$tmp/olsl/summary.json" || { echo "FAILED: a replay stopped at its step limit reported success"; fail=1; }
+grep -q 'success=false' "$tmp/olsl/simulation.sto" || { echo "FAILED: the stopped replay's table does not say so"; fail=1; }
 # The plan's Ipopt calls (its certificates) name the linear solver that served them: the paper's
 # problem is small, so flatsos's dense LDL^T.
 grep -q '"ipopt_linear_solver": "dense LDL^T (flatsos)"' "$tmp/olr/summary.json" || { echo "FAILED: the summary does not name Ipopt's linear solver"; fail=1; }

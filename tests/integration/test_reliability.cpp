@@ -157,6 +157,7 @@ TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
       {"simulation NaN state, Rosenbrock", [&] { SimTK::State s = model.defaultState(); s.updU()[1] = kNaN; fp::SimulationOptions o; o.integrator = fp::IntegratorKind::MuscleRosenbrock; fp::simulate(model, s, o); }, "initial state has a non-finite value"},
       {"excitation NaN", [&] { SimTK::State s = model.defaultState(); model.muscle(0).setExcitation(s, kNaN); }, "excitation is NaN"},
       {"simulation accuracy", [&] { fp::SimulationOptions o; o.accuracy = 0.0; fp::simulate(model, model.defaultState(), o); }, "accuracy"},
+      {"simulation step limit", [&] { fp::SimulationOptions o; o.max_steps = -1; fp::simulate(model, model.defaultState(), o); }, "max_steps must be >= 0"},
       {"simulation NaN state", [&] { SimTK::State s = model.defaultState(); s.updQ()[0] = kNaN; fp::simulate(model, s, {}); }, "initial state has a non-finite value"},
       {"SLP NaN bound", [&] { fpl::solve_slp(arm.flat.CY(), Eigen::VectorXd::Constant(6, kNaN)); }, "NaN"},
       {"tendon force not positive", [&] { fm::tendon_length_from_force(model.muscle(2).getParameters(), -3.0); }, "biceps"},

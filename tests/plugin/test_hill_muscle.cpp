@@ -145,6 +145,63 @@ TEST(HillMuscleRobustness, ZeroExcitationForSecondsStaysFiniteAndBounded) {
   EXPECT_LT(r.states.column("/jointset/shoulder/shoulder/value").back(), -0.5);
 }
 
+namespace {
+// The zero-excitation fall above, to its first 0.5 s, with the step limit.
+fp::SimulationResult fall_with_step_limit(const fp::MusculoskeletalModel& arm, fp::IntegratorKind integrator, long max_steps) {
+  SimTK::State s = paper_state(arm);
+  arm.setExcitations(s, Eigen::VectorXd::Zero(6));
+  fp::SimulationOptions o;
+  o.duration_s = 0.5;
+  o.report_interval_s = 0.01;
+  o.accuracy = 1e-8;
+  o.integrator = integrator;
+  o.max_steps = max_steps;
+  return fp::simulate(arm, s, o);
+}
+}  // namespace
+
+// Where the muscles' states are stiff, the explicit method's replay can run for hours (an
+// unstable plan replayed open loop: the arm falls, its tendons load at tiny activation). The
+// step limit ends it with the rows so far and a reason, and leaves the trajectory alone.
+TEST(SimulationStepLimit, AStiffExplicitRunStopsAtTheLimitWithItsRowsAndTheReason) {
+  const auto arm = flatsos::test::load_arm();
+  const long limit = 4000;
+  const auto r = fall_with_step_limit(*arm, fp::IntegratorKind::RungeKuttaMerson, limit);
+  EXPECT_TRUE(r.step_limit_reached);
+  EXPECT_TRUE(r.finite);
+  EXPECT_FALSE(r.completed());
+  EXPECT_GE(r.integrator_steps, limit);
+  for (const char* part : {"integration stopped at t = ", "the step limit", "rosenbrock or bdf"})
+    EXPECT_NE(r.message.find(part), std::string::npos) << part << " not in: " << r.message;
+  // Stopped at a report time well before the end, every row so far kept and finite.
+  ASSERT_GE(r.states.rows.size(), 2u);
+  const double stopped_s = r.states.rows.back()[0];
+  EXPECT_LT(stopped_s, 0.5 - 0.01);
+  EXPECT_NEAR(stopped_s, r.final_state.getTime(), 1e-12);
+  EXPECT_EQ(r.controls.rows.size(), r.states.rows.size());
+  for (const auto& row : r.states.rows)
+    for (double v : row) EXPECT_TRUE(std::isfinite(v));
+  // A higher limit goes further along the same trajectory: the limit only says where to stop.
+  const auto further = fall_with_step_limit(*arm, fp::IntegratorKind::RungeKuttaMerson, 2 * limit);
+  ASSERT_GT(further.states.rows.size(), r.states.rows.size());
+  for (std::size_t k = 0; k < r.states.rows.size(); ++k) EXPECT_EQ(further.states.rows[k], r.states.rows[k]) << "row " << k;
+}
+
+TEST(SimulationStepLimit, AnImplicitIntegratorFinishesTheSameRunWithinIt) {
+  const auto arm = flatsos::test::load_arm();
+  const auto r = fall_with_step_limit(*arm, fp::IntegratorKind::CPodesBdf, 4000);
+  EXPECT_TRUE(r.completed()) << r.message;
+  EXPECT_FALSE(r.step_limit_reached);
+  EXPECT_TRUE(r.message.empty()) << r.message;
+  EXPECT_LT(r.integrator_steps, 4000);
+  EXPECT_NEAR(r.states.rows.back()[0], 0.5, 1e-12);
+  // No limit (0): the same run, step for step.
+  const auto unlimited = fall_with_step_limit(*arm, fp::IntegratorKind::CPodesBdf, 0);
+  EXPECT_TRUE(unlimited.completed());
+  EXPECT_EQ(unlimited.integrator_steps, r.integrator_steps);
+  EXPECT_EQ(unlimited.states.rows.back(), r.states.rows.back());
+}
+
 TEST(HillMuscleRobustness, SlackTendonsAndActivationAtZeroStayFinite) {
   const auto arm = flatsos::test::load_arm();
   SimTK::State s = arm->defaultState();

@@ -42,6 +42,16 @@ def test_other_integrators_and_bad_options(arm):
         flatsos.simulate_plan(plan, accuracy=0.5)
     with pytest.raises(ValueError, match="reports"):
         flatsos.simulate_plan(plan, reports=0)
+    with pytest.raises(ValueError, match="max_steps"):
+        flatsos.simulate_plan(plan, max_steps=-1)
+    # Stopped at the step limit: the rows so far, the reason, not completed.
+    stopped = flatsos.simulate_plan(plan, max_steps=100)
+    assert stopped["step_limit_reached"] and stopped["finite"] and not stopped["completed"]
+    assert "the step limit" in stopped["message"] and stopped["integrator_steps"] >= 100
+    assert 1 < len(stopped["time"]) < 301 and stopped["q"].shape == (len(stopped["time"]), 2)
+    full = flatsos.simulate_plan(plan)
+    assert full["completed"] and not full["step_limit_reached"]
+    np.testing.assert_array_equal(stopped["q"], full["q"][:len(stopped["time"])])
     infeasible = scenario.plan(model, torque_pieces=1, torque_degree=0)
     with pytest.raises(ValueError, match="nothing to simulate"):
         flatsos.simulate_plan(infeasible)

@@ -6,6 +6,11 @@
 
 namespace flatsos::plugin {
 
+namespace {
+// Thrown from the report callback to leave the stepping loop at the step limit.
+struct StepLimitReached {};
+}  // namespace
+
 bool all_states_finite(const SimTK::State& s) {
   const SimTK::Vector& y = s.getY();
   for (int i = 0; i < y.size(); ++i)
@@ -21,6 +26,7 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
     throw std::invalid_argument("integrator accuracy must be in (0, 1)");
   if (!(o.report_interval_s > 0.0) || !std::isfinite(o.report_interval_s))
     throw std::invalid_argument("report interval must be a finite number > 0 s");
+  if (o.max_steps < 0) throw std::invalid_argument("simulation max_steps must be >= 0 (0: no limit)");
   if (!all_states_finite(initial))
     throw std::invalid_argument("initial state has a non-finite value");
 
@@ -32,6 +38,7 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
   const auto append_rows = [&](const SimTK::State& s) {
     append_state_row(model, s, result.states);
     append_controls_row(model, s, result.controls);
+    if (o.max_steps > 0 && stepper->stepsTaken() >= o.max_steps) throw StepLimitReached{};
   };
   append_rows(stepper->state());
 
@@ -39,10 +46,21 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
   const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
   std::vector<double> times;
   for (long k = 1; k <= reports; ++k) times.push_back(t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s));
-  if (!stepper->advanceTo(t0 + o.duration_s, times, append_rows)) {
-    result.finite = false;
-    result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
-                     " s: a state became non-finite or the step size collapsed";
+  try {
+    if (!stepper->advanceTo(t0 + o.duration_s, times, append_rows)) {
+      result.finite = false;
+      result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
+                       " s: a state became non-finite or the step size collapsed";
+    }
+  } catch (const StepLimitReached&) {
+    result.step_limit_reached = true;
+    result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) + " s of " +
+                     std::to_string(t0 + o.duration_s) + " s after " + std::to_string(stepper->stepsTaken()) +
+                     " steps, the step limit";
+    if (o.integrator == IntegratorKind::RungeKuttaMerson)
+      result.message += ": the explicit Runge-Kutta-Merson method takes tiny steps where the muscles' states are "
+                        "stiff (a tendon loaded at tiny activation); the implicit rosenbrock or bdf integrators take "
+                        "far fewer";
   }
   result.final_state = stepper->state();
   result.integrator_steps = stepper->stepsTaken();

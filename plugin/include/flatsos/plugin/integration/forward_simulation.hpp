@@ -20,6 +20,10 @@ struct SimulationOptions {
   IntegratorKind integrator = IntegratorKind::RungeKuttaMerson;
   double accuracy = 1e-8;           ///< Simbody integrator accuracy (relative)
   double report_interval_s = 0.01;  ///< rows of the state table
+  /// > 0: stop once the integrator has taken this many steps (checked at each report time) and
+  /// say so. An explicit method where the muscles' states are stiff (a falling arm's replay, a
+  /// tendon loaded at tiny activation) can take millions of tiny steps; 0: no limit.
+  long max_steps = 0;
 };
 
 struct SimulationResult {
@@ -28,11 +32,15 @@ struct SimulationResult {
   SimTK::State final_state;
   long integrator_steps = 0;
   bool finite = true;    ///< false: a state became NaN/Inf, integration stopped there
+  bool step_limit_reached = false;  ///< true: stopped at SimulationOptions::max_steps
   std::string message;   ///< why it stopped early, empty otherwise
+  /// Integrated over the whole duration (no non-finite state, no step limit).
+  bool completed() const { return finite && !step_limit_reached; }
 };
 
-/// Integrates from `initial` for options.duration_s; never throws for NaN: it stops and says so.
-/// Throws std::invalid_argument for a non-positive duration, accuracy or report interval.
+/// Integrates from `initial` for options.duration_s; never throws for NaN or the step limit: it
+/// stops, keeps the rows reported so far, and says so. Throws std::invalid_argument for a
+/// non-positive duration, accuracy or report interval, or a negative step limit.
 SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State& initial,
                           const SimulationOptions& options);
 
