@@ -65,6 +65,10 @@ int main(int argc, char** argv) {
                  "at most this many doublings of the torque pieces for the plan along the optimized path, while it "
                  "fails or costs more than 0.5 % above the path stage's cost at its points (0: none)")
       ->capture_default_str()->check(CLI::Range(0, 10));
+  app.add_option("--free-path-start-min-spans", options.free_path.start_min_spans,
+                 "the prescribed path's plan, which starts the free path's optimization, in the coarsest basis "
+                 "nested in the flat outputs' with at least this many spans (0: the flat outputs' own)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   std::string free_path_method = fpl::to_string(options.free_path.method);
   app.add_option("--free-path-method", free_path_method,
                  "how the free joint path moves: reduced_quasi_newton (BFGS on the bounded plan's cost as a "

@@ -228,6 +228,7 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
                       {"method", planner::to_string(f.method)},
                       {"prescribed_path_status", f.prescribed_status},
                       {"prescribed_path_cost_Ns", f.prescribed_cost_N_s},
+                      {"start_flat_output_spans", f.start_flat_output_spans},
                       {"cost_at_points_Ns", f.cost_at_points_N_s},
                       {"rounds", f.rounds},
                       {"points", f.points},

@@ -1,5 +1,6 @@
 #include "flatsos/planner/motion_planner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <utility>
@@ -131,6 +132,7 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
   if (!(f.span_growth > 0.0) || !std::isfinite(f.span_growth))
     throw std::invalid_argument("open-loop plan: free_path.span_growth must be finite and > 0 (1: uniform spans)");
   if (f.points_per_span < 1) throw std::invalid_argument("open-loop plan: free_path.points_per_span must be >= 1");
+  if (f.start_min_spans < 0) throw std::invalid_argument("open-loop plan: free_path.start_min_spans must be >= 0");
   if (f.check_points < 2) throw std::invalid_argument("open-loop plan: free_path.check_points must be >= 2");
   if (!(f.tolerance >= 0.0) || !(f.tolerance_N >= 0.0))
     throw std::invalid_argument("open-loop plan: free_path tolerances must be >= 0");
@@ -144,6 +146,18 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
                                 "the torque pieces)");
   if (!(f.torque_model_relative_gap >= 0.0) || !std::isfinite(f.torque_model_relative_gap))
     throw std::invalid_argument("open-loop plan: free_path.torque_model_relative_gap must be finite and >= 0");
+}
+
+// The flat outputs' spans of the plan that starts the path stage: S / f for the largest divisor
+// f of S that leaves at least `min_spans` (S / f spans growing by growth^f have every f-th
+// breakpoint of the S spans, so their splines are among the S spans').
+// `fewest`: the spans that leave the flat outputs a free coefficient besides their boundary
+// conditions.
+int start_spans(int spans, int min_spans, int fewest) {
+  if (min_spans == 0) return spans;
+  for (int f = spans; f > 1; --f)
+    if (spans % f == 0 && spans / f >= std::max(min_spans, fewest)) return spans / f;
+  return spans;
 }
 
 }  // namespace
@@ -270,20 +284,35 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   bc.terminal = Eigen::MatrixXd::Zero(p, 2);  // dY(T) = ddY(T) = 0
   bc.terminal_first_order = 1;
   const double before_sos = setup.seconds();
-  plan_along_path(flat, workspace, bc, o, plan);
+  // With a free path the prescribed path's plan only starts the path stage: a coarser nested
+  // basis gives it for a fraction of the time (FreeJointPathOptions::start_min_spans).
+  const int spans = o.sos.flat_output_spans;
+  OpenLoopOptions start = o;
+  if (o.free_path.enabled) {
+    const int fewest = static_cast<int>(bc.initial.cols() + bc.terminal.cols()) - o.sos.flat_output_degree + 1;
+    start.sos.flat_output_spans = start_spans(spans, o.free_path.start_min_spans, fewest);
+    start.sos.flat_output_span_growth = std::pow(o.sos.flat_output_span_growth, spans / start.sos.flat_output_spans);
+  }
+  plan_along_path(flat, workspace, bc, start, plan);
+  if (start.sos.flat_output_spans != spans && plan.status != SolveStatus::Solved) {
+    start = o;  // no plan in the coarse basis: the flat outputs' own
+    plan_along_path(flat, workspace, bc, o, plan);
+  }
   plan.setup_seconds += before_sos;
   if (!o.free_path.enabled) return plan;
 
   // The joint path as a variable too, from the prescribed path's plan (or, when the bounds cannot
-  // be met along it, from its closest plan).
+  // be met along it, from its closest plan), carried into the flat outputs' basis.
   const Stopwatch free_path;
   plan.free_path.prescribed_status = to_string(plan.status);
   plan.free_path.prescribed_cost_N_s = plan.status == SolveStatus::Solved ? plan.sos.cost_N_s : 0.0;
+  plan.free_path.start_flat_output_spans = start.sos.flat_output_spans;
   if (!plan.sos.Y) return plan;  // nothing to start from: the prescribed plan's status says why
   const detail::SosSetup program = detail::set_up_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos);
   const Eigen::VectorXd a_min = detail::activation_minima(flat, o.sos.bounds);
   const detail::FreePathOutcome free = detail::optimize_joint_path(
-      program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, *plan.sos.Y), o.reserves_N, a_min, o.free_path);
+      program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, plan.sos.Y->inBasis(program.basis)),
+      o.reserves_N, a_min, o.free_path);
   FreePathReport& report = plan.free_path;
   report.method = o.free_path.method;
   report.cost_at_points_N_s = free.cost_N_s;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -194,6 +195,43 @@ TEST(SplineTrajectory, JetAgreesWithTheBasisRowsEverywhere) {
   Eigen::MatrixXd bad = c;
   bad(0, 0) = std::nan("");
   EXPECT_THROW(fpl::SplineTrajectory(basis, bad), std::invalid_argument);
+}
+
+// A spline of a coarse geometric basis is a spline of the finer one whose breakpoints include
+// its own (every f-th breakpoint of S spans growing by g are those of S/f spans growing by g^f):
+// the same values and derivatives everywhere. A basis without its breakpoints, or a lower degree,
+// cannot hold it and is refused.
+TEST(SplineTrajectory, InAFinerBasisHoldingItsBreakpointsTheSignalsAreUnchanged) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coefficient(-200.0, 200.0);
+  for (const auto& [degree, spans, growth, factor] :
+       std::vector<std::tuple<int, int, double, int>>{{5, 48, 1.06, 2}, {5, 48, 1.06, 4}, {3, 24, 1.0, 3}, {4, 12, 0.9, 2}}) {
+    const fpl::BSplineBasis fine = fpl::BSplineBasis::geometric(degree, spans, 3.0, growth);
+    const fpl::BSplineBasis coarse = fpl::BSplineBasis::geometric(degree, spans / factor, 3.0, std::pow(growth, factor));
+    for (int k = 0; k < coarse.spans(); ++k) ASSERT_NEAR(coarse.breakpoints()[k], fine.breakpoints()[k * factor], 1e-13);
+    Eigen::MatrixXd c(2, coarse.size());
+    for (Eigen::Index i = 0; i < c.size(); ++i) c(i) = coefficient(rng);
+    const fpl::SplineTrajectory y(coarse, c);
+    const fpl::SplineTrajectory refined = y.inBasis(fine);
+    EXPECT_EQ(refined.basis().spans(), spans);
+    double shortest_s = 3.0;
+    for (int span = 0; span < fine.spans(); ++span) shortest_s = std::min(shortest_s, fine.spanLength(span));
+    for (int i = 0; i <= 900; ++i) {
+      const double t = 3.0 * i / 900.0;
+      const Eigen::MatrixXd a = y.jet(t, degree), b = refined.jet(t, degree);
+      for (int order = 0; order < degree; ++order)
+        for (int r = 0; r < 2; ++r)
+          EXPECT_NEAR(b(r, order), a(r, order), 1e-9 * 200.0 * std::pow(1.0 / shortest_s, order)) << t << " order " << order;
+    }
+  }
+  // Breakpoints of the coarse basis missing from the other: not its splines.
+  const fpl::BSplineBasis coarse(3, 4, 3.0), other(3, 5, 3.0);
+  const fpl::SplineTrajectory y(coarse, Eigen::MatrixXd::Random(1, coarse.size()) * 100.0);
+  EXPECT_THROW(y.inBasis(other), std::invalid_argument);
+  EXPECT_THROW(y.inBasis(fpl::BSplineBasis(2, 8, 3.0)), std::invalid_argument);  // a lower degree
+  EXPECT_THROW(y.inBasis(fpl::BSplineBasis(3, 8, 2.0)), std::invalid_argument);  // another duration
+  // Itself: the same coefficients.
+  EXPECT_LT((y.inBasis(coarse).coefficients() - y.coefficients()).cwiseAbs().maxCoeff(), 1e-10);
 }
 
 TEST(SplineTrajectory, BeyondItsEndsTheContinuedJetFollowsTheEndSpansPolynomials) {

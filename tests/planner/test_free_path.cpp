@@ -388,6 +388,49 @@ TEST_F(FreePath, ATorqueModelTooCoarseForTheOptimizedPathIsRefinedUntilItsPlanIs
   flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
 }
 
+TEST_F(FreePath, AStartPlanInACoarserNestedBasisLeadsToTheSamePlan) {
+  // The prescribed path's plan only starts the path stage. Made on every second breakpoint (12
+  // spans growing by 1.06^2 instead of 24 by 1.06), it lies in the flat outputs' splines, costs at
+  // least the fine basis' plan (a subspace), and the optimized path's plan is the same.
+  o = flatsos::test::graded_free_path_options(kDuration_s, kDegree, 24);
+  auto plan_with = [&](int start_min_spans) {
+    fpl::OpenLoopOptions with = o;
+    with.free_path.start_min_spans = start_min_spans;
+    return fpl::plan_open_loop(arm.flat, s0, with);
+  };
+  const fpl::OpenLoopPlan fine = plan_with(0), coarse = plan_with(12);
+  ASSERT_EQ(fine.status, fpl::SolveStatus::Solved) << fine.message;
+  ASSERT_EQ(coarse.status, fpl::SolveStatus::Solved) << coarse.message;
+  std::cout << "[ measure  ] start plans " << fine.free_path.prescribed_cost_N_s << " N s (24 spans) and "
+            << coarse.free_path.prescribed_cost_N_s << " N s (12); plans " << fine.sos.cost_N_s << " and "
+            << coarse.sos.cost_N_s << " N s in " << fine.free_path.path_iterations << " and "
+            << coarse.free_path.path_iterations << " Ipopt iterations\n";
+  EXPECT_EQ(fine.free_path.start_flat_output_spans, 24);
+  EXPECT_EQ(coarse.free_path.start_flat_output_spans, 12);
+  EXPECT_EQ(coarse.free_path.prescribed_status, "solved");
+  EXPECT_GE(coarse.free_path.prescribed_cost_N_s, fine.free_path.prescribed_cost_N_s * (1.0 - 1e-6));
+  EXPECT_GT(coarse.free_path.prescribed_cost_N_s, fine.free_path.prescribed_cost_N_s);  // a coarser start indeed
+  ASSERT_TRUE(coarse.free_path.optimized);
+  EXPECT_NEAR(coarse.sos.cost_N_s, fine.sos.cost_N_s, 1e-5 * fine.sos.cost_N_s);
+  EXPECT_EQ(coarse.Y->basis().spans(), 24);  // the plan itself is in the flat outputs' basis
+  flatsos::test::expect_executable(arm.flat, coarse, o.reserves_N);
+  // Even the coarsest nested basis that leaves a free coefficient (2 spans, 895 N s) starts it
+  // to the same plan. At T = 1 s that basis has no plan along the prescribed path: the flat
+  // outputs' own basis starts the path stage instead, and everything is as without the option.
+  const fpl::OpenLoopPlan coarsest = plan_with(1);
+  ASSERT_EQ(coarsest.status, fpl::SolveStatus::Solved) << coarsest.message;
+  EXPECT_EQ(coarsest.free_path.start_flat_output_spans, 2);
+  EXPECT_NEAR(coarsest.sos.cost_N_s, fine.sos.cost_N_s, 1e-5 * fine.sos.cost_N_s);
+  o.duration_s = 1.0;
+  const fpl::OpenLoopPlan fine_1s = plan_with(0), fallback = plan_with(1);
+  ASSERT_EQ(fallback.status, fpl::SolveStatus::Solved) << fallback.message;
+  EXPECT_EQ(fallback.free_path.start_flat_output_spans, 24);
+  EXPECT_EQ(fallback.free_path.prescribed_status, "solved");
+  EXPECT_EQ(fallback.free_path.prescribed_cost_N_s, fine_1s.free_path.prescribed_cost_N_s);
+  EXPECT_EQ(fallback.sos.cost_N_s, fine_1s.sos.cost_N_s);
+  EXPECT_EQ(fallback.free_path.path_iterations, fine_1s.free_path.path_iterations);
+}
+
 TEST_F(FreePath, BadOptionsAreNamed) {
   o.free_path.enabled = true;
   auto rejects = [&](fpl::OpenLoopOptions bad, const std::string& field) {
@@ -412,6 +455,9 @@ TEST_F(FreePath, BadOptionsAreNamed) {
   rejects(bad, "free_path.span_growth");
   bad.free_path.span_growth = std::nan("");
   rejects(bad, "free_path.span_growth");
+  bad = o;
+  bad.free_path.start_min_spans = -1;
+  rejects(bad, "free_path.start_min_spans");
   bad = o;
   bad.free_path.relative_tolerance = 0.0;
   rejects(bad, "free_path.relative_tolerance");

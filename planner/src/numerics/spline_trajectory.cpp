@@ -1,8 +1,12 @@
 #include "flatsos/planner/numerics/spline_trajectory.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 #include <stdexcept>
 #include <utility>
+
+#include <Eigen/QR>
 
 namespace flatsos::planner {
 
@@ -57,6 +61,30 @@ double SplineTrajectory::derivativeAt(int row, double t, int order) const {
 
 Polynomial SplineTrajectory::spanPolynomial(int row, int span) const {
   return Polynomial(basis_.spanPowerMatrix(span) * coefficients_.row(row).transpose());
+}
+
+SplineTrajectory SplineTrajectory::inBasis(const BSplineBasis& finer) const {
+  if (std::abs(finer.duration() - duration()) > 1e-12 * duration())
+    throw std::invalid_argument("spline trajectory: the finer basis lasts " + std::to_string(finer.duration()) +
+                                " s, the signals " + std::to_string(duration()) + " s");
+  // degree + 1 points inside every span of finer determine its coefficients; a least-squares fit
+  // over them is exact when the signals are among its splines, and shows when they are not.
+  const int per_span = finer.degree() + 1;
+  const Eigen::Index points = static_cast<Eigen::Index>(finer.spans()) * per_span;
+  Eigen::MatrixXd B(points, finer.size()), values(points, coefficients_.rows());
+  Eigen::Index row = 0;
+  for (int span = 0; span < finer.spans(); ++span)
+    for (int k = 0; k < per_span; ++k, ++row) {
+      const double t = finer.spanStart(span) + finer.spanLength(span) * (k + 0.5) / per_span;
+      B.row(row) = finer.derivativeRow(t, 0);
+      values.row(row) = jet(t, 1).col(0).transpose();
+    }
+  Eigen::MatrixXd refined = B.colPivHouseholderQr().solve(values).transpose();
+  const double miss = (B * refined.transpose() - values).cwiseAbs().maxCoeff();
+  if (!(miss <= 1e-9 * (1.0 + values.cwiseAbs().maxCoeff())))
+    throw std::invalid_argument("spline trajectory: the signals are not splines of the finer basis (they miss its fit by " +
+                                std::to_string(miss) + ")");
+  return SplineTrajectory(finer, std::move(refined));
 }
 
 }  // namespace flatsos::planner

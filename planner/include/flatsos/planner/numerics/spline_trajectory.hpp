@@ -37,6 +37,11 @@ class SplineTrajectory {
   double derivativeAt(int row, double t, int order = 0) const;
   /// Signal `row` on span `span` in powers of the span's scaled time s in [0, 1].
   Polynomial spanPolynomial(int row, int span) const;
+  /// The same signals in `finer`, a basis whose splines include this one's (every breakpoint of
+  /// this basis among finer's, a degree at least as high): exact up to rounding. Throws
+  /// std::invalid_argument when the durations differ or the signals are not in finer's splines
+  /// (the fit misses them by more than 1e-9 of their size).
+  SplineTrajectory inBasis(const BSplineBasis& finer) const;
 
  private:
   void spanJetInto(int span, double s, Eigen::Ref<Eigen::MatrixXd> out) const;
