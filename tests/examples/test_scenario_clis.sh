@@ -39,6 +39,9 @@ expect 2 "--free-path-span-growth" -- "$ol" --free-path-span-growth 0 --free-pat
 expect 0 "simulated open loop" -- "$ol" --flat-output-degree 3 --flat-output-spans 12 --free-path-spans 6 \
   --free-path-span-growth 1.3 --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olg"
 grep -q '"q_breakpoints_s": \[' "$tmp/olg/summary.json" || { echo "FAILED: the summary lacks the free path's knots"; fail=1; }
+# Its start plan: in the flat outputs' own 12 spans (none nested has 16 or more).
+grep -q '"start_flat_output_spans": 12' "$tmp/olg/summary.json" || { echo "FAILED: the summary lacks the start plan's spans"; fail=1; }
+expect 2 "--free-path-start-min-spans" -- "$ol" --free-path-start-min-spans -1 --free-path-spans 2 --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --sos-method whole_program_nlp --no-bounds --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olw"
 grep -q '"sos_method": "whole_program_nlp"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not name the SOS method"; fail=1; }
 grep -q '"equalities": 368' "$tmp/olw/summary.json" || { echo "FAILED: the summary lacks the whole-program NLP's size"; fail=1; }
