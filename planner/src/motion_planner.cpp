@@ -310,9 +310,9 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   if (!plan.sos.Y) return plan;  // nothing to start from: the prescribed plan's status says why
   const detail::SosSetup program = detail::set_up_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos);
   const Eigen::VectorXd a_min = detail::activation_minima(flat, o.sos.bounds);
+  const SplineTrajectory start_Y = start.sos.flat_output_spans == spans ? *plan.sos.Y : plan.sos.Y->inBasis(program.basis);
   const detail::FreePathOutcome free = detail::optimize_joint_path(
-      program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, plan.sos.Y->inBasis(program.basis)),
-      o.reserves_N, a_min, o.free_path);
+      program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, start_Y), o.reserves_N, a_min, o.free_path);
   FreePathReport& report = plan.free_path;
   report.method = o.free_path.method;
   report.cost_at_points_N_s = free.cost_N_s;
