@@ -200,6 +200,10 @@ TEST(SimulationStepLimit, AnImplicitIntegratorFinishesTheSameRunWithinIt) {
   EXPECT_TRUE(unlimited.completed());
   EXPECT_EQ(unlimited.integrator_steps, r.integrator_steps);
   EXPECT_EQ(unlimited.states.rows.back(), r.states.rows.back());
+  // A limit the whole run just reaches (at its last row, the end): complete, not stopped.
+  const auto exactly = fall_with_step_limit(*arm, fp::IntegratorKind::CPodesBdf, r.integrator_steps);
+  EXPECT_TRUE(exactly.completed()) << exactly.message;
+  EXPECT_EQ(exactly.states.rows.size(), r.states.rows.size());
 }
 
 TEST(HillMuscleRobustness, SlackTendonsAndActivationAtZeroStayFinite) {

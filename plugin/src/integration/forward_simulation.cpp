@@ -35,19 +35,20 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
   result.controls = make_controls_table(model);
   const auto stepper = make_stepper(model, o.integrator, o.accuracy);
   stepper->initialize(initial);
+  const double t0 = initial.getTime(), t_end = t0 + o.duration_s;
   const auto append_rows = [&](const SimTK::State& s) {
     append_state_row(model, s, result.states);
     append_controls_row(model, s, result.controls);
-    if (o.max_steps > 0 && stepper->stepsTaken() >= o.max_steps) throw StepLimitReached{};
+    // At the end the run is complete, however many steps it took.
+    if (o.max_steps > 0 && stepper->stepsTaken() >= o.max_steps && s.getTime() < t_end) throw StepLimitReached{};
   };
   append_rows(stepper->state());
 
-  const double t0 = initial.getTime();
   const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
   std::vector<double> times;
   for (long k = 1; k <= reports; ++k) times.push_back(t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s));
   try {
-    if (!stepper->advanceTo(t0 + o.duration_s, times, append_rows)) {
+    if (!stepper->advanceTo(t_end, times, append_rows)) {
       result.finite = false;
       result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
                        " s: a state became non-finite or the step size collapsed";
@@ -55,7 +56,7 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
   } catch (const StepLimitReached&) {
     result.step_limit_reached = true;
     result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) + " s of " +
-                     std::to_string(t0 + o.duration_s) + " s after " + std::to_string(stepper->stepsTaken()) +
+                     std::to_string(t_end) + " s after " + std::to_string(stepper->stepsTaken()) +
                      " steps, the step limit";
     if (o.integrator == IntegratorKind::RungeKuttaMerson)
       result.message += ": the explicit Runge-Kutta-Merson method takes tiny steps where the muscles' states are "
