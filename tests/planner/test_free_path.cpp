@@ -361,6 +361,40 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsACo
   rejects(warm, "coefficients");
 }
 
+TEST_F(FreePath, ThePlanAlongTheOptimizedPathSearchesTheWholeGridFromItsFirstRounds) {
+  // From the path stage's plan, the bound violations that only the whole check grid sees are there
+  // in the first round (the torque model changed, not the plan). Searched for beside the reserves'
+  // dips instead of after them: the same certified plan in fewer rounds.
+  // The benchmark's transfer: quintic flat outputs and torque pieces on 48 graded spans.
+  const fpl::OpenLoopOptions graded = flatsos::test::graded_free_path_options(kDuration_s, 5, 48);
+  o = graded;
+  o.free_path.enabled = false;  // the prescribed path's plan, which the path stage starts from
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  const fpd::FreePathOutcome stage =
+      fpd::optimize_joint_path(*p.setup, arm.flat, p.prescribed.path, p.initial_q_jet, o.target_q_rad,
+                               fpd::theta_of(*p.setup, *p.prescribed.Y), o.reserves_N, p.a_min, graded.free_path);
+  ASSERT_TRUE(stage.converged) << stage.failure;
+  auto ws = arm.flat.makeWorkspace();
+  const fpl::TorqueModel torque = fpl::build_torque_model(arm.flat, ws, stage.path, o.torque);
+  const fpl::MusclesAlongPath muscles{arm.flat, stage.path, ws};
+  auto plan_from_stage = [&](bool whole_grid_every_round) {
+    const fpd::BoundsWarmStart warm{stage.theta, stage.times_s, whole_grid_every_round};
+    return fpd::solve_sos_program_from(arm.flat, torque, o.duration_s, boundary(), o.reserves_N, o.sos, muscles, warm);
+  };
+  const fpl::SosProgramResult early = plan_from_stage(true), late = plan_from_stage(false);
+  ASSERT_EQ(early.status, fpl::SolveStatus::Solved) << early.message;
+  ASSERT_EQ(late.status, fpl::SolveStatus::Solved) << late.message;
+  std::cout << "[ measure  ] along the optimized path from the path stage: the whole grid searched in every round "
+            << early.cost_N_s << " N s in " << early.bound_rounds << " rounds, once the reserves hold " << late.cost_N_s
+            << " N s in " << late.bound_rounds << "\n";
+  EXPECT_TRUE(early.bounds_imposed && late.bounds_imposed);
+  EXPECT_TRUE(early.certified && late.certified);
+  EXPECT_NEAR(early.cost_N_s, late.cost_N_s, 1e-6 * late.cost_N_s);
+  EXPECT_LT(early.bound_rounds, late.bound_rounds);
+  EXPECT_LE(early.max_bound_excess, o.sos.bounds.tolerance);
+}
+
 TEST_F(FreePath, ATorqueModelTooCoarseForTheOptimizedPathIsRefinedUntilItsPlanIsSolved) {
   // Quintic flat outputs and torque pieces on 24 graded spans: the optimized path throws the arm
   // faster than 24 cubic torque pieces follow, and the plan along it fails with them. The pieces

@@ -172,8 +172,9 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
     // Every local maximum of the excess joins, not only those above the tolerance: along an arc
     // where a bound is active the dips between imposed points come back one by one otherwise.
     for (double t : violated_times(excess, h, 0.0)) bounds_added |= add_point(t);
-    if (!reserves_added && (excess.worst <= bo.tolerance || !bounds_added) && stride > 1) {
-      // Nothing left that the coarse grid sees: the whole grid decides.
+    const bool reserves_hold_or_warm = !reserves_added || (warm && warm->whole_grid_every_round);
+    if (reserves_hold_or_warm && (excess.worst <= bo.tolerance || !bounds_added) && stride > 1) {
+      // Nothing left that the coarse grid sees: the whole grid decides (BoundsWarmStart).
       excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points);
       for (double t : violated_times(excess, h, 0.0)) bounds_added |= add_point(t);
     }

@@ -21,6 +21,15 @@ namespace flatsos::planner::detail {
 struct BoundsWarmStart {
   Eigen::VectorXd theta;
   std::vector<double> times_s;  // within [0, T]
+  /// The whole check grid is searched in every round in which every tenth grid time shows no new
+  /// violation, also while the reserves' dips are still being chased, not only once they hold. A
+  /// plan that starts near its optimum has the violations only the whole grid sees from its first
+  /// round (they come from the new torque model, not from the plan's moves), and their points then
+  /// join beside the dips instead of after them: the arm's free path 14 -> 8 rounds, 0.17 ->
+  /// 0.13 s, the same plan (docs/method/free_path.md, "Speed", (vi)). From the reserves' optimum
+  /// the plan moves far in its first rounds, and whole-grid searches there cost more than the
+  /// rounds they save, so a cold start keeps them for the end.
+  bool whole_grid_every_round = true;
 };
 
 /// Starts from theta, the reserves-only optimum with its exchange stopped at
