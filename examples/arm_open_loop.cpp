@@ -69,6 +69,10 @@ int main(int argc, char** argv) {
                  "the prescribed path's plan, which starts the free path's optimization, in the coarsest basis "
                  "nested in the flat outputs' with at least this many spans (0: the flat outputs' own)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--free-path-exchange-tolerance", options.free_path.exchange_relative_tolerance,
+                 "joint_newton: the path's exchange ends once a round changes the cost at its points by at most this "
+                 "fraction of it (0: only when the check grid holds)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   std::string free_path_method = fpl::to_string(options.free_path.method);
   app.add_option("--free-path-method", free_path_method,
                  "how the free joint path moves: reduced_quasi_newton (BFGS on the bounded plan's cost as a "

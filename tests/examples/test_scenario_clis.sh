@@ -42,6 +42,7 @@ grep -q '"q_breakpoints_s": \[' "$tmp/olg/summary.json" || { echo "FAILED: the s
 # Its start plan: in the flat outputs' own 12 spans (none nested has 16 or more).
 grep -q '"start_flat_output_spans": 12' "$tmp/olg/summary.json" || { echo "FAILED: the summary lacks the start plan's spans"; fail=1; }
 expect 2 "--free-path-start-min-spans" -- "$ol" --free-path-start-min-spans -1 --free-path-spans 2 --out "$tmp/o"
+expect 2 "--free-path-exchange-tolerance" -- "$ol" --free-path-exchange-tolerance -1e-3 --free-path-spans 2 --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --sos-method whole_program_nlp --no-bounds --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olw"
 grep -q '"sos_method": "whole_program_nlp"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not name the SOS method"; fail=1; }
 grep -q '"equalities": 368' "$tmp/olw/summary.json" || { echo "FAILED: the summary lacks the whole-program NLP's size"; fail=1; }
