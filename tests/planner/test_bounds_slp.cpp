@@ -188,3 +188,35 @@ TEST(BoundsSlp, AnInfeasibleProblemEndsAtAStationaryPointOfTheViolationSoonerWhe
     EXPECT_GE(violation(y), at_end - 1e-9) << "trial " << trial;
   }
 }
+
+TEST(BoundsSlp, RowsGivenAtTheStartAreNotEvaluatedAgainAndComeBackAtTheEnd) {
+  // An exchange round starts where the last ended: the rows at its start are handed in instead of
+  // evaluated. The same steps to the bit, one evaluation fewer, and the rows handed back are those
+  // at the returned point.
+  const Problem problem;
+  const fpd::SlpLinearPart linear{problem.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
+  int evaluations = 0;
+  const fpd::NonlinearRows counted = [&](const Eigen::VectorXd& x, bool jacobian) {
+    ++evaluations;
+    return problem.rows(x, jacobian);
+  };
+  auto solve = [&](fpd::BoundRowsAt* given, Eigen::VectorXd& x) {
+    double radius = 0.1;
+    flatsos::planner::SlpBasis basis;
+    evaluations = 0;
+    return fpd::solve_bounds_by_slp(linear, counted, x, radius, basis, {}, given);
+  };
+  Eigen::VectorXd x_own = Eigen::VectorXd::Zero(Problem::kVariables), x_given = x_own;
+  const fpd::SlpOutcome own = solve(nullptr, x_own);
+  const int own_evaluations = evaluations;
+  fpd::BoundRowsAt rows = problem.rows(x_given, true);
+  const fpd::SlpOutcome given = solve(&rows, x_given);
+  ASSERT_TRUE(own.converged && given.converged) << own.failure << given.failure;
+  EXPECT_EQ(given.iterations, own.iterations);
+  EXPECT_EQ(x_given, x_own);
+  EXPECT_EQ(evaluations, own_evaluations - 1);
+  const fpd::BoundRowsAt at_end = problem.rows(x_given, true);
+  EXPECT_EQ(rows.value, at_end.value);
+  ASSERT_EQ(rows.jacobian.size(), at_end.jacobian.size());
+  for (std::size_t k = 0; k < rows.jacobian.size(); ++k) EXPECT_EQ(rows.jacobian[k].value(), at_end.jacobian[k].value());
+}

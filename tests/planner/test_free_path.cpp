@@ -395,6 +395,30 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathSearchesTheWholeGridFromItsFirstRou
   EXPECT_LE(early.max_bound_excess, o.sos.bounds.tolerance);
 }
 
+TEST_F(FreePath, TheBoundRowsOfAddedPointsFollowThoseOfThePointsBefore) {
+  // An exchange round evaluates only its new points' rows at the theta where the last round ended
+  // (fpd::append_rows): the same rows, numbered after the others, as all points' rows at once.
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  auto ws = arm.flat.makeWorkspace();
+  const fpl::MusclesAlongPath muscles{arm.flat, p.prescribed.path, ws};
+  std::vector<fpd::BoundPoint> points;
+  for (double t : {0.0, 0.013, 0.4, 1.7, 2.9}) points.push_back(fpd::make_point(*p.setup, muscles, t));
+  const Eigen::VectorXd theta = fpd::theta_of(*p.setup, *p.prescribed.Y);
+  const fpd::BoundRowsAt all = fpd::evaluate_rows(arm.flat, points, p.a_min, theta, true);
+  const std::vector<fpd::BoundPoint> before(points.begin(), points.begin() + 2);
+  fpd::BoundRowsAt rows = fpd::evaluate_rows(arm.flat, before, p.a_min, theta, true);
+  fpd::append_rows(arm.flat, points, before.size(), p.a_min, theta, true, fpd::kBoundMargin, rows);
+  EXPECT_EQ(rows.value, all.value);
+  EXPECT_EQ(rows.violation, all.violation);
+  ASSERT_EQ(rows.jacobian.size(), all.jacobian.size());
+  for (std::size_t k = 0; k < all.jacobian.size(); ++k) {
+    EXPECT_EQ(rows.jacobian[k].row(), all.jacobian[k].row()) << "entry " << k;
+    EXPECT_EQ(rows.jacobian[k].col(), all.jacobian[k].col()) << "entry " << k;
+    EXPECT_EQ(rows.jacobian[k].value(), all.jacobian[k].value()) << "entry " << k;
+  }
+}
+
 TEST_F(FreePath, ATorqueModelTooCoarseForTheOptimizedPathIsRefinedUntilItsPlanIsSolved) {
   // Quintic flat outputs and torque pieces on 24 graded spans: the optimized path throws the arm
   // faster than 24 cubic torque pieces follow, and the plan along it fails with them. The pieces

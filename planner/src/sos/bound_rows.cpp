@@ -144,15 +144,24 @@ double column_derivative(const BoundPoint& bp, const fm::TendonForceJetGradient&
 BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
                           const Eigen::VectorXd& theta, bool jacobian, double margin) {
   BoundRowsAt out;
+  append_rows(flat, points, 0, a_min, theta, jacobian, margin, out);
+  return out;
+}
+
+void append_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, std::size_t first_point,
+                 const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, bool jacobian, double margin,
+                 BoundRowsAt& out) {
   const int m = flat.numMuscles();
-  out.value.reserve(points.size() * static_cast<std::size_t>(m * kRowsPerMuscle));
+  const auto per_point = static_cast<std::size_t>(m * kRowsPerMuscle);
+  out.value.reserve(points.size() * per_point);
   if (jacobian) {
-    std::size_t entries = 0;
-    for (const auto& bp : points) entries += bp.columns.size() * static_cast<std::size_t>(m * kRowsPerMuscle);
+    std::size_t entries = out.jacobian.size();
+    for (std::size_t k = first_point; k < points.size(); ++k) entries += points[k].columns.size() * per_point;
     out.jacobian.reserve(entries);
   }
-  int row = 0;
-  for (const auto& bp : points)
+  auto row = static_cast<int>(out.value.size());
+  for (std::size_t point = first_point; point < points.size(); ++point) {
+    const BoundPoint& bp = points[point];
     for (int j = 0; j < m; ++j) {
       const MuscleBoundRows rows = bound_rows(flat, bp, j, a_min[j], theta, jacobian, margin);
       for (int k = 0; k < kRowsPerMuscle; ++k, ++row) {
@@ -163,7 +172,7 @@ BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoin
             out.jacobian.emplace_back(row, bp.columns[c], column_derivative(bp, rows.gradient[static_cast<std::size_t>(k)], j, c));
       }
     }
-  return out;
+  }
 }
 
 double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta) {

@@ -83,6 +83,11 @@ struct BoundRowsAt {
 
 BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
                           const Eigen::VectorXd& theta, bool jacobian, double margin = kBoundMargin);
+/// Appends the rows of points[first_point..] for theta to `rows` (numbered after its rows): the
+/// rows of points added to an exchange, beside those of the points it had, at the same theta.
+void append_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, std::size_t first_point,
+                 const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, bool jacobian, double margin,
+                 BoundRowsAt& rows);
 
 /// Sum of the reserve rows' violations (N) of the exchange LP in setup.lp.
 double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta);

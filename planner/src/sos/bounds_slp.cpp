@@ -100,13 +100,16 @@ NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPo
 }
 
 SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& nonlinear_rows, Eigen::VectorXd& theta,
-                               double& radius, SlpBasis& basis, const SlpSettings& settings) {
+                               double& radius, SlpBasis& basis, const SlpSettings& settings, BoundRowsAt* rows_at_theta) {
   SlpOutcome out;
   const LinearProgram& lp = linear.lp;
   const Eigen::Index n = theta.size();
   if (lp.cost.size() != n || lp.G.cols() != n) throw std::logic_error("bounds SLP: the linear part has other variables than theta");
   auto rows_at = [&](const Eigen::VectorXd& x) { return nonlinear_rows(x, true); };
-  BoundRowsAt rows = rows_at(theta);
+  // The rows at theta, kept in step with it (every return leaves them so).
+  BoundRowsAt own;
+  BoundRowsAt& rows = rows_at_theta ? *rows_at_theta : own;
+  if (!rows_at_theta) rows = rows_at(theta);
   double penalty = kInitialPenalty;
   auto merit = [&](const Eigen::VectorXd& x, const BoundRowsAt& r) {
     return lp.cost.dot(x) + penalty * (r.violation + reserve_violation_N(lp, x));

@@ -73,9 +73,12 @@ struct SlpSettings {
 
 /// Improves x in place (and the trust radius and the LP basis, kept across exchange rounds).
 /// The radius is first raised to the smallest box in which the linearization clears every
-/// violated row.
+/// violated row. `rows_at_theta`, when given, holds rows_at(theta) with its Jacobian, which is then
+/// not evaluated again; on return it holds the rows at the returned theta. An exchange round
+/// starts where the last ended: only its new points' rows are new (bound_rows.hpp, append_rows).
 SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& rows_at, Eigen::VectorXd& theta,
-                               double& radius, SlpBasis& basis, const SlpSettings& settings = {});
+                               double& radius, SlpBasis& basis, const SlpSettings& settings = {},
+                               BoundRowsAt* rows_at_theta = nullptr);
 
 /// The bound rows of `points` (bound_rows.hpp) for theta: what the bounds of a fixed joint path add.
 NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,

@@ -121,6 +121,11 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
 
   double radius = 0.1 * (1.0 + theta.cwiseAbs().maxCoeff());
   bool last_rows_violated = false;
+  // The bound rows at theta of the first rows_points points: a round starts at the theta where
+  // the last ended, so only the points it added need their rows (about a sixth of the plan along
+  // the free path's time went to re-evaluating them).
+  BoundRowsAt rows_at_theta;
+  std::size_t rows_points = 0;
   for (int round = 0; round < bo.max_rounds; ++round) {
     result.bound_rounds = round + 1;
     result.lp_points = build_exchange_rows(setup, o.feasibility_margin_N);
@@ -135,8 +140,10 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       SlpSettings settings;
       settings.max_iterations = bo.max_slp_iterations;
       settings.closest_rows_per_coefficient = kClosestRowsPerCoefficient;
+      append_rows(flat, points, rows_points, a_min, theta, true, kBoundMargin, rows_at_theta);
+      rows_points = points.size();
       const SlpOutcome slp = solve_bounds_by_slp(linear, bound_rows_of(flat, points, a_min, kBoundMargin), theta, radius,
-                                                 basis, settings);
+                                                 basis, settings, &rows_at_theta);
       result.bound_slp_iterations += slp.iterations;
       result.simplex_pivots += slp.lp_pivots;
       if (!slp.converged) {
