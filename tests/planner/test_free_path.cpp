@@ -303,9 +303,9 @@ TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   EXPECT_NEAR(newton.cost_N_s, quasi.cost_N_s, 2e-3 * quasi.cost_N_s);
   EXPECT_LE(newton.cost_N_s, quasi.cost_N_s * (1.0 + 1e-5));
 
-  // The joint method's exchange ending once a round changes the cost by at most 1e-4 of it (the
-  // default): fewer rounds, and the cost at the points where the full exchange ends within a few
-  // times that tolerance (each later round changes it by less).
+  // The joint method's exchange ending once a round changes the cost by at most the default
+  // fraction of it: fewer rounds, and the cost at the points where the full exchange ends within a
+  // few times that tolerance (each later round changes it by less).
   const double settle = fpl::FreeJointPathOptions{}.exchange_relative_tolerance;
   ASSERT_GT(settle, 0.0);
   const fpd::FreePathOutcome settled = optimize(fpl::FreePathMethod::JointNewton, settle);
