@@ -90,8 +90,8 @@ struct FreeJointPathOptions {
   /// points by at most this fraction: 0.1 %, the resolution at which the collocation reference's
   /// mesh counts as converged. The plan along the final path meets every row anyway, and later
   /// rounds move it by far less than the flat outputs' basis leaves to the optimum (0.85 % on the
-  /// arm): over seven configurations the certified plans differ from those of 1e-4 by -1.3e-4 to
-  /// +3e-4 of their cost, in 20 % fewer Ipopt iterations (docs/method/free_path.md, "Speed", (vi)).
+  /// arm): over seven configurations the certified plans differ from those of 1e-4 by -6e-6 to
+  /// +3e-4 of their cost, in 15 % fewer Ipopt iterations (docs/method/free_path.md, "Speed", (vi)).
   /// 0: only when the grid holds.
   double exchange_relative_tolerance = 1e-3;
   double relative_tolerance = 1e-6;  ///< stop when a step lowers the cost by less than this fraction
