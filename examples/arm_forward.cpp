@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-2));
   app.add_option("--report-interval-s", report_interval, "time between rows of states.sto, s")
       ->capture_default_str()->check(CLI::PositiveNumber);
-  long max_steps = 1000000;
+  long max_steps = ex::kDefaultMaxIntegratorSteps;
   ex::add_max_steps_option(app, max_steps);
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,

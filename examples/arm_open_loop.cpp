@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
   app.add_option("--shortest-time-tolerance-s", shortest.tolerance_s, "the bisection's resolution, s")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
-  long max_steps = 1000000;  // about a minute of Runge-Kutta-Merson; a replay takes 5-10 thousand at 1e-10
+  long max_steps = ex::kDefaultMaxIntegratorSteps;
   ex::add_max_steps_option(app, max_steps);
   std::string integrator = "rkm";
   ex::add_integrator_option(app, integrator,

@@ -26,6 +26,9 @@ void require_count(const std::vector<double>& v, int n, const std::string& optio
 int parse_arguments(CLI::App& app, int argc, char** argv);
 /// --integrator with the names of plugin::integrator_name as its only accepted values.
 CLI::Option* add_integrator_option(CLI::App& app, std::string& name, const std::string& help);
+/// The programs' default for --max-integrator-steps: about a minute of Runge-Kutta-Merson, where a
+/// plan's replay takes 5-10 thousand steps at 1e-10.
+constexpr long kDefaultMaxIntegratorSteps = 1000000;
 /// --max-integrator-steps: the simulation stops (and the program fails, saying why) after this
 /// many integrator steps; 0: no limit.
 CLI::Option* add_max_steps_option(CLI::App& app, long& max_steps);

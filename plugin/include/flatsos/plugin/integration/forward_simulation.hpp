@@ -21,8 +21,9 @@ struct SimulationOptions {
   double accuracy = 1e-8;           ///< Simbody integrator accuracy (relative)
   double report_interval_s = 0.01;  ///< rows of the state table
   /// > 0: stop once the integrator has taken this many steps (checked at each report time before
-  /// the end; a run that reaches it at the end is complete) and say so. An explicit method where the muscles' states are stiff (a falling arm's replay, a
-  /// tendon loaded at tiny activation) can take millions of tiny steps; 0: no limit.
+  /// the end; a run that reaches it at the end is complete) and say so. An explicit method where
+  /// the muscles' states are stiff (a falling arm's replay, a tendon loaded at tiny activation)
+  /// can take millions of tiny steps; 0: no limit.
   long max_steps = 0;
 };
 
