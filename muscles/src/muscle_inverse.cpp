@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/muscles/muscle_model.hpp"
 
 namespace flatsos::muscles {
 
@@ -88,12 +88,13 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
   }
   const D F = seed<K>(force.value, 0), dF = seed<K>(force.rate, 1), ddF = seed<K>(force.acceleration, 2);
   const D L = seed<K>(path.value, 3), dL = seed<K>(path.rate, 4), ddL = seed<K>(path.acceleration, 5);
-  // Tendon: L_S = Phi_S^-1(F), dL_S = dF / Phi_S', ddL_S = (ddF - Phi_S'' dL_S^2) / Phi_S';
-  // the tendon law is quadratic, so Phi_S'' is constant above slack.
-  const double ls_v = tendon_length_from_force(p, F.v);
-  const double d1_v = tendon_force_derivative(p, ls_v), d2 = tendon_force_second_derivative(p, ls_v);
-  const D ls = lift(ls_v, 1.0 / d1_v, F);
-  const D d1 = lift(d1_v, d2, ls);
+  // Tendon: L_S = Phi_S^-1(F), dL_S = dF / Phi_S', ddL_S = (ddF - Phi_S'' dL_S^2) / Phi_S'.
+  const MuscleModel& model = *p.model;
+  const double ls_v = model.tendonLengthFromForce(p, F.v);
+  const CurveJet tendon = model.tendonForce(p, ls_v);
+  const D ls = lift(ls_v, 1.0 / tendon.slope, F);
+  const D d1 = lift(tendon.slope, tendon.curvature, ls);
+  const D d2 = lift(tendon.curvature, K > 0 ? model.tendonForceThirdDerivative(p, ls_v) : 0.0, ls);
   const D dls = dF / d1;
   const D ddls = (ddF - d2 * (dls * dls)) / d1;
   out.tendon_length_m = ls.v;
@@ -122,15 +123,13 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
   }
   const D u = -dlm, du = -ddlm;  // shortening velocity along the fibre and its rate
   // Second derivatives of the laws only feed gradients: skipped without them (K = 0).
-  const double f_v = force_length(p, lm.v), f1_v = force_length_derivative(p, lm.v);
-  const double f2_v = K > 0 ? force_length_second_derivative(p, lm.v) : 0.0;
-  const D f = lift(f_v, f1_v, lm);
-  const D f1 = lift(f1_v, f2_v, lm);
+  const CurveJet fl = model.activeForceLength(p, lm.v);
+  const D f = lift(fl.value, fl.slope, lm);
+  const D f1 = lift(fl.slope, fl.curvature, lm);
   const D df = f1 * dlm;
-  const double g_v = force_velocity(p, u.v), g1_v = force_velocity_derivative(p, u.v);
-  const double g2_v = K > 0 ? force_velocity_second_derivative(p, u.v) : 0.0;
-  const D g = lift(g_v, g1_v, u);
-  const D g1 = lift(g1_v, g2_v, u);
+  const CurveJet fv = model.forceVelocity(p, u.v);
+  const D g = lift(fv.value, fv.slope, u);
+  const D g1 = lift(fv.slope, fv.curvature, u);
   const D dg = g1 * du;
   out.fiber_length_m = lm.v;
   out.cos_pennation = c.v;
@@ -142,12 +141,9 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
     return out;
   }
   // Active fibre force F / cos - Phi_P(L_M) = a Fmax f g, and its rate.
-  D passive{}, passive1{};
-  if (p.hasPassiveFiberForce()) {
-    const double p1_v = passive_fiber_force_derivative(p, lm.v);
-    passive = lift(passive_fiber_force(p, lm.v), p1_v, lm);
-    passive1 = lift(p1_v, K > 0 ? passive_fiber_force_second_derivative(p, lm.v) : 0.0, lm);
-  }
+  const CurveJet pe = model.passiveFiberForce(p, lm.v);
+  const D passive = lift(pe.value, pe.slope, lm);
+  const D passive1 = lift(pe.slope, pe.curvature, lm);
   D active = F - passive, dactive = dF - passive1 * dlm;
   if (h != 0.0) {
     active = F / c - passive;
@@ -160,7 +156,7 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
   const D da = (dactive - a * dcapacity) / capacity;
   out.activation = a.v;
   out.activation_rate_per_s = da.v;
-  const ExcitationFromActivation n = excitation_from_activation(p, a.v, da.v);
+  const ExcitationFromActivation n = model.excitationFromActivation(p, a.v, da.v);
   out.excitation = n.excitation;
   out.excitation_real = n.real_root;
   if constexpr (K == 6) {
@@ -170,18 +166,11 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
       out.path_activation_gradient[i] = a.g[3 + i];
       out.path_activation_rate_gradient[i] = da.g[3 + i];
     }
-    if (n.real_root) {
-      // Q(n, a, da) = (1 - beta) n^2 + (beta - (1 - beta) a) n - beta a - T_act da = 0.
-      const double beta = p.activation_beta();
-      const double nn = n.excitation;
-      const double Q_n = 2.0 * (1.0 - beta) * nn + beta - (1.0 - beta) * a.v;
-      const double Q_a = -(1.0 - beta) * nn - beta;
-      const double Q_da = -p.activation_time_constant_s;
+    if (n.real_root)
       for (int i = 0; i < 3; ++i) {
-        out.excitation_gradient[i] = -(Q_a * a.g[i] + Q_da * da.g[i]) / Q_n;
-        out.path_excitation_gradient[i] = -(Q_a * a.g[3 + i] + Q_da * da.g[3 + i]) / Q_n;
+        out.excitation_gradient[i] = n.d_activation * a.g[i] + n.d_activation_rate_s * da.g[i];
+        out.path_excitation_gradient[i] = n.d_activation * a.g[3 + i] + n.d_activation_rate_s * da.g[3 + i];
       }
-    }
   }
   return out;
 }

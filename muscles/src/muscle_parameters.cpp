@@ -1,14 +1,15 @@
 #include "flatsos/muscles/muscle_parameters.hpp"
 
+#include "flatsos/muscles/muscle_model.hpp"
+#include "parameter_checks.hpp"
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 namespace flatsos::muscles {
-namespace {
 
-[[noreturn]] void reject(const MuscleParameters& p, const char* field, double value,
-                         const char* requirement) {
+void reject(const MuscleParameters& p, const char* field, double value, const char* requirement) {
   std::ostringstream msg;
   msg << "muscle '" << (p.name.empty() ? std::string("<unnamed>") : p.name) << "': " << field
       << " = " << value << " is invalid (" << requirement << ")";
@@ -20,8 +21,6 @@ void require_positive(const MuscleParameters& p, const char* field, double value
   if (value <= 0.0) reject(p, field, value, "must be > 0");
 }
 
-}  // namespace
-
 void validate(const MuscleParameters& p) {
   require_positive(p, "max_isometric_force_N", p.max_isometric_force_N);
   require_positive(p, "optimal_fiber_length_m", p.optimal_fiber_length_m);
@@ -30,16 +29,8 @@ void validate(const MuscleParameters& p) {
   require_positive(p, "force_length_width", p.force_length_width);
   require_positive(p, "max_shortening_velocity_in_optimal_lengths_per_s",
                    p.max_shortening_velocity_in_optimal_lengths_per_s);
-  require_positive(p, "hill_constant", p.hill_constant);
-  require_positive(p, "max_eccentric_force_ratio", p.max_eccentric_force_ratio);
-  if (p.max_eccentric_force_ratio <= 1.0)
-    reject(p, "max_eccentric_force_ratio", p.max_eccentric_force_ratio,
-           "must be > 1: eccentric force exceeds isometric force");
   require_positive(p, "activation_time_constant_s", p.activation_time_constant_s);
   require_positive(p, "deactivation_time_constant_s", p.deactivation_time_constant_s);
-  if (p.activation_time_constant_s > p.deactivation_time_constant_s)
-    reject(p, "activation_time_constant_s", p.activation_time_constant_s,
-           "must not exceed deactivation_time_constant_s: activation is faster than deactivation");
   if (!std::isfinite(p.activation_floor) || p.activation_floor <= 0.0 || p.activation_floor >= 1.0)
     reject(p, "activation_floor", p.activation_floor,
            "must be in (0, 1): the contraction dynamics divide by the activation");
@@ -49,6 +40,10 @@ void validate(const MuscleParameters& p) {
   const double e0 = p.passive_fiber_strain_at_one_norm_force;
   if (!std::isfinite(e0) || e0 < 0.0)
     reject(p, "passive_fiber_strain_at_one_norm_force", e0, "must be > 0, or 0 for no passive force");
+  if (!p.model)
+    throw std::invalid_argument("muscle '" + (p.name.empty() ? std::string("<unnamed>") : p.name) +
+                                "': no muscle model");
+  p.model->validate(p);
 }
 
 }  // namespace flatsos::muscles

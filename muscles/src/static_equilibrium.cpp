@@ -19,19 +19,20 @@ double static_equilibrium_tendon_length(const MuscleParameters& p, double length
     throw std::domain_error(who + "none exists: the musculotendon length " + std::to_string(length_m) +
                             " m does not exceed the tendon slack length " +
                             std::to_string(p.tendon_slack_length_m) + " m");
-  const double k = p.tendon_stiffness_N_per_m2();
   const double capacity = effective_activation(p, activation) * p.max_isometric_force_N;
   // Over the tendon stretch s, the muscle along the tendon is x = room - s and
-  //   h(s) = k s^2 - (capacity f(L_M) + Phi_P(L_M)) cos(phi),
+  //   h(s) = Phi_S(L_slack + s) - (capacity f(L_M) + Phi_P(L_M)) cos(phi),
   // negative at s = 0. The fibre's pull is at most capacity + Phi_P(L_M(room)) (f <= 1, Phi_P
-  // grows with L_M, L_M with x), so h >= 0 from s = sqrt(that / k) on: every root lies below.
+  // grows with L_M, L_M with x), so h >= 0 from the stretch at which the tendon carries that
+  // pull on: every root lies below.
   auto fibre_pull = [&](double x) {
     const FiberGeometry g = fiber_geometry(p, x);
     return (capacity * force_length(p, g.length_m) + passive_fiber_force(p, g.length_m)) * g.cos_pennation;
   };
-  auto h = [&](double s) { return k * s * s - fibre_pull(room - s); };
+  auto h = [&](double s) { return tendon_force(p, p.tendon_slack_length_m + s) - fibre_pull(room - s); };
   double lo = 0.0;
-  double hi = std::sqrt((capacity + passive_fiber_force(p, fiber_geometry(p, room).length_m)) / k);
+  const double most_pull = capacity + passive_fiber_force(p, fiber_geometry(p, room).length_m);
+  double hi = tendon_length_from_force(p, most_pull) - p.tendon_slack_length_m;
   if (!(h(lo) < 0.0))
     throw std::domain_error(who + "none exists: the fiber length " + std::to_string(room) +
                             " m is so far from optimal that it produces no force");

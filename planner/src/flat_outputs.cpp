@@ -473,7 +473,7 @@ void FlatOutputMap::inverseFromTorque(const Jet& q_jet, const TorqueJet& tj, con
       why = {Kind::ActivationBelowFloor, a, mp.activation_floor};
     else if (!inv.excitation_real)
       why = {Kind::ExcitationUnattainable, da, 0.0};
-    else if (!(inv.excitation >= 0.0 && inv.excitation <= 1.0))
+    else if (!(inv.excitation >= mp.model->minimumExcitation(mp) && inv.excitation <= 1.0))
       why = {Kind::ExcitationOutsideUnitInterval, inv.excitation, 1.0};
   }
 }

@@ -247,8 +247,8 @@ TEST(ContractionDynamics, ActivationFloorBoundsTheForceRatio) {
 
 TEST(ActivationDynamics, FasterActivationThanDeactivation) {
   const auto p = biceps();
-  EXPECT_NEAR(fm::activation_rate_factor(p, 1.0), 1.0 / p.activation_time_constant_s, 1e-12);
-  EXPECT_NEAR(fm::activation_rate_factor(p, 0.0), 1.0 / p.deactivation_time_constant_s, 1e-12);
+  EXPECT_NEAR(fm::activation_derivative(p, 1.0, 0.0), 1.0 / p.activation_time_constant_s, 1e-12);
+  EXPECT_NEAR(-fm::activation_derivative(p, 0.0, 1.0), 1.0 / p.deactivation_time_constant_s, 1e-12);
   EXPECT_GT(fm::activation_derivative(p, 1.0, 0.5), -fm::activation_derivative(p, 0.0, 0.5));
   EXPECT_EQ(fm::activation_derivative(p, 0.3, 0.3), 0.0);
 }

@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_parameters.hpp"
 
 namespace fm = flatsos::muscles;
@@ -31,7 +32,7 @@ TEST(MuscleParameters, ValidParametersPassAndDerivedQuantitiesAreRight) {
   EXPECT_NO_THROW(fm::validate(p));
   EXPECT_NEAR(p.max_shortening_velocity_m_per_s(), 1.028, 1e-15);
   EXPECT_NEAR(p.activation_beta(), 0.25, 1e-15);
-  EXPECT_NEAR(p.tendon_stiffness_N_per_m2(), 700.0 / std::pow(0.04 * 0.0175, 2), 1e-3);
+  EXPECT_NEAR(fm::tendon_force(p, 1.04 * p.tendon_slack_length_m), 700.0, 1e-9);
 }
 
 TEST(MuscleParameters, EveryBadFieldIsRejectedByName) {

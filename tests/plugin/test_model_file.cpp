@@ -10,6 +10,7 @@
 #include "arm_fixture.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/model_description.hpp"
+#include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace fp = flatsos::plugin;
 using nlohmann::json;
@@ -104,6 +105,10 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
       {"zero axis", [](json& j) { j["joints"][0]["axis"] = {0, 0, 0}; }, {"joints[0].axis", "zero"}},
       {"gravity wrong dimension", [](json& j) { j["gravity_m_per_s2"] = {0, -9.81}; }, {"gravity_m_per_s2", "dimension"}},
       {"unknown top-level key", [](json& j) { j["muscle"] = json::array(); }, {"muscle", "unknown key"}},
+      {"unknown muscle model", [](json& j) { j["muscles"][2]["muscle_model"] = "Thelen2003Muscle"; },
+       {"muscles[2].muscle_model", "Thelen2003Muscle", "richter_warner", "thelen2003"}},
+      {"muscle model not a string", [](json& j) { j["muscle_defaults"]["muscle_model"] = 2003; },
+       {"muscle_defaults.muscle_model", "string"}},
       {"missing Fmax", [](json& j) { j["muscles"][0].erase("max_isometric_force_N"); },
        {"muscles[0].max_isometric_force_N", "missing"}},
       {"negative Fmax", [](json& j) { j["muscles"][3]["max_isometric_force_N"] = -1000; },
@@ -313,4 +318,31 @@ TEST(ModelFile, EffortWeightsAndJointLimitsAreRead) {
   EXPECT_EQ(d.joints[1].limit.transition_rad, 0.1);
   EXPECT_EQ(d.joints[1].limit.damping_N_m_s_per_rad, 0.0);
   EXPECT_FALSE(d.joints[0].limit.enabled());
+}
+
+TEST(ModelFile, AMuscleModelIsChosenPerMuscleStartsFromItsDefaultsAndRoundTrips) {
+  json j = arm_json();
+  j["muscles"][1]["muscle_model"] = "thelen2003";
+  j["muscles"][1]["activation_time_constant_s"] = 0.02;  // the muscle's own field wins
+  const fp::ModelDescription d = fp::parse_model_json(j.dump(), "arm with one Thelen muscle");
+  const flatsos::muscles::MuscleParameters& thelen = d.muscles[1].parameters;
+  EXPECT_EQ(thelen.model->name(), "thelen2003");
+  EXPECT_DOUBLE_EQ(thelen.activation_time_constant_s, 0.02);
+  EXPECT_DOUBLE_EQ(thelen.deactivation_time_constant_s, 0.05);  // OpenSim's default, not the file's
+  EXPECT_DOUBLE_EQ(thelen.max_eccentric_force_ratio, 1.4);
+  EXPECT_EQ(d.muscles[0].parameters.model->name(), "richter_warner");
+
+  // Written and read again: the same model and fields, also where a field equals the other
+  // model's default.
+  fp::ModelDescription changed = d;
+  changed.muscles[1].parameters.hill_constant = 0.3;
+  changed.muscles[1].parameters.deactivation_time_constant_s = 0.04;  // Richter & Warner's default
+  const fp::ModelDescription again = fp::parse_model_json(fp::model_json_text(changed), "round trip");
+  const flatsos::muscles::MuscleParameters& back = again.muscles[1].parameters;
+  EXPECT_EQ(back.model->name(), "thelen2003");
+  EXPECT_DOUBLE_EQ(back.hill_constant, 0.3);
+  EXPECT_DOUBLE_EQ(back.deactivation_time_constant_s, 0.04);
+  EXPECT_DOUBLE_EQ(back.max_eccentric_force_ratio, 1.4);
+  EXPECT_EQ(again.muscles[0].parameters.model->name(), "richter_warner");
+  EXPECT_NO_THROW(fp::MusculoskeletalModel{again});
 }

@@ -108,7 +108,7 @@ std::vector<double> constant_flat_output_start(const FlatOutputMap& flat, plugin
       const double a = mp.activation[j], n = mp.excitation[j], u = mp.shortening_velocity_m_per_s[j];
       const double s = (mp.tendon_length_m[j] - p.tendon_slack_length_m) / (p.tendon_strain_at_max_force * p.tendon_slack_length_m);
       if (!(std::isfinite(a) && std::isfinite(n) && std::isfinite(u) && std::isfinite(s))) continue;
-      x[problem.index(i, j, H::kStretch)] = std::max(s, std::sqrt(mu.reserve_N / p.max_isometric_force_N));
+      x[problem.index(i, j, H::kStretch)] = std::max(s, problem.stretchAtForce(j, mu.reserve_N));
       x[problem.index(i, j, H::kActivation)] = std::clamp(a, mu.min_activation, 1.0);
       x[problem.index(i, j, H::kExcitation)] = std::clamp(n, 0.0, 1.0);
       if (i < problem.points() - 1)  // rest at T is fixed
@@ -163,6 +163,13 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
     if (p.pennation_angle_at_optimal_rad != 0.0 || p.hasPassiveFiberForce())
       throw std::invalid_argument("collocation: muscle '" + p.name +
                                   "' has pennation or passive fibre force, which the collocation reference does not model");
+    // Newton's method stalls on a law whose slope jumps (measured on Thelen's muscles: 3000
+    // Ipopt iterations without convergence; either kink removed, 46-48).
+    if (const std::string kinks = p.model->slopeJumps(); !kinks.empty())
+      throw std::invalid_argument("collocation: muscle '" + p.name + "' follows the " + p.model->name() +
+                                  " model, whose " + kinks +
+                                  "; the collocation reference needs laws with continuous slopes, as direct "
+                                  "collocation tools advise");
   }
   if (o.effort_weights.size() > 0) {
     detail::require(o.effort_weights, m, "collocation: effort_weights");

@@ -15,16 +15,9 @@ namespace flatsos::planner::detail {
 namespace {
 constexpr double kInfinity = 1e19;  // Ipopt's default for "no bound"
 
-// Activation dynamics f_a(n, a) = sigma(n) (n - a), sigma(n) = (beta + (1 - beta) n) / T_act,
-// with its partial derivatives (the second ones are constant).
-struct ActivationRate {
-  double value, d_n, d_a, d_nn, d_na;
-};
-ActivationRate activation_rate(const muscles::MuscleParameters& p, double n, double a) {
-  const double beta = p.activation_beta(), T = p.activation_time_constant_s;
-  const double sigma = (beta + (1.0 - beta) * n) / T;
-  return {sigma * (n - a), ((1.0 - beta) * (2.0 * n - a) + beta) / T, -sigma, 2.0 * (1.0 - beta) / T,
-          -(1.0 - beta) / T};
+// The muscle model's activation dynamics f_a(n, a) with its partial derivatives.
+muscles::ActivationRate activation_rate(const muscles::MuscleParameters& p, double n, double a) {
+  return p.model->activationRate(p, n, a);
 }
 
 // Simpson's and the interpolation defect's weights of f at the interval's first, middle and
@@ -108,6 +101,11 @@ HermiteSimpsonProblem::MuscleAt HermiteSimpsonProblem::evaluate(const double* x,
 double HermiteSimpsonProblem::tendonForce(const double* x, int i, int j) const {
   return muscles::tendon_force(muscles_[j].parameters, tendonLength(x, i, j));
 }
+double HermiteSimpsonProblem::stretchAtForce(int j, double force_N) const {
+  const muscles::MuscleParameters& p = muscles_[j].parameters;
+  if (!(force_N > 0.0)) return 0.0;  // a slack tendon: no force at any stretch <= 0
+  return (muscles::tendon_length_from_force(p, force_N) - p.tendon_slack_length_m) / stretch_scale_m_[j];
+}
 double HermiteSimpsonProblem::tendonLength(const double* x, int i, int j) const {
   return muscles_[j].parameters.tendon_slack_length_m + stretch_scale_m_[j] * x[index(i, j, kStretch)];
 }
@@ -150,12 +148,12 @@ void HermiteSimpsonProblem::bounds(double* xl, double* xu, double* gl, double* g
     for (int j = 0; j < m; ++j) {
       const auto& mu = muscles_[j];
       const auto& p = mu.parameters;
-      // F = Fmax s^2 above slack: the reserve is a bound on s.
-      xl[index(i, j, kStretch)] = std::sqrt(mu.reserve_N / p.max_isometric_force_N);
+      // The tendon force grows with the stretch: the reserve is a bound on s.
+      xl[index(i, j, kStretch)] = stretchAtForce(j, mu.reserve_N);
       xu[index(i, j, kStretch)] = kInfinity;
       xl[index(i, j, kActivation)] = mu.min_activation;
       xu[index(i, j, kActivation)] = 1.0;
-      xl[index(i, j, kExcitation)] = 0.0;
+      xl[index(i, j, kExcitation)] = p.model->minimumExcitation(p);
       xu[index(i, j, kExcitation)] = 1.0;
       // Beyond Vmax the fibre has no force (g <= 0). Lengthening is limited to where the
       // force-velocity law is exact in the forward model (z <= z_hi; beyond, the simulator
@@ -205,7 +203,7 @@ void HermiteSimpsonProblem::startingPoint(double* x) const {
         s = mu.initial_stretch, a = mu.initial_activation;
       } else {
         const double force = std::max(F[j], mu.reserve_N + 0.01 * p.max_isometric_force_N);
-        s = std::sqrt(force / p.max_isometric_force_N);
+        s = stretchAtForce(j, force);
         const double fiber_length = samples_.musculotendon_length_m(j, i) - p.tendon_slack_length_m - stretch_scale_m_[j] * s;
         a = std::clamp(force / (p.max_isometric_force_N * muscles::force_length(p, fiber_length)),
                        std::max(mu.min_activation, 1e-3), 1.0);
@@ -375,11 +373,11 @@ void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
         const auto& rate = which == 0 ? kSimpsonRate : kInterpolationRate;
         for (int c = 0; c < 3; ++c) {
           const int i = 2 * k + c;
-          const ActivationRate fa =
+          const muscles::ActivationRate fa =
               activation_rate(p, x[index(i, j, kExcitation)], x[index(i, j, kActivation)]);
           if (state[c] != 0.0 || rate[c] != 0.0)
-            sink(defectRow(k, j, 2 + which), index(i, j, kActivation), state[c] + h * rate[c] * fa.d_a);
-          if (rate[c] != 0.0) sink(defectRow(k, j, 2 + which), index(i, j, kExcitation), h * rate[c] * fa.d_n);
+            sink(defectRow(k, j, 2 + which), index(i, j, kActivation), state[c] + h * rate[c] * fa.d_activation);
+          if (rate[c] != 0.0) sink(defectRow(k, j, 2 + which), index(i, j, kExcitation), h * rate[c] * fa.d_excitation);
         }
       }
     }
@@ -434,14 +432,15 @@ void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const do
           fa_weight += interval * (lambda[defectRow(i / 2 - 1, j, 2)] * kSimpsonRate[2] +
                                    lambda[defectRow(i / 2 - 1, j, 3)] * kInterpolationRate[2]);
       }
-      const ActivationRate fa = activation_rate(p, e.n, e.a);
+      const muscles::ActivationRate fa = activation_rate(p, e.n, e.a);
       sink(index(i, j, kStretch), index(i, j, kStretch), ss);
       sink(index(i, j, kActivation), index(i, j, kStretch), as);
       sink(index(i, j, kVelocity), index(i, j, kStretch), vs);
       sink(index(i, j, kVelocity), index(i, j, kActivation), va);
       sink(index(i, j, kVelocity), index(i, j, kVelocity), vv);
-      sink(index(i, j, kExcitation), index(i, j, kExcitation), fa_weight * fa.d_nn);
-      sink(index(i, j, kExcitation), index(i, j, kActivation), fa_weight * fa.d_na);
+      sink(index(i, j, kExcitation), index(i, j, kExcitation), fa_weight * fa.d_excitation2);
+      sink(index(i, j, kExcitation), index(i, j, kActivation), fa_weight * fa.d_excitation_activation);
+      sink(index(i, j, kActivation), index(i, j, kActivation), fa_weight * fa.d_activation2);
       if (free_)  // -a f(L(q) - L_S(s)) g(v) with dL/dq_r = -A_rj, dL_S/ds = lambda_s
         for (int r = 0; r < N; ++r) {
           if (A(r, j) == 0.0) continue;

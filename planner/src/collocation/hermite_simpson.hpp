@@ -135,6 +135,8 @@ class HermiteSimpsonProblem {
   /// Quantities in SI units at a point.
   double tendonForce(const double* x, int point, int muscle) const;
   double tendonLength(const double* x, int point, int muscle) const;
+  /// The scaled stretch s at which muscle's tendon carries force_N (0 for force_N <= 0).
+  double stretchAtForce(int muscle, double force_N) const;
   double shorteningVelocity(const double* x, int point, int muscle) const;
   double activationRate(const double* x, int point, int muscle) const;  ///< sigma(n) (n - a), 1/s
   /// The joint path at a point (the unknowns, or the samples along a prescribed path).

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "flatsos/muscles/muscle_model.hpp"
+
 namespace flatsos::plugin {
 
 using nlohmann::json;
@@ -192,9 +194,22 @@ constexpr OptionalMuscleField kOptionalMuscleFields[] = {
     {"activation_floor", &muscles::MuscleParameters::activation_floor},
     {"pennation_angle_at_optimal_rad", &muscles::MuscleParameters::pennation_angle_at_optimal_rad},
     {"passive_fiber_strain_at_one_norm_force", &muscles::MuscleParameters::passive_fiber_strain_at_one_norm_force},
+    {"passive_force_length_shape", &muscles::MuscleParameters::passive_force_length_shape},
 };
 
+// "muscle_model": the laws the muscle follows, by name (muscle_model.hpp).
+constexpr const char* kMuscleModelKey = "muscle_model";
+
 void read_optional_muscle_fields(ObjectReader& r, muscles::MuscleParameters& p) {
+  if (r.find(kMuscleModelKey)) {
+    const std::string name = r.string(kMuscleModelKey);
+    try {
+      p.model = muscles::muscle_model_named(name);
+      p.model->setDefaults(p);  // the muscle's own fields below override the model's defaults
+    } catch (const std::invalid_argument& e) {
+      r.fail(r.at(kMuscleModelKey), e.what());
+    }
+  }
   for (const auto& field : kOptionalMuscleFields)
     if (const json* v = r.find(field.key)) p.*field.member = r.number(*v, r.at(field.key));
 }
@@ -422,7 +437,11 @@ json muscle_json(const MuscleDescription& m, const std::vector<JointDescription>
               {"max_isometric_force_N", p.max_isometric_force_N},
               {"optimal_fiber_length_m", p.optimal_fiber_length_m},
               {"tendon_slack_length_m", p.tendon_slack_length_m}};
-  const muscles::MuscleParameters defaults;
+  muscles::MuscleParameters defaults;
+  if (p.model && p.model != defaults.model) {
+    out[kMuscleModelKey] = p.model->name();
+    p.model->setDefaults(defaults);
+  }
   for (const auto& field : kOptionalMuscleFields)
     if (p.*field.member != defaults.*field.member) out[field.key] = p.*field.member;
   if (m.polynomial_path) {

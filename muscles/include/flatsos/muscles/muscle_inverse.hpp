@@ -10,9 +10,9 @@
 //   x = L - L_S (the muscle along the tendon), L_M = sqrt(x^2 + h^2), cos = x / L_M (pennation
 //   at constant thickness h; h = 0: L_M = x, cos = 1), u = -dL_M/dt = -cos dx/dt (shortening)
 //   f = f(L_M), g = g(u), a = (F / cos - Phi_P(L_M)) / (Fmax f g), da/dt by the chain rule
-//   n: the larger root of sigma(n) (n - a) = da/dt.
-// The gradients are carried through every line in forward mode (the tendon law is quadratic
-// above slack, so Phi_S''' = 0).
+//   n: the inverse of the model's activation dynamics.
+// Every law is the muscle's own model's (muscle_model.hpp); the gradients are carried through
+// every line in forward mode.
 
 #include <array>
 

@@ -2,9 +2,14 @@
 // Parameters of one Hill-type muscle-tendon unit (docs/method/flatness.md). SI units throughout.
 
 #include <cmath>
+#include <memory>
 #include <string>
 
 namespace flatsos::muscles {
+
+class MuscleModel;
+/// The model of muscles that name none: Richter & Warner's laws (richter_warner_muscle.hpp).
+std::shared_ptr<const MuscleModel> default_muscle_model();
 
 struct MuscleParameters {
   std::string name;                        ///< used in every error message
@@ -33,16 +38,15 @@ struct MuscleParameters {
   /// Passive fibre strain e0 at which the passive force reaches Fmax; 0: no passive force (the
   /// paper's muscles). See passive_fiber_force.
   double passive_fiber_strain_at_one_norm_force = 0.0;
+  /// Shape k of the passive curve's exponential growth (Thelen's KshapePassive).
+  double passive_force_length_shape = 4.0;
+  /// The laws this muscle follows (muscle_model.hpp); never null in a validated muscle. Which
+  /// fields above a model reads is documented with the model.
+  std::shared_ptr<const MuscleModel> model = default_muscle_model();
 
   /// Vmax in m/s.
   double max_shortening_velocity_m_per_s() const {
     return max_shortening_velocity_in_optimal_lengths_per_s * optimal_fiber_length_m;
-  }
-  /// Tendon stiffness k in N/m^2 of Phi_S = k (L_S - L_slack)^2, so that Phi_S = Fmax at the
-  /// given strain.
-  double tendon_stiffness_N_per_m2() const {
-    const double stretch_at_fmax = tendon_strain_at_max_force * tendon_slack_length_m;
-    return max_isometric_force_N / (stretch_at_fmax * stretch_at_fmax);
   }
   /// h = Lopt sin(phi0), m: the fibres' constant thickness; exactly 0 without pennation, and then
   /// without a call to sin (the laws ask for it at every evaluation).
@@ -57,8 +61,9 @@ struct MuscleParameters {
 };
 
 /// Throws std::invalid_argument naming the muscle and the field when a parameter is
-/// non-finite or non-physical (non-positive force, lengths, time constants; gmax <= 1;
-/// T_act > T_deact; floor outside (0, 1); pennation outside [0, pi/2); passive strain < 0).
+/// non-finite or non-physical (non-positive force, lengths, time constants; floor outside
+/// (0, 1); pennation outside [0, pi/2); passive strain < 0; no model), then the model's own
+/// checks (MuscleModel::validate).
 void validate(const MuscleParameters& p);
 
 }  // namespace flatsos::muscles

@@ -51,7 +51,7 @@ struct CollocationResult {
   /// values and rates at the interval's ends (Hermite-Simpson's own representation), and the
   /// excitation is the one that cubic implies.
   Eigen::MatrixXd tendon_force_N, tendon_length_m, activation, excitation, shortening_velocity_m_per_s;
-  Eigen::MatrixXd activation_rate_per_s;  ///< da/dt = sigma(n) (n - a)
+  Eigen::MatrixXd activation_rate_per_s;  ///< da/dt of each muscle's activation dynamics
   /// N x (2K + 1): the joint path at the points (the prescribed one, or the optimized one).
   Eigen::MatrixXd joint_angle_rad, joint_speed_rad_per_s, joint_acceleration_rad_per_s2;
 };

@@ -1,0 +1,33 @@
+// The registry of muscle models by the names model files use.
+
+#include <stdexcept>
+
+#include "flatsos/muscles/muscle_model.hpp"
+#include "flatsos/muscles/richter_warner_muscle.hpp"
+#include "flatsos/muscles/thelen2003_muscle.hpp"
+
+namespace flatsos::muscles {
+
+std::shared_ptr<const MuscleModel> default_muscle_model() {
+  static const std::shared_ptr<const MuscleModel> model = std::make_shared<RichterWarnerMuscle>();
+  return model;
+}
+
+namespace {
+std::shared_ptr<const MuscleModel> thelen2003() {
+  static const std::shared_ptr<const MuscleModel> model = std::make_shared<Thelen2003Muscle>();
+  return model;
+}
+}  // namespace
+
+std::vector<std::string> muscle_model_names() { return {RichterWarnerMuscle::kName, Thelen2003Muscle::kName}; }
+
+std::shared_ptr<const MuscleModel> muscle_model_named(const std::string& name) {
+  if (name == RichterWarnerMuscle::kName) return default_muscle_model();
+  if (name == Thelen2003Muscle::kName) return thelen2003();
+  std::string known;
+  for (const std::string& n : muscle_model_names()) known += (known.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown muscle model '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace flatsos::muscles

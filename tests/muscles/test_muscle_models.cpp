@@ -1,0 +1,185 @@
+// The muscle-model seam: each model's derivatives and inverses by the finite-difference twin,
+// Thelen's published properties, the registry, and a deliberately wrong model the twin catches.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/muscles/muscle_model.hpp"
+#include "flatsos/muscles/muscle_model_check.hpp"
+#include "flatsos/muscles/richter_warner_muscle.hpp"
+#include "flatsos/muscles/thelen2003_muscle.hpp"
+
+namespace fm = flatsos::muscles;
+
+namespace {
+
+fm::MuscleParameters muscle(const std::string& model) {
+  fm::MuscleParameters p;
+  p.name = "m";
+  p.max_isometric_force_N = 600.0;
+  p.optimal_fiber_length_m = 0.11;
+  p.tendon_slack_length_m = 0.20;
+  p.model = fm::muscle_model_named(model);
+  p.model->setDefaults(p);
+  return p;
+}
+
+// Richter & Warner's laws with a tendon slope 0.1 % too steep.
+class WrongSlope final : public fm::MuscleModel {
+ public:
+  std::string name() const override { return "wrong"; }
+  void validate(const fm::MuscleParameters& p) const override { base_.validate(p); }
+  void setDefaults(fm::MuscleParameters& p) const override { base_.setDefaults(p); }
+  std::string slopeJumps() const override { return {}; }
+  fm::CurveJet tendonForce(const fm::MuscleParameters& p, double l) const override {
+    fm::CurveJet j = base_.tendonForce(p, l);
+    j.slope *= 1.001;
+    return j;
+  }
+  double tendonForceThirdDerivative(const fm::MuscleParameters& p, double l) const override {
+    return base_.tendonForceThirdDerivative(p, l);
+  }
+  double tendonLengthFromForce(const fm::MuscleParameters& p, double f) const override {
+    return base_.tendonLengthFromForce(p, f);
+  }
+  fm::CurveJet activeForceLength(const fm::MuscleParameters& p, double l) const override {
+    return base_.activeForceLength(p, l);
+  }
+  fm::CurveJet passiveFiberForce(const fm::MuscleParameters& p, double l) const override {
+    return base_.passiveFiberForce(p, l);
+  }
+  fm::CurveJet forceVelocity(const fm::MuscleParameters& p, double u) const override { return base_.forceVelocity(p, u); }
+  double forceVelocityInverse(const fm::MuscleParameters& p, double z) const override {
+    return base_.forceVelocityInverse(p, z);
+  }
+  double forceRatioExactUpperBound(const fm::MuscleParameters& p) const override {
+    return base_.forceRatioExactUpperBound(p);
+  }
+  fm::CurveJet fiberVelocityFromForceRatio(const fm::MuscleParameters& p, double z) const override {
+    return base_.fiberVelocityFromForceRatio(p, z);
+  }
+  fm::ActivationRate activationRate(const fm::MuscleParameters& p, double n, double a) const override {
+    return base_.activationRate(p, n, a);
+  }
+  fm::ExcitationFromActivation excitationFromActivation(const fm::MuscleParameters& p, double a,
+                                                        double r) const override {
+    return base_.excitationFromActivation(p, a, r);
+  }
+  fm::ExcitationBoundMargins excitationBoundMargins(const fm::MuscleParameters& p, double a, double r) const override {
+    return base_.excitationBoundMargins(p, a, r);
+  }
+
+ private:
+  fm::RichterWarnerMuscle base_;
+};
+
+}  // namespace
+
+TEST(MuscleModels, RichterWarnerPassesTheFiniteDifferenceTwin) {
+  fm::MuscleParameters p = muscle("richter_warner");
+  const fm::MuscleModelCheck plain = fm::check_muscle_model(p);
+  EXPECT_TRUE(plain.ok()) << plain.summary();
+  p.passive_fiber_strain_at_one_norm_force = 0.6;
+  p.pennation_angle_at_optimal_rad = 0.2;
+  const fm::MuscleModelCheck passive = fm::check_muscle_model(p);
+  EXPECT_TRUE(passive.ok()) << passive.summary();
+  EXPECT_GT(passive.checked, 2000);
+  EXPECT_LT(passive.skipped, passive.checked / 50);
+}
+
+TEST(MuscleModels, Thelen2003PassesTheFiniteDifferenceTwin) {
+  const fm::MuscleModelCheck check = fm::check_muscle_model(muscle("thelen2003"));
+  EXPECT_TRUE(check.ok()) << check.summary();
+  EXPECT_LT(check.skipped, check.checked / 50);
+}
+
+TEST(MuscleModels, TheTwinCatchesAWrongDerivative) {
+  fm::MuscleParameters p = muscle("richter_warner");
+  p.model = std::make_shared<WrongSlope>();
+  const fm::MuscleModelCheck check = fm::check_muscle_model(p);
+  ASSERT_FALSE(check.ok());
+  int slopes = 0;
+  for (const fm::MuscleModelMismatch& m : check.mismatches) {
+    slopes += m.quantity == "tendonForce.slope";
+    // The wrong slope also differs from the differences of itself that the curvature meets.
+    EXPECT_TRUE(m.quantity == "tendonForce.slope" || m.quantity == "tendonForce.curvature") << m.quantity;
+  }
+  EXPECT_GT(slopes, 20);
+}
+
+TEST(MuscleModels, TheRegistryNamesEveryModelAndRejectsOthers) {
+  for (const std::string& name : fm::muscle_model_names()) EXPECT_EQ(fm::muscle_model_named(name)->name(), name);
+  EXPECT_EQ(fm::muscle_model_named("richter_warner"), fm::default_muscle_model());
+  try {
+    fm::muscle_model_named("Thelen2003Muscle");
+    FAIL() << "an unknown name was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("thelen2003"), std::string::npos) << e.what();
+  }
+  fm::MuscleParameters p = muscle("thelen2003");
+  p.model = nullptr;
+  EXPECT_THROW(fm::validate(p), std::invalid_argument);
+}
+
+TEST(Thelen2003, TendonCarriesMaxIsometricForceAtItsStrainAndIsC1AtTheToe) {
+  for (const double e0 : {0.04, 0.033}) {  // OpenSim's default and arm26's
+    fm::MuscleParameters p = muscle("thelen2003");
+    p.tendon_strain_at_max_force = e0;
+    const double slack = p.tendon_slack_length_m, fmax = p.max_isometric_force_N;
+    EXPECT_NEAR(fm::tendon_force(p, slack * (1.0 + e0)), fmax, 1e-12 * fmax);
+    // The toe ends at 0.33 Fmax near Thelen's rounded 0.609 e0, with the linear slope near his
+    // 1.712 / e0 (OpenSim: 0.6086 e0 and 42.797 at e0 = 0.04).
+    const double toe_strain = 99.0 * e0 * std::exp(3.0) / (166.0 * std::exp(3.0) - 67.0);
+    EXPECT_NEAR(toe_strain / e0, 0.6086, 1e-4);
+    const double toe_end = slack * (1.0 + toe_strain), h = 1e-9 * slack;
+    EXPECT_NEAR(fm::tendon_force(p, toe_end), 0.33 * fmax, 1e-9 * fmax);
+    EXPECT_NEAR(fm::tendon_force_derivative(p, toe_end + h) * slack / fmax * e0, 1.712, 2e-4);
+    EXPECT_NEAR(fm::tendon_force_derivative(p, toe_end - h) / fm::tendon_force_derivative(p, toe_end + h), 1.0, 1e-6);
+    EXPECT_EQ(fm::tendon_force(p, slack), 0.0);
+  }
+}
+
+TEST(Thelen2003, ForceVelocityHasThelensShape) {
+  const fm::MuscleParameters p = muscle("thelen2003");
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  EXPECT_DOUBLE_EQ(fm::force_velocity(p, 0.0), 1.0);
+  EXPECT_NEAR(fm::force_velocity(p, vmax), 0.0, 1e-15);
+  EXPECT_NEAR(fm::force_velocity(p, -1e6 * vmax), p.max_eccentric_force_ratio, 1e-5);
+  // Thelen's eccentric b is (2 + 2 / Af) a f, twice the concentric a f (1 + 1 / Af) at z = 1:
+  // the curve's slope doubles across isometric.
+  EXPECT_NEAR(fm::force_velocity_derivative(p, -1e-12) / fm::force_velocity_derivative(p, 0.0), 2.0, 1e-9);
+  // Half of Vmax concentric: z = Af (1 - 0.5) / (Af + 0.5) = 1/6 at Af = 0.25.
+  EXPECT_NEAR(fm::force_velocity(p, 0.5 * vmax), 1.0 / 6.0, 1e-14);
+}
+
+TEST(Thelen2003, ActivationDynamicsAreOpenSimsFirstOrderModel) {
+  const fm::MuscleParameters p = muscle("thelen2003");
+  // Activating from 0.5 at n = 1: tau = 0.015 (0.5 + 0.75) = 0.01875 s.
+  EXPECT_NEAR(fm::activation_derivative(p, 1.0, 0.5), 0.5 / 0.01875, 1e-12);
+  // Deactivating at n = 0 (the excitation is not clamped): tau = 0.05 / 1.25 = 0.04 s.
+  EXPECT_NEAR(fm::activation_derivative(p, 0.0, 0.5), -0.5 / 0.04, 1e-12);
+  // The activation is clamped to [minimum, 1]: below the minimum it acts as the minimum.
+  EXPECT_NEAR(fm::activation_derivative(p, 0.5, 0.001), (0.5 - 0.01) / (0.015 * (0.5 + 1.5 * 0.01)), 1e-9);
+  // The excitation's bounds are [minimum, 1] (OpenSim's min_control): deactivating from 0.5
+  // faster than n = 0.01 allows, (0.01 - 0.5) / 0.04 = -12.25 /s, needs an excitation below them.
+  EXPECT_NEAR(fm::excitation_from_activation(p, 0.5, -12.25).excitation, 0.01, 1e-12);
+  EXPECT_LT(fm::excitation_bound_margins(p, 0.5, -12.3).lower, 0.0);
+  EXPECT_GT(fm::excitation_bound_margins(p, 0.5, -12.2).lower, 0.0);
+  EXPECT_DOUBLE_EQ(p.model->minimumExcitation(p), 0.01);
+}
+
+TEST(Thelen2003, DefaultsAreOpenSims) {
+  const fm::MuscleParameters p = muscle("thelen2003");
+  EXPECT_DOUBLE_EQ(p.force_length_width * p.force_length_width, 0.45);  // KshapeActive
+  EXPECT_DOUBLE_EQ(p.max_eccentric_force_ratio, 1.4);                   // Flen
+  EXPECT_DOUBLE_EQ(p.activation_time_constant_s, 0.015);
+  EXPECT_DOUBLE_EQ(p.deactivation_time_constant_s, 0.05);
+  EXPECT_DOUBLE_EQ(p.activation_floor, 0.01);
+  EXPECT_DOUBLE_EQ(p.passive_force_length_shape, 5.0);  // KshapePassive
+  EXPECT_DOUBLE_EQ(p.passive_fiber_strain_at_one_norm_force, 0.6);
+  EXPECT_DOUBLE_EQ(p.tendon_strain_at_max_force, 0.04);
+  EXPECT_NO_THROW(fm::validate(p));
+}
