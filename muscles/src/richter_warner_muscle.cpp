@@ -2,22 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 #include "parameter_checks.hpp"
+#include "shared_curves.hpp"
 
 namespace flatsos::muscles {
 namespace {
 
 // Fraction of (1, gmax) on which the forward model uses the exact eccentric inverse.
 constexpr double kExactEccentricFraction = 0.9;
-
-[[noreturn]] void domain_failure(const MuscleParameters& p, const char* what, double value) {
-  std::ostringstream msg;
-  msg << "muscle '" << p.name << "': " << what << " (got " << value << ")";
-  throw std::domain_error(msg.str());
-}
 
 double tendon_stiffness_N_per_m2(const MuscleParameters& p) {
   const double stretch_at_fmax = p.tendon_strain_at_max_force * p.tendon_slack_length_m;
@@ -107,16 +101,13 @@ CurveJet RichterWarnerMuscle::tendonForce(const MuscleParameters& p, double tend
 
 double RichterWarnerMuscle::tendonLengthFromForce(const MuscleParameters& p, double tendon_force_N) const {
   if (!std::isfinite(tendon_force_N) || tendon_force_N <= 0.0)
-    domain_failure(p, "tendon length is defined only for a finite tendon force > 0 N", tendon_force_N);
+    detail::domain_failure(p, "tendon length is defined only for a finite tendon force > 0 N", tendon_force_N);
   return p.tendon_slack_length_m + std::sqrt(tendon_force_N / tendon_stiffness_N_per_m2(p));
 }
 
 // ---------------------------------------------------------------- fibre
 CurveJet RichterWarnerMuscle::activeForceLength(const MuscleParameters& p, double fiber_length_m) const {
-  const double width = p.force_length_width * p.optimal_fiber_length_m;
-  const double x = (fiber_length_m - p.optimal_fiber_length_m) / width;
-  const double f = std::exp(-x * x);
-  return {f, -2.0 * x / width * f, (4.0 * x * x - 2.0) / (width * width) * f};
+  return detail::gaussian_force_length(p, fiber_length_m);
 }
 
 CurveJet RichterWarnerMuscle::passiveFiberForce(const MuscleParameters& p, double fiber_length_m) const {
@@ -147,7 +138,7 @@ CurveJet RichterWarnerMuscle::forceVelocity(const MuscleParameters& p, double u)
 
 double RichterWarnerMuscle::forceVelocityInverse(const MuscleParameters& p, double z) const {
   if (!(z > -p.hill_constant && z < p.max_eccentric_force_ratio))
-    domain_failure(p, "force-velocity inverse needs a force ratio in (-Ah, gmax)", z);
+    detail::domain_failure(p, "force-velocity inverse needs a force ratio in (-Ah, gmax)", z);
   return inverse_unchecked(p, z);
 }
 

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 #include "parameter_checks.hpp"
+#include "shared_curves.hpp"
 
 namespace flatsos::muscles {
 namespace {
@@ -19,12 +19,6 @@ constexpr double kToeShape = 3.0;
 // OpenSim's fv_linear_extrap_threshold: beyond this fraction of Flen the inverse of g continues
 // linearly.
 constexpr double kLinearExtrapolationThreshold = 0.95;
-
-[[noreturn]] void domain_failure(const MuscleParameters& p, const char* what, double value) {
-  std::ostringstream msg;
-  msg << "muscle '" << p.name << "': " << what << " (got " << value << ")";
-  throw std::domain_error(msg.str());
-}
 
 struct Tendon {
   double toe_strain, linear_stiffness, toe_scale;  // toe_scale = Ftoe / (exp(kToe) - 1)
@@ -108,7 +102,7 @@ double Thelen2003Muscle::tendonForceThirdDerivative(const MuscleParameters& p, d
 
 double Thelen2003Muscle::tendonLengthFromForce(const MuscleParameters& p, double tendon_force_N) const {
   if (!std::isfinite(tendon_force_N) || tendon_force_N <= 0.0)
-    domain_failure(p, "tendon length is defined only for a finite tendon force > 0 N", tendon_force_N);
+    detail::domain_failure(p, "tendon length is defined only for a finite tendon force > 0 N", tendon_force_N);
   const Tendon t = tendon_constants(p);
   const double normalized = tendon_force_N / p.max_isometric_force_N;
   const double strain = normalized > kToeForce
@@ -119,11 +113,8 @@ double Thelen2003Muscle::tendonLengthFromForce(const MuscleParameters& p, double
 
 // ---------------------------------------------------------------- fibre
 CurveJet Thelen2003Muscle::activeForceLength(const MuscleParameters& p, double fiber_length_m) const {
-  // exp(-(l - 1)^2 / KshapeActive) with KshapeActive = W^2: in lengths, a Gaussian of width W Lopt.
-  const double width = p.force_length_width * p.optimal_fiber_length_m;
-  const double x = (fiber_length_m - p.optimal_fiber_length_m) / width;
-  const double f = std::exp(-x * x);
-  return {f, -2.0 * x / width * f, (4.0 * x * x - 2.0) / (width * width) * f};
+  // exp(-(l - 1)^2 / KshapeActive) with KshapeActive = W^2: a Gaussian of width W Lopt.
+  return detail::gaussian_force_length(p, fiber_length_m);
 }
 
 CurveJet Thelen2003Muscle::passiveFiberForce(const MuscleParameters& p, double fiber_length_m) const {
@@ -155,7 +146,7 @@ CurveJet Thelen2003Muscle::forceVelocity(const MuscleParameters& p, double u) co
 
 double Thelen2003Muscle::forceVelocityInverse(const MuscleParameters& p, double z) const {
   if (!(z > -p.hill_constant && z < p.max_eccentric_force_ratio))
-    domain_failure(p, "force-velocity inverse needs a force ratio in (-Af, Flen)", z);
+    detail::domain_failure(p, "force-velocity inverse needs a force ratio in (-Af, Flen)", z);
   return p.max_shortening_velocity_m_per_s() * velocity_exact(p, z);
 }
 
