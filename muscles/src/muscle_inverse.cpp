@@ -122,7 +122,7 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
     ddlm = dc * dx + c * ddx;
   }
   const D u = -dlm, du = -ddlm;  // shortening velocity along the fibre and its rate
-  // Second derivatives of the laws only feed gradients: skipped without them (K = 0).
+  // Each law's jet comes with its curvature, which only the gradients (K = 6) use.
   const CurveJet fl = model.activeForceLength(p, lm.v);
   const D f = lift(fl.value, fl.slope, lm);
   const D f1 = lift(fl.slope, fl.curvature, lm);

@@ -110,7 +110,7 @@ std::vector<double> constant_flat_output_start(const FlatOutputMap& flat, plugin
       if (!(std::isfinite(a) && std::isfinite(n) && std::isfinite(u) && std::isfinite(s))) continue;
       x[problem.index(i, j, H::kStretch)] = std::max(s, problem.stretchAtForce(j, mu.reserve_N));
       x[problem.index(i, j, H::kActivation)] = std::clamp(a, mu.min_activation, 1.0);
-      x[problem.index(i, j, H::kExcitation)] = std::clamp(n, 0.0, 1.0);
+      x[problem.index(i, j, H::kExcitation)] = std::clamp(n, p.model->minimumExcitation(p), 1.0);
       if (i < problem.points() - 1)  // rest at T is fixed
         x[problem.index(i, j, H::kVelocity)] = std::min(u / p.max_shortening_velocity_m_per_s(), 0.9);
     }
