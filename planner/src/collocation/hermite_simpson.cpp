@@ -82,19 +82,22 @@ HermiteSimpsonProblem::MuscleAt HermiteSimpsonProblem::evaluate(const double* x,
   e.n = x[index(i, j, kExcitation)];
   e.v = x[index(i, j, kVelocity)];
   const double tendon_length = p.tendon_slack_length_m + lambda * e.s;
-  e.F = muscles::tendon_force(p, tendon_length);
-  e.F_s = muscles::tendon_force_derivative(p, tendon_length) * lambda;
-  e.F_ss = muscles::tendon_force_second_derivative(p, tendon_length) * lambda * lambda;
+  // One evaluation of each law gives its value and both derivatives.
+  const muscles::CurveJet tendon = p.model->tendonForce(p, tendon_length);
+  e.F = tendon.value;
+  e.F_s = tendon.slope * lambda;
+  e.F_ss = tendon.curvature * lambda * lambda;
   const double fiber_length = musculotendonLength(x, i, j) - tendon_length;
-  e.f = muscles::force_length(p, fiber_length);
-  e.f_s = -muscles::force_length_derivative(p, fiber_length) * lambda;
-  e.f_L = muscles::force_length_derivative(p, fiber_length);
-  e.f_LL = muscles::force_length_second_derivative(p, fiber_length);
+  const muscles::CurveJet fl = p.model->activeForceLength(p, fiber_length);
+  e.f = fl.value;
+  e.f_s = -fl.slope * lambda;
+  e.f_L = fl.slope;
+  e.f_LL = fl.curvature;
   e.f_ss = e.f_LL * lambda * lambda;
-  const double u = vmax * e.v;
-  e.g = muscles::force_velocity(p, u);
-  e.g_v = muscles::force_velocity_derivative(p, u) * vmax;
-  e.g_vv = muscles::force_velocity_second_derivative(p, u) * vmax * vmax;
+  const muscles::CurveJet fv = p.model->forceVelocity(p, vmax * e.v);
+  e.g = fv.value;
+  e.g_v = fv.slope * vmax;
+  e.g_vv = fv.curvature * vmax * vmax;
   return e;
 }
 
