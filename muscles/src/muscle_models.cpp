@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "flatsos/muscles/degroote_fregly2016_muscle.hpp"
 #include "flatsos/muscles/muscle_model.hpp"
 #include "flatsos/muscles/richter_warner_muscle.hpp"
 #include "flatsos/muscles/thelen2003_muscle.hpp"
@@ -18,13 +19,18 @@ std::shared_ptr<const MuscleModel> thelen2003() {
   static const std::shared_ptr<const MuscleModel> model = std::make_shared<Thelen2003Muscle>();
   return model;
 }
+std::shared_ptr<const MuscleModel> degroote_fregly2016() {
+  static const std::shared_ptr<const MuscleModel> model = std::make_shared<DeGrooteFregly2016Muscle>();
+  return model;
+}
 }  // namespace
 
-std::vector<std::string> muscle_model_names() { return {RichterWarnerMuscle::kName, Thelen2003Muscle::kName}; }
+std::vector<std::string> muscle_model_names() { return {RichterWarnerMuscle::kName, Thelen2003Muscle::kName, DeGrooteFregly2016Muscle::kName}; }
 
 std::shared_ptr<const MuscleModel> muscle_model_named(const std::string& name) {
   if (name == RichterWarnerMuscle::kName) return default_muscle_model();
   if (name == Thelen2003Muscle::kName) return thelen2003();
+  if (name == DeGrooteFregly2016Muscle::kName) return degroote_fregly2016();
   std::string known;
   for (const std::string& n : muscle_model_names()) known += (known.empty() ? "" : ", ") + n;
   throw std::invalid_argument("unknown muscle model '" + name + "' (known: " + known + ")");

@@ -22,9 +22,9 @@ double static_equilibrium_tendon_length(const MuscleParameters& p, double length
   const double capacity = effective_activation(p, activation) * p.max_isometric_force_N;
   // Over the tendon stretch s, the muscle along the tendon is x = room - s and
   //   h(s) = Phi_S(L_slack + s) - (capacity f(L_M) + Phi_P(L_M)) cos(phi),
-  // negative at s = 0. The fibre's pull is at most capacity + Phi_P(L_M(room)) (f <= 1, Phi_P
-  // grows with L_M, L_M with x), so h >= 0 from the stretch at which the tendon carries that
-  // pull on: every root lies below.
+  // negative at s = 0. The fibre's pull is about capacity + Phi_P(L_M(room)) at most (f peaks
+  // near 1, Phi_P grows with L_M, L_M with x), so h >= 0 from about the stretch at which the
+  // tendon carries that pull on; the bracket grows where a model's f peaks above 1.
   auto fibre_pull = [&](double x) {
     const FiberGeometry g = fiber_geometry(p, x);
     return (capacity * force_length(p, g.length_m) + passive_fiber_force(p, g.length_m)) * g.cos_pennation;
@@ -33,6 +33,7 @@ double static_equilibrium_tendon_length(const MuscleParameters& p, double length
   double lo = 0.0;
   const double most_pull = capacity + passive_fiber_force(p, fiber_geometry(p, room).length_m);
   double hi = tendon_length_from_force(p, most_pull) - p.tendon_slack_length_m;
+  for (int grow = 0; grow < 60 && hi < room && h(hi) < 0.0; ++grow) hi *= 1.5;
   if (!(h(lo) < 0.0))
     throw std::domain_error(who + "none exists: the fiber length " + std::to_string(room) +
                             " m is so far from optimal that it produces no force");

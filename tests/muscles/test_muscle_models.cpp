@@ -6,6 +6,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "flatsos/muscles/degroote_fregly2016_muscle.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_model.hpp"
 #include "flatsos/muscles/muscle_model_check.hpp"
@@ -96,6 +97,19 @@ TEST(MuscleModels, Thelen2003PassesTheFiniteDifferenceTwin) {
   EXPECT_LT(check.skipped, check.checked / 50);
 }
 
+TEST(MuscleModels, DeGrooteFregly2016PassesTheFiniteDifferenceTwin) {
+  fm::MuscleParameters p = muscle("degroote_fregly2016");
+  const fm::MuscleModelCheck plain = fm::check_muscle_model(p);
+  EXPECT_TRUE(plain.ok()) << plain.summary();
+  EXPECT_LT(plain.skipped, plain.checked / 50);
+  // The steep switch OpenSim recommends (b = 10), a wider active curve and pennation.
+  p.activation_dynamics_smoothing = 10.0;
+  p.force_length_width = 1.5;
+  p.pennation_angle_at_optimal_rad = 0.2;
+  const fm::MuscleModelCheck steep = fm::check_muscle_model(p);
+  EXPECT_TRUE(steep.ok()) << steep.summary();
+}
+
 TEST(MuscleModels, TheTwinCatchesAWrongDerivative) {
   fm::MuscleParameters p = muscle("richter_warner");
   p.model = std::make_shared<WrongSlope>();
@@ -182,4 +196,62 @@ TEST(Thelen2003, DefaultsAreOpenSims) {
   EXPECT_DOUBLE_EQ(p.passive_fiber_strain_at_one_norm_force, 0.6);
   EXPECT_DOUBLE_EQ(p.tendon_strain_at_max_force, 0.04);
   EXPECT_NO_THROW(fm::validate(p));
+}
+
+TEST(DeGrooteFregly2016, CurvesPassThroughOpenSimsPoints) {
+  const fm::MuscleParameters p = muscle("degroote_fregly2016");
+  const double slack = p.tendon_slack_length_m, fmax = p.max_isometric_force_N, lopt = p.optimal_fiber_length_m;
+  const double vmax = p.max_shortening_velocity_m_per_s();
+  EXPECT_TRUE(p.model->slopeJumps().empty());
+  // Tendon: 0 at slack, Fmax at e0 = 0.049, a compression approaching -0.2 Fmax far below slack.
+  EXPECT_EQ(fm::tendon_force(p, slack), 0.0);
+  EXPECT_NEAR(fm::tendon_force(p, slack * 1.049), fmax, 1e-12 * fmax);
+  EXPECT_NEAR(fm::tendon_force(p, 0.5 * slack), -0.2 * fmax, 1e-6 * fmax);
+  // Active force-length: 1 at the optimal length, the curve's other Gaussians small far away.
+  EXPECT_NEAR(fm::force_length(p, lopt), 1.0, 1e-12);
+  EXPECT_LT(fm::force_length(p, 0.4 * lopt), 0.1);
+  EXPECT_LT(fm::force_length(p, 1.8 * lopt), 0.1);
+  // Passive: 0 at the model's least fibre length 0.2 Lopt, Fmax at 1 + e0 (e0 = 0.6).
+  EXPECT_NEAR(fm::passive_fiber_force(p, 0.2 * lopt), 0.0, 1e-12 * fmax);
+  EXPECT_NEAR(fm::passive_fiber_force(p, 1.6 * lopt), fmax, 1e-12 * fmax);
+  EXPECT_LT(fm::passive_fiber_force(p, 0.1 * lopt), 0.0);
+  // Force-velocity through (-1, 0), (0, 1) and (1, 1.794) in OpenSim's lengthening velocity.
+  EXPECT_NEAR(fm::force_velocity(p, vmax), 0.0, 1e-6);
+  EXPECT_NEAR(fm::force_velocity(p, 0.0), 1.0, 1e-12);
+  EXPECT_NEAR(fm::force_velocity(p, -vmax), 1.794, 5e-4);
+  EXPECT_NEAR(p.model->forceRatioExactUpperBound(p), fm::force_velocity(p, -vmax), 1e-15);
+}
+
+TEST(DeGrooteFregly2016, ActivationSmoothsThelensTwoTimeConstants) {
+  fm::MuscleParameters p = muscle("degroote_fregly2016");
+  const double a = 0.5, s = 0.5 + 1.5 * a;
+  // OpenSim's default b = 0.1 barely switches: at n = 1 the time constant is close to the mean of
+  // T_act s and T_deact / s, weighted by (1 +- tanh(0.05)) / 2.
+  const double t = std::tanh(0.1 * 0.5);
+  const double expected = ((0.5 + 0.5 * t) / (0.015 * s) + (0.5 - 0.5 * t) * s / 0.060) * 0.5;
+  EXPECT_NEAR(fm::activation_derivative(p, 1.0, a), expected, 1e-12 * expected);
+  EXPECT_EQ(fm::activation_derivative(p, a, a), 0.0);
+  // A steep switch approaches Thelen's first-order model on each side.
+  p.activation_dynamics_smoothing = 1e3;
+  EXPECT_NEAR(fm::activation_derivative(p, 1.0, a), 0.5 / (0.015 * s), 1e-9);
+  EXPECT_NEAR(fm::activation_derivative(p, 0.0, a), -0.5 * s / 0.060, 1e-9);
+  // The inverse finds the excitation that gives a rate, at the bounds too.
+  for (const double n : {0.0, 0.3, 1.0}) {
+    const double rate = fm::activation_derivative(p, n, 0.2);
+    EXPECT_NEAR(fm::excitation_from_activation(p, 0.2, rate).excitation, n, 1e-12);
+  }
+}
+
+TEST(DeGrooteFregly2016, DefaultsAreOpenSims) {
+  const fm::MuscleParameters p = muscle("degroote_fregly2016");
+  EXPECT_DOUBLE_EQ(p.tendon_strain_at_max_force, 0.049);
+  EXPECT_DOUBLE_EQ(p.force_length_width, 1.0);  // active_force_width_scale
+  EXPECT_DOUBLE_EQ(p.passive_fiber_strain_at_one_norm_force, 0.6);
+  EXPECT_DOUBLE_EQ(p.activation_time_constant_s, 0.015);
+  EXPECT_DOUBLE_EQ(p.deactivation_time_constant_s, 0.060);
+  EXPECT_DOUBLE_EQ(p.activation_dynamics_smoothing, 0.1);
+  EXPECT_NO_THROW(fm::validate(p));
+  fm::MuscleParameters narrow = p;
+  narrow.force_length_width = 0.5;
+  EXPECT_THROW(fm::validate(narrow), std::invalid_argument);
 }

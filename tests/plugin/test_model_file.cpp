@@ -346,3 +346,22 @@ TEST(ModelFile, AMuscleModelIsChosenPerMuscleStartsFromItsDefaultsAndRoundTrips)
   EXPECT_EQ(again.muscles[0].parameters.model->name(), "richter_warner");
   EXPECT_NO_THROW(fp::MusculoskeletalModel{again});
 }
+
+TEST(ModelFile, DeGrooteFreglysSmoothingIsReadAndWritten) {
+  json j = arm_json();
+  j["muscle_defaults"]["muscle_model"] = "degroote_fregly2016";
+  // The file's own width (Richter & Warner's W = 0.56) overrides the model's scale 1 and is
+  // refused: De Groote's curve can only be widened.
+  EXPECT_THROW(fp::parse_model_json(j.dump(), "narrow"), std::exception);
+  j["muscle_defaults"].erase("force_length_width");
+  j["muscles"][0]["activation_dynamics_smoothing"] = 10.0;
+  const fp::ModelDescription d = fp::parse_model_json(j.dump(), "arm of De Groote-Fregly muscles");
+  EXPECT_EQ(d.muscles[1].parameters.model->name(), "degroote_fregly2016");
+  EXPECT_DOUBLE_EQ(d.muscles[1].parameters.activation_dynamics_smoothing, 0.1);  // OpenSim's default
+  EXPECT_DOUBLE_EQ(d.muscles[0].parameters.activation_dynamics_smoothing, 10.0);
+  const fp::ModelDescription again = fp::parse_model_json(fp::model_json_text(d), "round trip");
+  EXPECT_DOUBLE_EQ(again.muscles[0].parameters.activation_dynamics_smoothing, 10.0);
+  EXPECT_EQ(again.muscles[1].parameters.model->name(), "degroote_fregly2016");
+  j["muscles"][0]["activation_dynamics_smoothing"] = 0.0;
+  EXPECT_THROW(fp::parse_model_json(j.dump(), "zero smoothing"), std::exception);
+}

@@ -195,6 +195,7 @@ constexpr OptionalMuscleField kOptionalMuscleFields[] = {
     {"pennation_angle_at_optimal_rad", &muscles::MuscleParameters::pennation_angle_at_optimal_rad},
     {"passive_fiber_strain_at_one_norm_force", &muscles::MuscleParameters::passive_fiber_strain_at_one_norm_force},
     {"passive_force_length_shape", &muscles::MuscleParameters::passive_force_length_shape},
+    {"activation_dynamics_smoothing", &muscles::MuscleParameters::activation_dynamics_smoothing},
 };
 
 // "muscle_model": the laws the muscle follows, by name (muscle_model.hpp).

@@ -71,7 +71,8 @@ class MuscleModel {
   /// The least excitation the muscle accepts (its control's lower bound); the upper is 1.
   virtual double minimumExcitation(const MuscleParameters&) const { return 0.0; }
 
-  // ---- Tendon: force from its length (0 at and below slack), and the inverse above slack.
+  // ---- Tendon: force from its length (0 at slack; below slack 0, or a model's small
+  // compression), and the inverse for forces > 0.
   virtual CurveJet tendonForce(const MuscleParameters& p, double tendon_length_m) const = 0;
   /// d3 F_S / d L_S^3 (N/m^3): the inverse map's exact gradients need it.
   virtual double tendonForceThirdDerivative(const MuscleParameters& p, double tendon_length_m) const = 0;
@@ -79,7 +80,7 @@ class MuscleModel {
   virtual double tendonLengthFromForce(const MuscleParameters& p, double tendon_force_N) const = 0;
 
   // ---- Fibre.
-  /// Active force-length factor f(L_M), in (0, 1], 1 at the optimal length.
+  /// Active force-length factor f(L_M) > 0: 1 at the optimal length, its peak near 1.
   virtual CurveJet activeForceLength(const MuscleParameters& p, double fiber_length_m) const = 0;
   /// Passive fibre force Phi_P(L_M) in N (0 for a model or muscle without one).
   virtual CurveJet passiveFiberForce(const MuscleParameters& p, double fiber_length_m) const = 0;
@@ -102,8 +103,8 @@ class MuscleModel {
                                                         double activation_rate_per_s) const = 0;
 };
 
-/// The model a model file names ("richter_warner", "thelen2003"); throws std::invalid_argument
-/// listing the known names for any other.
+/// The model a model file names ("richter_warner", "thelen2003", "degroote_fregly2016"); throws
+/// std::invalid_argument listing the known names for any other.
 std::shared_ptr<const MuscleModel> muscle_model_named(const std::string& name);
 /// The names muscle_model_named accepts.
 std::vector<std::string> muscle_model_names();

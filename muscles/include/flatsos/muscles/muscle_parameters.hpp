@@ -40,6 +40,9 @@ struct MuscleParameters {
   double passive_fiber_strain_at_one_norm_force = 0.0;
   /// Shape k of the passive curve's exponential growth (Thelen's KshapePassive).
   double passive_force_length_shape = 4.0;
+  /// Steepness b of the tanh that smooths the switch between activation and deactivation time
+  /// constants (De Groote et al. 2016; OpenSim's activation_dynamics_smoothing).
+  double activation_dynamics_smoothing = 0.1;
   /// The laws this muscle follows (muscle_model.hpp); never null in a validated muscle. Which
   /// fields above a model reads is documented with the model.
   std::shared_ptr<const MuscleModel> model = default_muscle_model();
