@@ -266,9 +266,9 @@ int main(int argc, char** argv) try {
       }
       json row = {{"duration_s", T}, {"flatness", flatness}, {"collocation", collocation_json(reference, t)}};
       if (reference.status == fpl::SolveStatus::Solved) {
-        row["collocation"]["cost_Ns"] = reference.cost_N_s;
+        row["collocation"]["cost_Ns"] = reference.cost;
         if (flatness.contains("cost_Ns"))
-          row["flatness_cost_above_collocation_percent"] = 100.0 * (flatness["cost_Ns"].get<double>() / reference.cost_N_s - 1.0);
+          row["flatness_cost_above_collocation_percent"] = 100.0 * (flatness["cost_Ns"].get<double>() / reference.cost - 1.0);
       }
       row["collocation_time_over_flatness_time"] = ex::median(t) / flatness_median;
       versus.push_back(row);
@@ -310,9 +310,9 @@ int main(int argc, char** argv) try {
                  [&] { reference = fpl::solve_collocation_free_path(flat, ws, start, ms0, ol.reserves_N, reference_mesh); });
       row["collocation"] = collocation_json(reference, c);
       if (reference.status == fpl::SolveStatus::Solved) {
-        row["collocation"]["cost_Ns"] = reference.cost_N_s;
+        row["collocation"]["cost_Ns"] = reference.cost;
         if (plan.status == fpl::SolveStatus::Solved)
-          row["flatness_cost_above_collocation_percent"] = 100.0 * (plan.sos.cost_N_s / reference.cost_N_s - 1.0);
+          row["flatness_cost_above_collocation_percent"] = 100.0 * (plan.sos.cost_N_s / reference.cost - 1.0);
       }
       row["collocation_time_over_flatness_time"] = ex::median(c) / ex::median(t);
     } catch (const std::exception& e) {

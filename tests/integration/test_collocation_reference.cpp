@@ -57,11 +57,11 @@ TEST_F(CollocationReference, TheMeshConvergesToATenthOfAPercent) {
     const auto r1 = collocate(p, coarse), r2 = collocate(p, 2 * coarse);
     ASSERT_EQ(r1.status, fpl::SolveStatus::Solved) << r1.message;
     ASSERT_EQ(r2.status, fpl::SolveStatus::Solved) << r2.message;
-    EXPECT_NEAR(r1.cost_N_s, r2.cost_N_s, 1e-3 * r2.cost_N_s) << "T = " << T;
+    EXPECT_NEAR(r1.cost, r2.cost, 1e-3 * r2.cost) << "T = " << T;
     // Far below the paper's quartic at 3 s (958 N s, excitations in range there): the effort
     // gap is the quartic's basis.
     if (T == 3.0) {
-      EXPECT_LT(r2.cost_N_s, 0.5 * 958.32);
+      EXPECT_LT(r2.cost, 0.5 * 958.32);
     }
   }
 }
@@ -106,11 +106,11 @@ TEST_F(CollocationReference, RichFlatnessPlansComeWithinOnePercentAndNeverBelow)
     ASSERT_EQ(reference.status, fpl::SolveStatus::Solved) << reference.message;
     const auto plan = fpl::plan_open_loop(arm.flat, s0, open_loop_options(T, degree, spans));
     ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
-    EXPECT_GE(plan.sos.cost_N_s, reference.cost_N_s * (1.0 - 1e-3)) << "T = " << T;
-    EXPECT_LE(plan.sos.cost_N_s, reference.cost_N_s * 1.01) << "T = " << T;
+    EXPECT_GE(plan.sos.cost_N_s, reference.cost * (1.0 - 1e-3)) << "T = " << T;
+    EXPECT_LE(plan.sos.cost_N_s, reference.cost * 1.01) << "T = " << T;
     std::printf("T = %.1f s: collocation %.3f N s (K = %d, %.2f s), flatness degree %d, %d spans %.3f N s (%+.2f %%, %.2f s)\n", T,
-                reference.cost_N_s, reference.mesh_intervals, reference.setup_seconds + reference.solve_seconds, degree,
-                spans, plan.sos.cost_N_s, 100.0 * (plan.sos.cost_N_s / reference.cost_N_s - 1.0),
+                reference.cost, reference.mesh_intervals, reference.setup_seconds + reference.solve_seconds, degree,
+                spans, plan.sos.cost_N_s, 100.0 * (plan.sos.cost_N_s / reference.cost - 1.0),
                 plan.setup_seconds + plan.solve_seconds + plan.certify_seconds);
   }
 }
@@ -133,8 +133,8 @@ TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReported
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, Eigen::VectorXd::Constant(6, -1.0)); }, "reserves");
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, Eigen::VectorXd::Constant(5, 1.0)); }, "reserves");
   co = {};
-  co.effort_weights = Eigen::VectorXd::Constant(6, std::nan(""));
-  expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, reserves, co); }, "effort_weights");
+  co.effort = std::make_shared<fpl::TendonForceEffort>(Eigen::VectorXd::Constant(6, std::nan("")));
+  expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, reserves, co); }, "weight 0 must be finite");
   auto bad = s0;
   bad.activation[2] = 1.5;
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, bad, reserves); }, "activation");
@@ -157,7 +157,7 @@ TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReported
   co.mesh_intervals = 20;
   co.max_iterations = 500;
   const auto r = fpl::solve_collocation_along_path(arm.flat, ws, path(0.3), s0, reserves, co);
-  EXPECT_NE(r.status, fpl::SolveStatus::Solved) << r.cost_N_s;
+  EXPECT_NE(r.status, fpl::SolveStatus::Solved) << r.cost;
   EXPECT_FALSE(r.message.empty());
 }
 
@@ -168,13 +168,13 @@ TEST_F(CollocationReference, WithTheJointPathFreeItConvergesObeysTheLawsAndBeats
   ASSERT_EQ(r.status, fpl::SolveStatus::Solved) << r.message;
   ASSERT_EQ(fine.status, fpl::SolveStatus::Solved) << fine.message;
   ASSERT_EQ(along.status, fpl::SolveStatus::Solved) << along.message;
-  EXPECT_NEAR(r.cost_N_s, fine.cost_N_s, 1e-3 * fine.cost_N_s);
+  EXPECT_NEAR(r.cost, fine.cost, 1e-3 * fine.cost);
   // The prescribed path is one of the free problem's paths (up to the mesh's error).
-  EXPECT_LE(r.cost_N_s, along.cost_N_s * (1.0 + 1e-3));
+  EXPECT_LE(r.cost, along.cost * (1.0 + 1e-3));
   std::printf("T = 3.0 s: collocation along the path %.3f N s (K = 100, %.2f s), free path %.3f N s (K = 100, %d iterations, "
               "%.2f s), %.3f N s (K = 150, %.2f s)\n",
-              along.cost_N_s, along.setup_seconds + along.solve_seconds, r.cost_N_s, r.iterations,
-              r.setup_seconds + r.solve_seconds, fine.cost_N_s, fine.setup_seconds + fine.solve_seconds);
+              along.cost, along.setup_seconds + along.solve_seconds, r.cost, r.iterations,
+              r.setup_seconds + r.solve_seconds, fine.cost, fine.setup_seconds + fine.solve_seconds);
 
   // The path keeps its ends: the start's angles and speeds, rest at the target.
   const int last = static_cast<int>(r.time_s.size()) - 1;
@@ -233,12 +233,12 @@ TEST_F(CollocationReference, TheFlatnessFreePathComesWithinTwoPercentWithAnExecu
   EXPECT_TRUE(plan.free_path.optimized);
   std::printf("T = 3.0 s, free path: collocation %.3f N s (K = 100, %.2f s), flatness %.3f N s (%+.2f %%; path %.2f s in %d "
               "Ipopt iterations, %d rounds)\n",
-              reference.cost_N_s, reference.setup_seconds + reference.solve_seconds, plan.sos.cost_N_s,
-              100.0 * (plan.sos.cost_N_s / reference.cost_N_s - 1.0), plan.free_path.seconds, plan.free_path.path_iterations,
+              reference.cost, reference.setup_seconds + reference.solve_seconds, plan.sos.cost_N_s,
+              100.0 * (plan.sos.cost_N_s / reference.cost - 1.0), plan.free_path.seconds, plan.free_path.path_iterations,
               plan.free_path.rounds);
   // Feasible for the collocation's problem, so never below its optimum (up to its mesh's 0.1 %).
-  EXPECT_GE(plan.sos.cost_N_s, reference.cost_N_s * (1.0 - 1e-3));
-  EXPECT_LE(plan.sos.cost_N_s, reference.cost_N_s * 1.02);
+  EXPECT_GE(plan.sos.cost_N_s, reference.cost * (1.0 - 1e-3));
+  EXPECT_LE(plan.sos.cost_N_s, reference.cost * 1.02);
   flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
 
   // Simbody replays it open loop. The arm ends upright with every muscle at its reserve, an

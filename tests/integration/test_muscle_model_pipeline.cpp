@@ -1,7 +1,8 @@
 // A second muscle model through the whole pipeline. The 3-muscle elbow (models/elbow_1dof.json)
 // with every muscle switched to Thelen's (2003) laws at OpenSim's defaults is planned and
 // certified, executed by Simbody and controlled by the receding-horizon loop; the collocation
-// reference refuses its laws' slope jumps by name. Planned and simulated motion agree only because
+// reference refuses its laws' slope jumps by name. With De Groote and Fregly's (2016) smooth laws
+// the collocation reference runs too. Planned and simulated motion agree only because
 // planner and plant read the same model's laws through the seam: the same plan on the default
 // model's plant misses.
 #include <gtest/gtest.h>
@@ -115,6 +116,34 @@ TEST(SecondMuscleModel, TheRecedingHorizonLoopReachesItsTarget) {
   EXPECT_LT(error_deg, 0.5);
   EXPECT_GE(run.settling_time_s, 0.0);
   EXPECT_EQ(controller.planFailures(), 0);
+}
+
+TEST(SecondMuscleModel, SmoothLawsRunTheWholePipelineWithTheCollocationOptimumBeside) {
+  // De Groote and Fregly's (2016) laws are smooth: plan, certificate, execution and the
+  // collocation reference's optimum along the same joint path. Without passive force: this
+  // elbow's brachialis rests at 1.3 optimal lengths (0.16 Fmax of De Groote's passive force)
+  // while its triceps, at 0.55, has under 0.06 Fmax of De Groote's narrower active curve to
+  // hold it, so no rest state with excitations in [0, 1] exists.
+  const Elbow dgf(elbow("degroote_fregly2016", false));
+  const fpl::OpenLoopOptions o = dgf.openLoopOptions();
+  const fpl::MuscleState s0 = dgf.rest(dgf.scenario("open_loop"));
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(dgf.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_TRUE(plan.sos.certified);
+  const auto replay = flatsos::test::replay_open_loop(dgf.flat, s0, plan, 1e-10, 0.005);
+  ASSERT_TRUE(replay.sim.finite) << replay.sim.message;
+  EXPECT_LT(replay.max_q_error_rad, deg(1e-5));
+  EXPECT_LT(replay.max_activation_error, 1e-6);
+
+  fp::ModelWorkspace workspace(*dgf.model);
+  const fpl::CollocationResult reference =
+      fpl::solve_collocation_along_path(dgf.flat, workspace, plan.path, s0, o.reserves_N);
+  ASSERT_EQ(reference.status, fpl::SolveStatus::Solved) << reference.message;
+  std::cout << "De Groote-Fregly elbow: flatness " << plan.sos.cost_N_s << " N s, collocation optimum "
+            << reference.cost << " N s in " << reference.iterations << " iterations\n";
+  // The optimum is below the flatness plan (a restricted problem) and not far below it.
+  EXPECT_LT(reference.cost, plan.sos.cost_N_s * (1.0 + 1e-3));
+  EXPECT_GT(reference.cost, plan.sos.cost_N_s * 0.9);
 }
 
 TEST(SecondMuscleModel, TheCollocationReferenceRefusesLawsWithSlopeJumpsByName) {

@@ -3,7 +3,8 @@
 // the Hessian of the Lagrangian with random multipliers, on the paper's arm at a random point
 // away from the laws' kinks (slack tendon, u = 0): along a prescribed joint path and with the
 // path free (joint unknowns, inverse dynamics, lengths of q); with the arm's muscles following
-// each muscle model in turn (Thelen's without passive force, which the reference does not model).
+// each muscle model in turn (Thelen's and De Groote's without passive force), and minimizing each
+// kind of effort (tendon forces; powers of excitations, activations and stress).
 #include <gtest/gtest.h>
 
 #include <map>
@@ -14,6 +15,7 @@
 
 #include "collocation/hermite_simpson.hpp"
 #include "finite_difference.hpp"
+#include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_model.hpp"
 #include "flatsos/planner/collocation.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
@@ -37,24 +39,34 @@ std::shared_ptr<const flatsos::plugin::MusculoskeletalModel> arm_with(const std:
   return std::make_shared<const flatsos::plugin::MusculoskeletalModel>(d);
 }
 
-class CollocationDerivatives : public ::testing::TestWithParam<std::string> {
+// (muscle model, effort) pairs.
+class CollocationDerivatives : public ::testing::TestWithParam<std::pair<std::string, std::string>> {
  protected:
   struct Arm {
     std::shared_ptr<const flatsos::plugin::MusculoskeletalModel> model;
     fpl::FlatOutputMap flat{model};
-  } arm{arm_with(GetParam())};
+  } arm{arm_with(GetParam().first)};
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
 
   fpd::HermiteSimpsonProblem problem(bool free) {
     auto o = flatsos::test::open_loop_options();
     o.sos.bounds.enforce = false;
+    // Reserves below the start's forces: De Groote's narrower active curve leaves the posterior
+    // deltoid 0.84 N at the paper's initial activation, under the paper's 10 N.
+    for (int j = 0; j < arm.model->numMuscles(); ++j)
+      o.reserves_N[j] = std::min(o.reserves_N[j],
+                                 0.5 * flatsos::muscles::tendon_force(arm.model->muscle(j).getParameters(), s0.tendon_length_m[j]));
     const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+    // Its path is all the test needs; without bounds the plan may leave the muscles' domain.
+    if (plan.path.numJoints() != arm.model->numJoints()) throw std::runtime_error("no flatness path: " + plan.message);
     auto ws = arm.flat.makeWorkspace();
-    const Eigen::VectorXd w = fpl::flat_output_effort_weights(arm.flat);
+    const std::string& effort = GetParam().second;
+    const Eigen::VectorXd w = effort == "tendon_force" ? fpl::flat_output_effort_weights(arm.flat)
+                                                       : Eigen::VectorXd::LinSpaced(arm.model->numMuscles(), 0.5, 2.0);
     std::optional<fpd::FreeJoints> joints;
     if (free) joints = fpd::free_joints(arm.flat, plan.path);
-    return fpd::HermiteSimpsonProblem(fpd::collocation_muscles(arm.flat, s0, o.reserves_N, w, 0.0),
-                                      fpd::sample_path(arm.flat, ws, plan.path, 2), joints);
+    return fpd::HermiteSimpsonProblem(fpd::collocation_muscles(arm.flat, s0, o.reserves_N, 0.0),
+                                      fpd::sample_path(arm.flat, ws, plan.path, 2), fpl::effort_named(effort, w), joints);
   }
 
   // The start, moved randomly: stretches by a few percent, activations and excitations inside
@@ -231,4 +243,14 @@ TEST_P(CollocationDerivatives, TheHessianOfTheLagrangianMatchesFiniteDifferences
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(MuscleModels, CollocationDerivatives, ::testing::Values("richter_warner", "thelen2003"));
+INSTANTIATE_TEST_SUITE_P(
+    MuscleModelsAndEfforts, CollocationDerivatives,
+    ::testing::Values(std::pair<std::string, std::string>{"richter_warner", "tendon_force"},
+                      std::pair<std::string, std::string>{"thelen2003", "tendon_force"},
+                      std::pair<std::string, std::string>{"degroote_fregly2016", "tendon_force"},
+                      std::pair<std::string, std::string>{"richter_warner", "excitation_squared"},
+                      std::pair<std::string, std::string>{"richter_warner", "activation_cubed"},
+                      std::pair<std::string, std::string>{"degroote_fregly2016", "stress_squared"}),
+    [](const ::testing::TestParamInfo<std::pair<std::string, std::string>>& param) {
+      return param.param.first + "_" + param.param.second;
+    });

@@ -126,12 +126,20 @@ struct IpoptOutcome {
   std::vector<double> x;
 };
 
+// Ipopt's objective scaling: a cost in N s is O(100-1000), scaled to O(1)-O(10) per unit of time
+// and weight; a dimensionless integrand (powers of n, a, F / Fmax <= 1) per unit of time and
+// muscle.
+double objective_scaling(const Effort& effort, double duration_s, int muscles) {
+  if (const std::optional<Eigen::VectorXd> w = effort.tendonForceWeights())
+    return 1.0 / (duration_s * std::max(w->sum(), 1e-12) * 10.0);
+  return 1.0 / (duration_s * muscles);
+}
+
 IpoptOutcome run_ipopt(const detail::HermiteSimpsonProblem& problem, std::vector<double> start, const CollocationOptions& o,
-                       double duration_s, const Eigen::VectorXd& weights) {
+                       double objective_scaling_factor) {
   Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(problem, std::move(start));
   auto app = detail::make_ipopt(o.tolerance, o.max_iterations, *nlp);
-  // The cost in N s is O(100-1000): scaled to O(1)-O(10) per unit of time and weight.
-  app->Options()->SetNumericValue("obj_scaling_factor", 1.0 / (duration_s * std::max(weights.sum(), 1e-12) * 10.0));
+  app->Options()->SetNumericValue("obj_scaling_factor", objective_scaling_factor);
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
   IpoptOutcome out;
   out.solver_status = detail::ipopt_status_name(status);
@@ -171,9 +179,12 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
                                   "; the collocation reference needs laws with continuous slopes, as direct "
                                   "collocation tools advise");
   }
-  if (o.effort_weights.size() > 0) {
-    detail::require(o.effort_weights, m, "collocation: effort_weights");
-    if (o.effort_weights.minCoeff() < 0.0) throw std::invalid_argument("collocation: effort_weights must be >= 0");
+  if (o.effort) {
+    try {
+      o.effort->validate(m);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("collocation: ") + e.what());
+    }
   }
   if (o.mesh_intervals < 1) throw std::invalid_argument("collocation: mesh_intervals must be >= 1");
   if (!(o.min_activation >= 0.0 && o.min_activation < 1.0))
@@ -230,14 +241,12 @@ FreeJoints free_joints(const FlatOutputMap& flat, const JointPath& path) {
 }
 
 std::vector<CollocationMuscle> collocation_muscles(const FlatOutputMap& flat, const MuscleState& initial,
-                                                   const Eigen::VectorXd& reserves_N, const Eigen::VectorXd& weights,
-                                                   double min_activation) {
+                                                   const Eigen::VectorXd& reserves_N, double min_activation) {
   std::vector<CollocationMuscle> muscles(flat.numMuscles());
   for (int j = 0; j < flat.numMuscles(); ++j) {
     const auto& p = flat.model().muscle(j).getParameters();
     auto& mu = muscles[j];
     mu.parameters = p;
-    mu.effort_weight = weights[j];
     mu.reserve_N = reserves_N[j];
     mu.min_activation = min_activation > 0.0 ? min_activation : p.activation_floor;
     mu.initial_stretch = (initial.tendon_length_m[j] - p.tendon_slack_length_m) / (p.tendon_strain_at_max_force * p.tendon_slack_length_m);
@@ -261,10 +270,11 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   validate(flat, path, initial, reserves_N, o);
   const Stopwatch setup;
   const int m = flat.numMuscles(), N = flat.numJoints();
-  const Eigen::VectorXd weights = o.effort_weights.size() > 0 ? o.effort_weights : flat.effortWeights();
+  const std::shared_ptr<const Effort> effort =
+      o.effort ? o.effort : std::make_shared<TendonForceEffort>(flat.effortWeights());
   detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
   std::vector<detail::CollocationMuscle> muscles =
-      detail::collocation_muscles(flat, initial, reserves_N, weights, o.min_activation);
+      detail::collocation_muscles(flat, initial, reserves_N, o.min_activation);
 
   std::optional<detail::FreeJoints> free_path;
   if (free) {
@@ -284,7 +294,7 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
       throw std::invalid_argument(why.str());
     }
   }
-  const detail::HermiteSimpsonProblem problem(std::move(muscles), std::move(samples), std::move(free_path));
+  const detail::HermiteSimpsonProblem problem(std::move(muscles), std::move(samples), effort, std::move(free_path));
 
   CollocationResult result;
   result.mesh_intervals = o.mesh_intervals;
@@ -294,7 +304,8 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
 
   const Stopwatch solve;
   const IpoptOutcome outcome =
-      run_ipopt(problem, constant_flat_output_start(flat, workspace, path, initial, problem), o, path.duration_s, weights);
+      run_ipopt(problem, constant_flat_output_start(flat, workspace, path, initial, problem), o,
+                objective_scaling(*effort, path.duration_s, m));
   result.solve_seconds = solve.seconds();
   result.solver_status = outcome.solver_status;
   result.linear_solver = outcome.linear_solver;
@@ -314,7 +325,8 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   }
   const double* x = outcome.x.data();
   const int P = problem.points();
-  result.cost_N_s = problem.objective(x);
+  result.cost = problem.objective(x);
+  result.cost_unit = effort->unit();
   result.time_s = problem.samples().time_s;
   result.tendon_force_N.resize(m, P);
   result.tendon_length_m.resize(m, P);

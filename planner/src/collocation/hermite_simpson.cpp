@@ -40,9 +40,11 @@ struct HermiteSimpsonProblem::MuscleAt {
 };
 
 HermiteSimpsonProblem::HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples,
-                                             std::optional<FreeJoints> free)
-    : muscles_(std::move(muscles)), samples_(std::move(samples)), free_(std::move(free)) {
+                                             std::shared_ptr<const Effort> effort, std::optional<FreeJoints> free)
+    : muscles_(std::move(muscles)), samples_(std::move(samples)), effort_(std::move(effort)), free_(std::move(free)) {
   const int P = points(), m = this->muscles(), N = joints();
+  if (!effort_) throw std::invalid_argument("Hermite-Simpson: no effort to minimize");
+  effort_->validate(m);
   if (P < 3 || P % 2 == 0) throw std::invalid_argument("Hermite-Simpson: need 2K + 1 >= 3 points");
   if (samples_.musculotendon_length_m.rows() != m || samples_.musculotendon_length_m.cols() != P ||
       samples_.lengthening_rate_m_per_s.rows() != m || samples_.lengthening_rate_m_per_s.cols() != P ||
@@ -254,10 +256,15 @@ void HermiteSimpsonProblem::visitJointDefect(int k, int r, int which, Term&& ter
   }
 }
 
+MuscleEffortJet HermiteSimpsonProblem::effortTerm(const double* x, int i, int j, double tendon_force_N) const {
+  return effort_->muscleTerm(j, muscles_[j].parameters, tendon_force_N, x[index(i, j, kActivation)],
+                             x[index(i, j, kExcitation)]);
+}
+
 double HermiteSimpsonProblem::objective(const double* x) const {
   double sum = 0.0;
   for (int i = 0; i < points(); ++i)
-    for (int j = 0; j < muscles(); ++j) sum += quadratureWeight(i) * muscles_[j].effort_weight * tendonForce(x, i, j);
+    for (int j = 0; j < muscles(); ++j) sum += quadratureWeight(i) * effortTerm(x, i, j, tendonForce(x, i, j)).value;
   return sum;
 }
 
@@ -266,8 +273,12 @@ void HermiteSimpsonProblem::objectiveGradient(const double* x, double* grad) con
   for (int i = 0; i < points(); ++i)
     for (int j = 0; j < muscles(); ++j) {
       const auto& p = muscles_[j].parameters;
-      grad[index(i, j, kStretch)] = quadratureWeight(i) * muscles_[j].effort_weight *
-                                    muscles::tendon_force_derivative(p, tendonLength(x, i, j)) * stretch_scale_m_[j];
+      const muscles::CurveJet tendon = p.model->tendonForce(p, tendonLength(x, i, j));
+      const MuscleEffortJet term = effortTerm(x, i, j, tendon.value);
+      const double w = quadratureWeight(i);
+      grad[index(i, j, kStretch)] = w * term.d_force * tendon.slope * stretch_scale_m_[j];
+      grad[index(i, j, kActivation)] = w * term.d_activation;
+      grad[index(i, j, kExcitation)] = w * term.d_excitation;
     }
 }
 
@@ -413,12 +424,15 @@ void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const do
       const auto& p = muscles_[j].parameters;
       const MuscleAt e = evaluate(x, i, j);
       // Second derivative of everything that depends on F(s): cost and torques.
-      double F_weight = sigma * quadratureWeight(i) * muscles_[j].effort_weight;
+      const MuscleEffortJet term = effortTerm(x, i, j, e.F);
+      const double cost_weight = sigma * quadratureWeight(i);
+      double F_weight = cost_weight * term.d_force;
       if (i >= firstTorquePoint())
         for (int r = 0; r < N; ++r) F_weight += lambda[torqueRow(i, r)] * A(r, j);
       // The equilibrium row's F / Fmax - a f g.
       const double le = lambda[equilibriumRow(i, j)];
-      const double ss = F_weight * e.F_ss + le * (e.F_ss / p.max_isometric_force_N - e.a * e.f_ss * e.g);
+      const double ss = F_weight * e.F_ss + cost_weight * term.d_force2 * e.F_s * e.F_s +
+                        le * (e.F_ss / p.max_isometric_force_N - e.a * e.f_ss * e.g);
       const double as = le * (-e.f_s * e.g), vs = le * (-e.a * e.f_s * e.g_v);
       const double va = le * (-e.f * e.g_v), vv = le * (-e.a * e.f * e.g_vv);
       // Activation defects: the weight of f_a(n, a) at this point in each defect row.
@@ -441,9 +455,11 @@ void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const do
       sink(index(i, j, kVelocity), index(i, j, kStretch), vs);
       sink(index(i, j, kVelocity), index(i, j, kActivation), va);
       sink(index(i, j, kVelocity), index(i, j, kVelocity), vv);
-      sink(index(i, j, kExcitation), index(i, j, kExcitation), fa_weight * fa.d_excitation2);
+      sink(index(i, j, kExcitation), index(i, j, kExcitation),
+           fa_weight * fa.d_excitation2 + cost_weight * term.d_excitation2);
       sink(index(i, j, kExcitation), index(i, j, kActivation), fa_weight * fa.d_excitation_activation);
-      sink(index(i, j, kActivation), index(i, j, kActivation), fa_weight * fa.d_activation2);
+      sink(index(i, j, kActivation), index(i, j, kActivation),
+           fa_weight * fa.d_activation2 + cost_weight * term.d_activation2);
       if (free_)  // -a f(L(q) - L_S(s)) g(v) with dL/dq_r = -A_rj, dL_S/ds = lambda_s
         for (int r = 0; r < N; ++r) {
           if (A(r, j) == 0.0) continue;

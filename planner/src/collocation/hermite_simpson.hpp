@@ -35,6 +35,7 @@
 #include <Eigen/Core>
 
 #include "flatsos/muscles/muscle_parameters.hpp"
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
 #include "flatsos/plugin/model/pin_tree_dynamics.hpp"
@@ -44,7 +45,6 @@ namespace flatsos::planner::detail {
 /// One muscle's data for the transcription.
 struct CollocationMuscle {
   muscles::MuscleParameters parameters;
-  double effort_weight = 1.0;
   double reserve_N = 0.0;
   double min_activation = 0.0;
   double initial_stretch = 0.0;     ///< s at t = 0
@@ -77,11 +77,10 @@ PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& works
 /// The free-path data of the model, with the path's ends (it must end at rest; throws
 /// std::invalid_argument otherwise).
 FreeJoints free_joints(const FlatOutputMap& flat, const JointPath& path);
-/// The model's muscles with the problem's weights, reserves, activation floor (0: each
-/// muscle's own) and initial state.
+/// The model's muscles with the problem's reserves, activation floor (0: each muscle's own) and
+/// initial state.
 std::vector<CollocationMuscle> collocation_muscles(const FlatOutputMap& flat, const MuscleState& initial,
-                                                   const Eigen::VectorXd& reserves_N, const Eigen::VectorXd& weights,
-                                                   double min_activation);
+                                                   const Eigen::VectorXd& reserves_N, double min_activation);
 
 class HermiteSimpsonProblem {
  public:
@@ -89,10 +88,10 @@ class HermiteSimpsonProblem {
   enum Unknown { kStretch = 0, kActivation = 1, kExcitation = 2, kVelocity = 3 };
   enum JointUnknown { kAngle = 0, kSpeed = 1, kAcceleration = 2 };
 
-  /// Along the sampled joint path, or (free given) with the path free between its ends; the
-  /// samples' path is then only the start.
+  /// Minimizing `effort` (not null) along the sampled joint path, or (free given) with the path
+  /// free between its ends; the samples' path is then only the start.
   HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples,
-                        std::optional<FreeJoints> free = std::nullopt);
+                        std::shared_ptr<const Effort> effort, std::optional<FreeJoints> free = std::nullopt);
 
   int points() const { return static_cast<int>(samples_.time_s.size()); }
   int intervals() const { return (points() - 1) / 2; }
@@ -118,7 +117,9 @@ class HermiteSimpsonProblem {
   /// n = a; the initial state at t = 0.
   void startingPoint(double* x) const;
 
-  double objective(const double* x) const;  ///< the effort, integral of sum_j w_j F_j (Simpson), N s
+  /// The effort's term of muscle j at point i, where its tendon carries tendon_force_N.
+  MuscleEffortJet effortTerm(const double* x, int point, int muscle, double tendon_force_N) const;
+  double objective(const double* x) const;  ///< the effort's integral (Simpson), in Effort::unit()
   void objectiveGradient(const double* x, double* gradient) const;
   void constraintValues(const double* x, double* g) const;
   /// Triplets in a fixed order (no duplicates); the values are filled in that order.
@@ -184,6 +185,7 @@ class HermiteSimpsonProblem {
 
   std::vector<CollocationMuscle> muscles_;
   PathSamples samples_;
+  std::shared_ptr<const Effort> effort_;
   std::optional<FreeJoints> free_;
   std::vector<double> stretch_scale_m_;  // eps L_slack
   std::vector<int> jac_rows_, jac_cols_, hess_rows_, hess_cols_;

@@ -3,7 +3,7 @@
 // problem the flatness planner solves, transcribed the way OpenSim Moco and most optimal-control
 // codes do it, so that its optimum is the yardstick for the flatness plans and users get a
 // baseline:
-//   minimize  integral_0^T sum_j w_j F_j(t) dt
+//   minimize  integral_0^T sum_j l_j(F_j, a_j, n_j) dt   (the effort, effort.hpp)
 //   over the muscle states (tendon length, activation), excitations and fibre velocities,
 //   subject to the Hill muscle's laws (muscles/), the joint torques A F = ID(q(t)) along a
 //   prescribed joint path, F_j >= reserve_j, 0 <= n <= 1, a_min <= a <= 1, the initial muscle
@@ -15,10 +15,12 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <memory>
 #include <string>
 
 #include <Eigen/Core>
 
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
 #include "flatsos/planner/solve_status.hpp"
@@ -27,9 +29,9 @@ namespace flatsos::planner {
 
 struct CollocationOptions {
   int mesh_intervals = 100;          ///< K uniform intervals: 2K + 1 collocation points
-  /// Cost weights w (one per muscle): empty means the flatness planner's own
-  /// (FlatOutputMap::effortWeights: the model's effort_weights, by default (E^T 1)^T F).
-  Eigen::VectorXd effort_weights;
+  /// What to minimize: null means the flatness planner's own effort, w^T F with the model's
+  /// effort_weights (FlatOutputMap::effortWeights).
+  std::shared_ptr<const Effort> effort;
   double min_activation = 0.0;       ///< a >= this; 0: each muscle's own activation floor
   double tolerance = 1e-9;           ///< Ipopt's tol (scaled NLP error)
   int max_iterations = 3000;
@@ -40,7 +42,8 @@ struct CollocationResult {
   std::string message;               ///< why, when not solved
   std::string solver_status;         ///< Ipopt's return status
   std::string linear_solver;         ///< what factored Ipopt's KKT systems
-  double cost_N_s = 0.0;             ///< the effort: Simpson quadrature of sum_j w_j F_j
+  double cost = 0.0;                 ///< the effort: Simpson quadrature of its integrand
+  std::string cost_unit;             ///< Effort::unit(): "N s" for tendon forces, "s" otherwise
   int mesh_intervals = 0;
   int variables = 0, constraints = 0;
   int iterations = 0;
