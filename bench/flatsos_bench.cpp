@@ -107,7 +107,7 @@ int main(int argc, char** argv) try {
   const SimTK::State s0 = ex::initial_state(flat, ol_in);
   const fpl::MuscleState ms0 = fpl::muscle_state_of(*model, s0);
   const Eigen::VectorXd a0 = model->activations(s0);
-  fpl::OpenLoopOptions ol;
+  fpl::OpenLoopOptions ol = fpl::open_loop_options(fpl::Preset::Paper);  // the paper's scenario as planned before
   ol.duration_s = ol_in.duration_s;
   ol.target_q_rad = ol_in.target_q_rad;
   ol.reserves_N = ol_in.reserves_N;

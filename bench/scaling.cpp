@@ -55,7 +55,7 @@ json scaling_row(const std::string& model_path, int repetitions) {
   // The open-loop plan of the model's scenario, default options (bounds where they bind).
   const ex::ScenarioInputs ol_in = ex::resolve_scenario(*model, "open_loop", {}, 3.0, 10.0);
   const fpl::MuscleState ms0 = fpl::muscle_state_of(*model, ex::initial_state(flat, ol_in));
-  fpl::OpenLoopOptions ol;
+  fpl::OpenLoopOptions ol = fpl::open_loop_options(fpl::Preset::Paper);
   ol.duration_s = ol_in.duration_s;
   ol.target_q_rad = ol_in.target_q_rad;
   ol.reserves_N = ol_in.reserves_N;

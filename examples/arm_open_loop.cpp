@@ -36,18 +36,22 @@ int main(int argc, char** argv) {
   fpl::OpenLoopOptions options;
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
   ex::add_scenario_options(app, given, "open_loop", true, 3.0, 10.0);
-  app.add_option("--pieces", options.torque.pieces, "torque-model pieces K (1 with --degree 0: the paper's box)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--pieces", options.torque.pieces,
+                 "torque-model pieces K (1 with --degree 0: the paper's box; 0: as many as the flat outputs' spans, "
+                 "at least 12)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--degree", options.torque.degree, "torque-model polynomial degree r")->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--flat-output-degree", options.sos.flat_output_degree,
-                 "degree of the flat outputs' B-splines Y (4 with 1 span: the paper's quartic)")
+                 "degree of the flat outputs' B-splines Y (4 with 1 span: the paper's quartic, --paper)")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--piece-growth", options.torque.piece_growth,
                  "each torque-model piece this many times as long as the one before (1: uniform; above 1: short "
                  "pieces at the start, where a fast motion's torques change)")
       ->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--flat-output-spans", options.sos.flat_output_spans, "knot spans of the flat outputs' B-splines")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--flat-output-spans", options.sos.flat_output_spans,
+                 "knot spans of the flat outputs' B-splines (0: chosen from the model's size, about 212 coefficients "
+                 "over all flat outputs, at most 48 spans: 48 on the paper's arm)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--flat-output-span-growth", options.sos.flat_output_span_growth,
                  "each of the flat outputs' spans this many times as long as the one before (1: uniform; above 1: "
                  "short spans at the start, where a low-effort transfer spends its effort)")
@@ -81,6 +85,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({fpl::to_string(fpl::FreePathMethod::ReducedQuasiNewton),
                              fpl::to_string(fpl::FreePathMethod::JointNewton)}));
+  bool paper = false;
+  app.add_flag("--paper", paper,
+               "Richter & Warner's configuration (one quartic flat-output polynomial, 12 cubic torque pieces) "
+               "instead of the default quintic B-splines on spans chosen from the model; --pieces, --degree, --flat-output-degree and "
+               "--flat-output-spans given as well override it");
   bool no_bounds = false;
   app.add_flag("--no-bounds", no_bounds,
                "plan with the reserves only: excitations outside [0, 1] or activations above 1 then make the plan "
@@ -119,6 +128,13 @@ int main(int argc, char** argv) {
     const fpl::FlatOutputMap flat(model);
     const int m = model->numMuscles();
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "open_loop", given, 3.0, 10.0);
+    if (paper) {  // the preset's basis, except where the command line names one
+      const fpl::OpenLoopOptions preset = fpl::open_loop_options(fpl::Preset::Paper);
+      if (app.count("--pieces") == 0) options.torque.pieces = preset.torque.pieces;
+      if (app.count("--degree") == 0) options.torque.degree = preset.torque.degree;
+      if (app.count("--flat-output-degree") == 0) options.sos.flat_output_degree = preset.sos.flat_output_degree;
+      if (app.count("--flat-output-spans") == 0) options.sos.flat_output_spans = preset.sos.flat_output_spans;
+    }
     options.sos.bounds.enforce = !no_bounds;
     options.sos.method = fpl::sos_program_method(sos_method);
     options.free_path.enabled = free_path_spans > 0;
@@ -150,6 +166,7 @@ int main(int argc, char** argv) {
     summary["model_file"] = model_path;
     summary["problem"] = ex::problem_summary(flat);
     summary["inputs"] = in.describe();
+    summary["preset"] = fpl::to_string(paper ? fpl::Preset::Paper : fpl::Preset::Best);
     summary["warnings"] = ex::print_warnings("arm_open_loop", model->warnings(), plan.warnings);
     std::cout << "arm_open_loop: plan " << fpl::to_string(plan.status) << (plan.message.empty() ? "" : ": " + plan.message)
               << "\n  cost " << plan.sos.cost_N_s << " N s, " << plan.sos.ipopt_iterations << " Ipopt iterations in "

@@ -9,8 +9,10 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 "$root/scripts/build.sh"
 results="$root/results"
 mkdir -p "$results"
-echo "== open loop: [0, 10] deg -> straight up in 3 s (reserves 10 N)"
-"$root/build/bin/arm_open_loop" --out "$results/open_loop"
+echo "== open loop, the paper's quartic: [0, 10] deg -> straight up in 3 s (reserves 10 N)"
+"$root/build/bin/arm_open_loop" --paper --out "$results/open_loop"
+echo "== open loop, the default plan (quintic B-splines on 48 spans)"
+"$root/build/bin/arm_open_loop" --out "$results/open_loop_default"
 echo "== receding horizon: [20, 20] deg -> [80, 80] deg, 2 s (reserves 1 N)"
 "$root/build/bin/arm_receding_horizon" --out "$results/receding_horizon"
 # The models made from OpenSim's example by opensim_to_model, each in its own scenarios.

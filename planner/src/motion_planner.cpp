@@ -26,6 +26,34 @@ FreePathMethod free_path_method(const std::string& name) {
   throw std::invalid_argument("free path method '" + name + "': expected 'reduced_quasi_newton' or 'joint_newton'");
 }
 
+Preset preset_named(const std::string& name) {
+  for (const Preset p : {Preset::Best, Preset::Paper})
+    if (name == to_string(p)) return p;
+  throw std::invalid_argument("preset '" + name + "': expected 'best' or 'paper'");
+}
+
+int automatic_flat_output_spans(int flat_outputs, int degree) {
+  constexpr int kCoefficients = 212, kMostSpans = 48;
+  return std::clamp(kCoefficients / std::max(flat_outputs, 1) - degree, 1, kMostSpans);
+}
+
+OpenLoopOptions resolve_basis(const FlatOutputMap& flat, OpenLoopOptions o) {
+  if (o.sos.flat_output_spans == 0)
+    o.sos.flat_output_spans = automatic_flat_output_spans(flat.numFlatOutputs(), o.sos.flat_output_degree);
+  if (o.torque.pieces == 0) o.torque.pieces = std::max(12, o.sos.flat_output_spans);
+  return o;
+}
+
+OpenLoopOptions open_loop_options(Preset preset) {
+  OpenLoopOptions o;
+  if (preset == Preset::Paper) {
+    o.sos.flat_output_degree = 4;
+    o.sos.flat_output_spans = 1;
+    o.torque.pieces = 12;
+  }
+  return o;
+}
+
 namespace {
 
 using detail::require;
@@ -245,8 +273,9 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
 }
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
-                            const OpenLoopOptions& o) {
+                            const OpenLoopOptions& options) {
   const Stopwatch setup;
+  const OpenLoopOptions o = resolve_basis(flat, options);
   const int n = flat.numJoints(), m = flat.numMuscles(), p = flat.numFlatOutputs();
   if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s)) throw std::invalid_argument("open-loop plan: duration T must be > 0 s");
   require(o.target_q_rad, n, "target joint angles");
@@ -258,6 +287,8 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
   OpenLoopPlan plan;
+  plan.flat_output_degree = o.sos.flat_output_degree;
+  plan.flat_output_spans = o.sos.flat_output_spans;
   plan.warnings = plugin::joint_angle_warnings(flat.model().description(), initial.q_rad, "initial joint angles");
   for (auto& w : plugin::joint_angle_warnings(flat.model().description(), o.target_q_rad, "target joint angles"))
     plan.warnings.push_back(std::move(w));

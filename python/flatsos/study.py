@@ -104,7 +104,7 @@ class Study:
             raise StudyError("plan.duration_s: must be a positive number of seconds")
         self.reserves_N = _numbers(given.get("reserves_N", 10.0), m, "plan.reserves_N", broadcast=True)
         self.options = dict(plan.get("options", {}))
-        keywords = {"flat_output_degree", "flat_output_spans", "flat_output_span_growth", "torque_pieces",
+        keywords = {"preset", "flat_output_degree", "flat_output_spans", "flat_output_span_growth", "torque_pieces",
                     "torque_piece_growth", "torque_degree", "bounds"}
         if set(self.options) - keywords:
             raise StudyError(f"plan.options: unknown field(s) {sorted(set(self.options) - keywords)} "

@@ -22,10 +22,37 @@ struct OpenLoopInputs {
   std::optional<Eigen::VectorXd> activations;
 };
 
+// The basis keywords: a preset, and each of its values unless given (None).
+struct BasisArguments {
+  std::string preset;
+  std::optional<int> flat_output_degree, flat_output_spans;
+  std::optional<double> flat_output_span_growth;
+  std::optional<int> torque_pieces;
+  std::optional<double> torque_piece_growth;
+  std::optional<int> torque_degree;
+  bool bounds = true;
+};
+
+planner::OpenLoopOptions preset_options(const BasisArguments& b) {
+  planner::OpenLoopOptions o;
+  try {
+    o = planner::open_loop_options(planner::preset_named(b.preset));
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string("preset: ") + e.what());
+  }
+  o.sos.flat_output_degree = b.flat_output_degree.value_or(o.sos.flat_output_degree);
+  o.sos.flat_output_spans = b.flat_output_spans.value_or(o.sos.flat_output_spans);
+  o.sos.flat_output_span_growth = b.flat_output_span_growth.value_or(o.sos.flat_output_span_growth);
+  o.torque.pieces = b.torque_pieces.value_or(o.torque.pieces);
+  o.torque.piece_growth = b.torque_piece_growth.value_or(o.torque.piece_growth);
+  o.torque.degree = b.torque_degree.value_or(o.torque.degree);
+  o.sos.bounds.enforce = b.bounds;
+  return o;
+}
+
 OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
                                 const py::object& target, double duration, const py::object& reserves,
-                                int flat_output_degree, int flat_output_spans, double flat_output_span_growth,
-                                int torque_pieces, double torque_piece_growth, int torque_degree, bool bounds) {
+                                const BasisArguments& basis) {
   const plugin::MusculoskeletalModel& model = *m.model;
   const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
   OpenLoopInputs in;
@@ -33,26 +60,23 @@ OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::
   in.qd0_rad_per_s = vector_argument(qd0, joints, "qd0");
   in.activations = activations_argument(a0, muscles);
   if (!(duration > 0.0) || !std::isfinite(duration)) throw py::value_error("duration: must be a positive number of seconds");
+  in.options = preset_options(basis);
   planner::OpenLoopOptions& o = in.options;
   o.duration_s = duration;
   o.target_q_rad = vector_argument(target, joints, "target");
   o.reserves_N = vector_argument(reserves, muscles, "reserves", true);
-  o.sos.flat_output_degree = flat_output_degree;
-  o.sos.flat_output_spans = flat_output_spans;
-  o.sos.flat_output_span_growth = flat_output_span_growth;
-  o.torque.pieces = torque_pieces;
-  o.torque.piece_growth = torque_piece_growth;
-  o.torque.degree = torque_degree;
-  o.sos.bounds.enforce = bounds;
   return in;
 }
 
 Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
-                    const py::object& target, double duration, const py::object& reserves, int flat_output_degree,
-                    int flat_output_spans, double flat_output_span_growth, int torque_pieces, double torque_piece_growth,
-                    int torque_degree, bool bounds, const std::string& method) {
-  OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves, flat_output_degree, flat_output_spans,
-                                       flat_output_span_growth, torque_pieces, torque_piece_growth, torque_degree, bounds);
+                    const py::object& target, double duration, const py::object& reserves, const std::string& preset,
+                    std::optional<int> flat_output_degree, std::optional<int> flat_output_spans,
+                    std::optional<double> flat_output_span_growth, std::optional<int> torque_pieces,
+                    std::optional<double> torque_piece_growth, std::optional<int> torque_degree, bool bounds,
+                    const std::string& method) {
+  OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves,
+                                       {preset, flat_output_degree, flat_output_spans, flat_output_span_growth,
+                                        torque_pieces, torque_piece_growth, torque_degree, bounds});
   try {
     in.options.sos.method = planner::sos_program_method(method);
   } catch (const std::invalid_argument& e) {
@@ -68,12 +92,14 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
 
 py::dict shortest_transfer(const Model& m, const py::object& q0, const py::object& qd0, const py::object& a0,
                            const py::object& target, const py::object& reserves, double longest, double shortest,
-                           double ratio, double tolerance, int flat_output_degree, int flat_output_spans,
-                           double flat_output_span_growth, int torque_pieces, double torque_piece_growth,
-                           int torque_degree, bool bounds) {
+                           double ratio, double tolerance, const std::string& preset,
+                           std::optional<int> flat_output_degree, std::optional<int> flat_output_spans,
+                           std::optional<double> flat_output_span_growth, std::optional<int> torque_pieces,
+                           std::optional<double> torque_piece_growth, std::optional<int> torque_degree, bool bounds) {
   const OpenLoopInputs in =
-      open_loop_inputs(m, q0, qd0, a0, target, longest, reserves, flat_output_degree, flat_output_spans,
-                       flat_output_span_growth, torque_pieces, torque_piece_growth, torque_degree, bounds);
+      open_loop_inputs(m, q0, qd0, a0, target, longest, reserves,
+                       {preset, flat_output_degree, flat_output_spans, flat_output_span_growth, torque_pieces,
+                        torque_piece_growth, torque_degree, bounds});
   planner::ShortestTransferOptions so;
   so.lower_s = shortest;
   so.upper_s = longest;
@@ -206,15 +232,17 @@ void register_open_loop(py::module_& m) {
       });
 
   m.def("plan_open_loop", &plan_open_loop, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
-        py::arg("target"), py::arg("duration"), py::arg("reserves"), py::kw_only(), py::arg("flat_output_degree") = 4,
-        py::arg("flat_output_spans") = 1, py::arg("flat_output_span_growth") = 1.0, py::arg("torque_pieces") = 12,
-        py::arg("torque_piece_growth") = 1.0, py::arg("torque_degree") = 3, py::arg("bounds") = true,
+        py::arg("target"), py::arg("duration"), py::arg("reserves"), py::kw_only(), py::arg("preset") = "best",
+        py::arg("flat_output_degree") = py::none(), py::arg("flat_output_spans") = py::none(),
+        py::arg("flat_output_span_growth") = py::none(), py::arg("torque_pieces") = py::none(),
+        py::arg("torque_piece_growth") = py::none(), py::arg("torque_degree") = py::none(), py::arg("bounds") = true,
         py::arg("method") = "exchange",
         "Minimum-effort open-loop plan from the initial state to rest at `target` in `duration` s.\n"
         "q0, qd0, target: rad and rad/s, one per joint; a0: initial activations in (0, 1], one per muscle, with "
         "tendons in static equilibrium (None: the minimum-effort rest state at q0); reserves: minimum tendon "
-        "force, N, one number or one per muscle. Keywords: the flat outputs' B-spline degree and spans (4 and 1: "
-        "the paper's quartic) and how much longer each span is than the one before (1: uniform; above 1: short "
+        "force, N, one number or one per muscle. Keywords: `preset`, 'best' (quintic B-splines on 48 spans, 48 "
+        "cubic torque pieces: the default) or 'paper' (Richter & Warner's single quartic, 12 pieces); then, each "
+        "overriding the preset's value where given, the flat outputs' B-spline degree and spans and how much longer each span is than the one before (1: uniform; above 1: short "
         "spans where a fast transfer starts), the torque model's pieces, their growth likewise, and degree, and whether excitations and activations are "
         "kept within their bounds; `method`: 'exchange' (the default) or 'whole_program_nlp' (the whole program as one "
         "Ipopt problem, the reference formulation, which checks the bounds instead of imposing them). Bad input "
@@ -222,9 +250,10 @@ void register_open_loop(py::module_& m) {
 
   m.def("shortest_transfer", &shortest_transfer, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("target"), py::arg("reserves"), py::kw_only(), py::arg("longest"), py::arg("shortest") = 0.1,
-        py::arg("ratio") = 0.8, py::arg("tolerance") = 1e-3, py::arg("flat_output_degree") = 4,
-        py::arg("flat_output_spans") = 1, py::arg("flat_output_span_growth") = 1.0, py::arg("torque_pieces") = 12,
-        py::arg("torque_piece_growth") = 1.0, py::arg("torque_degree") = 3, py::arg("bounds") = true,
+        py::arg("ratio") = 0.8, py::arg("tolerance") = 1e-3, py::arg("preset") = "best",
+        py::arg("flat_output_degree") = py::none(), py::arg("flat_output_spans") = py::none(),
+        py::arg("flat_output_span_growth") = py::none(), py::arg("torque_pieces") = py::none(),
+        py::arg("torque_piece_growth") = py::none(), py::arg("torque_degree") = py::none(), py::arg("bounds") = true,
         "The shortest duration (s) with a plan for this transfer: searched down from `longest` (which must have "
         "one) in steps of `ratio`, no further than `shortest`, then bisected to `tolerance`. Returns a dict: "
         "'status' ('solved', 'infeasible': no plan at `longest`, 'failed'), 'message', 'shortest' (None unless "

@@ -8,17 +8,17 @@ models=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../models" && pwd)
 expect 0 "--pieces" -- "$ol" --help
 expect 2 "--target-deg" -- "$ol" --target-deg 90 --out "$tmp/o"
 expect 2 "--reserves-N" -- "$ol" --reserves-N 1,2,3 --out "$tmp/o"
-expect 2 "--pieces" -- "$ol" --pieces 0 --out "$tmp/o"
+expect 2 "--pieces" -- "$ol" --pieces -1 --out "$tmp/o"
 expect 2 "--duration-s" -- "$ol" --duration-s -3 --out "$tmp/o"
 printf '{"bodies": []}' > "$tmp/bad.json"
 expect 1 "bodies: must not be empty" -- "$ol" --model "$tmp/bad.json" --out "$tmp/o"
 # The paper's single box: infeasible, exit 1, a summary that says why, no simulation.
-expect 1 "infeasible" -- "$ol" --pieces 1 --degree 0 --out "$tmp/box"
+expect 1 "infeasible" -- "$ol" --paper --pieces 1 --degree 0 --out "$tmp/box"
 grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box summary lacks the status"; fail=1; }
 [[ ! -e "$tmp/box/simulation.sto" ]] || { echo "FAILED: a failed plan left a simulation"; fail=1; }
 # The open-loop simulation's integrator is chosen and recorded like the other programs'.
 expect 2 "--integrator" -- "$ol" --integrator euler --out "$tmp/o"
-expect 0 "simulated open loop" -- "$ol" --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
+expect 0 "simulated open loop" -- "$ol" --paper --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
 grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
 # A replay past its step limit fails the task, says why, and keeps what it simulated (an unstable
 # plan's explicit replay can otherwise run for hours).
@@ -43,7 +43,7 @@ grep -q '"q_breakpoints_s": \[' "$tmp/olg/summary.json" || { echo "FAILED: the s
 grep -q '"start_flat_output_spans": 12' "$tmp/olg/summary.json" || { echo "FAILED: the summary lacks the start plan's spans"; fail=1; }
 expect 2 "--free-path-start-min-spans" -- "$ol" --free-path-start-min-spans -1 --free-path-spans 2 --out "$tmp/o"
 expect 2 "--free-path-exchange-tolerance" -- "$ol" --free-path-exchange-tolerance -1e-3 --free-path-spans 2 --out "$tmp/o"
-expect 0 "simulated open loop" -- "$ol" --sos-method whole_program_nlp --no-bounds --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olw"
+expect 0 "simulated open loop" -- "$ol" --paper --sos-method whole_program_nlp --no-bounds --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olw"
 grep -q '"sos_method": "whole_program_nlp"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not name the SOS method"; fail=1; }
 grep -q '"equalities": 368' "$tmp/olw/summary.json" || { echo "FAILED: the summary lacks the whole-program NLP's size"; fail=1; }
 grep -q '"whole_program_nlp_solve_seconds"' "$tmp/olw/summary.json" || { echo "FAILED: the summary does not time the NLP under its name"; fail=1; }
@@ -52,10 +52,10 @@ expect 1 "free_path plans by the exchange method" -- "$ol" --sos-method whole_pr
 # The shortest transfer: found, simulated over that duration, every plan of the search in the
 # summary; a longest duration without a plan fails the task.
 expect 2 "--shortest-time-ratio" -- "$ol" --shortest-time --shortest-time-ratio 1.5 --out "$tmp/o"
-expect 0 "shortest transfer solved, 1.365 s" -- "$ol" --shortest-time --duration-s 3 --integrator rosenbrock --accuracy 1e-6 --out "$tmp/ost"
+expect 0 "shortest transfer solved, 1.365 s" -- "$ol" --paper --shortest-time --duration-s 3 --integrator rosenbrock --accuracy 1e-6 --out "$tmp/ost"
 grep -q '"shortest_duration_s": 1.365' "$tmp/ost/summary.json" || { echo "FAILED: the summary lacks the shortest duration"; fail=1; }
 grep -q '"below_status": "infeasible"' "$tmp/ost/summary.json" || { echo "FAILED: the summary lacks the verdict below it"; fail=1; }
-expect 1 "no plan at the longest duration, 1 s" -- "$ol" --shortest-time --duration-s 1 --out "$tmp/ost_none"
+expect 1 "no plan at the longest duration, 1 s" -- "$ol" --paper --shortest-time --duration-s 1 --out "$tmp/ost_none"
 grep -q '"success": false' "$tmp/ost_none/summary.json" || { echo "FAILED: a search without a plan reported success"; fail=1; }
 [[ ! -e "$tmp/ost_none/simulation.sto" ]] || { echo "FAILED: a search without a plan left a simulation"; fail=1; }
 expect 0 "--horizon-s" -- "$rh" --help

@@ -12,7 +12,9 @@
 #include <cmath>
 #include <cstdio>
 #include <tuple>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "../planner/executable_plan.hpp"
 #include "../planner/scenario_fixture.hpp"
@@ -100,19 +102,58 @@ TEST_F(CollocationReference, ItsSolutionObeysTheModelsLawsEvaluatedIndependently
 
 TEST_F(CollocationReference, RichFlatnessPlansComeWithinOnePercentAndNeverBelow) {
   // Each flatness plan is feasible for the collocation's problem, so none can cost less than
-  // its optimum (up to the mesh's 0.1 %); with enough spans they come within 1 %.
-  for (const auto& [T, degree, spans] : {std::tuple{3.0, 5, 48}, std::tuple{1.5, 3, 48}}) {
+  // its optimum (up to the mesh's 0.1 %); with enough spans they come within 1 %. The default
+  // options (Preset::Best: quintic B-splines on 48 spans on this arm) at both durations, and
+  // cubic ones on 48 spans at 1.5 s; each keeps the bounds on the 3001-point check grid.
+  for (const double T : {3.0, 1.5}) {
     const auto reference = collocate(path(T), T > 2.0 ? 150 : 100);
     ASSERT_EQ(reference.status, fpl::SolveStatus::Solved) << reference.message;
-    const auto plan = fpl::plan_open_loop(arm.flat, s0, open_loop_options(T, degree, spans));
-    ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
-    EXPECT_GE(plan.sos.cost_N_s, reference.cost * (1.0 - 1e-3)) << "T = " << T;
-    EXPECT_LE(plan.sos.cost_N_s, reference.cost * 1.01) << "T = " << T;
-    std::printf("T = %.1f s: collocation %.3f N s (K = %d, %.2f s), flatness degree %d, %d spans %.3f N s (%+.2f %%, %.2f s)\n", T,
-                reference.cost, reference.mesh_intervals, reference.setup_seconds + reference.solve_seconds, degree,
-                spans, plan.sos.cost_N_s, 100.0 * (plan.sos.cost_N_s / reference.cost - 1.0),
-                plan.setup_seconds + plan.solve_seconds + plan.certify_seconds);
+    fpl::OpenLoopOptions best;  // the library's defaults
+    best.duration_s = T;
+    best.target_q_rad = open_loop_options(T).target_q_rad;
+    best.reserves_N = open_loop_options(T).reserves_N;
+    std::vector<std::pair<std::string, fpl::OpenLoopOptions>> plans{{"default", best}};
+    if (T < 2.0) plans.emplace_back("cubic, 48 spans", open_loop_options(T, 3, 48));
+    for (const auto& [what, options] : plans) {
+      const auto plan = fpl::plan_open_loop(arm.flat, s0, options);
+      ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << what << ": " << plan.message;
+      EXPECT_GE(plan.sos.cost_N_s, reference.cost * (1.0 - 1e-3)) << what << ", T = " << T;
+      EXPECT_LE(plan.sos.cost_N_s, reference.cost * 1.01) << what << ", T = " << T;
+      EXPECT_EQ(options.sos.bounds.check_points, 3001);
+      EXPECT_LE(plan.sos.max_bound_excess, options.sos.bounds.tolerance) << what << ", T = " << T;
+      std::printf("T = %.1f s: collocation %.3f N s (K = %d, %.2f s), flatness %s (degree %d, %d spans) %.3f N s "
+                  "(%+.2f %%, %.2f s)\n",
+                  T, reference.cost, reference.mesh_intervals, reference.setup_seconds + reference.solve_seconds,
+                  what.c_str(), plan.flat_output_degree, plan.flat_output_spans, plan.sos.cost_N_s,
+                  100.0 * (plan.sos.cost_N_s / reference.cost - 1.0),
+                  plan.setup_seconds + plan.solve_seconds + plan.certify_seconds);
+    }
   }
+}
+
+TEST(Presets, ThePapersPresetPlansThePapersQuarticAndTheDefaultSpansFollowTheModelsSize) {
+  const flatsos::test::ArmPlanning arm;
+  fpl::OpenLoopOptions paper = fpl::open_loop_options(fpl::Preset::Paper);
+  const fpl::OpenLoopOptions scenario = flatsos::test::open_loop_options(3.0);
+  paper.target_q_rad = scenario.target_q_rad;
+  paper.reserves_N = scenario.reserves_N;
+  const auto plan = fpl::plan_open_loop(arm.flat, flatsos::test::open_loop_initial_state(*arm.model), paper);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_NEAR(plan.sos.cost_N_s, 958.32, 0.005);
+  EXPECT_EQ(plan.flat_output_degree, 4);
+  EXPECT_EQ(plan.flat_output_spans, 1);
+  EXPECT_EQ(plan.torque.pieces.size(), 12u);
+  EXPECT_EQ(fpl::preset_named("paper"), fpl::Preset::Paper);
+  EXPECT_THROW(fpl::preset_named("fast"), std::invalid_argument);
+  // About 212 coefficients: the arm's 4 flat outputs 48 quintic spans, a knee's 12 twelve, a
+  // 37-output leg one; a 2-output elbow at most 48.
+  EXPECT_EQ(fpl::automatic_flat_output_spans(4, 5), 48);
+  EXPECT_EQ(fpl::automatic_flat_output_spans(12, 5), 12);
+  EXPECT_EQ(fpl::automatic_flat_output_spans(37, 5), 1);
+  EXPECT_EQ(fpl::automatic_flat_output_spans(2, 5), 48);
+  const fpl::OpenLoopOptions resolved = fpl::resolve_basis(arm.flat, fpl::OpenLoopOptions{});
+  EXPECT_EQ(resolved.sos.flat_output_spans, 48);
+  EXPECT_EQ(resolved.torque.pieces, 48);
 }
 
 TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReportedSolved) {

@@ -51,7 +51,7 @@ TEST(SecondEffort, SquaredExcitationsShareTheLoadAndEachOptimumBeatsTheOther) {
   SimTK::State state = model->defaultState();
   fpl::set_minimum_effort_rest_state(flat, state, s.q0_rad, reserves);
   const fpl::MuscleState s0 = fpl::muscle_state_of(*model, state);
-  fpl::OpenLoopOptions o;
+  fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
   o.duration_s = s.duration_s;
   o.target_q_rad = s.target_q_rad;
   o.reserves_N = reserves;

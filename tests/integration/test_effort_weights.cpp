@@ -48,7 +48,7 @@ struct Planned {
 };
 
 Planned plan_elbow(const fpl::FlatOutputMap& flat, const fpl::MuscleState& start, double target_deg, int spans = 1) {
-  fpl::OpenLoopOptions o;
+  fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
   o.duration_s = 1.5;
   o.target_q_rad = Eigen::VectorXd::Constant(1, deg(target_deg));
   o.reserves_N = Eigen::VectorXd::Constant(3, 10.0);

@@ -50,7 +50,7 @@ struct ShippedModel {
   }
   fpl::OpenLoopOptions openLoopOptions() const {
     const fp::ScenarioDescription& s = scenario("open_loop");
-    fpl::OpenLoopOptions o;
+    fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
     o.duration_s = s.duration_s;
     o.target_q_rad = s.target_q_rad;
     o.reserves_N = reserves(s);

@@ -36,7 +36,7 @@ struct PostureDependentElbow {
     return fpl::muscle_state_of(*model, s);
   }
   fpl::OpenLoopOptions options(double target_deg, double duration_s) const {
-    fpl::OpenLoopOptions o;
+    fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
     o.duration_s = duration_s;
     o.target_q_rad = Eigen::VectorXd::Constant(1, deg(target_deg));
     o.reserves_N = reserves;
@@ -148,7 +148,7 @@ TEST(PostureDependentPlans, AThreeJointArmWhoseFlatOutputsTheLibraryChoseIsPlann
   SimTK::State s = model->defaultState();
   fpl::set_minimum_effort_rest_state(flat, s, Eigen::Vector3d(0.0, deg(20), 0.0), reserves);
   const fpl::MuscleState s0 = fpl::muscle_state_of(*model, s);
-  fpl::OpenLoopOptions o;
+  fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
   o.duration_s = 1.5;
   o.target_q_rad = Eigen::Vector3d(deg(30), deg(80), deg(20));
   o.reserves_N = reserves;

@@ -124,7 +124,7 @@ TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
       {"duration infinite", plan_with([](auto& o, auto&) { o.duration_s = std::numeric_limits<double>::infinity(); }), "duration T must be > 0"},
       {"reserve negative", plan_with([](auto& o, auto&) { o.reserves_N[2] = -1.0; }), "reserves must be >= 0"},
       {"reserve NaN", plan_with([](auto& o, auto&) { o.reserves_N[2] = kNaN; }), "reserves: values must be finite"},
-      {"pieces zero", plan_with([](auto& o, auto&) { o.torque.pieces = 0; }), "pieces K must be >= 1"},
+      {"pieces negative", plan_with([](auto& o, auto&) { o.torque.pieces = -1; }), "pieces K must be >= 1"},
       {"flat-output degree too low", plan_with([](auto& o, auto&) { o.sos.flat_output_degree = 2; }), "too low for 4 boundary equalities"},
       {"RH horizon negative", rh_with([](auto& o) { o.horizon_s = -0.5; }), "horizon must be > 0"},
       {"RH grid of one point", rh_with([](auto& o) { o.grid_points = 1; }), "at least 2 grid points"},

@@ -29,7 +29,7 @@ inline planner::MuscleState open_loop_initial_state(const plugin::Musculoskeleta
 }
 
 inline planner::OpenLoopOptions open_loop_options() {
-  planner::OpenLoopOptions o;
+  planner::OpenLoopOptions o = planner::open_loop_options(planner::Preset::Paper);
   o.duration_s = 3.0;
   o.target_q_rad = Eigen::Vector2d(deg(90), 0.0);
   o.reserves_N = Eigen::VectorXd::Constant(6, 10.0);

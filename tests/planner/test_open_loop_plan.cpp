@@ -109,7 +109,7 @@ TEST_F(OpenLoopScenario, BadInputIsRejectedByName) {
   o.sos.flat_output_degree = 2;
   expect_message(o, s0, "degree 2 with 1 span(s) is too low for 4 boundary equalities");
   o.sos.flat_output_degree = 3;
-  o.sos.flat_output_spans = 0;
+  o.sos.flat_output_spans = -1;  // 0 asks for the automatic choice
   expect_message(o, s0, "flat outputs need at least 1 span");
   auto s = s0;
   s.activation[2] = 0.0;
@@ -176,7 +176,7 @@ TEST(OpenLoopFromRest, TheLibrarysOwnMinimumEffortRestStateIsAFeasibleStartWithT
         SimTK::State s = model->defaultState();
         const Eigen::VectorXd reserves = Eigen::VectorXd::Constant(m, reserve);
         fpl::set_minimum_effort_rest_state(flat, s, Eigen::VectorXd::Constant(n, flatsos::test::deg(q0_deg)), reserves);
-        fpl::OpenLoopOptions o;
+        fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
         o.duration_s = 2.0;
         o.target_q_rad = Eigen::VectorXd::Constant(n, flatsos::test::deg(q0_deg + 30.0));
         o.reserves_N = reserves;

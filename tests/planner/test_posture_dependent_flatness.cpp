@@ -251,7 +251,7 @@ TEST(PostureDependentFlatness, WhatNeedsConstantMomentArmsSaysSo) {
   EXPECT_THROW(flat.CY(), std::logic_error);
   Eigen::MatrixXd gradient(3, 5);
   EXPECT_THROW(flat.pathLengthJetGradient(0, joint_jet(0.1, 5), gradient), std::logic_error);
-  fpl::OpenLoopOptions o;
+  fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
   o.duration_s = 1.0;
   o.target_q_rad = Eigen::VectorXd::Constant(1, deg(90));
   o.reserves_N = Eigen::VectorXd::Constant(3, 10.0);

@@ -35,6 +35,7 @@ class Scenario:
         self.reserves = s["reserves_N"]
 
     def plan(self, model, **options):
+        options.setdefault("preset", "paper")  # the tests' numbers are the paper's configuration's
         return flatsos.plan_open_loop(model, self.q0, self.qd0, self.a0, self.target, self.duration, self.reserves,
                                       **options)
 

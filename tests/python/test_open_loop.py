@@ -27,7 +27,7 @@ def test_the_plan_costs_what_the_cpp_program_plans(name, request, build_dir, mod
     plan = scenario.plan(model)
     assert plan.status == "solved", plan.message
     program = subprocess.run([str(build_dir / "bin" / "arm_open_loop"), "--model", str(models_dir / model_file),
-                              "--out", str(tmp_path)], capture_output=True, text=True)
+                              "--paper", "--out", str(tmp_path)], capture_output=True, text=True)
     assert program.returncode == 0, program.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert plan.cost == pytest.approx(summary["cost_Ns"], rel=1e-9)
@@ -119,17 +119,17 @@ def test_a_bad_model_file_or_sample_time_raises_a_value_error(arm, tmp_path):
 
 def test_the_shortest_transfer_matches_the_cpp_program_and_its_bracket(arm, build_dir, tmp_path):
     model, s = arm
-    r = flatsos.shortest_transfer(model, s.q0, s.qd0, s.a0, s.target, s.reserves, longest=3.0)
+    r = flatsos.shortest_transfer(model, s.q0, s.qd0, s.a0, s.target, s.reserves, longest=3.0, preset="paper")
     assert r["status"] == "solved", r["message"]
     assert r["below_status"] == "infeasible" and 0 < r["shortest"] - r["no_plan_below"] <= 1e-3
     assert r["plan"].status == "solved" and r["plan"].duration == pytest.approx(r["shortest"], abs=1e-12)
     assert r["tried"][0]["duration"] == 3.0 and len(r["tried"]) > 2
     # Its ends, planned again one by one.
-    at = flatsos.plan_open_loop(model, s.q0, s.qd0, s.a0, s.target, r["shortest"], s.reserves)
-    below = flatsos.plan_open_loop(model, s.q0, s.qd0, s.a0, s.target, r["no_plan_below"], s.reserves)
+    at = flatsos.plan_open_loop(model, s.q0, s.qd0, s.a0, s.target, r["shortest"], s.reserves, preset="paper")
+    below = flatsos.plan_open_loop(model, s.q0, s.qd0, s.a0, s.target, r["no_plan_below"], s.reserves, preset="paper")
     assert at.status == "solved" and at.cost == pytest.approx(r["plan"].cost, rel=1e-9)
     assert below.status == "infeasible"
-    program = subprocess.run([str(build_dir / "bin" / "arm_open_loop"), "--shortest-time", "--duration-s", "3",
+    program = subprocess.run([str(build_dir / "bin" / "arm_open_loop"), "--shortest-time", "--paper", "--duration-s", "3",
                               "--out", str(tmp_path)], capture_output=True, text=True)
     assert program.returncode == 0, program.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())["shortest_transfer"]
@@ -142,7 +142,7 @@ def test_the_shortest_transfer_names_bad_options_and_reports_no_plan(arm):
         flatsos.shortest_transfer(model, s.q0, s.qd0, s.a0, s.target, s.reserves, longest=3.0, ratio=1.0)
     with pytest.raises(ValueError, match="lower_s"):
         flatsos.shortest_transfer(model, s.q0, s.qd0, s.a0, s.target, s.reserves, longest=3.0, shortest=-1.0)
-    none = flatsos.shortest_transfer(model, s.q0, s.qd0, s.a0, s.target, s.reserves, longest=1.0)
+    none = flatsos.shortest_transfer(model, s.q0, s.qd0, s.a0, s.target, s.reserves, longest=1.0, preset="paper")
     assert none["status"] == "infeasible" and none["shortest"] is None and none["plan"].status == "infeasible"
     assert "no plan at the longest duration" in none["message"]
 

@@ -17,7 +17,7 @@ def test_the_simulation_is_the_cpp_programs_and_follows_the_plan(name, model_fil
     assert sim["finite"] and sim["message"] == ""
     assert sim["q"].shape == (301, len(model.joints)) and sim["activation"].shape == (301, len(model.muscles))
     program = subprocess.run([str(build_dir / "bin" / "arm_open_loop"), "--model", str(models_dir / model_file),
-                              "--out", str(tmp_path)], capture_output=True, text=True)
+                              "--paper", "--out", str(tmp_path)], capture_output=True, text=True)
     assert program.returncode == 0, program.stderr
     table = read_sto(tmp_path / "simulation.sto")
     time, q = joint_angles(model, table)

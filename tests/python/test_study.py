@@ -12,7 +12,9 @@ import pytest
 import flatsos
 import flatsos.study as study
 
-OWN_REST = {"plan": {"a0": None, "qd0_deg_per_s": [0, 0]}, "strength": {"low": 0.8, "high": 1.2}}
+# Every study here plans the paper's configuration (the tests' numbers, and 1000 plans in seconds).
+PAPER = {"preset": "paper"}
+OWN_REST = {"plan": {"a0": None, "qd0_deg_per_s": [0, 0], "options": PAPER}, "strength": {"low": 0.8, "high": 1.2}}
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +50,7 @@ def test_a_cluster_gives_the_serial_loops_table_and_a_second_client_sees_its_wor
 
 def test_unperturbed_samples_cost_what_plan_open_loop_plans(arm, arm_file):
     model, scenario = arm
-    result = study.run(arm_file, {"strength": {"low": 1.0, "high": 1.0}}, 3, workers=0)
+    result = study.run(arm_file, {"plan": {"options": PAPER}, "strength": {"low": 1.0, "high": 1.0}}, 3, workers=0)
     expected = scenario.plan(model)
     t = result.table()
     assert list(t["status"]) == ["solved"] * 3
@@ -59,7 +61,7 @@ def test_unperturbed_samples_cost_what_plan_open_loop_plans(arm, arm_file):
 
 
 def test_targets_drawn_in_their_box_and_the_table_file_read_back(arm_file, tmp_path):
-    box = {"plan": {"a0": None, "qd0_deg_per_s": [0, 0]}, "target_deg": {"low": [60, 0], "high": [90, 20]}}
+    box = {"plan": {"a0": None, "qd0_deg_per_s": [0, 0], "options": PAPER}, "target_deg": {"low": [60, 0], "high": [90, 20]}}
     result = study.run(arm_file, box, 20, workers=0)
     t = result.table()
     assert 60 <= t["target_shoulder_deg"].min() and t["target_shoulder_deg"].max() <= 90
@@ -79,7 +81,7 @@ def test_targets_drawn_in_their_box_and_the_table_file_read_back(arm_file, tmp_p
 
 
 def test_a_sample_the_library_refuses_is_a_row_that_says_why(arm_file):
-    result = study.run(arm_file, {"plan": {"options": {"torque_pieces": 0}}}, 2, workers=0)
+    result = study.run(arm_file, {"plan": {"options": {"torque_pieces": -1}}}, 2, workers=0)
     t = result.table()
     assert list(t["status"]) == ["failed", "failed"] and np.isnan(t["cost_Ns"]).all()
     assert t["message"][0].startswith("error: ") and "torque" in t["message"][0]
@@ -145,12 +147,12 @@ def test_the_command_line(arm_file, tmp_path):
 def test_a_study_of_a_model_whose_flat_outputs_the_library_chooses(knee, models_dir):
     model, scenario = knee
     knee_file = str(models_dir / "seated_knee_r.json")
-    result = study.run(knee_file, {"strength": {"low": 1.0, "high": 1.0}, "target_deg": {"low": [30], "high": [30]}},
+    result = study.run(knee_file, {"plan": {"options": PAPER}, "strength": {"low": 1.0, "high": 1.0}, "target_deg": {"low": [30], "high": [30]}},
                        2, workers=0)
     t = result.table()
     assert list(t["status"]) == ["solved", "solved"], t["message"]
     np.testing.assert_allclose(t["cost_Ns"], scenario.plan(model).cost, rtol=1e-12)
-    weaker = study.run(knee_file, {"strength": {"low": 0.8, "high": 0.9}}, 3, workers=0).table()
+    weaker = study.run(knee_file, {"plan": {"options": PAPER}, "strength": {"low": 0.8, "high": 0.9}}, 3, workers=0).table()
     assert (weaker["status"] == "solved").all(), weaker["message"]
     # The library's effort here is tendon force over maximum force: each weight grows by 1/f >=
     # 1/0.9 (the start, each subject's own rest, moves too, so the cost need not grow as much).

@@ -129,15 +129,55 @@ struct FreePathReport {
   double seconds = 0.0;
 };
 
+/// The open-loop options (OpenLoopOptions{} is Preset::Best): the basis of the flat outputs, the
+/// torque model's pieces and the excitation bounds.
 struct OpenLoopOptions {
   double duration_s = 3.0;
   Eigen::VectorXd target_q_rad;       ///< rest target (qd = qdd = q''' = q'''' = 0 there)
   Eigen::VectorXd reserves_N;         ///< minimum tendon force per muscle
-  TorqueModelOptions torque;          ///< K pieces of degree r (K = 1, r = 0: the paper's box)
-  SosProgramOptions sos;              ///< includes the flat-output degree (4: quartic)
+  /// K pieces of degree r (K = 1, r = 0: the paper's box). K = 0 (the default): as many as the
+  /// flat outputs' spans, at least 12.
+  TorqueModelOptions torque = [] {
+    TorqueModelOptions t;
+    t.pieces = 0;
+    return t;
+  }();
+  /// The flat outputs' basis and the bounds. By default quintic B-splines on uniform spans whose
+  /// number S = 0 is chosen from the model (automatic_flat_output_spans).
+  SosProgramOptions sos = [] {
+    SosProgramOptions s;
+    s.flat_output_degree = 5;
+    s.flat_output_spans = 0;
+    return s;
+  }();
   int check_points = 301;             ///< dense grid of the a-posteriori check
   FreeJointPathOptions free_path;
 };
+
+/// Named configurations of the open-loop planner (docs/method/sos_program.md, "Presets").
+enum class Preset {
+  /// The default: quintic B-splines on as many spans as the model's size allows
+  /// (automatic_flat_output_spans: 48 on the paper's arm), as many cubic torque pieces, the
+  /// excitation bounds.
+  Best,
+  /// Richter & Warner's configuration: one quartic flat-output polynomial (12 cubic torque
+  /// pieces): 958.32 N s on the paper's scenario.
+  Paper,
+};
+/// "best" or "paper": the names the programs and Python use.
+constexpr const char* to_string(Preset p) { return p == Preset::Paper ? "paper" : "best"; }
+/// The preset of that name; std::invalid_argument naming the accepted ones otherwise.
+Preset preset_named(const std::string& name);
+/// The options of a preset (duration, target and reserves are left to the caller).
+OpenLoopOptions open_loop_options(Preset preset);
+/// The flat outputs' spans of the default basis: about 212 B-spline coefficients over all p flat
+/// outputs, S = 212 / p - degree within [1, 48] (48 for the paper's arm, p = 4; 12 for a 13-muscle
+/// knee; 1 for a 40-muscle leg). The plan's linear programs and bounds grow with the
+/// coefficients times the muscles, and a richer basis costs less effort.
+int automatic_flat_output_spans(int flat_outputs, int degree);
+/// `options` with an automatic basis (flat_output_spans 0, torque pieces 0) made explicit for
+/// `flat`; what plan_open_loop plans with.
+OpenLoopOptions resolve_basis(const FlatOutputMap& flat, OpenLoopOptions options);
 
 struct OpenLoopPlan {
   SolveStatus status = SolveStatus::Failed;
@@ -146,6 +186,7 @@ struct OpenLoopPlan {
   std::vector<std::string> warnings;
   JointPath path;                     ///< degree-8 joint polynomials, or the optimized spline (free path)
   std::optional<SplineTrajectory> Y;  ///< flat outputs (N); none unless the SOS program was solved
+  int flat_output_degree = 0, flat_output_spans = 0;  ///< the basis planned in (resolve_basis)
   SosProgramResult sos;
   TorqueModel torque;
   PlanCheck check;
