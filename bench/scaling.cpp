@@ -87,6 +87,7 @@ json scaling_row(const std::string& model_path, int repetitions) {
   // then its steps replanned from the states it passed through, for where a step's time goes.
   const ex::ScenarioInputs rh_in = ex::resolve_scenario(*model, "receding_horizon", {}, 2.0, 1.0);
   fpl::RecedingHorizonControllerOptions co;
+  co.disturbance_observer_gain_per_s = 0.0;  // the paper's controller, as benchmarked before
   co.plan.target_q_rad = rh_in.target_q_rad;
   co.plan.reserves_N = rh_in.reserves_N;
   SimTK::State rest = model->defaultState();

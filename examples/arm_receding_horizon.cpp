@@ -18,6 +18,7 @@
 #include "example_support.hpp"
 #include "scenario_inputs.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 
@@ -51,8 +52,20 @@ int main(int argc, char** argv) {
                "[0, 1] are clamped by the muscle and counted)");
   app.add_option("--observer-gain-per-s", options.disturbance_observer_gain_per_s,
                  "disturbance observer gain in [0, 40] 1/s: integrates the plan's prediction error so that a model "
-                 "mismatch leaves no offset (20 recommended; 0: the paper's controller)")
+                 "mismatch leaves no offset (0: the paper's controller, --paper)")
       ->capture_default_str()->check(CLI::Range(0.0, 40.0));
+  bool paper = false;
+  app.add_flag("--paper", paper,
+               "Richter & Warner's controller: no disturbance observer (unless --observer-gain-per-s is given)");
+  std::string plant_path;
+  app.add_option("--plant", plant_path,
+                 "model file (JSON) of the simulated plant, apart from the model the controller plans with (as "
+                 "many joints and muscles; default: the model itself)");
+  double plant_strength = 1.0;
+  app.add_option("--plant-strength", plant_strength,
+                 "every maximum isometric force of the plant times this factor (a plant weaker or stronger than the "
+                 "model)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   // Defaults measured on this scenario against CPodes BDF at 1e-10 (README, Benchmarks): the
   // Rosenbrock method at 1e-5 stays within 8e-4 deg of it (RTF ~70); BDF and RKM at 1e-8.
   app.add_option("--accuracy", accuracy,
@@ -71,6 +84,14 @@ int main(int argc, char** argv) {
     const auto model = fp::MusculoskeletalModel::fromFile(model_path);
     const fpl::FlatOutputMap flat(model);
     const int n = model->numJoints();
+    if (paper && app.count("--observer-gain-per-s") == 0) options.disturbance_observer_gain_per_s = 0.0;
+    // The plant: another model file and/or other strengths; null when it is the model itself.
+    std::shared_ptr<const fp::MusculoskeletalModel> plant;
+    if (!plant_path.empty() || plant_strength != 1.0) {
+      fp::ModelDescription d = plant_path.empty() ? model->description() : fp::load_model_file(plant_path);
+      for (auto& muscle : d.muscles) muscle.parameters.max_isometric_force_N *= plant_strength;
+      plant = std::make_shared<const fp::MusculoskeletalModel>(std::move(d));
+    }
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "receding_horizon", given, 2.0, 1.0);
     const double duration = in.duration_s;
     options.plan.target_q_rad = in.target_q_rad;
@@ -84,9 +105,9 @@ int main(int argc, char** argv) {
     const fp::IntegratorKind kind = fp::integrator_from_name(integrator);
     if (accuracy == 0.0) accuracy = kind == fp::IntegratorKind::MuscleRosenbrock ? 1e-5 : 1e-8;
 
-    // The paper's loop starts at rest (no initial speeds or activations to give).
-    SimTK::State s = ex::initial_state(flat, in);
-    fpl::RecedingHorizonController controller(flat, options);
+    // The paper's loop starts at rest (no initial speeds or activations to give): the plant's own.
+    fpl::RecedingHorizonController controller(flat, options, plant);  // checks the plant's sizes first
+    SimTK::State s = plant ? ex::initial_state(flat.withModel(plant), in) : ex::initial_state(flat, in);
     std::vector<std::string> found = fp::joint_angle_warnings(model->description(), in.q0_rad, "initial joint angles");
     for (auto& w : controller.warnings()) found.push_back(std::move(w));
     const std::vector<std::string> warnings = ex::print_warnings("arm_receding_horizon", model->warnings(), found);
@@ -133,6 +154,7 @@ int main(int argc, char** argv) {
     summary["integrator_attempts"] = run.integrator_attempts;
     summary["slp_solver"] = solver;
     summary["observer_gain_per_s"] = options.disturbance_observer_gain_per_s;
+    summary["plant"] = {{"model_file", plant_path.empty() ? model_path : plant_path}, {"strength", plant_strength}};
     summary["horizon_s"] = options.plan.horizon_s;
     summary["control_period_s"] = options.control_period_s;
 

@@ -171,7 +171,8 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   j["message"] = plan.message;
   j["model"] = model.description().name;
   const auto& s = plan.sos;
-  j["cost_Ns"] = s.cost_N_s;
+  j["cost_Ns"] = s.cost_N_s;  // the name kept for readers of older summaries; the unit is cost_unit
+  j["cost_unit"] = flat.effortUnit();
   j["solve_seconds"] = plan.setup_seconds + plan.solve_seconds;
   j["setup_seconds"] = plan.setup_seconds;
   j["sos_method"] = planner::to_string(s.method);

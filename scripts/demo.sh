@@ -14,7 +14,7 @@ echo "== open loop, the paper's quartic: [0, 10] deg -> straight up in 3 s (rese
 echo "== open loop, the default plan (quintic B-splines on 48 spans)"
 "$root/build/bin/arm_open_loop" --out "$results/open_loop_default"
 echo "== receding horizon: [20, 20] deg -> [80, 80] deg, 2 s (reserves 1 N)"
-"$root/build/bin/arm_receding_horizon" --out "$results/receding_horizon"
+"$root/build/bin/arm_receding_horizon" --paper --out "$results/receding_horizon"
 # The models made from OpenSim's example by opensim_to_model, each in its own scenarios.
 models="$root/build/share/flatsos/models"
 echo "== seated knee extension (13 muscles, hip held at 60 deg): open loop 90 -> 30 deg in 1 s (10 N)"

@@ -361,6 +361,10 @@ Eigen::MatrixXd FlatOutputMap::forceJet(const Jet& q_jet, const Eigen::MatrixXd&
   return F;
 }
 
+std::string FlatOutputMap::effortUnit() const {
+  return effort_kind_ == plugin::EffortWeights::Kind::NormalizedTendonForce ? "s" : "N s";
+}
+
 bool FlatOutputMap::effortIsFlatOutputSum() const {
   return effort_kind_ == plugin::EffortWeights::Kind::FlatOutputs;
 }

@@ -182,7 +182,9 @@ void register_open_loop(py::module_& m) {
             if (p.plan.status != planner::SolveStatus::Solved) return std::nullopt;
             return p.plan.sos.cost_N_s;
           },
-          "the effort, N s (None when not solved)")
+          "the effort, in cost_unit (None when not solved)")
+      .def_property_readonly("cost_unit", [](const Plan& p) { return p.flat->effortUnit(); },
+                             "'N s' (tendon forces) or 's' (normalized tendon forces, the library's choice of flat outputs)")
       .def_property_readonly("duration", [](const Plan& p) { return p.plan.path.duration_s; }, "s")
       .def_property_readonly("warnings", [](const Plan& p) { return p.plan.warnings; })
       .def_property_readonly(

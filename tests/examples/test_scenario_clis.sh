@@ -69,6 +69,18 @@ grep -q '"integrator_accuracy": 1e-05' "$tmp/rh/summary.json" || { echo "FAILED:
 grep -q '"success": true' "$tmp/rh/summary.json" || { echo "FAILED: a settled run is not a success"; fail=1; }
 # Bounded steps (the default) leave nothing to clamp; the paper's step clamps the first period.
 grep -q '"excitation_clamps": 0,' "$tmp/rh/summary.json" || { echo "FAILED: bounded steps clamped excitations"; fail=1; }
+# A plant 20 % weaker than the model: the default observer reaches the target; the paper's
+# controller (no observer) ends short of it and fails its task.
+expect 0 "settling" -- "$rh" --plant-strength 0.8 --out "$tmp/rh_weak"
+python3 - "$tmp/rh_weak/summary.json" <<'PY' || { echo "FAILED: the weaker plant did not end within 1 deg, or the summary lacks it"; fail=1; }
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["plant"]["strength"] == 0.8 and s["observer_gain_per_s"] == 20.0, s["plant"]
+assert max(abs(a - b) for a, b in zip(s["final_q_deg"], s["target_q_deg"])) < 1.0, s["final_q_deg"]
+PY
+expect 1 "never settled" -- "$rh" --paper --plant-strength 0.8 --out "$tmp/rh_weak_paper"
+grep -q '"observer_gain_per_s": 0.0' "$tmp/rh_weak_paper/summary.json" || { echo "FAILED: --paper kept the observer"; fail=1; }
+expect 1 "plant" -- "$rh" --plant "$models/elbow_1dof.json" --out "$tmp/o"
 expect 1 "bounded steps 0" -- "$rh" --duration-s 0.2 --no-excitation-bounds --out "$tmp/rh_paper"
 grep -q '"enforced": false' "$tmp/rh_paper/summary.json" || { echo "FAILED: --no-excitation-bounds not in the summary"; fail=1; }
 grep -q '"excitation_clamps": 0,' "$tmp/rh_paper/summary.json" && { echo "FAILED: the paper's step clamped nothing"; fail=1; }

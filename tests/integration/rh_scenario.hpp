@@ -1,7 +1,7 @@
 #pragma once
 // The paper's receding-horizon scenario, once for every test that runs it: the arm from rest at
 // q = [20, 20] deg (muscles in the plant's own minimum-effort equilibrium) to [80, 80] deg,
-// horizon 0.5 s on 11 points, delta = 0.05 s, reserves 1 N, exact SLP.
+// horizon 0.5 s on 11 points, delta = 0.05 s, reserves 1 N, exact SLP, no disturbance observer.
 #include <memory>
 
 #include "../planner/scenario_fixture.hpp"
@@ -21,6 +21,7 @@ struct RecedingHorizonScenario {
     o.plan.target_q_rad = Eigen::Vector2d(deg(80), deg(80));
     o.plan.reserves_N = Eigen::VectorXd::Constant(6, 1.0);
     o.plan.solver = planner::SlpSolver::VertexEnumeration;
+    o.disturbance_observer_gain_per_s = 0.0;  // the paper's controller; tests of the observer set it
     return o;
   }
 

@@ -31,6 +31,9 @@ def test_the_plan_costs_what_the_cpp_program_plans(name, request, build_dir, mod
     assert program.returncode == 0, program.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert plan.cost == pytest.approx(summary["cost_Ns"], rel=1e-9)
+    # The cost's unit follows the effort: the arm's given flat outputs weigh tendon forces (N s),
+    # the knee's, chosen by the library, normalized ones (s).
+    assert plan.cost_unit == summary["cost_unit"] == {"arm": "N s", "knee": "s"}[name]
 
 
 def test_samples_start_at_the_initial_state_end_at_the_target_and_keep_every_bound(arm):

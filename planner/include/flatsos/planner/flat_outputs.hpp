@@ -186,6 +186,9 @@ class FlatOutputMap {
   plugin::EffortWeights::Kind effortKind() const { return effort_kind_; }
   /// True for the paper's weights E^T 1: then w^T F is exactly the sum of the flat outputs.
   bool effortIsFlatOutputSum() const;
+  /// The cost's unit: "s" for normalized tendon forces (w = 1 / Fmax), "N s" otherwise (weights
+  /// taken as dimensionless).
+  std::string effortUnit() const;
   /// w^T F split into its flat-output and torque parts at posture q (constant with constant arms).
   EffortSplit effortSplit(const Eigen::VectorXd& q_rad) const;
   /// The moment arms R(q) (N x m) in any posture.
