@@ -361,6 +361,24 @@ Eigen::MatrixXd FlatOutputMap::forceJet(const Jet& q_jet, const Eigen::MatrixXd&
   return F;
 }
 
+std::shared_ptr<const Effort> FlatOutputMap::effort() const {
+  return std::make_shared<TendonForceEffort>(effort_weights_);
+}
+
+FlatOutputMap FlatOutputMap::withEffort(std::shared_ptr<const Effort> effort) const {
+  if (!effort) throw std::invalid_argument("flat outputs: no effort given");
+  effort->validate(muscles_);
+  const std::optional<Eigen::VectorXd> weights = effort->tendonForceWeights();
+  if (!weights)
+    throw std::invalid_argument("effort '" + effort->name() +
+                                "' is not linear in the tendon forces: the flatness planners minimize linear efforts "
+                                "(w^T F); the collocation reference (collocation.hpp) minimizes any");
+  FlatOutputMap out = *this;
+  out.effort_weights_ = *weights;
+  out.effort_kind_ = plugin::EffortWeights::Kind::PerMuscle;
+  return out;
+}
+
 std::string FlatOutputMap::effortUnit() const {
   return effort_kind_ == plugin::EffortWeights::Kind::NormalizedTendonForce ? "s" : "N s";
 }

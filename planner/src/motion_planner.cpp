@@ -274,6 +274,11 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
                             const OpenLoopOptions& options) {
+  if (options.effort) {  // the same plan on a map that minimizes this effort
+    OpenLoopOptions rest = options;
+    rest.effort = nullptr;
+    return plan_open_loop(flat.withEffort(options.effort), workspace, initial, rest);
+  }
   const Stopwatch setup;
   const OpenLoopOptions o = resolve_basis(flat, options);
   const int n = flat.numJoints(), m = flat.numMuscles(), p = flat.numFlatOutputs();

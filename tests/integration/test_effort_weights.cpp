@@ -193,3 +193,48 @@ TEST(EffortWeights, TheRecedingHorizonStepWeighsItsConstantFlatOutputsByTheEffor
     EXPECT_GT((a.slp.alpha - b.slp.alpha).norm(), 1e-3) << file;
   }
 }
+
+TEST(EffortWeights, AnEffortGivenWithThePlanIsTheModelFilesWeights) {
+  // OpenLoopOptions::effort and FlatOutputMap::withEffort (the receding-horizon step's map)
+  // plan exactly what the model file's per-muscle weights plan; an effort that is not linear
+  // in the tendon forces is refused by name.
+  fp::EffortWeights w;
+  w.kind = fp::EffortWeights::Kind::PerMuscle;
+  w.per_muscle = Eigen::Vector3d(1.0, 0.01, 1.0);
+  const fpl::FlatOutputMap from_file(model_with_weights("elbow_1dof.json", w));
+  const fpl::FlatOutputMap paper(model_with_weights("elbow_1dof.json", fp::EffortWeights{}));
+  const auto effort = std::make_shared<fpl::TendonForceEffort>(w.per_muscle);
+  const fpl::MuscleState start = rest_state(paper, 20.0);
+  fpl::OpenLoopOptions o = fpl::open_loop_options(fpl::Preset::Paper);
+  o.duration_s = 1.5;
+  o.target_q_rad = Eigen::VectorXd::Constant(1, deg(90));
+  o.reserves_N = Eigen::VectorXd::Constant(3, 10.0);
+  const fpl::OpenLoopPlan expected = fpl::plan_open_loop(from_file, start, o);
+  const fpl::OpenLoopPlan unweighted = fpl::plan_open_loop(paper, start, o);
+  o.effort = effort;
+  const fpl::OpenLoopPlan given = fpl::plan_open_loop(paper, start, o);
+  ASSERT_EQ(given.status, fpl::SolveStatus::Solved) << given.message;
+  ASSERT_EQ(expected.status, fpl::SolveStatus::Solved) << expected.message;
+  EXPECT_NEAR(given.sos.cost_N_s, expected.sos.cost_N_s, 1e-9 * expected.sos.cost_N_s);
+  EXPECT_GT(std::abs(given.sos.cost_N_s - unweighted.sos.cost_N_s), 1e-3 * unweighted.sos.cost_N_s);
+
+  fpl::RecedingHorizonOptions rh;
+  rh.target_q_rad = Eigen::VectorXd::Constant(1, deg(80));
+  rh.reserves_N = Eigen::VectorXd::Constant(3, 1.0);
+  const Eigen::VectorXd q = Eigen::VectorXd::Constant(1, deg(40)), qd = Eigen::VectorXd::Zero(1);
+  const fpl::RecedingHorizonStep a = fpl::plan_receding_horizon_step(paper.withEffort(effort), q, qd, rh);
+  const fpl::RecedingHorizonStep b = fpl::plan_receding_horizon_step(from_file, q, qd, rh);
+  ASSERT_EQ(a.status, fpl::SolveStatus::Solved) << a.message;
+  EXPECT_LT((a.slp.alpha - b.slp.alpha).norm(), 1e-9 * (1.0 + b.slp.alpha.norm()));
+
+  o.effort = fpl::effort_named("excitation_squared");
+  try {
+    fpl::plan_open_loop(paper, start, o);
+    FAIL() << "a nonlinear effort was planned by the linear programs";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'excitation_squared' is not linear in the tendon forces"), std::string::npos)
+        << e.what();
+  }
+  o.effort = std::make_shared<fpl::TendonForceEffort>(Eigen::Vector2d(1.0, 1.0));
+  EXPECT_THROW(fpl::plan_open_loop(paper, start, o), std::invalid_argument);
+}

@@ -270,8 +270,7 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   validate(flat, path, initial, reserves_N, o);
   const Stopwatch setup;
   const int m = flat.numMuscles(), N = flat.numJoints();
-  const std::shared_ptr<const Effort> effort =
-      o.effort ? o.effort : std::make_shared<TendonForceEffort>(flat.effortWeights());
+  const std::shared_ptr<const Effort> effort = o.effort ? o.effort : flat.effort();
   detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
   std::vector<detail::CollocationMuscle> muscles =
       detail::collocation_muscles(flat, initial, reserves_N, o.min_activation);

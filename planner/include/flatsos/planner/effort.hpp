@@ -3,8 +3,11 @@
 //   J = integral sum_j l_j(F_j, a_j, n_j) dt,
 // each muscle's term separable in its tendon force F, activation a and excitation n. The
 // flatness planners solve linear programs and need an effort linear in the tendon forces
-// (tendonForceWeights); the collocation reference takes any effort with the first and second
-// derivatives of its terms. A new effort is one new implementation of this class.
+// (tendonForceWeights): OpenLoopOptions::effort, or FlatOutputMap::withEffort for the
+// receding-horizon step and controller; by default the model file's effort_weights
+// (FlatOutputMap::effort). The collocation reference takes any effort with the first and second
+// derivatives of its terms (CollocationOptions::effort). A new effort is one new implementation
+// of this class.
 //
 // The efforts of the field:
 //   TendonForceEffort  w^T F (N s): the paper's; its weights are the model file's effort_weights.

@@ -38,6 +38,7 @@
 
 #include "flatsos/plugin/model/model_workspace.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/flat_output_choice.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
@@ -189,6 +190,12 @@ class FlatOutputMap {
   /// The cost's unit: "s" for normalized tendon forces (w = 1 / Fmax), "N s" otherwise (weights
   /// taken as dimensionless).
   std::string effortUnit() const;
+  /// The effort the flatness planners minimize: w^T F with the weights above (effort.hpp).
+  std::shared_ptr<const Effort> effort() const;
+  /// This map minimizing `effort` instead of the model's weights. The flatness planners solve
+  /// linear programs: throws std::invalid_argument naming an effort that is not linear in the
+  /// tendon forces (the collocation reference takes any) or whose weights do not fit the model.
+  FlatOutputMap withEffort(std::shared_ptr<const Effort> effort) const;
   /// w^T F split into its flat-output and torque parts at posture q (constant with constant arms).
   EffortSplit effortSplit(const Eigen::VectorXd& q_rad) const;
   /// The moment arms R(q) (N x m) in any posture.

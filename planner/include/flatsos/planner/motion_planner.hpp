@@ -152,6 +152,9 @@ struct OpenLoopOptions {
   }();
   int check_points = 301;             ///< dense grid of the a-posteriori check
   FreeJointPathOptions free_path;
+  /// What to minimize (effort.hpp): null means the model's effort_weights (FlatOutputMap::effort).
+  /// The flatness planner takes efforts linear in the tendon forces (FlatOutputMap::withEffort).
+  std::shared_ptr<const Effort> effort;
 };
 
 /// Named configurations of the open-loop planner (docs/method/sos_program.md, "Presets").
