@@ -176,6 +176,9 @@ TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReported
   co = {};
   co.effort = std::make_shared<fpl::TendonForceEffort>(Eigen::VectorXd::Constant(6, std::nan("")));
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, reserves, co); }, "weight 0 must be finite");
+  co = {};
+  co.effort_weights = Eigen::VectorXd::Constant(6, -1.0);  // the deprecated spelling is still checked
+  expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, reserves, co); }, "weight 0 must be finite");
   auto bad = s0;
   bad.activation[2] = 1.5;
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, bad, reserves); }, "activation");

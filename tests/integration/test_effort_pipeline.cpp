@@ -71,6 +71,11 @@ TEST(SecondEffort, SquaredExcitationsShareTheLoadAndEachOptimumBeatsTheOther) {
   ASSERT_EQ(linear.status, fpl::SolveStatus::Solved) << linear.message;
   ASSERT_EQ(squared.status, fpl::SolveStatus::Solved) << squared.message;
   EXPECT_EQ(linear.cost_unit, "N s");
+  // The deprecated spelling (per-muscle weights, cost_N_s) plans the same.
+  fpl::CollocationOptions deprecated = linear_options;
+  deprecated.effort_weights = flat.effortWeights();
+  const fpl::CollocationResult old = fpl::solve_collocation_along_path(flat, workspace, plan.path, s0, reserves, deprecated);
+  EXPECT_NEAR(old.cost_N_s, linear.cost, 1e-9 * linear.cost);
   EXPECT_EQ(squared.cost_unit, "s");
 
   // The reported costs are the efforts' quadratures, and each optimum beats the other's solution

@@ -179,9 +179,12 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
                                   "; the collocation reference needs laws with continuous slopes, as direct "
                                   "collocation tools advise");
   }
-  if (o.effort) {
+  if (o.effort || o.effort_weights.size() > 0) {
     try {
-      o.effort->validate(m);
+      if (o.effort)
+        o.effort->validate(m);
+      else
+        TendonForceEffort(o.effort_weights).validate(m);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(std::string("collocation: ") + e.what());
     }
@@ -270,7 +273,9 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   validate(flat, path, initial, reserves_N, o);
   const Stopwatch setup;
   const int m = flat.numMuscles(), N = flat.numJoints();
-  const std::shared_ptr<const Effort> effort = o.effort ? o.effort : flat.effort();
+  const std::shared_ptr<const Effort> effort = o.effort                       ? o.effort
+                                               : o.effort_weights.size() > 0 ? std::make_shared<TendonForceEffort>(o.effort_weights)
+                                                                             : flat.effort();
   detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
   std::vector<detail::CollocationMuscle> muscles =
       detail::collocation_muscles(flat, initial, reserves_N, o.min_activation);
@@ -326,6 +331,7 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   const int P = problem.points();
   result.cost = problem.objective(x);
   result.cost_unit = effort->unit();
+  result.cost_N_s = result.cost;
   result.time_s = problem.samples().time_s;
   result.tendon_force_N.resize(m, P);
   result.tendon_length_m.resize(m, P);

@@ -32,6 +32,9 @@ struct CollocationOptions {
   /// What to minimize: null means the flatness planner's own effort, w^T F with the model's
   /// effort_weights (FlatOutputMap::effortWeights).
   std::shared_ptr<const Effort> effort;
+  /// Deprecated (use effort = TendonForceEffort(w)): per-muscle weights of w^T F, used when
+  /// `effort` is null and this is not empty; kept so existing callers still run.
+  Eigen::VectorXd effort_weights;
   double min_activation = 0.0;       ///< a >= this; 0: each muscle's own activation floor
   double tolerance = 1e-9;           ///< Ipopt's tol (scaled NLP error)
   int max_iterations = 3000;
@@ -44,6 +47,7 @@ struct CollocationResult {
   std::string linear_solver;         ///< what factored Ipopt's KKT systems
   double cost = 0.0;                 ///< the effort: Simpson quadrature of its integrand
   std::string cost_unit;             ///< Effort::unit(): "N s" for tendon forces, "s" otherwise
+  double cost_N_s = 0.0;             ///< deprecated: cost, kept for existing callers
   int mesh_intervals = 0;
   int variables = 0, constraints = 0;
   int iterations = 0;
