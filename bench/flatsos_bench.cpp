@@ -22,6 +22,9 @@
 #include "scenario_inputs.hpp"
 #include "timing.hpp"
 #include "flatsos/planner/collocation.hpp"
+#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/receding_horizon_study.hpp"
+#include "flatsos/planner/slp_study.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -116,12 +119,13 @@ int main(int argc, char** argv) try {
   // posture-dependent moment arms C_Y(q_i) and B_i at each grid posture) are the SLP stages' problem.
   const ex::ScenarioInputs rh_in = ex::resolve_scenario(*model, "receding_horizon", {}, 2.0, 1.0);
   fpl::RecedingHorizonOptions rh;
-  rh.solver = fpl::SlpSolver::Ipopt;  // the cold/warm comparison below is Ipopt's
   rh.target_q_rad = rh_in.target_q_rad;
   rh.reserves_N = rh_in.reserves_N;
+  fpl::RecedingHorizonStudyOptions by_ipopt;  // the cold/warm comparison below is Ipopt's
+  by_ipopt.slp_by_ipopt = true;
   const Eigen::VectorXd q_rh = rh_in.q0_rad;
   const fpl::RecedingHorizonStep first =
-      fpl::plan_receding_horizon_step(flat, ws, q_rh, Eigen::VectorXd::Zero(model->numJoints()), rh);
+      fpl::plan_receding_horizon_step(flat, q_rh, Eigen::VectorXd::Zero(model->numJoints()), rh, by_ipopt);
   const Eigen::MatrixXd& G = first.reserve_rows;
   const Eigen::VectorXd& B = first.bound_N;
   auto linear_solver_study = [&] {
@@ -131,11 +135,11 @@ int main(int argc, char** argv) try {
     emit({{"machine", j["machine"]}, {"ipopt_linear_solvers", linear_solver_study()}});
     return 0;
   }
-  auto time_plan = [&](const fpl::OpenLoopOptions& o, int repetitions) {
+  auto time_plan = [&](const fpl::OpenLoopOptions& o, int repetitions, const fpl::OpenLoopStudyOptions& study = {}) {
     std::vector<double> setup, solve, certify, total, bounds;
     fpl::OpenLoopPlan last;
     for (int i = 0; i < repetitions; ++i) {
-      last = fpl::plan_open_loop(flat, ws, ms0, o);
+      last = fpl::plan_open_loop(flat, ws, ms0, o, study);
       bounds.push_back(last.sos.bounds_seconds);
       setup.push_back(last.setup_seconds);
       solve.push_back(last.solve_seconds);
@@ -145,9 +149,9 @@ int main(int argc, char** argv) try {
     json r = {{"status", fpl::to_string(last.status)},
               {"message", last.message},
               {"pieces", o.torque.pieces},
-              {"degree", o.torque.degree},
+              {"degree", study.torque.degree},
               {"setup", stats(setup, 1e3, "ms")},
-              {o.sos.method == fpl::SosProgramMethod::Exchange ? "exchange_solve" : "whole_program_nlp_solve",
+              {study.sos.method == fpl::SosProgramMethod::Exchange ? "exchange_solve" : "whole_program_nlp_solve",
                stats(solve, 1e3, "ms")},
               {"certify", stats(certify, 1e3, "ms")},
               {"setup_plus_solve", stats(total, 1e3, "ms")},
@@ -160,7 +164,7 @@ int main(int argc, char** argv) try {
               {"bounds_check_and_solve", stats(bounds, 1e3, "ms")},
               {"sequential_lp_iterations", last.sos.bound_slp_iterations}};
     if (last.status == fpl::SolveStatus::Solved) r["cost_Ns"] = last.sos.cost_N_s;
-    if (o.sos.method == fpl::SosProgramMethod::WholeProgramNlp)
+    if (study.sos.method == fpl::SosProgramMethod::WholeProgramNlp)
       r["nlp"] = {{"variables", last.sos.nlp_variables},
                   {"equalities", last.sos.nlp_equalities},
                   {"max_certificate_residual_N", last.sos.max_certificate_residual_N}};
@@ -194,9 +198,9 @@ int main(int argc, char** argv) try {
   double box_median = 0.0;  // the paper's torque box beside the default model (its ratio is in the summary)
   if (!versus_collocation_only) {
     // The same program as one Ipopt problem (the reference formulation), beside the exchange.
-    fpl::OpenLoopOptions whole = ol;
+    fpl::OpenLoopStudyOptions whole;
     whole.sos.method = fpl::SosProgramMethod::WholeProgramNlp;
-    const auto [nlp, nlp_median] = time_plan(whole, std::max(3, reps / 10));
+    const auto [nlp, nlp_median] = time_plan(ol, std::max(3, reps / 10), whole);
     j["open_loop_sop_whole_program_nlp"] = nlp;
     if (nlp.contains("cost_Ns") && sop.contains("cost_Ns"))
       j["open_loop_sop_whole_program_nlp"]["cost_relative_to_exchange"] =
@@ -204,9 +208,10 @@ int main(int argc, char** argv) try {
     j["open_loop_sop_whole_program_nlp"]["time_over_exchange_time"] = nlp_median / sop_median;
     fpl::OpenLoopOptions box = ol;
     box.torque.pieces = 1;
-    box.torque.degree = 0;
-    box.torque.samples_per_piece = 31;
-    const auto timed_box = time_plan(box, reps);
+    fpl::OpenLoopStudyOptions box_study;
+    box_study.torque.degree = 0;
+    box_study.torque.samples_per_piece = 31;
+    const auto timed_box = time_plan(box, reps, box_study);
     box_median = timed_box.second;
     j["open_loop_sop_paper_box"] = timed_box.first;
     // Rich flat-output bases (cubic B-splines) and the excitation bounds: the scenario itself with
@@ -286,7 +291,8 @@ int main(int argc, char** argv) try {
     o.torque.pieces = 48;
     o.torque.piece_growth = 1.06;
     o.free_path.enabled = true;
-    o.free_path.method = fpl::FreePathMethod::JointNewton;
+    fpl::OpenLoopStudyOptions joint_newton;
+    joint_newton.free_path.method = fpl::FreePathMethod::JointNewton;
     o.free_path.spans = 12;
     o.free_path.span_growth = 1.4;
     json row = {{"duration_s", o.duration_s}};
@@ -294,7 +300,7 @@ int main(int argc, char** argv) try {
     try {
       // Three samples of each: single ones of the collocation varied by 7 % between runs.
       constexpr int kFreePathSamples = 3;
-      const std::vector<double> t = repeat(kFreePathSamples, [&] { plan = fpl::plan_open_loop(flat, ws, ms0, o); });
+      const std::vector<double> t = repeat(kFreePathSamples, [&] { plan = fpl::plan_open_loop(flat, ws, ms0, o, joint_newton); });
       row["flatness"] = {{"status", fpl::to_string(plan.status)},
                          {"message", plan.message},
                          {"total", stats(t, 1e3, "ms")},
@@ -328,7 +334,7 @@ int main(int argc, char** argv) try {
   time_check_and_inverse_map();
 
   // ---- SLP and one RH step, at the first step of the RH scenario ----
-  const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp(G, B, fpl::SlpSolver::Ipopt); });
+  const auto slp_ipopt = repeat(reps, [&] { fpl::solve_slp_by_ipopt(G, B); });
   const auto slp_exact = repeat(reps * 20, [&] { fpl::solve_slp(G, B, fpl::SlpSolver::VertexEnumeration); });
   const auto slp_appendix = repeat(reps * 20, [&] { fpl::slp_appendix_solution(G, B); });
   const double appendix_cost = fpl::slp_appendix_solution(G, B).sum();
@@ -346,12 +352,15 @@ int main(int argc, char** argv) try {
   const fpl::Jet after = first.path.jet(0.05, 2);
   const Eigen::VectorXd q1 = after.col(0), qd1 = after.col(1);
   const Eigen::VectorXd alpha0 = first.alpha();
-  fpl::RecedingHorizonOptions warm = rh;
+  fpl::RecedingHorizonStudyOptions warm = by_ipopt;
   warm.warm_start = alpha0;
-  const auto cold_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, ws, q1, qd1, rh); });
-  const auto warm_t = repeat(reps, [&] { fpl::plan_receding_horizon_step(flat, ws, q1, qd1, warm); });
-  fpl::RecedingHorizonOptions exact = rh;
-  exact.solver = fpl::SlpSolver::VertexEnumeration;
+  auto ipopt_step = [&](const fpl::RecedingHorizonStudyOptions& study) {
+    fpl::RecedingHorizonStep step;  // a fresh one, as the returning overload makes
+    fpl::plan_receding_horizon_step(flat, ws, q1, qd1, rh, study, step);
+  };
+  const auto cold_t = repeat(reps, [&] { ipopt_step(by_ipopt); });
+  const auto warm_t = repeat(reps, [&] { ipopt_step(warm); });
+  const fpl::RecedingHorizonOptions exact = rh;
   const auto exact_t = repeat(reps * 5, [&] { fpl::plan_receding_horizon_step(flat, ws, q1, qd1, exact); });
   // The scenario's first step, whose SLP optimum leaves the excitation bounds: the bounds'
   // sequential LP moves alpha (the only such step of the scenario).
@@ -362,8 +371,8 @@ int main(int argc, char** argv) try {
                        {"exact", stats(exact_t, 1e3, "ms")},
                        {"first_step_bounds_imposed", bounded_first.bounds_imposed},
                        {"warm_over_cold_time", ex::median(warm_t) / ex::median(cold_t)},
-                       {"cold_iterations", fpl::plan_receding_horizon_step(flat, ws, q1, qd1, rh).slp.iterations},
-                       {"warm_iterations", fpl::plan_receding_horizon_step(flat, ws, q1, qd1, warm).slp.iterations}};
+                       {"cold_iterations", fpl::plan_receding_horizon_step(flat, q1, qd1, rh, by_ipopt).slp.iterations},
+                       {"warm_iterations", fpl::plan_receding_horizon_step(flat, q1, qd1, rh, warm).slp.iterations}};
   // On the paper's arm the first step is the scenario's only bounded one; other models may need
   // no bounds there (nothing to time).
   if (bounded_first.bounds_imposed) {

@@ -11,6 +11,7 @@
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "flatsos/planner/numerics/linear_program.hpp"
 #include "flatsos/planner/slp.hpp"
+#include "flatsos/planner/slp_study.hpp"
 
 namespace flatsos::bench {
 namespace {
@@ -141,7 +142,7 @@ json ipopt_linear_solver_study(const LinearSolverStudyInputs& in, int reps) {
   fast.torque.pieces = 24;
   stages["open_loop_cubic_24_spans_half_duration_bounded"] = stage(std::max(3, reps / 10), plan(fast));
   stages["slp_by_ipopt"] = stage(reps, [&] {
-    const fpl::SlpResult r = fpl::solve_slp(in.slp_rows, in.slp_bounds_N, fpl::SlpSolver::Ipopt);
+    const fpl::SlpResult r = fpl::solve_slp_by_ipopt(in.slp_rows, in.slp_bounds_N);
     return std::make_pair(r.iterations, std::string(fpl::to_string(r.status)));
   });
   out["stages"] = stages;

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/motion_planner_study.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "flatsos/planner/shortest_transfer.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -34,13 +35,16 @@ int main(int argc, char** argv) {
   ex::ScenarioOptions given;
   double accuracy = 1e-10;
   fpl::OpenLoopOptions options;
+  fpl::OpenLoopStudyOptions study;
+  CLI::Option_group* study_group =
+      app.add_option_group("Study", "second opinions and tuning of the planner's stages (their defaults are the product's)");
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
   ex::add_scenario_options(app, given, "open_loop", true, 3.0, 10.0);
   app.add_option("--pieces", options.torque.pieces,
                  "torque-model pieces K (1 with --degree 0: the paper's box; 0: as many as the flat outputs' spans, "
                  "at least 12)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
-  app.add_option("--degree", options.torque.degree, "torque-model polynomial degree r")->capture_default_str()->check(CLI::NonNegativeNumber);
+  study_group->add_option("--degree", study.torque.degree, "torque-model polynomial degree r")->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--flat-output-degree", options.sos.flat_output_degree,
                  "degree of the flat outputs' B-splines Y (4 with 1 span: the paper's quartic, --paper)")
       ->capture_default_str()->check(CLI::PositiveNumber);
@@ -65,20 +69,20 @@ int main(int argc, char** argv) {
                  "each of the free path's spans this many times as long as the one before (1: uniform; above 1: "
                  "short spans at the start, where a low-effort transfer moves fast)")
       ->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--free-path-torque-refinements", options.free_path.max_torque_refinements,
+  study_group->add_option("--free-path-torque-refinements", study.free_path.max_torque_refinements,
                  "at most this many doublings of the torque pieces for the plan along the optimized path, while it "
                  "fails or costs more than 0.5 % above the path stage's cost at its points (0: none)")
       ->capture_default_str()->check(CLI::Range(0, 10));
-  app.add_option("--free-path-start-min-spans", options.free_path.start_min_spans,
+  study_group->add_option("--free-path-start-min-spans", study.free_path.start_min_spans,
                  "the prescribed path's plan, which starts the free path's optimization, in the coarsest basis "
                  "nested in the flat outputs' with at least this many spans (0: the flat outputs' own)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
-  app.add_option("--free-path-exchange-tolerance", options.free_path.exchange_relative_tolerance,
+  study_group->add_option("--free-path-exchange-tolerance", study.free_path.exchange_relative_tolerance,
                  "joint_newton: the path's exchange ends once a round changes the cost at its points by at most this "
                  "fraction of it (0: only when the check grid holds)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
-  std::string free_path_method = fpl::to_string(options.free_path.method);
-  app.add_option("--free-path-method", free_path_method,
+  std::string free_path_method = fpl::to_string(study.free_path.method);
+  study_group->add_option("--free-path-method", free_path_method,
                  "how the free joint path moves: reduced_quasi_newton (BFGS on the bounded plan's cost as a "
                  "function of the path; fastest on few spans) or joint_newton (one Ipopt problem over the plan and "
                  "the path; converges on 24-48 spans too)")
@@ -88,14 +92,14 @@ int main(int argc, char** argv) {
   bool paper = false;
   app.add_flag("--paper", paper,
                "Richter & Warner's configuration (one quartic flat-output polynomial, 12 cubic torque pieces) "
-               "instead of the default quintic B-splines on spans chosen from the model; --pieces, --degree, --flat-output-degree and "
+               "instead of the default quintic B-splines on spans chosen from the model; --pieces, --flat-output-degree and "
                "--flat-output-spans given as well override it");
   bool no_bounds = false;
   app.add_flag("--no-bounds", no_bounds,
                "plan with the reserves only: excitations outside [0, 1] or activations above 1 then make the plan "
                "infeasible instead of being constrained");
-  std::string sos_method = fpl::to_string(options.sos.method);
-  app.add_option("--sos-method", sos_method,
+  std::string sos_method = fpl::to_string(study.sos.method);
+  study_group->add_option("--sos-method", sos_method,
                  "how the reserves' program is solved: exchange (an exchange of LPs, then certificates of the "
                  "near-active pieces) or whole_program_nlp (one Ipopt problem with a certificate of every piece, "
                  "the reference formulation; it checks the excitation bounds instead of imposing them)")
@@ -131,19 +135,18 @@ int main(int argc, char** argv) {
     if (paper) {  // the preset's basis, except where the command line names one
       const fpl::OpenLoopOptions preset = fpl::open_loop_options(fpl::Preset::Paper);
       if (app.count("--pieces") == 0) options.torque.pieces = preset.torque.pieces;
-      if (app.count("--degree") == 0) options.torque.degree = preset.torque.degree;
       if (app.count("--flat-output-degree") == 0) options.sos.flat_output_degree = preset.sos.flat_output_degree;
       if (app.count("--flat-output-spans") == 0) options.sos.flat_output_spans = preset.sos.flat_output_spans;
     }
     options.sos.bounds.enforce = !no_bounds;
-    options.sos.method = fpl::sos_program_method(sos_method);
+    study.sos.method = fpl::sos_program_method(sos_method);
     options.free_path.enabled = free_path_spans > 0;
     if (free_path_spans > 0) options.free_path.spans = free_path_spans;
-    options.free_path.method = fpl::free_path_method(free_path_method);
+    study.free_path.method = fpl::free_path_method(free_path_method);
     options.duration_s = in.duration_s;
     options.target_q_rad = in.target_q_rad;
     options.reserves_N = in.reserves_N;
-    options.torque.samples_per_piece = std::max(options.torque.samples_per_piece, options.torque.pieces == 1 ? 31 : 0);
+    study.torque.samples_per_piece = std::max(study.torque.samples_per_piece, options.torque.pieces == 1 ? 31 : 0);
 
     SimTK::State s = ex::initial_state(flat, in);
     const fpl::MuscleState s0 = fpl::muscle_state_of(*model, s);
@@ -152,13 +155,13 @@ int main(int argc, char** argv) {
     if (shortest_time) {
       shortest.upper_s = in.duration_s;
       fp::ModelWorkspace workspace = flat.makeWorkspace();
-      search = fpl::shortest_transfer(flat, workspace, s0, options, shortest);
+      search = fpl::shortest_transfer(flat, workspace, s0, options, shortest, study);
       std::cout << "arm_open_loop: shortest transfer " << fpl::to_string(search->status)
                 << (search->status == fpl::SolveStatus::Solved ? ", " + ex::format(search->shortest_s) + " s" : "")
                 << (search->message.empty() ? "" : ": " + search->message) << " (" << search->tried.size() << " plans, "
                 << search->seconds << " s)\n";
     }
-    const fpl::OpenLoopPlan plan = search ? search->plan : fpl::plan_open_loop(flat, s0, options);
+    const fpl::OpenLoopPlan plan = search ? search->plan : fpl::plan_open_loop(flat, s0, options, study);
     const double duration_s = search ? search->shortest_s : in.duration_s;
     std::filesystem::create_directories(out_dir);
     nlohmann::json summary = ex::plan_summary(plan, flat);

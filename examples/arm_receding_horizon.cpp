@@ -18,6 +18,7 @@
 #include "example_support.hpp"
 #include "scenario_inputs.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/planner/receding_horizon_study.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -41,7 +42,8 @@ int main(int argc, char** argv) {
   app.add_option("--grid-points", options.plan.grid_points, "torque-box grid points over the horizon")
       ->capture_default_str()->check(CLI::Range(2, 10000));
   app.add_option("--period-s", options.control_period_s, "control period delta, s")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--slp-solver", solver,
+  app.add_option_group("Study", "second opinions (their defaults are the product's)")
+      ->add_option("--slp-solver", solver,
                  "exact (vertex enumeration; the dual simplex where there are more than 20000 vertices), simplex "
                  "(Clp's dual simplex, restarted from the previous period's basis) or ipopt (the interior-point "
                  "reference); all tested against each other")
@@ -96,9 +98,14 @@ int main(int argc, char** argv) {
     const double duration = in.duration_s;
     options.plan.target_q_rad = in.target_q_rad;
     options.plan.reserves_N = in.reserves_N;
-    options.plan.solver = solver == "ipopt"     ? fpl::SlpSolver::Ipopt
-                          : solver == "simplex" ? fpl::SlpSolver::Simplex
-                                                : fpl::SlpSolver::VertexEnumeration;
+    options.plan.solver = solver == "simplex" ? fpl::SlpSolver::Simplex : fpl::SlpSolver::VertexEnumeration;
+    if (solver == "ipopt")  // the interior-point reference, through the controller's planner seam
+      options.planner = [](const fpl::FlatOutputMap& f, fp::ModelWorkspace& w, const Eigen::VectorXd& q,
+                           const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& o, fpl::RecedingHorizonStep& out) {
+        fpl::RecedingHorizonStudyOptions by_ipopt;
+        by_ipopt.slp_by_ipopt = true;
+        fpl::plan_receding_horizon_step(f, w, q, qd, o, by_ipopt, out);
+      };
     options.plan.excitation_bounds.enforce = !no_bounds;
     if (options.control_period_s > options.plan.horizon_s)
       throw CLI::ValidationError("--period-s", "must not exceed --horizon-s");

@@ -175,9 +175,9 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   j["cost_unit"] = flat.effortUnit();
   j["solve_seconds"] = plan.setup_seconds + plan.solve_seconds;
   j["setup_seconds"] = plan.setup_seconds;
-  j["sos_method"] = planner::to_string(s.method);
+  j["sos_method"] = s.method;
   // The solve's time under the name of the method that solved (as flatsos_bench names it).
-  j[s.method == planner::SosProgramMethod::Exchange ? "exchange_solve_seconds" : "whole_program_nlp_solve_seconds"] =
+  j[s.method == "exchange" ? "exchange_solve_seconds" : "whole_program_nlp_solve_seconds"] =
       plan.solve_seconds;
   j["certify_seconds"] = plan.certify_seconds;
   j["check_seconds"] = plan.check_seconds;
@@ -186,7 +186,7 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   // Which linear solver factored those calls' KKT systems: flatsos's dense LDL^T or MUMPS.
   j["ipopt_linear_solver"] = s.ipopt_linear_solver;
   j["exchange_rounds"] = s.exchange_rounds;
-  if (s.method == planner::SosProgramMethod::WholeProgramNlp)
+  if (s.method == "whole_program_nlp")
     j["whole_program_nlp"] = {{"variables", s.nlp_variables},
                               {"equalities", s.nlp_equalities},
                               {"max_certificate_residual_N", s.max_certificate_residual_N}};

@@ -1,4 +1,7 @@
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/receding_horizon_study.hpp"
+#include "flatsos/planner/slp_study.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +16,7 @@
 #include "flatsos/plugin/stopwatch.hpp"
 #include "input_checks.hpp"
 #include "path/free_path.hpp"
+#include "path/free_path_settings.hpp"
 #include "period_bounds.hpp"
 #include "sos/bound_rows.hpp"
 #include "sos/sos_bounds.hpp"
@@ -79,12 +83,13 @@ void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, co
 // The plan along plan.path (torque model, SOS program with the bounds, dense check): sets every
 // field but the path, the warnings and the free-path report. `warm`: the bounded exchange's start.
 void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const FlatOutputBoundary& bc,
-                     const OpenLoopOptions& o, OpenLoopPlan& plan, const detail::BoundsWarmStart* warm = nullptr) {
+                     const OpenLoopOptions& o, const OpenLoopStudyOptions& study, OpenLoopPlan& plan,
+                     const detail::BoundsWarmStart* warm = nullptr) {
   const Stopwatch setup;
   if (!flat.hasConstantMomentArms()) {
     // C(q(t)) must satisfy Assumption 1 all along the path, not only in the ranges' grid: checked
     // as densely as the torque model samples it.
-    const int points = o.torque.pieces * (o.torque.samples_per_piece - 1) + 1;
+    const int points = o.torque.pieces * (study.torque.samples_per_piece - 1) + 1;
     for (int i = 0; i < points; ++i) {
       const double t = plan.path.duration_s * i / (points - 1);
       const std::string failure = flat.assumption1FailureAt(plan.path.jet(t, 1).col(0));
@@ -95,12 +100,12 @@ void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
       return;
     }
   }
-  plan.torque = build_torque_model(flat, workspace, plan.path, o.torque);
+  plan.torque = build_torque_model(flat, workspace, plan.path, o.torque, study.torque);
   const double before_sos = setup.seconds();
   const MusclesAlongPath muscles{flat, plan.path, workspace};
-  plan.sos = warm ? detail::solve_sos_program_from(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, muscles,
-                                                   *warm)
-                  : solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
+  plan.sos = warm ? detail::solve_sos_program_from(flat, plan.torque, o.duration_s, bc, o.reserves_N,
+                                                   detail::sos_settings(o.sos, study.sos), muscles, *warm)
+                  : solve_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos, study.sos, &muscles);
   plan.setup_seconds = before_sos + plan.sos.setup_seconds;
   plan.solve_seconds = plan.sos.solve_seconds;
   plan.certify_seconds = plan.sos.certify_seconds;
@@ -108,7 +113,7 @@ void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   plan.message = plan.sos.message;
   if (plan.status == SolveStatus::Infeasible && plan.sos.bounds_imposed && plan.sos.Y) {
     // The bounds cannot be met: say where the closest plan leaves the muscles' domain.
-    auto closest = check_plan(flat, workspace, plan.path, *plan.sos.Y, o.reserves_N, o.check_points, o.sos.bounds.tolerance);
+    auto closest = check_plan(flat, workspace, plan.path, *plan.sos.Y, o.reserves_N, o.check_points, study.sos.bounds.tolerance);
     if (!closest.limiting_violation.empty())
       plan.message += "; the closest plan leaves the model's valid domain: " + closest.limiting_violation;
     plan.check = std::move(closest);
@@ -119,7 +124,7 @@ void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
 
   const Stopwatch check;
   plan.check = check_plan(flat, workspace, plan.path, *plan.Y, o.reserves_N, o.check_points,
-                          o.sos.bounds.enforce ? o.sos.bounds.tolerance : 0.0);
+                          o.sos.bounds.enforce ? study.sos.bounds.tolerance : 0.0);
   plan.check_seconds = check.seconds();
   if (plan.check.min_reserve_margin_N < -1e-6) {
     plan.status = SolveStatus::Failed;
@@ -135,9 +140,9 @@ void plan_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
   }
 }
 
-void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions& o) {
-  const FreeJointPathOptions& f = o.free_path;
-  if (!f.enabled) return;
+void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions& o, const OpenLoopStudyOptions& study) {
+  if (!o.free_path.enabled) return;
+  const detail::FreePathSettings f(o.free_path, study.free_path);
   if (!flat.hasConstantMomentArms())
     throw std::invalid_argument("open-loop plan: free_path needs constant moment arms; model '" +
                                 flat.model().description().name + "' has posture-dependent ones (plan along the "
@@ -149,10 +154,10 @@ void require_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions&
   if (!o.sos.bounds.enforce)
     throw std::invalid_argument("open-loop plan: free_path needs the excitation bounds (sos.bounds.enforce): without "
                                 "them a faster path always costs less");
-  if (o.sos.method != SosProgramMethod::Exchange)
+  if (study.sos.method != SosProgramMethod::Exchange)
     throw std::invalid_argument(std::string("open-loop plan: free_path plans by the exchange method, which imposes the "
                                             "excitation bounds; sos.method '") +
-                                to_string(o.sos.method) + "' only checks them");
+                                to_string(study.sos.method) + "' only checks them");
   if (f.degree < 5) throw std::invalid_argument("open-loop plan: free_path.degree must be >= 5 (q'''' continuous)");
   if (f.spans < 1 || f.degree + f.spans - 9 < 1)
     throw std::invalid_argument("open-loop plan: free_path.degree + free_path.spans must be >= 10 (9 boundary "
@@ -268,16 +273,26 @@ PlanCheck check_plan(const FlatOutputMap& flat, plugin::ModelWorkspace& workspac
 }
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& o) {
-  plugin::ModelWorkspace workspace = flat.makeWorkspace();
-  return plan_open_loop(flat, workspace, initial, o);
+  return plan_open_loop(flat, initial, o, OpenLoopStudyOptions{});
 }
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
-                            const OpenLoopOptions& options) {
+                            const OpenLoopOptions& o) {
+  return plan_open_loop(flat, workspace, initial, o, OpenLoopStudyOptions{});
+}
+
+OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& o,
+                            const OpenLoopStudyOptions& study) {
+  plugin::ModelWorkspace workspace = flat.makeWorkspace();
+  return plan_open_loop(flat, workspace, initial, o, study);
+}
+
+OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
+                            const OpenLoopOptions& options, const OpenLoopStudyOptions& study) {
   if (options.effort) {  // the same plan on a map that minimizes this effort
     OpenLoopOptions rest = options;
     rest.effort = nullptr;
-    return plan_open_loop(flat.withEffort(options.effort), workspace, initial, rest);
+    return plan_open_loop(flat.withEffort(options.effort), workspace, initial, rest, study);
   }
   const Stopwatch setup;
   const OpenLoopOptions o = resolve_basis(flat, options);
@@ -287,7 +302,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   require_reserves(o.reserves_N, m);
   if (o.check_points < 2) throw std::invalid_argument("open-loop plan: check_points must be >= 2");
-  require_free_path_options(flat, o);
+  require_free_path_options(flat, o, study);
   detail::require_initial_muscle_state(flat, initial);
   const FlatState y0 = flat.forward(workspace, initial);  // validates q, qd sizes too
 
@@ -303,7 +318,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
     const auto& mp = flat.model().muscle(j).getParameters();
     const double F0 = muscles::tendon_force(mp, initial.tendon_length_m[j]);
     // To the SOS program's feasibility margin: a rest state on a vertex meets reserves to rounding.
-    if (F0 < o.reserves_N[j] - o.sos.feasibility_margin_N) {
+    if (F0 < o.reserves_N[j] - study.sos.feasibility_margin_N) {
       std::ostringstream why;
       why << "initial tendon force of '" << mp.name << "' is " << F0 << " N, below its reserve of " << o.reserves_N[j]
           << " N: no plan from this state can meet it (lower the reserve or start from a state with more force)";
@@ -326,17 +341,18 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   // 10 of the start's 70 ms).
   const int spans = o.sos.flat_output_spans;
   OpenLoopOptions start = o;
+  OpenLoopStudyOptions start_study = study;
   if (o.free_path.enabled) {
-    start.sos.certify = false;
+    start_study.sos.certify = false;
     const int fewest = static_cast<int>(bc.initial.cols() + bc.terminal.cols()) - o.sos.flat_output_degree + 1;
-    start.sos.flat_output_spans = start_spans(spans, o.free_path.start_min_spans, fewest);
+    start.sos.flat_output_spans = start_spans(spans, study.free_path.start_min_spans, fewest);
     start.sos.flat_output_span_growth = std::pow(o.sos.flat_output_span_growth, spans / start.sos.flat_output_spans);
   }
-  plan_along_path(flat, workspace, bc, start, plan);
+  plan_along_path(flat, workspace, bc, start, start_study, plan);
   if (start.sos.flat_output_spans != spans && plan.status != SolveStatus::Solved) {
     start.sos.flat_output_spans = spans;  // no plan in the coarse basis: the flat outputs' own
     start.sos.flat_output_span_growth = o.sos.flat_output_span_growth;
-    plan_along_path(flat, workspace, bc, start, plan);
+    plan_along_path(flat, workspace, bc, start, start_study, plan);
   }
   plan.setup_seconds += before_sos;
   if (!o.free_path.enabled) return plan;
@@ -348,13 +364,15 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   plan.free_path.prescribed_cost_N_s = plan.status == SolveStatus::Solved ? plan.sos.cost_N_s : 0.0;
   plan.free_path.start_flat_output_spans = start.sos.flat_output_spans;
   if (!plan.sos.Y) return plan;  // nothing to start from: the prescribed plan's status says why
-  const detail::SosSetup program = detail::set_up_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, o.sos);
+  const detail::SosSetup program =
+      detail::set_up_sos_program(flat, plan.torque, o.duration_s, bc, o.reserves_N, detail::sos_settings(o.sos, study.sos));
   const Eigen::VectorXd a_min = detail::activation_minima(flat, o.sos.bounds);
   const SplineTrajectory start_Y = start.sos.flat_output_spans == spans ? *plan.sos.Y : plan.sos.Y->inBasis(program.basis);
   const detail::FreePathOutcome free = detail::optimize_joint_path(
-      program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, start_Y), o.reserves_N, a_min, o.free_path);
+      program, flat, plan.path, y0.q, o.target_q_rad, detail::theta_of(program, start_Y), o.reserves_N, a_min,
+      detail::FreePathSettings(o.free_path, study.free_path));
   FreePathReport& report = plan.free_path;
-  report.method = o.free_path.method;
+  report.method = study.free_path.method;
   report.cost_at_points_N_s = free.cost_N_s;
   report.rounds = free.rounds;
   report.points = free.points;
@@ -374,7 +392,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
   // plan fails or costs clearly more than the path stage's (FreeJointPathOptions::
   // max_torque_refinements); the best plan made is kept.
   const detail::BoundsWarmStart warm{free.theta, free.times_s};
-  const FreeJointPathOptions& f = o.free_path;
+  const FreePathStudyOptions& f = study.free_path;
   OpenLoopOptions along = o;
   OpenLoopPlan best;
   int best_pieces = 0;
@@ -383,7 +401,7 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
     attempt.path = free.path;
     attempt.Y.reset();
     attempt.check = PlanCheck{};
-    plan_along_path(flat, workspace, bc, along, attempt, &warm);
+    plan_along_path(flat, workspace, bc, along, study, attempt, &warm);
     report.final_plans = refinement + 1;
     // A solved plan beats a failed one and a cheaper one a dearer one; among failures the last
     // (finest torque model) says why.
@@ -418,20 +436,26 @@ void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
   require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   require_reserves(o.reserves_N, flat.numMuscles());
   if (o.torque_offset_N_m.size() > 0) require(o.torque_offset_N_m, n, "torque offset");
-  if (o.warm_start) require(*o.warm_start, flat.numFlatOutputs(), "SLP warm start");
   const PeriodExcitationBounds& b = o.excitation_bounds;
   if (b.enforce) {
     if (!(b.period_s > 0.0 && b.period_s <= o.horizon_s))
       throw std::invalid_argument("RH step: excitation_bounds.period_s must be in (0, horizon]");
     if (b.samples < 2) throw std::invalid_argument("RH step: excitation_bounds.samples must be >= 2");
-    if (b.max_iterations < 1) throw std::invalid_argument("RH step: excitation_bounds.max_iterations must be >= 1");
   }
 }
 
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
                                                const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
+  return plan_receding_horizon_step(flat, q, qd, o, RecedingHorizonStudyOptions{});
+}
+
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
+                                               const Eigen::VectorXd& qd, const RecedingHorizonOptions& o,
+                                               const RecedingHorizonStudyOptions& study) {
   plugin::ModelWorkspace workspace = flat.makeWorkspace();
-  return plan_receding_horizon_step(flat, workspace, q, qd, o);
+  RecedingHorizonStep step;
+  plan_receding_horizon_step(flat, workspace, q, qd, o, study, step);
+  return step;
 }
 
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
@@ -444,9 +468,18 @@ RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin
 
 void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q,
                                 const Eigen::VectorXd& qd, const RecedingHorizonOptions& o, RecedingHorizonStep& step) {
+  static const RecedingHorizonStudyOptions kProduct;  // constant: no allocation per step
+  plan_receding_horizon_step(flat, workspace, q, qd, o, kProduct, step);
+}
+
+void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q,
+                                const Eigen::VectorXd& qd, const RecedingHorizonOptions& o,
+                                const RecedingHorizonStudyOptions& study, RecedingHorizonStep& step) {
   const Stopwatch wall;
   const int n = flat.numJoints();
   validate(o, flat);
+  if (study.warm_start) require(*study.warm_start, flat.numFlatOutputs(), "SLP warm start");
+  if (study.bound_max_iterations < 1) throw std::invalid_argument("RH step: bound_max_iterations must be >= 1");
   require(q, n, "joint angles");
   require(qd, n, "joint speeds");
 
@@ -502,11 +535,12 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
     if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortWeights();
   }
   step.grid_seconds = wall.seconds();
-  solve_slp(step.reserve_rows, step.bound_N, o.solver, o.warm_start, step.buffers.slp, step.slp);
+  if (study.slp_by_ipopt) solve_slp_by_ipopt(step.reserve_rows, step.bound_N, study.warm_start, step.buffers.slp, step.slp);
+  else solve_slp(step.reserve_rows, step.bound_N, o.solver, step.buffers.slp, step.slp);
   step.status = step.slp.status;
   step.message = step.slp.message;
   const double before_bounds = wall.seconds();
-  detail::impose_period_bounds(flat, workspace, o, step);
+  detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
   step.wall_seconds = wall.seconds();
   step.bounds_seconds = step.wall_seconds - before_bounds;
 }

@@ -103,6 +103,7 @@ std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExc
 }  // namespace
 
 void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+                          int max_iterations,
                           RecedingHorizonStep& step) {
   step.bounds_imposed = false;
   step.bound_iterations = 0;
@@ -147,7 +148,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   }
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
   const SlpOutcome slp =
-      solve_bounds_by_slp(linear, rows, alpha, radius, step.buffers.bounds_basis, {b.max_iterations, kRelativeDecrease});
+      solve_bounds_by_slp(linear, rows, alpha, radius, step.buffers.bounds_basis, {max_iterations, kRelativeDecrease});
   step.bound_iterations = slp.iterations;
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;

@@ -14,8 +14,9 @@ namespace flatsos::planner::detail {
 /// Checks step.alpha() on the first period's samples (step.buffers.excitations / activations
 /// hold them afterwards when they are finite) and, when a bound is violated, moves alpha inside:
 /// step.slp.alpha, cost, status and message, bounds_imposed and bound_iterations updated.
-/// Allocates nothing when the SLP's optimum already meets the bounds.
+/// Allocates nothing when the SLP's optimum already meets the bounds. `max_iterations`: the
+/// sequential LP's steps.
 void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
-                          RecedingHorizonStep& step);
+                          int max_iterations, RecedingHorizonStep& step);
 
 }  // namespace flatsos::planner::detail

@@ -1,4 +1,5 @@
 #include "flatsos/planner/shortest_transfer.hpp"
+#include "flatsos/planner/motion_planner_study.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,6 +32,12 @@ std::string seconds_text(double T) {
 
 ShortestTransfer shortest_transfer(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
                                    const OpenLoopOptions& plan_options, const ShortestTransferOptions& o) {
+  return shortest_transfer(flat, workspace, initial, plan_options, o, OpenLoopStudyOptions{});
+}
+
+ShortestTransfer shortest_transfer(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
+                                   const OpenLoopOptions& plan_options, const ShortestTransferOptions& o,
+                                   const OpenLoopStudyOptions& study) {
   require_search_options(o);
   const Stopwatch wall;
   ShortestTransfer out;
@@ -40,7 +47,7 @@ ShortestTransfer shortest_transfer(const FlatOutputMap& flat, plugin::ModelWorks
   auto plan = [&](double T) {
     at.duration_s = T;
     const Stopwatch one;
-    trial = plan_open_loop(flat, workspace, initial, at);
+    trial = plan_open_loop(flat, workspace, initial, at, study);
     out.tried.push_back({T, trial.status, trial.status == SolveStatus::Solved ? trial.sos.cost_N_s : 0.0, trial.message,
                          one.seconds()});
     return trial.status == SolveStatus::Solved;

@@ -1,4 +1,5 @@
 #include "flatsos/planner/slp.hpp"
+#include "flatsos/planner/slp_study.hpp"
 
 #include <cmath>
 #include <vector>
@@ -134,16 +135,10 @@ Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::V
   return alpha;
 }
 
-SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
-                    const std::optional<Eigen::VectorXd>& warm_start) {
-  SlpWorkspace w;
-  SlpResult r;
-  solve_slp(CY, B, solver, warm_start, w, r);
-  return r;
-}
-
-void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
-               const std::optional<Eigen::VectorXd>& warm_start, SlpWorkspace& w, SlpResult& r) {
+namespace {
+// The exact solvers, or Ipopt (`ipopt`) from `warm_start`.
+void solve(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver, bool ipopt,
+           const std::optional<Eigen::VectorXd>& warm_start, SlpWorkspace& w, SlpResult& r) {
   const Stopwatch wall;
   check(CY, B, w.row_sums);
   appendix_solution(w.row_sums, B, CY.cols(), w.start);
@@ -155,7 +150,7 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
   // Enumeration visits C(m + p, p) vertices: 210 for the paper's arm, millions for dozens of
   // muscles or stacked grid postures, where the simplex's pivots are far fewer.
   const bool too_many = vertex_count(CY.rows() + CY.cols(), CY.cols()) > kMaxEnumeratedVertices;
-  if (solver == SlpSolver::VertexEnumeration && !too_many) {
+  if (!ipopt && solver == SlpSolver::VertexEnumeration && !too_many) {
     if (!vertex_enumeration(CY, B, w, r.alpha)) throw std::runtime_error("SLP: no feasible vertex (violates Assumption 1?)");
     r.status = SolveStatus::Solved;
   } else {
@@ -169,7 +164,6 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
     lp.row_upper = Eigen::VectorXd::Constant(m, 1e19);
     lp.x_lower = Eigen::VectorXd::Zero(p);
     lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
-    const bool ipopt = solver == SlpSolver::Ipopt;
     LinearProgramResult lr;
     if (ipopt) {
       LinearProgramOptions o;
@@ -196,6 +190,31 @@ void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver so
   }
   r.cost_N = w.costOf(r.alpha);
   r.wall_seconds = wall.seconds();
+}
+}  // namespace
+
+SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver) {
+  SlpWorkspace w;
+  SlpResult r;
+  solve(CY, B, solver, false, std::nullopt, w, r);
+  return r;
+}
+
+void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver, SlpWorkspace& w, SlpResult& r) {
+  solve(CY, B, solver, false, std::nullopt, w, r);
+}
+
+SlpResult solve_slp_by_ipopt(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B,
+                             const std::optional<Eigen::VectorXd>& warm_start) {
+  SlpWorkspace w;
+  SlpResult r;
+  solve(CY, B, SlpSolver::Simplex, true, warm_start, w, r);
+  return r;
+}
+
+void solve_slp_by_ipopt(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B,
+                        const std::optional<Eigen::VectorXd>& warm_start, SlpWorkspace& w, SlpResult& r) {
+  solve(CY, B, SlpSolver::Simplex, true, warm_start, w, r);
 }
 
 }  // namespace flatsos::planner

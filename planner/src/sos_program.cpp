@@ -1,4 +1,5 @@
 #include "flatsos/planner/sos_program.hpp"
+#include "flatsos/planner/sos_program_study.hpp"
 
 #include <stdexcept>
 
@@ -27,12 +28,12 @@ SosProgramMethod sos_program_method(const std::string& name) {
 namespace {
 SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                        const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
-                       const SosProgramOptions& options, const MusclesAlongPath* muscles,
+                       const detail::SosSettings& options, const MusclesAlongPath* muscles,
                        const detail::BoundsWarmStart* warm) {
   const Stopwatch setup_time;
   detail::SosSetup setup = detail::set_up_sos_program(flat, torque, duration_s, boundary, reserves_N, options);
   SosProgramResult result;
-  result.method = options.method;
+  result.method = to_string(options.method);
   result.setup_seconds = setup_time.seconds();
 
   Eigen::VectorXd theta;
@@ -65,13 +66,20 @@ SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, dou
 SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                    const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
                                    const SosProgramOptions& options, const MusclesAlongPath* muscles) {
-  return solve(flat, torque, duration_s, boundary, reserves_N, options, muscles, nullptr);
+  return solve_sos_program(flat, torque, duration_s, boundary, reserves_N, options, SosProgramStudyOptions{}, muscles);
+}
+
+SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
+                                   const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
+                                   const SosProgramOptions& options, const SosProgramStudyOptions& study,
+                                   const MusclesAlongPath* muscles) {
+  return solve(flat, torque, duration_s, boundary, reserves_N, detail::sos_settings(options, study), muscles, nullptr);
 }
 
 namespace detail {
 SosProgramResult solve_sos_program_from(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                         const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
-                                        const SosProgramOptions& options, const MusclesAlongPath& muscles,
+                                        const SosSettings& options, const MusclesAlongPath& muscles,
                                         const BoundsWarmStart& warm) {
   return solve(flat, torque, duration_s, boundary, reserves_N, options, &muscles, &warm);
 }

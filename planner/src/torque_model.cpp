@@ -1,4 +1,5 @@
 #include "flatsos/planner/torque_model.hpp"
+#include "flatsos/planner/torque_model_study.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -100,10 +101,22 @@ Eigen::MatrixXd coupling_jet(const FlatOutputMap& flat, const Jet& q_jet, const 
   return out;
 }
 
+// The pieces and their study settings in one place.
+struct TorqueModelSettings : TorqueModelOptions, TorqueModelStudyOptions {
+  TorqueModelSettings(const TorqueModelOptions& options, const TorqueModelStudyOptions& study)
+      : TorqueModelOptions(options), TorqueModelStudyOptions(study) {}
+};
+
 }  // namespace
 
 TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                               const TorqueModelOptions& o) {
+                               const TorqueModelOptions& options) {
+  return build_torque_model(flat, workspace, path, options, TorqueModelStudyOptions{});
+}
+
+TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
+                               const TorqueModelOptions& options, const TorqueModelStudyOptions& study) {
+  const TorqueModelSettings o(options, study);
   if (o.pieces < 1) throw std::invalid_argument("torque model: pieces K must be >= 1");
   if (o.degree < 0) throw std::invalid_argument("torque model: degree r must be >= 0");
   if (o.samples_per_piece < 2 || o.samples_per_piece < o.degree + 1)

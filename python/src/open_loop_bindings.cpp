@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "flatsos/planner/motion_planner_study.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/planner/shortest_transfer.hpp"
 
@@ -18,6 +19,7 @@ namespace {
 // The options and start state both entry points share; bad input raises ValueError.
 struct OpenLoopInputs {
   planner::OpenLoopOptions options;
+  planner::OpenLoopStudyOptions study;  // torque_degree and method
   Eigen::VectorXd q0_rad, qd0_rad_per_s;
   std::optional<Eigen::VectorXd> activations;
 };
@@ -45,7 +47,6 @@ planner::OpenLoopOptions preset_options(const BasisArguments& b) {
   o.sos.flat_output_span_growth = b.flat_output_span_growth.value_or(o.sos.flat_output_span_growth);
   o.torque.pieces = b.torque_pieces.value_or(o.torque.pieces);
   o.torque.piece_growth = b.torque_piece_growth.value_or(o.torque.piece_growth);
-  o.torque.degree = b.torque_degree.value_or(o.torque.degree);
   o.sos.bounds.enforce = b.bounds;
   return o;
 }
@@ -61,6 +62,7 @@ OpenLoopInputs open_loop_inputs(const Model& m, const py::object& q0, const py::
   in.activations = activations_argument(a0, muscles);
   if (!(duration > 0.0) || !std::isfinite(duration)) throw py::value_error("duration: must be a positive number of seconds");
   in.options = preset_options(basis);
+  in.study.torque.degree = basis.torque_degree.value_or(in.study.torque.degree);
   planner::OpenLoopOptions& o = in.options;
   o.duration_s = duration;
   o.target_q_rad = vector_argument(target, joints, "target");
@@ -78,14 +80,14 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
                                        {preset, flat_output_degree, flat_output_spans, flat_output_span_growth,
                                         torque_pieces, torque_piece_growth, torque_degree, bounds});
   try {
-    in.options.sos.method = planner::sos_program_method(method);
+    in.study.sos.method = planner::sos_program_method(method);
   } catch (const std::invalid_argument& e) {
     throw py::value_error(std::string("method: ") + e.what());
   }
   Plan out{m.model, m.flat, {}, {}};
   py::gil_scoped_release release;
   const SimTK::State s = planner::start_state(*m.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
-  out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(*m.model, s), in.options);
+  out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(*m.model, s), in.options, in.study);
   out.initial = s;
   return out;
 }
@@ -111,7 +113,7 @@ py::dict shortest_transfer(const Model& m, const py::object& q0, const py::objec
     py::gil_scoped_release release;  // pybind11 raises std::invalid_argument as ValueError
     const SimTK::State s = planner::start_state(*m.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
     plugin::ModelWorkspace workspace = m.flat->makeWorkspace();
-    r = planner::shortest_transfer(*m.flat, workspace, planner::muscle_state_of(*m.model, s), in.options, so);
+    r = planner::shortest_transfer(*m.flat, workspace, planner::muscle_state_of(*m.model, s), in.options, so, in.study);
     plan.initial = s;
   }
   py::list tried;
@@ -203,7 +205,7 @@ void register_open_loop(py::module_& m) {
           [](const Plan& p) {
             const planner::SosProgramResult& r = p.plan.sos;
             py::dict d;
-            d["method"] = planner::to_string(r.method);
+            d["method"] = r.method;
             d["ipopt_iterations"] = r.ipopt_iterations;
             d["ipopt_calls"] = r.ipopt_calls;
             d["ipopt_linear_solver"] = r.ipopt_linear_solver;
@@ -215,7 +217,7 @@ void register_open_loop(py::module_& m) {
             std::vector<double> piece_starts;
             for (const auto& piece : p.plan.torque.pieces) piece_starts.push_back(piece.t0_s);
             d["torque_piece_starts"] = piece_starts;
-            if (r.method == planner::SosProgramMethod::WholeProgramNlp) {
+            if (r.method == "whole_program_nlp") {
               d["nlp_variables"] = r.nlp_variables;
               d["nlp_equalities"] = r.nlp_equalities;
               d["max_certificate_residual"] = r.max_certificate_residual_N;

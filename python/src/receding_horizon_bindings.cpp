@@ -5,6 +5,7 @@
 #include <string>
 
 #include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/planner/receding_horizon_study.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/integration/stepper.hpp"
 
@@ -15,9 +16,8 @@ namespace flatsos::python {
 namespace {
 
 planner::SlpSolver slp_solver_from_name(const std::string& name) {
-  if (name == "exact") return planner::SlpSolver::VertexEnumeration;
+  if (name == "exact" || name == "ipopt") return planner::SlpSolver::VertexEnumeration;
   if (name == "simplex") return planner::SlpSolver::Simplex;
-  if (name == "ipopt") return planner::SlpSolver::Ipopt;
   throw py::value_error("solver: unknown SLP solver '" + name + "' (exact, simplex or ipopt)");
 }
 
@@ -41,6 +41,14 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
   options.plan.target_q_rad = target_rad;
   options.plan.reserves_N = reserves_N;
   options.plan.solver = slp_solver_from_name(solver);
+  if (solver == "ipopt")  // the interior-point reference, through the controller's planner seam
+    options.planner = [](const planner::FlatOutputMap& f, plugin::ModelWorkspace& w, const Eigen::VectorXd& q,
+                         const Eigen::VectorXd& qd, const planner::RecedingHorizonOptions& o,
+                         planner::RecedingHorizonStep& out) {
+      planner::RecedingHorizonStudyOptions by_ipopt;
+      by_ipopt.slp_by_ipopt = true;
+      planner::plan_receding_horizon_step(f, w, q, qd, o, by_ipopt, out);
+    };
   options.plan.excitation_bounds.enforce = bounds;
   options.control_period_s = period;
   options.disturbance_observer_gain_per_s = observer_gain;

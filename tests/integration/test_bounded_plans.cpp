@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "flatsos/planner/motion_planner_study.hpp"
 #include "../planner/executable_plan.hpp"
 #include "../planner/scenario_fixture.hpp"
 #include "open_loop_replay.hpp"
@@ -55,10 +56,10 @@ TEST_F(BoundedPlans, TheQuarticAtOneAndAHalfSecondsIsBoundedAtAHigherCost) {
 
 TEST_F(BoundedPlans, SequentialLpAndIpoptReachTheSameBoundedOptimum) {
   const auto o = open_loop_options(1.5);
-  auto by_ipopt = o;
+  fpl::OpenLoopStudyOptions by_ipopt;
   by_ipopt.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
   const auto slp = fpl::plan_open_loop(arm.flat, s0, o);
-  const auto ipopt = fpl::plan_open_loop(arm.flat, s0, by_ipopt);
+  const auto ipopt = fpl::plan_open_loop(arm.flat, s0, o, by_ipopt);
   ASSERT_EQ(slp.status, fpl::SolveStatus::Solved) << slp.message;
   ASSERT_EQ(ipopt.status, fpl::SolveStatus::Solved) << ipopt.message;
   EXPECT_GT(slp.sos.bound_slp_iterations, 0);
@@ -102,8 +103,9 @@ TEST_F(BoundedPlans, BetweenTheCheckPointsTheBoundsHoldToo) {
   // n) around 28 ms, on 1990 of 300001 points. The search between the points (Brent on each
   // near-active maximum of the rows' margins) finds those and imposes them.
   auto o = open_loop_options(1.5, 5, 24);
-  o.sos.bounds.check_points = 301;
-  const auto plan = fpl::plan_open_loop(arm.flat, s0, o);
+  fpl::OpenLoopStudyOptions sparse_check;
+  sparse_check.sos.bounds.check_points = 301;
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, o, sparse_check);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   EXPECT_TRUE(plan.sos.bounds_imposed);
   auto ws = arm.flat.makeWorkspace();

@@ -9,6 +9,7 @@
 
 #include <tuple>
 
+#include "flatsos/planner/receding_horizon_study.hpp"
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "open_loop_replay.hpp"
@@ -129,7 +130,12 @@ TEST(PaperScenarios, RecedingHorizonIsTheSameWithEveryIntegrator) {
 TEST(PaperScenarios, RecedingHorizonWithIpoptAgreesWithTheExactSlp) {
   flatsos::test::RecedingHorizonScenario rh;
   const auto exact = rh.run(rh.loop(0.5));
-  rh.options.plan.solver = fpl::SlpSolver::Ipopt;
+  rh.options.planner = [](const fpl::FlatOutputMap& f, flatsos::plugin::ModelWorkspace& w, const Eigen::VectorXd& q,
+                          const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& o, fpl::RecedingHorizonStep& out) {
+    fpl::RecedingHorizonStudyOptions by_ipopt;
+    by_ipopt.slp_by_ipopt = true;
+    fpl::plan_receding_horizon_step(f, w, q, qd, o, by_ipopt, out);
+  };
   const auto ipopt = rh.run(rh.loop(0.5));
   const auto& hi = ipopt.controller->history();
   const auto& he = exact.controller->history();

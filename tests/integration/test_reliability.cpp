@@ -138,7 +138,6 @@ TEST(Reliability, EveryKindOfBadInputIsRejectedWithTheProblemNamed) {
       {"RH controller target NaN", controller_with([](auto& o) { o.plan.target_q_rad[1] = kNaN; }), "target joint angles: values must be finite"},
       {"RH controller horizon zero", controller_with([](auto& o) { o.plan.horizon_s = 0.0; }), "horizon must be > 0"},
       {"RH controller grid of one point", controller_with([](auto& o) { o.plan.grid_points = 1; }), "at least 2 grid points"},
-      {"RH controller warm start wrong size", controller_with([](auto& o) { o.plan.warm_start = Eigen::VectorXd::Ones(6); }), "SLP warm start: expected 4"},
       {"RH controller torque offset wrong size", controller_with([](auto& o) { o.plan.torque_offset_N_m = Eigen::VectorXd::Ones(3); }), "torque offset: expected 2"},
       {"RH controller one sample", controller_with([](auto& o) { o.excitation_samples_per_period = 1; }), "at least 2 excitation samples"},
       {"RH controller period NaN", controller_with([](auto& o) { o.control_period_s = kNaN; }), "control period must be > 0"},

@@ -7,6 +7,7 @@
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/motion_planner_study.hpp"
 
 namespace flatsos::test {
 
@@ -47,7 +48,14 @@ inline planner::OpenLoopOptions open_loop_options(double T, int degree = 4, int 
   return o;
 }
 
-/// The transfer with the joint path free (the joint Newton method): flat outputs and torque
+/// The study settings that optimize the joint path by the joint Newton method.
+inline planner::OpenLoopStudyOptions joint_newton_study() {
+  planner::OpenLoopStudyOptions s;
+  s.free_path.method = planner::FreePathMethod::JointNewton;
+  return s;
+}
+
+/// The transfer with the joint path free (with joint_newton_study): flat outputs and torque
 /// pieces on `spans` spans growing by 1.06, the path on 12 spans growing by 1.4. A low-effort
 /// transfer throws the arm up in its first few tenths of a second: short spans there.
 inline planner::OpenLoopOptions graded_free_path_options(double T, int degree, int spans) {
@@ -56,7 +64,6 @@ inline planner::OpenLoopOptions graded_free_path_options(double T, int degree, i
   o.torque.pieces = spans;
   o.torque.piece_growth = 1.06;
   o.free_path.enabled = true;
-  o.free_path.method = planner::FreePathMethod::JointNewton;
   o.free_path.spans = 12;
   o.free_path.span_growth = 1.4;
   return o;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "executable_plan.hpp"
+#include "flatsos/planner/motion_planner_study.hpp"
 #include "path/free_path.hpp"
 #include "path/path_rows.hpp"
 #include "scenario_fixture.hpp"
@@ -33,6 +34,9 @@ class FreePath : public ::testing::Test {
   flatsos::test::ArmPlanning arm;
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
   fpl::OpenLoopOptions o = open_loop_options(kDuration_s, kDegree, kSpans);
+  fpl::OpenLoopStudyOptions study;
+  fpd::SosSettings sos() const { return fpd::sos_settings(o.sos, study.sos); }
+  fpd::FreePathSettings free_path() const { return fpd::FreePathSettings(o.free_path, study.free_path); }
 
   // What plan_open_loop hands the path optimization: the SOS setup along the prescribed path.
   struct Problem {
@@ -52,9 +56,9 @@ class FreePath : public ::testing::Test {
   }
   Problem problem() {
     Problem p;
-    p.prescribed = fpl::plan_open_loop(arm.flat, s0, o);
+    p.prescribed = fpl::plan_open_loop(arm.flat, s0, o, study);
     auto ws = arm.flat.makeWorkspace();
-    p.setup.emplace(fpd::set_up_sos_program(arm.flat, p.prescribed.torque, o.duration_s, boundary(), o.reserves_N, o.sos));
+    p.setup.emplace(fpd::set_up_sos_program(arm.flat, p.prescribed.torque, o.duration_s, boundary(), o.reserves_N, sos()));
     p.initial_q_jet = arm.flat.forward(ws, s0).q;
     p.a_min = fpd::activation_minima(arm.flat, o.sos.bounds);
     return p;
@@ -62,7 +66,7 @@ class FreePath : public ::testing::Test {
 
   fpd::PathValue value(const Problem& p, const std::vector<double>& times, const Eigen::VectorXd& c,
                        const Eigen::VectorXd& theta) const {
-    return fpd::path_value(*p.setup, arm.flat, p.initial_q_jet, o.target_q_rad, o.reserves_N, p.a_min, o.free_path, times, c,
+    return fpd::path_value(*p.setup, arm.flat, p.initial_q_jet, o.target_q_rad, o.reserves_N, p.a_min, free_path(), times, c,
                            theta);
   }
 
@@ -82,7 +86,7 @@ TEST_F(FreePath, TheValuesGradientIsTheMultipliersTimesTheRowsDerivatives) {
   const Problem p = problem();
   ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
   ASSERT_TRUE(p.prescribed.sos.bounds_imposed);
-  Eigen::VectorXd c = fpd::path_coefficients(*p.setup, p.prescribed.path, p.initial_q_jet, o.target_q_rad, o.free_path);
+  Eigen::VectorXd c = fpd::path_coefficients(*p.setup, p.prescribed.path, p.initial_q_jet, o.target_q_rad, free_path());
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> move(-0.01, 0.01);
   for (Eigen::Index i = 0; i < c.size(); ++i) c[i] += move(rng);  // generic: away from V's kinks
@@ -114,7 +118,7 @@ TEST_F(FreePath, TheRowsHessianIsTheDerivativeOfTheirWeightedGradient) {
   o = open_loop_options(1.5, kDegree, 24);
   const Problem p = problem();
   ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
-  const fpd::PathParameterization P = fpd::parameterize(o.free_path, o.duration_s, p.initial_q_jet, o.target_q_rad);
+  const fpd::PathParameterization P = fpd::parameterize(free_path(), o.duration_s, p.initial_q_jet, o.target_q_rad);
   const fpd::PathVariables v{p.setup->free_coefficients, P.free};
   std::vector<fpd::PathPoint> points;
   for (double t : {0.1, 0.37, 0.74, 1.2}) points.push_back(fpd::make_path_point(*p.setup, arm.flat, P, t));
@@ -224,7 +228,7 @@ TEST_F(FreePath, TheRowsHessianIsTheDerivativeOfTheirWeightedGradient) {
 
 TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost) {
   o.free_path.enabled = true;
-  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o, study);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   ASSERT_TRUE(plan.free_path.optimized);
   std::cout << "[ measure  ] free path: " << plan.free_path.prescribed_cost_N_s << " -> " << plan.sos.cost_N_s
@@ -238,7 +242,7 @@ TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost)
   // Local optimality on an independent point set (10 per span): no move of 0.01 rad in a random
   // direction lowers V by more than the point sets' difference.
   const Problem p = problem();
-  const Eigen::VectorXd c = fpd::path_coefficients(*p.setup, plan.path, p.initial_q_jet, o.target_q_rad, o.free_path);
+  const Eigen::VectorXd c = fpd::path_coefficients(*p.setup, plan.path, p.initial_q_jet, o.target_q_rad, free_path());
   const std::vector<double> times = uniform_times(kDuration_s, 10 * kSpans);
   const fpd::PathValue at = value(p, times, c, fpd::theta_of(*p.setup, *plan.Y));
   ASSERT_TRUE(at.ok) << at.failure;
@@ -259,9 +263,9 @@ TEST_F(FreePath, SpansThatGrowPutTheKnotsWhereTheTransferIsFastAndLowerItsCost) 
   // The low-effort transfer throws the arm up in its first few tenths of a second and settles
   // slowly: with as many coefficients, short spans at the start plan it cheaper.
   o.free_path.enabled = true;
-  const fpl::OpenLoopPlan uniform = fpl::plan_open_loop(arm.flat, s0, o);
+  const fpl::OpenLoopPlan uniform = fpl::plan_open_loop(arm.flat, s0, o, study);
   o.free_path.span_growth = 1.3;
-  const fpl::OpenLoopPlan graded = fpl::plan_open_loop(arm.flat, s0, o);
+  const fpl::OpenLoopPlan graded = fpl::plan_open_loop(arm.flat, s0, o, study);
   ASSERT_EQ(uniform.status, fpl::SolveStatus::Solved) << uniform.message;
   ASSERT_EQ(graded.status, fpl::SolveStatus::Solved) << graded.message;
   ASSERT_TRUE(graded.path.spline);
@@ -284,7 +288,7 @@ TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   const Eigen::VectorXd theta = fpd::theta_of(*p.setup, *p.prescribed.Y);
   // Both with the exchange run until the grid holds.
   auto optimize = [&](fpl::FreePathMethod method, double exchange_relative_tolerance) {
-    fpl::FreeJointPathOptions f = o.free_path;
+    fpd::FreePathSettings f = free_path();
     f.method = method;
     f.exchange_relative_tolerance = exchange_relative_tolerance;
     return fpd::optimize_joint_path(*p.setup, arm.flat, p.prescribed.path, p.initial_q_jet, o.target_q_rad, theta,
@@ -297,8 +301,8 @@ TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   std::cout << "[ measure  ] free path at its points: joint Newton " << newton.cost_N_s << " N s (" << newton.path_iterations
             << " Ipopt iterations, " << newton.rounds << " rounds), quasi-Newton " << quasi.cost_N_s << " N s ("
             << quasi.path_iterations << " steps)\n";
-  EXPECT_LE(newton.worst_bound_excess, o.free_path.tolerance);
-  EXPECT_GE(newton.min_reserve_margin_N, -o.free_path.tolerance_N);
+  EXPECT_LE(newton.worst_bound_excess, study.free_path.tolerance);
+  EXPECT_GE(newton.min_reserve_margin_N, -study.free_path.tolerance_N);
   EXPECT_LT(newton.cost_N_s, 0.8 * p.prescribed.sos.cost_N_s);
   EXPECT_NEAR(newton.cost_N_s, quasi.cost_N_s, 2e-3 * quasi.cost_N_s);
   EXPECT_LE(newton.cost_N_s, quasi.cost_N_s * (1.0 + 1e-5));
@@ -306,7 +310,7 @@ TEST_F(FreePath, TheJointNewtonMethodReachesTheQuasiNewtonMethodsOptimum) {
   // The joint method's exchange ending once a round changes the cost by at most the default
   // fraction of it: fewer rounds, and the cost at the points where the full exchange ends within a
   // few times that tolerance (each later round changes it by less).
-  const double settle = fpl::FreeJointPathOptions{}.exchange_relative_tolerance;
+  const double settle = fpl::FreePathStudyOptions{}.exchange_relative_tolerance;
   ASSERT_GT(settle, 0.0);
   const fpd::FreePathOutcome settled = optimize(fpl::FreePathMethod::JointNewton, settle);
   ASSERT_TRUE(settled.converged) << settled.failure;
@@ -324,7 +328,8 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsACo
   // Cubic splines on 24 spans growing by 1.06, the path on 12 growing by 1.4: along the optimized
   // path the bounds bind (along the fixture's, the reserves' optimum meets them).
   o = flatsos::test::graded_free_path_options(kDuration_s, kDegree, 24);
-  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
+  study = flatsos::test::joint_newton_study();
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o, study);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   ASSERT_TRUE(plan.free_path.optimized);
   auto ws = arm.flat.makeWorkspace();
@@ -334,7 +339,7 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsACo
   const fpl::TorqueModel& torque = plan.torque;
   const fpl::MusclesAlongPath muscles{arm.flat, plan.path, ws};
   const fpl::SosProgramResult cold =
-      fpl::solve_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, &muscles);
+      fpl::solve_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, study.sos, &muscles);
   ASSERT_EQ(cold.status, fpl::SolveStatus::Solved) << cold.message;
   std::cout << "[ measure  ] along the optimized path: from the path stage " << plan.sos.cost_N_s << " N s in "
             << plan.sos.bound_rounds << " bounded rounds, from the reserves' optimum " << cold.cost_N_s << " N s in "
@@ -345,11 +350,11 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathStartsFromThePathStagesAndEqualsACo
   EXPECT_LT(plan.sos.bound_rounds, cold.bound_rounds);
 
   // A warm start that is not the program's is named.
-  const fpd::SosSetup program = fpd::set_up_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos);
+  const fpd::SosSetup program = fpd::set_up_sos_program(arm.flat, torque, o.duration_s, bc, o.reserves_N, sos());
   fpd::BoundsWarmStart warm{fpd::theta_of(program, *plan.Y), {0.5, 4.0}};
   auto rejects = [&](const fpd::BoundsWarmStart& bad, const std::string& what) {
     try {
-      fpd::solve_sos_program_from(arm.flat, torque, o.duration_s, bc, o.reserves_N, o.sos, muscles, bad);
+      fpd::solve_sos_program_from(arm.flat, torque, o.duration_s, bc, o.reserves_N, sos(), muscles, bad);
       ADD_FAILURE() << "accepted " << what;
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
@@ -368,19 +373,21 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathSearchesTheWholeGridFromItsFirstRou
   // The benchmark's transfer: quintic flat outputs and torque pieces on 48 graded spans.
   const fpl::OpenLoopOptions graded = flatsos::test::graded_free_path_options(kDuration_s, 5, 48);
   o = graded;
+  study = flatsos::test::joint_newton_study();
   o.free_path.enabled = false;  // the prescribed path's plan, which the path stage starts from
   const Problem p = problem();
   ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
   const fpd::FreePathOutcome stage =
       fpd::optimize_joint_path(*p.setup, arm.flat, p.prescribed.path, p.initial_q_jet, o.target_q_rad,
-                               fpd::theta_of(*p.setup, *p.prescribed.Y), o.reserves_N, p.a_min, graded.free_path);
+                               fpd::theta_of(*p.setup, *p.prescribed.Y), o.reserves_N, p.a_min,
+                               fpd::FreePathSettings(graded.free_path, study.free_path));
   ASSERT_TRUE(stage.converged) << stage.failure;
   auto ws = arm.flat.makeWorkspace();
-  const fpl::TorqueModel torque = fpl::build_torque_model(arm.flat, ws, stage.path, o.torque);
+  const fpl::TorqueModel torque = fpl::build_torque_model(arm.flat, ws, stage.path, o.torque, study.torque);
   const fpl::MusclesAlongPath muscles{arm.flat, stage.path, ws};
   auto plan_from_stage = [&](bool whole_grid_every_round) {
     const fpd::BoundsWarmStart warm{stage.theta, stage.times_s, whole_grid_every_round};
-    return fpd::solve_sos_program_from(arm.flat, torque, o.duration_s, boundary(), o.reserves_N, o.sos, muscles, warm);
+    return fpd::solve_sos_program_from(arm.flat, torque, o.duration_s, boundary(), o.reserves_N, sos(), muscles, warm);
   };
   const fpl::SosProgramResult early = plan_from_stage(true), late = plan_from_stage(false);
   ASSERT_EQ(early.status, fpl::SolveStatus::Solved) << early.message;
@@ -392,7 +399,7 @@ TEST_F(FreePath, ThePlanAlongTheOptimizedPathSearchesTheWholeGridFromItsFirstRou
   EXPECT_TRUE(early.certified && late.certified);
   EXPECT_NEAR(early.cost_N_s, late.cost_N_s, 1e-6 * late.cost_N_s);
   EXPECT_LT(early.bound_rounds, late.bound_rounds);
-  EXPECT_LE(early.max_bound_excess, o.sos.bounds.tolerance);
+  EXPECT_LE(early.max_bound_excess, study.sos.bounds.tolerance);
 }
 
 TEST_F(FreePath, TheBoundRowsOfAddedPointsFollowThoseOfThePointsBefore) {
@@ -424,15 +431,16 @@ TEST_F(FreePath, ATorqueModelTooCoarseForTheOptimizedPathIsRefinedUntilItsPlanIs
   // faster than 24 cubic torque pieces follow, and the plan along it fails with them. The pieces
   // double until the certified plan costs what the path stage found at its points.
   o = flatsos::test::graded_free_path_options(kDuration_s, 5, 24);
-  o.free_path.max_torque_refinements = 0;
-  const fpl::OpenLoopPlan coarse = fpl::plan_open_loop(arm.flat, s0, o);
+  study = flatsos::test::joint_newton_study();
+  study.free_path.max_torque_refinements = 0;
+  const fpl::OpenLoopPlan coarse = fpl::plan_open_loop(arm.flat, s0, o, study);
   ASSERT_TRUE(coarse.free_path.optimized);
   EXPECT_NE(coarse.status, fpl::SolveStatus::Solved);
   EXPECT_EQ(coarse.free_path.final_plans, 1);
   EXPECT_EQ(coarse.free_path.final_torque_pieces, 24);
 
-  o.free_path.max_torque_refinements = fpl::FreeJointPathOptions{}.max_torque_refinements;
-  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o);
+  study.free_path.max_torque_refinements = fpl::FreePathStudyOptions{}.max_torque_refinements;
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(arm.flat, s0, o, study);
   ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
   std::cout << "[ measure  ] along the optimized path: " << coarse.message << "; refined to "
             << plan.free_path.final_torque_pieces << " torque pieces (" << plan.free_path.final_plans
@@ -441,7 +449,7 @@ TEST_F(FreePath, ATorqueModelTooCoarseForTheOptimizedPathIsRefinedUntilItsPlanIs
   EXPECT_GT(plan.free_path.final_plans, 1);
   EXPECT_EQ(plan.free_path.final_torque_pieces, 24 << (plan.free_path.final_plans - 1));
   EXPECT_EQ(plan.torque.pieces.size(), static_cast<std::size_t>(plan.free_path.final_torque_pieces));
-  EXPECT_LE(plan.sos.cost_N_s, (1.0 + o.free_path.torque_model_relative_gap) * plan.free_path.cost_at_points_N_s);
+  EXPECT_LE(plan.sos.cost_N_s, (1.0 + study.free_path.torque_model_relative_gap) * plan.free_path.cost_at_points_N_s);
   EXPECT_TRUE(plan.sos.certified);
   flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
 }
@@ -451,10 +459,11 @@ TEST_F(FreePath, AStartPlanInACoarserNestedBasisLeadsToTheSamePlan) {
   // spans growing by 1.06^2 instead of 24 by 1.06), it lies in the flat outputs' splines, costs at
   // least the fine basis' plan (a subspace), and the optimized path's plan is the same.
   o = flatsos::test::graded_free_path_options(kDuration_s, kDegree, 24);
+  study = flatsos::test::joint_newton_study();
   auto plan_with = [&](int start_min_spans) {
-    fpl::OpenLoopOptions with = o;
+    fpl::OpenLoopStudyOptions with = study;
     with.free_path.start_min_spans = start_min_spans;
-    return fpl::plan_open_loop(arm.flat, s0, with);
+    return fpl::plan_open_loop(arm.flat, s0, o, with);
   };
   const fpl::OpenLoopPlan fine = plan_with(0), coarse = plan_with(12);
   ASSERT_EQ(fine.status, fpl::SolveStatus::Solved) << fine.message;
@@ -491,17 +500,20 @@ TEST_F(FreePath, AStartPlanInACoarserNestedBasisLeadsToTheSamePlan) {
 
 TEST_F(FreePath, BadOptionsAreNamed) {
   o.free_path.enabled = true;
-  auto rejects = [&](fpl::OpenLoopOptions bad, const std::string& field) {
+  auto rejects = [&](fpl::OpenLoopOptions bad, const std::string& field, fpl::OpenLoopStudyOptions bad_study = {}) {
     try {
-      fpl::plan_open_loop(arm.flat, s0, bad);
+      fpl::plan_open_loop(arm.flat, s0, bad, bad_study);
       ADD_FAILURE() << "accepted bad " << field;
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   };
   auto bad = o;
-  bad.free_path.degree = 4;
-  rejects(bad, "free_path.degree");
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.degree = 4;
+    rejects(o, "free_path.degree", s);
+  }
   bad = o;
   bad.free_path.spans = 1;
   rejects(bad, "free_path.spans");
@@ -514,24 +526,48 @@ TEST_F(FreePath, BadOptionsAreNamed) {
   bad.free_path.span_growth = std::nan("");
   rejects(bad, "free_path.span_growth");
   bad = o;
-  bad.free_path.start_min_spans = -1;
-  rejects(bad, "free_path.start_min_spans");
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.start_min_spans = -1;
+    rejects(o, "free_path.start_min_spans", s);
+  }
   bad = o;
-  bad.free_path.relative_tolerance = 0.0;
-  rejects(bad, "free_path.relative_tolerance");
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.relative_tolerance = 0.0;
+    rejects(o, "free_path.relative_tolerance", s);
+  }
   bad = o;
-  bad.free_path.exchange_relative_tolerance = -1e-4;
-  rejects(bad, "free_path.exchange_relative_tolerance");
-  bad.free_path.exchange_relative_tolerance = std::numeric_limits<double>::infinity();
-  rejects(bad, "free_path.exchange_relative_tolerance");
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.exchange_relative_tolerance = -1e-4;
+    rejects(o, "free_path.exchange_relative_tolerance", s);
+  }
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.exchange_relative_tolerance = std::numeric_limits<double>::infinity();
+    rejects(o, "free_path.exchange_relative_tolerance", s);
+  }
   bad = o;
-  bad.free_path.max_torque_refinements = -1;
-  rejects(bad, "free_path.max_torque_refinements");
-  bad.free_path.max_torque_refinements = 11;
-  rejects(bad, "free_path.max_torque_refinements");
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.max_torque_refinements = -1;
+    rejects(o, "free_path.max_torque_refinements", s);
+  }
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.max_torque_refinements = 11;
+    rejects(o, "free_path.max_torque_refinements", s);
+  }
   bad = o;
-  bad.free_path.torque_model_relative_gap = -1e-3;
-  rejects(bad, "free_path.torque_model_relative_gap");
-  bad.free_path.torque_model_relative_gap = std::nan("");
-  rejects(bad, "free_path.torque_model_relative_gap");
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.torque_model_relative_gap = -1e-3;
+    rejects(o, "free_path.torque_model_relative_gap", s);
+  }
+  {
+    fpl::OpenLoopStudyOptions s;
+    s.free_path.torque_model_relative_gap = std::nan("");
+    rejects(o, "free_path.torque_model_relative_gap", s);
+  }
 }

@@ -15,6 +15,7 @@
 #include "flatsos/planner/numerics/linear_program.hpp"
 #include "flatsos/planner/numerics/sos_certificate_study.hpp"
 #include "flatsos/planner/slp.hpp"
+#include "flatsos/planner/slp_study.hpp"
 #include "random_linear_program.hpp"
 #include "scenario_fixture.hpp"
 
@@ -141,8 +142,8 @@ TEST(IpoptLinearSolvers, TheSlpAgrees) {
   for (Eigen::Index i = 0; i < G.rows(); ++i)  // the paper's Assumption 1: every row sums to > 0
     if (G.row(i).sum() <= 0.0) G.row(i) *= -1.0;
   const Eigen::VectorXd B = Eigen::VectorXd::NullaryExpr(6, [&] { return 100.0 * u(rng); });
-  const auto dense = under(IpoptLinearSolver::DenseLdlt, [&] { return fpl::solve_slp(G, B, fpl::SlpSolver::Ipopt); });
-  const auto mumps = under(IpoptLinearSolver::Mumps, [&] { return fpl::solve_slp(G, B, fpl::SlpSolver::Ipopt); });
+  const auto dense = under(IpoptLinearSolver::DenseLdlt, [&] { return fpl::solve_slp_by_ipopt(G, B); });
+  const auto mumps = under(IpoptLinearSolver::Mumps, [&] { return fpl::solve_slp_by_ipopt(G, B); });
   EXPECT_EQ(dense.status, mumps.status);
   EXPECT_EQ(dense.iterations, mumps.iterations);
   EXPECT_EQ(dense.ipopt_linear_solver, kDense);
@@ -184,23 +185,24 @@ TEST(IpoptLinearSolvers, OpenLoopPlansWithIpoptExchangeAndBoundsAgree) {
     // infeasibility of 1e11 leaves the next step to rounding (dense 67 iterations, MUMPS 44 as
     // measured, both infeasible). There only the verdict is compared.
     bool same_iterations = true;
+    fpl::OpenLoopStudyOptions study = {};
   };
   std::vector<Case> cases;
   // The paper's quartic, every exchange LP by Ipopt (and its certificates).
   cases.push_back({"quartic, exchange by Ipopt", flatsos::test::open_loop_options(3.0), fpl::SolveStatus::Solved});
-  cases.back().options.sos.study.lp_solver = fpl::ExchangeLpSolver::Ipopt;
+  cases.back().study.sos.exchange.lp_solver = fpl::ExchangeLpSolver::Ipopt;
   // Bounds by Ipopt's NLP: the quartic keeps them in 1.5 s, not in 1.3 s (its shortest transfer
   // is 1.365 s); cubic splines in 1.5 s.
   cases.push_back({"quartic bounded, 1.5 s", flatsos::test::open_loop_options(1.5), fpl::SolveStatus::Solved});
-  cases.back().options.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
+  cases.back().study.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
   cases.push_back({"quartic bounded, 1.3 s", flatsos::test::open_loop_options(1.3), fpl::SolveStatus::Infeasible, false});
-  cases.back().options.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
+  cases.back().study.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
   cases.push_back({"cubic on 12 spans bounded, 1.5 s", flatsos::test::open_loop_options(1.5, 3, 12), fpl::SolveStatus::Solved});
-  cases.back().options.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
+  cases.back().study.sos.bounds.solver = fpl::BoundsSolver::Ipopt;
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);
-    const auto dense = under(IpoptLinearSolver::DenseLdlt, [&] { return fpl::plan_open_loop(arm.flat, s0, c.options); });
-    const auto mumps = under(IpoptLinearSolver::Mumps, [&] { return fpl::plan_open_loop(arm.flat, s0, c.options); });
+    const auto dense = under(IpoptLinearSolver::DenseLdlt, [&] { return fpl::plan_open_loop(arm.flat, s0, c.options, c.study); });
+    const auto mumps = under(IpoptLinearSolver::Mumps, [&] { return fpl::plan_open_loop(arm.flat, s0, c.options, c.study); });
     EXPECT_EQ(mumps.sos.status, c.expected) << mumps.sos.message;
     EXPECT_EQ(dense.sos.status, mumps.sos.status) << dense.sos.message;
     EXPECT_EQ(dense.sos.ipopt_calls, mumps.sos.ipopt_calls);
@@ -241,9 +243,9 @@ TEST(IpoptLinearSolvers, TheJointPathNewtonMethodAgrees) {
   const fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
   auto o = flatsos::test::open_loop_options(3.0, 3, 12);
   o.free_path.enabled = true;
-  o.free_path.method = fpl::FreePathMethod::JointNewton;
-  const auto dense = under(IpoptLinearSolver::DenseLdlt, [&] { return fpl::plan_open_loop(arm.flat, s0, o); });
-  const auto mumps = under(IpoptLinearSolver::Mumps, [&] { return fpl::plan_open_loop(arm.flat, s0, o); });
+  const fpl::OpenLoopStudyOptions study = flatsos::test::joint_newton_study();
+  const auto dense = under(IpoptLinearSolver::DenseLdlt, [&] { return fpl::plan_open_loop(arm.flat, s0, o, study); });
+  const auto mumps = under(IpoptLinearSolver::Mumps, [&] { return fpl::plan_open_loop(arm.flat, s0, o, study); });
   ASSERT_EQ(mumps.status, fpl::SolveStatus::Solved) << mumps.message;
   EXPECT_EQ(dense.status, mumps.status) << dense.message;
   EXPECT_EQ(dense.free_path.rounds, mumps.free_path.rounds);

@@ -4,6 +4,7 @@
 // paper's single torque box reported infeasible with the reason; bad input rejected by name.
 #include <gtest/gtest.h>
 
+#include "flatsos/planner/motion_planner_study.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "dense_grid_bound.hpp"
@@ -56,9 +57,10 @@ TEST_F(OpenLoopScenario, OptimumIsWithinOnePercentAboveAnIndependentDenseGridBou
 
 TEST_F(OpenLoopScenario, PapersSingleTorqueBoxIsReportedInfeasibleWithTheReason) {
   options.torque.pieces = 1;
-  options.torque.degree = 0;
-  options.torque.samples_per_piece = 31;
-  const auto plan = fpl::plan_open_loop(arm.flat, s0, options);
+  fpl::OpenLoopStudyOptions box;
+  box.torque.degree = 0;
+  box.torque.samples_per_piece = 31;
+  const auto plan = fpl::plan_open_loop(arm.flat, s0, options, box);
   EXPECT_EQ(plan.status, fpl::SolveStatus::Infeasible);
   EXPECT_NE(plan.message.find("t = 0 s"), std::string::npos) << plan.message;
   EXPECT_NE(plan.message.find("reserve of 10 N"), std::string::npos) << plan.message;
@@ -124,9 +126,9 @@ TEST_F(OpenLoopScenario, BadInputIsRejectedByName) {
 
 TEST_F(OpenLoopScenario, SimplexExchangeReachesIpoptsOptimum) {
   const auto fast = fpl::plan_open_loop(arm.flat, s0, options);
-  auto ipopt_only = options;
-  ipopt_only.sos.study.lp_solver = fpl::ExchangeLpSolver::Ipopt;
-  const auto slow = fpl::plan_open_loop(arm.flat, s0, ipopt_only);
+  fpl::OpenLoopStudyOptions ipopt_only;
+  ipopt_only.sos.exchange.lp_solver = fpl::ExchangeLpSolver::Ipopt;
+  const auto slow = fpl::plan_open_loop(arm.flat, s0, options, ipopt_only);
   ASSERT_EQ(fast.status, fpl::SolveStatus::Solved) << fast.message;
   ASSERT_EQ(slow.status, fpl::SolveStatus::Solved) << slow.message;
   EXPECT_NEAR(fast.sos.cost_N_s, slow.sos.cost_N_s, 1e-6 * slow.sos.cost_N_s);

@@ -4,6 +4,7 @@
 
 #include <thread>
 
+#include "flatsos/planner/receding_horizon_study.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatsos/planner/rest_state.hpp"
@@ -122,12 +123,18 @@ TEST(Ownership, WarmStartedSlpReachesTheSameOptimumInNoMoreIterations) {
   const auto cold = fpl::plan_receding_horizon_step(arm.flat, q, qd, o);
   ASSERT_EQ(cold.status, fpl::SolveStatus::Solved);
   ASSERT_FALSE(cold.slp.used_fallback);
-  o.warm_start = cold.alpha();
-  const auto warm = fpl::plan_receding_horizon_step(arm.flat, q, qd, o);
+  fpl::RecedingHorizonStudyOptions study;
+  study.slp_by_ipopt = true;
+  const auto cold_ipopt = fpl::plan_receding_horizon_step(arm.flat, q, qd, o, study);
+  ASSERT_EQ(cold_ipopt.status, fpl::SolveStatus::Solved);
+  ASSERT_FALSE(cold_ipopt.slp.used_fallback);
+  EXPECT_GT(cold_ipopt.slp.iterations, 0);
+  study.warm_start = cold.alpha();
+  const auto warm = fpl::plan_receding_horizon_step(arm.flat, q, qd, o, study);
   ASSERT_EQ(warm.status, fpl::SolveStatus::Solved);
   EXPECT_FALSE(warm.slp.used_fallback);
   EXPECT_LT((warm.alpha() - cold.alpha()).norm(), 1e-6 * (1 + cold.alpha().norm()));
-  EXPECT_LE(warm.slp.iterations, cold.slp.iterations);
-  o.warm_start = Eigen::VectorXd::Constant(3, 1.0);
-  EXPECT_THROW(fpl::plan_receding_horizon_step(arm.flat, q, qd, o), std::invalid_argument);
+  EXPECT_LE(warm.slp.iterations, cold_ipopt.slp.iterations);
+  study.warm_start = Eigen::VectorXd::Constant(3, 1.0);
+  EXPECT_THROW(fpl::plan_receding_horizon_step(arm.flat, q, qd, o, study), std::invalid_argument);
 }

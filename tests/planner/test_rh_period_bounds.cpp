@@ -6,6 +6,7 @@
 
 #include <Eigen/QR>
 
+#include "flatsos/planner/receding_horizon_study.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -188,7 +189,10 @@ TEST(RecedingHorizonStepBounds, BadBoundOptionsAreNamed) {
   rejects([](auto& b) { b.period_s = 0.0; }, "excitation_bounds.period_s");
   rejects([](auto& b) { b.period_s = 0.6; }, "excitation_bounds.period_s");  // beyond the 0.5 s horizon
   rejects([](auto& b) { b.samples = 1; }, "excitation_bounds.samples");
-  rejects([](auto& b) { b.max_iterations = 0; }, "excitation_bounds.max_iterations");
+  fpl::RecedingHorizonStudyOptions study;
+  study.bound_max_iterations = 0;
+  fpl::RecedingHorizonStep step;
+  EXPECT_THROW(fpl::plan_receding_horizon_step(s.arm.flat, s.ws, s.q, s.qd, s.options, study, step), std::invalid_argument);
   fpl::RecedingHorizonOptions off = s.options;  // off, they are not checked
   off.excitation_bounds.enforce = false;
   off.excitation_bounds.samples = 1;

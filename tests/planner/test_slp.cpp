@@ -5,6 +5,7 @@
 #include <iostream>
 #include <random>
 
+#include "flatsos/planner/slp_study.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -19,7 +20,7 @@ TEST(Slp, IpoptMatchesVertexEnumerationAndAppendixIsFeasible) {
     Eigen::VectorXd B(6);
     for (auto& b : B) b = u(rng);
     const Eigen::VectorXd exact = fpl::slp_vertex_enumeration(CY, B);
-    const auto ipopt = fpl::solve_slp(CY, B, fpl::SlpSolver::Ipopt);
+    const auto ipopt = fpl::solve_slp_by_ipopt(CY, B);
     ASSERT_EQ(ipopt.status, fpl::SolveStatus::Solved);
     EXPECT_FALSE(ipopt.used_fallback) << ipopt.message;
     EXPECT_NEAR(ipopt.cost_N, exact.sum(), 1e-6 * (1 + exact.sum())) << "trial " << trial;
@@ -33,7 +34,7 @@ TEST(Slp, IpoptMatchesVertexEnumerationAndAppendixIsFeasible) {
     EXPECT_NEAR(enumerated.cost_N, exact.sum(), 1e-12 * (1 + exact.sum()));
   }
   // All bounds below zero: nothing to pull, alpha = 0.
-  EXPECT_NEAR(fpl::solve_slp(CY, Eigen::VectorXd::Constant(6, -5.0), fpl::SlpSolver::Ipopt).cost_N, 0.0, 1e-7);
+  EXPECT_NEAR(fpl::solve_slp_by_ipopt(CY, Eigen::VectorXd::Constant(6, -5.0)).cost_N, 0.0, 1e-7);
   EXPECT_NEAR(fpl::solve_slp(CY, Eigen::VectorXd::Constant(6, -5.0)).cost_N, 0.0, 1e-12);
 }
 
@@ -94,8 +95,8 @@ TEST(Slp, TheDualSimplexMatchesIpoptAndVertexEnumeration) {
       fpl::SlpWorkspace simplex_w, ipopt_w;
       simplex_w.cost = ipopt_w.cost = s.cost;
       fpl::SlpResult simplex, ipopt;
-      fpl::solve_slp(s.CY, s.B, fpl::SlpSolver::Simplex, std::nullopt, simplex_w, simplex);
-      fpl::solve_slp(s.CY, s.B, fpl::SlpSolver::Ipopt, std::nullopt, ipopt_w, ipopt);
+      fpl::solve_slp(s.CY, s.B, fpl::SlpSolver::Simplex, simplex_w, simplex);
+      fpl::solve_slp_by_ipopt(s.CY, s.B, std::nullopt, ipopt_w, ipopt);
       ASSERT_EQ(simplex.status, fpl::SolveStatus::Solved);
       ASSERT_FALSE(simplex.used_fallback) << simplex.message;
       ASSERT_FALSE(ipopt.used_fallback) << ipopt.message;
@@ -119,7 +120,7 @@ TEST(Slp, TooManyVerticesToEnumerateAreSolvedByTheSimplex) {
   ASSERT_EQ(result.status, fpl::SolveStatus::Solved);
   EXPECT_TRUE(result.message.empty()) << result.message;
   EXPECT_GT(result.iterations, 0);  // pivots: not enumerated
-  EXPECT_NEAR(result.cost_N, fpl::solve_slp(CY, B, fpl::SlpSolver::Ipopt).cost_N, 1e-7 * (1 + result.cost_N));
+  EXPECT_NEAR(result.cost_N, fpl::solve_slp_by_ipopt(CY, B).cost_N, 1e-7 * (1 + result.cost_N));
   EXPECT_GE((CY * result.alpha - B).minCoeff(), -1e-6);
 }
 
@@ -135,10 +136,10 @@ TEST(Slp, TheSimplexRestartsFromTheLastBasis) {
   for (int period = 0; period < 20; ++period) {
     for (auto& b : s.B) b += drift(rng);
     fpl::SlpResult warm, cold;
-    fpl::solve_slp(s.CY, s.B, fpl::SlpSolver::Simplex, std::nullopt, warm_w, warm);
+    fpl::solve_slp(s.CY, s.B, fpl::SlpSolver::Simplex, warm_w, warm);
     fpl::SlpWorkspace cold_w;
     cold_w.cost = s.cost;
-    fpl::solve_slp(s.CY, s.B, fpl::SlpSolver::Simplex, std::nullopt, cold_w, cold);
+    fpl::solve_slp(s.CY, s.B, fpl::SlpSolver::Simplex, cold_w, cold);
     ASSERT_FALSE(warm.used_fallback || cold.used_fallback) << warm.message << cold.message;
     EXPECT_NEAR(warm.cost_N, cold.cost_N, 1e-9 * (1 + std::abs(cold.cost_N))) << "period " << period;
     if (period > 0) warm_pivots += warm.iterations, cold_pivots += cold.iterations;

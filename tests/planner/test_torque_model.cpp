@@ -9,6 +9,7 @@
 #include "flatsos/planner/joint_paths.hpp"
 #include "flatsos/planner/numerics/bspline.hpp"
 #include "flatsos/planner/torque_model.hpp"
+#include "flatsos/planner/torque_model_study.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -33,9 +34,9 @@ struct TorqueModelScenario : ::testing::Test {
 
 TEST_F(TorqueModelScenario, TheRemainderBoundHoldsOnADenseGridOfEveryPiece) {
   for (int degree : {1, 2, 3, 5}) {
-    fpl::TorqueModelOptions o;
-    o.degree = degree;
-    const fpl::TorqueModel model = fpl::build_torque_model(arm.flat, ws, path, o);
+    fpl::TorqueModelStudyOptions study;
+    study.degree = degree;
+    const fpl::TorqueModel model = fpl::build_torque_model(arm.flat, ws, path, {}, study);
     ASSERT_EQ(model.pieces.size(), 12u);
     for (const auto& piece : model.pieces)
       for (int i = 0; i <= 200; ++i) {
@@ -94,9 +95,10 @@ TEST_F(TorqueModelScenario, TheFirstPieceMatchesTheInitialTorqueAndRateSoItsBoun
 TEST_F(TorqueModelScenario, OnePieceOfDegreeZeroIsThePapersBox) {
   fpl::TorqueModelOptions o;
   o.pieces = 1;
-  o.degree = 0;
-  o.samples_per_piece = 301;
-  const fpl::TorqueModel model = fpl::build_torque_model(arm.flat, ws, path, o);
+  fpl::TorqueModelStudyOptions study;
+  study.degree = 0;
+  study.samples_per_piece = 301;
+  const fpl::TorqueModel model = fpl::build_torque_model(arm.flat, ws, path, o, study);
   ASSERT_EQ(model.pieces.size(), 1u);
   const auto& box = model.pieces[0];
   EXPECT_EQ(box.remainder_order, 0);

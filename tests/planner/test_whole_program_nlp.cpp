@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <random>
 
+#include "flatsos/planner/motion_planner_study.hpp"
 #include "scenario_fixture.hpp"
 #include "sos/whole_program_nlp.hpp"
 
@@ -106,8 +107,9 @@ class WholeProgramNlp : public ::testing::Test {
     const auto exchange = fpl::plan_open_loop(arm.flat, s0, options);
     EXPECT_EQ(exchange.status, fpl::SolveStatus::Solved) << exchange.message;
     if (exchange.status != fpl::SolveStatus::Solved) return 0;
-    options.sos.method = fpl::SosProgramMethod::WholeProgramNlp;
-    const auto nlp = fpl::plan_open_loop(arm.flat, s0, options);
+    fpl::OpenLoopStudyOptions whole;
+    whole.sos.method = fpl::SosProgramMethod::WholeProgramNlp;
+    const auto nlp = fpl::plan_open_loop(arm.flat, s0, options, whole);
     EXPECT_EQ(nlp.status, fpl::SolveStatus::Solved) << nlp.message;
     if (nlp.status != fpl::SolveStatus::Solved) return 0;
     std::printf("%s: exchange %.9f N s, whole-program NLP %.9f N s (%d Ipopt iterations in %d rounds, %d variables, "

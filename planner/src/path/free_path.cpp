@@ -265,14 +265,14 @@ enum class GridVerdict { Holds, PointsAdded, Stuck };
 // meets every row). Its rounds are solved to Ipopt's tolerance, so the change is the new points'
 // doing; the quasi-Newton method stops its rounds on V's kinks, and a small change there may be
 // its own early stop (on the cubic fixture it ended 0.25 % above the joint method).
-bool settled(double last_cost, double cost, const FreeJointPathOptions& o) {
+bool settled(double last_cost, double cost, const FreePathSettings& o) {
   return std::abs(cost - last_cost) <= o.exchange_relative_tolerance * std::abs(cost);
 }
 
 // Checks the plan (theta, path of c) on the dense grid, records its worst violations in `out`, and
 // adds a point at each local maximum of a violation; `out.failure` says when none is new.
 GridVerdict check_and_extend(ExchangePoints& pts, const Eigen::VectorXd& theta, const Eigen::VectorXd& c,
-                             const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, const FreeJointPathOptions& o,
+                             const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, const FreePathSettings& o,
                              FreePathOutcome& out) {
   const double T = pts.setup.duration_s;
   const GridViolations g = check_grid(pts.setup, pts.flat, pts.P.path(c), theta, reserves, a_min, o.check_points);
@@ -294,7 +294,7 @@ GridVerdict check_and_extend(ExchangePoints& pts, const Eigen::VectorXd& theta, 
 FreePathOutcome optimize_by_joint_newton(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
                                          const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
                                          const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
-                                         const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
+                                         const Eigen::VectorXd& a_min, const FreePathSettings& o) {
   const PathParameterization P = parameterize(o, setup.duration_s, initial_q_jet, target);
   const PathVariables v{setup.free_coefficients, P.free};
   FreePathOutcome out;
@@ -343,7 +343,7 @@ FreePathOutcome optimize_by_joint_newton(const SosSetup& setup, const FlatOutput
 FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
                                          const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
                                          const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
-                                         const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
+                                         const Eigen::VectorXd& a_min, const FreePathSettings& o) {
   const PathParameterization P = parameterize(o, setup.duration_s, initial_q_jet, target);
   FreePathOutcome out;
   ExchangePoints pts(setup, flat, P, o.points_per_span);
@@ -385,25 +385,25 @@ FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutput
 FreePathOutcome optimize_joint_path(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
                                     const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target,
                                     const Eigen::VectorXd& theta_start, const Eigen::VectorXd& reserves,
-                                    const Eigen::VectorXd& a_min, const FreeJointPathOptions& o) {
+                                    const Eigen::VectorXd& a_min, const FreePathSettings& o) {
   return o.method == FreePathMethod::JointNewton
              ? optimize_by_joint_newton(setup, flat, start_path, initial_q_jet, target, theta_start, reserves, a_min, o)
              : optimize_by_quasi_newton(setup, flat, start_path, initial_q_jet, target, theta_start, reserves, a_min, o);
 }
 
 Eigen::VectorXd path_coefficients(const SosSetup& setup, const JointPath& path, const Eigen::MatrixXd& initial_q_jet,
-                                  const Eigen::VectorXd& target, const FreeJointPathOptions& o) {
+                                  const Eigen::VectorXd& target, const FreePathSettings& o) {
   return fit_to(parameterize(o, setup.duration_s, initial_q_jet, target), path);
 }
 
 JointPath path_of(const SosSetup& setup, const Eigen::VectorXd& c, const Eigen::MatrixXd& initial_q_jet,
-                  const Eigen::VectorXd& target, const FreeJointPathOptions& o) {
+                  const Eigen::VectorXd& target, const FreePathSettings& o) {
   return parameterize(o, setup.duration_s, initial_q_jet, target).path(c);
 }
 
 PathValue path_value(const SosSetup& setup, const FlatOutputMap& flat, const Eigen::MatrixXd& initial_q_jet,
                      const Eigen::VectorXd& target, const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
-                     const FreeJointPathOptions& o, const std::vector<double>& times, const Eigen::VectorXd& c,
+                     const FreePathSettings& o, const std::vector<double>& times, const Eigen::VectorXd& c,
                      const Eigen::VectorXd& theta_start) {
   const PathParameterization P = parameterize(o, setup.duration_s, initial_q_jet, target);
   if (c.size() != P.free) throw std::invalid_argument("path value: c has " + std::to_string(c.size()) + " entries, the path " + std::to_string(P.free));

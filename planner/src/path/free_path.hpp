@@ -1,5 +1,5 @@
 #pragma once
-// The joint path as part of the optimization (motion_planner.hpp, FreeJointPathOptions;
+// The joint path as part of the optimization (free_path.hpp;
 // docs/method/free_path.md). Each joint is a clamped B-spline through the open-loop plan's
 // boundary derivatives; its free coefficients c are optimized in reduced space:
 //   V(c) = min over theta of  cost . theta   (the effort: sum_l of the integral of Y_l)
@@ -21,7 +21,8 @@
 
 #include <Eigen/Core>
 
-#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/joint_paths.hpp"
+#include "path/free_path_settings.hpp"
 #include "sos/sos_setup.hpp"
 
 namespace flatsos::planner::detail {
@@ -37,7 +38,7 @@ struct FreePathOutcome {
   std::vector<double> times_s;   // the exchange's time points
   int path_iterations = 0, evaluations = 0, slp_iterations = 0;
   // On the dense grid at the last check (before the last round when the exchange ended on a
-  // small change of cost: FreeJointPathOptions::exchange_relative_tolerance).
+  // small change of cost: FreePathStudyOptions::exchange_relative_tolerance).
   double worst_bound_excess = 0.0, min_reserve_margin_N = 0.0;
 };
 
@@ -47,14 +48,14 @@ struct FreePathOutcome {
 FreePathOutcome optimize_joint_path(const SosSetup& setup, const FlatOutputMap& flat, const JointPath& start_path,
                                     const Eigen::MatrixXd& initial_q_jet, const Eigen::VectorXd& target_q_rad,
                                     const Eigen::VectorXd& theta, const Eigen::VectorXd& reserves_N,
-                                    const Eigen::VectorXd& a_min, const FreeJointPathOptions& options);
+                                    const Eigen::VectorXd& a_min, const FreePathSettings& options);
 
 /// The path's free coefficients c closest to `path` (exact when the spline holds it), and the
 /// path of c: the optimization's coordinates, for tests.
 Eigen::VectorXd path_coefficients(const SosSetup& setup, const JointPath& path, const Eigen::MatrixXd& initial_q_jet,
-                                  const Eigen::VectorXd& target_q_rad, const FreeJointPathOptions& options);
+                                  const Eigen::VectorXd& target_q_rad, const FreePathSettings& options);
 JointPath path_of(const SosSetup& setup, const Eigen::VectorXd& c, const Eigen::MatrixXd& initial_q_jet,
-                  const Eigen::VectorXd& target_q_rad, const FreeJointPathOptions& options);
+                  const Eigen::VectorXd& target_q_rad, const FreePathSettings& options);
 
 /// V(c) at the given time points, the plan's theta there and dV/dc (the envelope gradient), with
 /// the plan's SLP started from theta_start: what the optimization evaluates, for tests.
@@ -67,7 +68,7 @@ struct PathValue {
 };
 PathValue path_value(const SosSetup& setup, const FlatOutputMap& flat, const Eigen::MatrixXd& initial_q_jet,
                      const Eigen::VectorXd& target_q_rad, const Eigen::VectorXd& reserves_N, const Eigen::VectorXd& a_min,
-                     const FreeJointPathOptions& options, const std::vector<double>& times_s, const Eigen::VectorXd& c,
+                     const FreePathSettings& options, const std::vector<double>& times_s, const Eigen::VectorXd& c,
                      const Eigen::VectorXd& theta_start);
 
 }  // namespace flatsos::planner::detail

@@ -53,7 +53,7 @@ JointPath PathParameterization::path(const Eigen::VectorXd& c) const {
   return JointPath::fromSpline(SplineTrajectory(basis, coefficients(c)));
 }
 
-PathParameterization parameterize(const FreeJointPathOptions& o, double T, const Eigen::MatrixXd& initial,
+PathParameterization parameterize(const FreePathSettings& o, double T, const Eigen::MatrixXd& initial,
                                   const Eigen::VectorXd& target) {
   PathParameterization out(BSplineBasis::geometric(o.degree, o.spans, T, o.span_growth));
   FlatOutputBoundary bc;

@@ -12,7 +12,8 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
-#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/joint_paths.hpp"
+#include "path/free_path_settings.hpp"
 #include "sos/bound_rows.hpp"
 #include "sos/sos_setup.hpp"
 
@@ -33,7 +34,7 @@ struct PathParameterization {
 };
 
 /// The spline of `o` through q..q''' at 0 (initial: N x 4) and rest at `target` at T.
-PathParameterization parameterize(const FreeJointPathOptions& o, double T, const Eigen::MatrixXd& initial,
+PathParameterization parameterize(const FreePathSettings& o, double T, const Eigen::MatrixXd& initial,
                                   const Eigen::VectorXd& target);
 
 /// The c whose spline is closest (least squares on a fine grid) to `path`: exact when the

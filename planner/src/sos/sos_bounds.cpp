@@ -32,14 +32,14 @@ constexpr const char* kBoundsUnmet =
 
 namespace {
 // The torques' jets on the check grid (what the bounds need besides theta).
-std::vector<TorqueJet> check_grid_jets(const SosSetup& setup, const MusclesAlongPath& mp, const ExcitationBoundsOptions& bo) {
+std::vector<TorqueJet> check_grid_jets(const SosSetup& setup, const MusclesAlongPath& mp, const BoundsSettings& bo) {
   if (bo.check_points < 2) throw std::invalid_argument("SOS program: bounds need at least 2 check points");
   const double h = setup.duration_s / (bo.check_points - 1);
   return torque_jets_on_grid(mp.flat, mp.workspace, mp.path, h, bo.check_points);
 }
 }  // namespace
 
-bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, const SosProgramOptions& o,
+bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, const SosSettings& o,
                              const Eigen::VectorXd& theta, SosProgramResult& result) {
   const Stopwatch wall;
   const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, o.bounds);
@@ -54,7 +54,7 @@ bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, 
   return false;
 }
 
-bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosProgramOptions& o,
+bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosSettings& o,
                               Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis,
                               const BoundsWarmStart* warm) {
   const Stopwatch wall;
@@ -66,7 +66,7 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       if (!(t >= 0.0 && t <= setup.duration_s))
         throw std::invalid_argument("SOS program: the warm start's time " + std::to_string(t) + " s is outside [0, T]");
   }
-  const ExcitationBoundsOptions& bo = o.bounds;
+  const BoundsSettings& bo = o.bounds;
   const FlatOutputMap& flat = mp.flat;
   const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, bo);
   const Eigen::VectorXd a_min = activation_minima(flat, bo);

@@ -41,20 +41,20 @@ struct BoundsWarmStart {
 /// `basis`: the exchange's last basis, where the sequential LP's step LPs start (most reserve rows
 /// keep their status; from scratch the first step LP took 484 pivots on the arm at T = 1.5 s).
 /// `warm`: when the bounds bind, the rounds start from it instead.
-bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& muscles, const SosProgramOptions& options,
+bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& muscles, const SosSettings& options,
                               Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis = {},
                               const BoundsWarmStart* warm = nullptr);
 
 /// solve_sos_program (sos_program.hpp) with the bounded exchange started from `warm`.
 SosProgramResult solve_sos_program_from(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                         const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
-                                        const SosProgramOptions& options, const MusclesAlongPath& muscles,
+                                        const SosSettings& options, const MusclesAlongPath& muscles,
                                         const BoundsWarmStart& warm);
 
 /// Only checks the bounds at theta on the whole check grid (for solvers that do not impose them):
 /// fills max_bound_excess and bounds_seconds; when a bound is exceeded, sets status Failed and a
 /// message naming the worst excess, and returns false.
-bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& muscles, const SosProgramOptions& options,
+bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& muscles, const SosSettings& options,
                              const Eigen::VectorXd& theta, SosProgramResult& result);
 
 }  // namespace flatsos::planner::detail

@@ -7,7 +7,7 @@
 
 namespace flatsos::planner::detail {
 
-void certify_near_active_pieces(const SosSetup& setup, const Eigen::VectorXd& theta, const SosProgramOptions& o,
+void certify_near_active_pieces(const SosSetup& setup, const Eigen::VectorXd& theta, const SosSettings& o,
                                 SosProgramResult& result) {
   const Stopwatch certify;
   std::vector<Polynomial> near_active;

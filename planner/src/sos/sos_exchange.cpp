@@ -10,7 +10,7 @@
 
 namespace flatsos::planner::detail {
 
-bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::VectorXd& theta, SosProgramResult& result,
+bool solve_by_exchange(SosSetup& setup, const SosSettings& o, Eigen::VectorXd& theta, SosProgramResult& result,
                        SlpBasis* final_basis, double tolerance_N) {
   const Stopwatch solve;
   auto& constraints = setup.constraints;
@@ -38,7 +38,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
   }
   auto solve_round = [&](int round) -> bool {
     LinearProgramResult lr;
-    if (o.study.lp_solver == ExchangeLpSolver::Simplex) {
+    if (o.exchange.lp_solver == ExchangeLpSolver::Simplex) {
       SimplexBasis basis{theta_status, {}};
       for (std::size_t c = 0; c < constraints.size(); ++c) {
         point_status[c].resize(constraints[c].points.size(), BasisStatus::Basic);
@@ -63,7 +63,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
       result.status = lr.status == SolveStatus::Infeasible || !reason.empty() ? SolveStatus::Infeasible : SolveStatus::Failed;
       result.message = !reason.empty() ? reason
                                        : "the exchange LP of round " + std::to_string(round + 1) + " was not solved (" +
-                                             (o.study.lp_solver == ExchangeLpSolver::Simplex ? "Clp: " : "Ipopt: ") +
+                                             (o.exchange.lp_solver == ExchangeLpSolver::Simplex ? "Clp: " : "Ipopt: ") +
                                              lr.solver_status + ")";
       result.solve_seconds = solve.seconds();
       return false;
@@ -85,7 +85,7 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
         statuses.resize(c.points.size(), BasisStatus::Basic);
         const Polynomial g = c.at(theta);
         for (std::size_t i = c.points.size(); i-- > 0;)
-          if (!c.sticky[i] && g(c.points[i]) > o.study.prune_slack_N) {
+          if (!c.sticky[i] && g(c.points[i]) > o.exchange.prune_slack_N) {
             c.points.erase(c.points.begin() + static_cast<std::ptrdiff_t>(i));
             c.sticky.erase(c.sticky.begin() + static_cast<std::ptrdiff_t>(i));
             statuses.erase(statuses.begin() + static_cast<std::ptrdiff_t>(i));
@@ -116,10 +116,10 @@ bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& o, Eigen::Vecto
     result.message = why.str();
     return false;
   }
-  if (n_theta > 0 && (theta.cwiseAbs().maxCoeff() > 0.999 * o.study.coefficient_bound_N)) {
+  if (n_theta > 0 && (theta.cwiseAbs().maxCoeff() > 0.999 * o.exchange.coefficient_bound_N)) {
     result.status = SolveStatus::Failed;
     result.message = "the SOS program is unbounded: a free coefficient of Y reached the bound " +
-                     std::to_string(o.study.coefficient_bound_N) + " N";
+                     std::to_string(o.exchange.coefficient_bound_N) + " N";
     return false;
   }
 

@@ -18,12 +18,12 @@ namespace flatsos::planner::detail {
 /// the bounds' sequential LP starts from it, and so does a second call (when it fits). `tolerance_N`: how far below 0 a constraint's
 /// minimum may stay (kLooseConstraintTolerance_N: a start for the bounds' exchange, which
 /// finishes the reserves'). A second call goes on from the points the first one left.
-bool solve_by_exchange(SosSetup& setup, const SosProgramOptions& options, Eigen::VectorXd& theta,
+bool solve_by_exchange(SosSetup& setup, const SosSettings& options, Eigen::VectorXd& theta,
                        SosProgramResult& result, SlpBasis* basis = nullptr, double tolerance_N = kConstraintTolerance_N);
 
 /// Lukacs certificates (one Ipopt problem) for the pieces whose constraint minimum is below
 /// options.near_active_N; fills the certification fields and certify_seconds.
-void certify_near_active_pieces(const SosSetup& setup, const Eigen::VectorXd& theta, const SosProgramOptions& options,
+void certify_near_active_pieces(const SosSetup& setup, const Eigen::VectorXd& theta, const SosSettings& options,
                                 SosProgramResult& result);
 
 }  // namespace flatsos::planner::detail

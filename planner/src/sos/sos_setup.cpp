@@ -53,7 +53,7 @@ int piece_at(const TorqueModel& torque, double t) {
 }
 
 void require_valid_inputs(const FlatOutputMap& flat, const TorqueModel& torque, double T, const FlatOutputBoundary& bc,
-                          const Eigen::VectorXd& reserves, const SosProgramOptions& o) {
+                          const Eigen::VectorXd& reserves, const SosSettings& o) {
   const int m = flat.numMuscles(), p = flat.numFlatOutputs();
   if (!(T > 0.0) || !std::isfinite(T)) throw std::invalid_argument("SOS program: horizon T must be > 0 s");
   if (o.flat_output_degree < 1) throw std::invalid_argument("SOS program: flat-output degree must be >= 1");
@@ -86,7 +86,7 @@ Eigen::RowVectorXd monomials(double s, Eigen::Index size) {
 }
 
 SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double T, const FlatOutputBoundary& bc,
-                            const Eigen::VectorXd& reserves, const SosProgramOptions& o) {
+                            const Eigen::VectorXd& reserves, const SosSettings& o) {
   require_valid_inputs(flat, torque, T, bc, reserves, o);
   const int m = flat.numMuscles(), n = flat.numJoints(), p = flat.numFlatOutputs();
   const int d = o.flat_output_degree;
@@ -157,7 +157,7 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
     // At t = 0 the initial state fixes the value; with a constant remainder bound the LP row
     // there carries it, with the vanishing bound (order 2) it is data, checked by fixed_violation.
     std::vector<double> initial_points;  // the exchange adds interior minima where violated
-    for (int i = 1; i <= o.study.initial_interior_points; ++i) initial_points.push_back(i / (o.study.initial_interior_points + 1.0));
+    for (int i = 1; i <= o.exchange.initial_interior_points; ++i) initial_points.push_back(i / (o.exchange.initial_interior_points + 1.0));
     initial_points.push_back(1.0);
     if (starts_at_zero && margin_order == 0) initial_points.insert(initial_points.begin(), 0.0);
     auto add = [&](ConstraintPolynomial c) {
@@ -263,8 +263,8 @@ SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque
         setup.cost_constant += weight * piece_length * signal.integral(a, a + b);
       }
   }
-  lp.x_lower = Eigen::VectorXd::Constant(n_theta, -o.study.coefficient_bound_N);
-  lp.x_upper = Eigen::VectorXd::Constant(n_theta, o.study.coefficient_bound_N);
+  lp.x_lower = Eigen::VectorXd::Constant(n_theta, -o.exchange.coefficient_bound_N);
+  lp.x_upper = Eigen::VectorXd::Constant(n_theta, o.exchange.coefficient_bound_N);
   setup.free_coefficients = n_theta;
   return setup;
 }

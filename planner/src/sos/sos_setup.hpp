@@ -17,6 +17,7 @@
 #include "flatsos/planner/numerics/polynomial.hpp"
 #include "flatsos/planner/numerics/spline_trajectory.hpp"
 #include "flatsos/planner/sos_program.hpp"
+#include "sos/sos_settings.hpp"
 #include "flatsos/planner/torque_model.hpp"
 
 namespace flatsos::planner::detail {
@@ -89,7 +90,7 @@ Eigen::RowVectorXd monomials(double s, Eigen::Index size);
 /// Validates the inputs (std::invalid_argument naming the problem) and builds the program.
 SosSetup set_up_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                             const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
-                            const SosProgramOptions& options);
+                            const SosSettings& options);
 
 /// A constraint that no free coefficient can change (the equalities fix Y there) and that is
 /// violated at one of its points: the program is infeasible for a reason that can be named.

@@ -225,7 +225,7 @@ bool moves_with_theta(const ConstraintPolynomial& c) { return c.G.size() > 0 && 
 // The start: on a grid of every segment, first the largest slack t (capped) with which every
 // constraint can hold (>= t s^margin_order, so values the initial state fixes need none), then
 // the cheapest theta with half of it. Returns false (with a reason) when the grid allows none.
-bool strictly_feasible_start(const SosSetup& setup, const SosProgramOptions& o, VectorXd& theta,
+bool strictly_feasible_start(const SosSetup& setup, const SosSettings& o, VectorXd& theta,
                              std::vector<StartDual>& duals, std::string& why) {
   const int n_theta = setup.free_coefficients;
   std::vector<std::pair<std::size_t, double>> points;  // (constraint, s)
@@ -245,8 +245,8 @@ bool strictly_feasible_start(const SosSetup& setup, const SosProgramOptions& o, 
     lp.G(r, n_theta) = -std::pow(s, c.margin_order);
     lp.row_lower[r] = -v.dot(c.base);
   }
-  lp.x_lower = VectorXd::Constant(n_theta + 1, -o.study.coefficient_bound_N);
-  lp.x_upper = VectorXd::Constant(n_theta + 1, o.study.coefficient_bound_N);
+  lp.x_lower = VectorXd::Constant(n_theta + 1, -o.exchange.coefficient_bound_N);
+  lp.x_upper = VectorXd::Constant(n_theta + 1, o.exchange.coefficient_bound_N);
   lp.x_lower[n_theta] = -1e19;
   lp.x_upper[n_theta] = kStartSlackCap_N;
   lp.cost = VectorXd::Zero(n_theta + 1);
@@ -285,7 +285,7 @@ Ipopt::SmartPtr<Ipopt::TNLP> make_whole_program_nlp(const std::vector<SquaresBlo
   return Ipopt::GetRawPtr(nlp);
 }
 
-bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& o, VectorXd& theta, SosProgramResult& result) {
+bool solve_whole_program(const SosSetup& setup, const SosSettings& o, VectorXd& theta, SosProgramResult& result) {
   const Stopwatch solve;
   auto fail = [&](SolveStatus status, std::string message) {
     result.status = status;

@@ -44,7 +44,7 @@ Ipopt::SmartPtr<Ipopt::TNLP> make_whole_program_nlp(const std::vector<SquaresBlo
 
 /// Solves the reserves' program; fills theta and the result's status, message, counts,
 /// certification fields and solve_seconds; returns whether theta is a certified optimum.
-bool solve_whole_program(const SosSetup& setup, const SosProgramOptions& options, Eigen::VectorXd& theta,
+bool solve_whole_program(const SosSetup& setup, const SosSettings& options, Eigen::VectorXd& theta,
                          SosProgramResult& result);
 
 }  // namespace flatsos::planner::detail

@@ -6,13 +6,16 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/free_path.hpp"
 #include "flatsos/planner/joint_paths.hpp"
 #include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/planner/slp.hpp"
@@ -37,111 +40,16 @@ struct PlanCheck {
   std::string limiting_violation;
 };
 
-/// How the joint path's coefficients move (docs/method/free_path.md).
-enum class FreePathMethod {
-  /// BFGS on the bounded plan's cost as a function of the path: fastest on few path spans (1.8 s
-  /// against 17 s on 6 spans), far too slow on many.
-  ReducedQuasiNewton,
-  /// One Ipopt problem over the plan and the path per exchange round, exact first derivatives
-  /// and a Hessian from them: the same optimum on few spans, and it still converges on 24-48.
-  JointNewton,
-};
-
-/// "reduced_quasi_newton" or "joint_newton": the names the programs and summaries use.
-constexpr const char* to_string(FreePathMethod m) {
-  return m == FreePathMethod::ReducedQuasiNewton ? "reduced_quasi_newton" : "joint_newton";
-}
-/// The method of that name; std::invalid_argument naming the accepted ones otherwise.
-FreePathMethod free_path_method(const std::string& name);
-
-/// The joint path as part of the optimization (the predictive problem, not only the redundancy
-/// along a given path): each joint a clamped B-spline of `degree` on `spans` uniform spans
-/// through the same boundary derivatives as the degree-8 path (q..q''' at 0, rest at T). Its free
-/// coefficients c (degree + spans - 9 per joint) minimize V(c), the bounded plan's cost along the
-/// path of c at time points found by exchange (`method`: by BFGS with the gradient from the
-/// bounded plan's multipliers, or by Newton steps over the plan and the path together); then the
-/// plan along the optimized path is made and certified as along any path. Needs the excitation bounds (without them a
-/// path that moves faster always costs less).
-struct FreeJointPathOptions {
-  bool enabled = false;
-  FreePathMethod method = FreePathMethod::ReducedQuasiNewton;
-  int degree = 8;             ///< >= 5 (q'''' continuous); 8 holds the prescribed path exactly
-  int spans = 6;
-  /// Each span this many times as long as the one before (1: uniform). A low-effort transfer
-  /// starts fast and settles slowly, so its path needs short spans near t = 0
-  /// (docs/method/free_path.md, "Knots where the motion is fast").
-  double span_growth = 1.0;
-  int points_per_span = 2;    ///< of the flat outputs' spans, imposed from the start
-  /// The plan along the prescribed path only starts the path stage, so it is made in the
-  /// coarsest basis nested in the flat outputs' (every f-th of their S breakpoints: S / f spans
-  /// growing by growth^f, f the largest divisor of S) with at least this many spans, and carried
-  /// into the flat outputs' basis exactly. On the arm (quintic, 48 spans: 16) that plan took
-  /// 0.05 s instead of 0.20, with the same path-stage iterations and the same certified plan
-  /// (docs/method/free_path.md, "Speed"). When the coarse plan is not solved, the flat outputs'
-  /// own basis plans it. 0 (or S and above): the flat outputs' own basis.
-  int start_min_spans = 16;
-  int check_points = 3001;    ///< the dense grid on which the exchange looks for violations
-  /// Allowed excess of a and n and reserve deficit on that grid while the path moves. The plan
-  /// along the final path meets the SOS program's own tolerances: these only decide when the
-  /// path's points suffice (a deficit of 1e-3 N moves the cost by far less than 1e-6).
-  double tolerance = 1e-4;
-  double tolerance_N = 1e-3;
-  /// JointNewton: the exchange also ends once a round (after the first) changed the cost at the
-  /// points by at most this fraction: 0.1 %, the resolution at which the collocation reference's
-  /// mesh counts as converged. The plan along the final path meets every row anyway, and later
-  /// rounds move it by far less than the flat outputs' basis leaves to the optimum (0.85 % on the
-  /// arm): over seven configurations the certified plans differ from those of 1e-4 by -6e-6 to
-  /// +3e-4 of their cost, in 15 % fewer Ipopt iterations (docs/method/free_path.md, "Speed", (vi)).
-  /// 0: only when the grid holds.
-  double exchange_relative_tolerance = 1e-3;
-  double relative_tolerance = 1e-6;  ///< stop when a step lowers the cost by less than this fraction
-  int max_rounds = 20;
-  int max_path_iterations = 200;  ///< quasi-Newton steps per exchange round
-  int max_slp_iterations = 200;   ///< sequential-LP steps per evaluation of V(c)
-  int max_newton_iterations = 1000;  ///< Ipopt iterations per exchange round (JointNewton)
-  /// The plan along the optimized path gets its own torque model, and the optimized path is
-  /// faster than the prescribed one: the pieces chosen for that (OpenLoopOptions::torque) may not
-  /// follow it, and their remainders then leave no room for the reserves (the plan fails) or cost
-  /// effort. The pieces double (their growth its square root, keeping the grading), at most
-  /// `max_torque_refinements` (0 to 10) times, while that plan fails or costs more than
-  /// `torque_model_relative_gap` above the path stage's cost at its points (exact torques).
-  int max_torque_refinements = 3;
-  double torque_model_relative_gap = 5e-3;
-};
-
-/// What optimizing the joint path did (OpenLoopOptions::free_path).
-struct FreePathReport {
-  bool optimized = false;         ///< the path was optimized and the plan is along it
-  /// The plan along the degree-8 path that started the path stage, in its basis of
-  /// start_flat_output_spans spans (FreeJointPathOptions::start_min_spans; 0 when it has none).
-  double prescribed_cost_N_s = 0.0;
-  std::string prescribed_status;  ///< of that plan: "solved", "infeasible", ...
-  int start_flat_output_spans = 0;
-  double cost_at_points_N_s = 0.0;   ///< the path optimization's own cost (exact torques at its points)
-  FreePathMethod method = FreePathMethod::ReducedQuasiNewton;
-  int rounds = 0, points = 0;     ///< exchange rounds, time points
-  /// Quasi-Newton steps (ReducedQuasiNewton) or Ipopt iterations (JointNewton), then V(c)
-  /// evaluations and their LP steps (ReducedQuasiNewton only).
-  int path_iterations = 0, evaluations = 0, slp_iterations = 0;
-  /// The torque model of the plan along the optimized path: its pieces (torque.pieces, doubled
-  /// max_torque_refinements times at most) and how many plans along the path were made.
-  int final_torque_pieces = 0, final_plans = 0;
-  double seconds = 0.0;
-};
-
-/// The open-loop options (OpenLoopOptions{} is Preset::Best): the basis of the flat outputs, the
-/// torque model's pieces and the excitation bounds.
+/// The open-loop options (OpenLoopOptions{} is Preset::Best): the task, the effort, the basis of
+/// the flat outputs, the torque model's pieces, the excitation bounds and the free path.
+/// motion_planner_study.hpp holds the stages' study settings.
 struct OpenLoopOptions {
   double duration_s = 3.0;
   Eigen::VectorXd target_q_rad;       ///< rest target (qd = qdd = q''' = q'''' = 0 there)
   Eigen::VectorXd reserves_N;         ///< minimum tendon force per muscle
-  /// K pieces of degree r (K = 1, r = 0: the paper's box). K = 0 (the default): as many as the
-  /// flat outputs' spans, at least 12.
-  TorqueModelOptions torque = [] {
-    TorqueModelOptions t;
-    t.pieces = 0;
-    return t;
-  }();
+  /// What to minimize (effort.hpp): null means the model's effort_weights (FlatOutputMap::effort).
+  /// The flatness planner takes efforts linear in the tendon forces (FlatOutputMap::withEffort).
+  std::shared_ptr<const Effort> effort;
   /// The flat outputs' basis and the bounds. By default quintic B-splines on uniform spans whose
   /// number S = 0 is chosen from the model (automatic_flat_output_spans).
   SosProgramOptions sos = [] {
@@ -150,11 +58,14 @@ struct OpenLoopOptions {
     s.flat_output_spans = 0;
     return s;
   }();
+  /// K cubic pieces. K = 0 (the default): as many as the flat outputs' spans, at least 12.
+  TorqueModelOptions torque = [] {
+    TorqueModelOptions t;
+    t.pieces = 0;
+    return t;
+  }();
+  FreeJointPathOptions free_path;     ///< the joint path optimized too (off: the degree-8 path)
   int check_points = 301;             ///< dense grid of the a-posteriori check
-  FreeJointPathOptions free_path;
-  /// What to minimize (effort.hpp): null means the model's effort_weights (FlatOutputMap::effort).
-  /// The flatness planner takes efforts linear in the tendon forces (FlatOutputMap::withEffort).
-  std::shared_ptr<const Effort> effort;
 };
 
 /// Named configurations of the open-loop planner (docs/method/sos_program.md, "Presets").
@@ -231,7 +142,6 @@ struct PeriodExcitationBounds {
   bool enforce = true;
   double period_s = 0.05;
   int samples = 11;
-  int max_iterations = 100;  ///< LP steps of the bounds' sequential LP
 };
 
 struct RecedingHorizonOptions {
@@ -239,8 +149,7 @@ struct RecedingHorizonOptions {
   int grid_points = 11;               ///< torque box sampled here (the paper's grid)
   Eigen::VectorXd target_q_rad;
   Eigen::VectorXd reserves_N;
-  SlpSolver solver = SlpSolver::VertexEnumeration;  ///< the programs' default too
-  std::optional<Eigen::VectorXd> warm_start;  ///< Ipopt's start for the SLP (e.g. the last alpha), p entries
+  SlpSolver solver = SlpSolver::VertexEnumeration;
   /// Joint torque the muscles need not produce (N m per joint; empty: none): the planned
   /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
   Eigen::VectorXd torque_offset_N_m;
@@ -299,8 +208,8 @@ struct RecedingHorizonStep {
 
 /// Checks RH options against the model: horizon > 0 s, >= 2 grid points, target and reserves
 /// (>= 0 N) of the model's sizes and finite, a torque offset (if any) of one entry per joint,
-/// a warm start (if any) of one entry per flat output, enforced excitation bounds on a period in
-/// (0, horizon] with >= 2 samples. Throws std::invalid_argument naming the field.
+/// enforced excitation bounds on a period in (0, horizon] with >= 2 samples. Throws
+/// std::invalid_argument naming the field.
 void validate(const RecedingHorizonOptions& options, const FlatOutputMap& flat);
 
 /// One RH step from the measured joint state (the SLP formulation: no initial constraints on Y,
@@ -314,7 +223,6 @@ RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin
 /// The same into `step`, reusing its storage: with SlpSolver::VertexEnumeration and a step that
 /// has planned for this model before, nothing is allocated (the receding-horizon controller's
 /// inner loop) unless the bounds must move alpha (their sequential LP allocates, as does Clp).
-/// Ipopt allocates inside.
 void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                 const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                 const RecedingHorizonOptions& options, RecedingHorizonStep& step);

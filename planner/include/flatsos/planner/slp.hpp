@@ -37,15 +37,13 @@ Eigen::VectorXd slp_appendix_solution(const Eigen::MatrixXd& CY, const Eigen::Ve
 /// tests and a fast exact path. Throws std::runtime_error if no vertex is feasible.
 Eigen::VectorXd slp_vertex_enumeration(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B);
 
-/// VertexEnumeration: exact, every vertex of the feasible set (tested against Ipopt; 0.03 ms on
-/// the paper's arm, allocation-free), the default; the dual simplex solves instead when there
-/// would be more than 20000 vertices (C(m + p, p): posture-dependent moment arms stack the rows
-/// of every grid posture); both are exact, so the message stays empty.
+/// VertexEnumeration: exact, every vertex of the feasible set, allocation-free; the dual simplex
+/// solves instead when there would be more than 20000 vertices (C(m + p, p): posture-dependent
+/// moment arms stack the rows of every grid posture).
 /// Simplex: exact, Clp's dual simplex, restarted from the workspace's last basis (a receding
 /// horizon's consecutive SLPs differ little, so few pivots are left); allocates.
-/// Ipopt: the interior-point reference, 0.9 ms per solve on the paper's arm (9 iterations; 26 times the
-/// exact solver's time, which therefore stays the default).
-enum class SlpSolver { Ipopt, VertexEnumeration, Simplex };
+/// (slp_study.hpp has Ipopt's interior-point solution as a second opinion.)
+enum class SlpSolver { VertexEnumeration, Simplex };
 
 struct SlpResult {
   SolveStatus status = SolveStatus::Failed;
@@ -54,7 +52,7 @@ struct SlpResult {
   double cost_N = 0.0;         ///< c . alpha (SlpWorkspace::cost; sum(alpha) by default)
   bool used_fallback = false;  ///< the solver failed and the appendix construction was used
   int iterations = 0;
-  std::string ipopt_linear_solver;  ///< what factored Ipopt's KKT systems (empty for the others)
+  std::string ipopt_linear_solver;  ///< what factored Ipopt's KKT systems (slp_study.hpp; empty otherwise)
   double wall_seconds = 0.0;
 };
 
@@ -76,17 +74,14 @@ struct SlpWorkspace {
   Eigen::VectorXd costVector(Eigen::Index p) const { return cost.size() ? cost : Eigen::VectorXd::Ones(p); }
 };
 
-/// Solves the SLP. Ipopt starts from the appendix construction; if it fails, the result falls
-/// back to the appendix construction (feasible, status Solved, used_fallback = true, message says
-/// why). Throws std::invalid_argument for wrong sizes or NaN, FlatnessError-like
-/// std::invalid_argument if some row sum of C_Y is not positive.
-/// `warm_start` (optional, p entries): Ipopt's initial point instead of the appendix construction,
-/// e.g. the previous RH step's alpha (the simplex starts from the workspace's basis instead).
-SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::VertexEnumeration,
-                    const std::optional<Eigen::VectorXd>& warm_start = std::nullopt);
+/// Solves the SLP; if the simplex fails, the result falls back to the appendix construction
+/// (feasible, status Solved, used_fallback = true, message says why). Throws
+/// std::invalid_argument for wrong sizes or NaN, or if some row sum of C_Y is not positive
+/// (Assumption 1).
+SlpResult solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver = SlpSolver::VertexEnumeration);
 /// The same into `result`, with reusable work storage (no allocation with VertexEnumeration once
-/// both have been used for this size; Ipopt allocates inside).
-void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver,
-               const std::optional<Eigen::VectorXd>& warm_start, SlpWorkspace& workspace, SlpResult& result);
+/// both have been used for this size).
+void solve_slp(const Eigen::MatrixXd& CY, const Eigen::VectorXd& B, SlpSolver solver, SlpWorkspace& workspace,
+               SlpResult& result);
 
 }  // namespace flatsos::planner

@@ -41,44 +41,14 @@ struct FlatOutputBoundary {
   int terminal_first_order = 1;       ///< 1: Y(T) free, rates fixed (terminal equilibrium)
 };
 
-/// The solver of the exchange LPs.
-enum class ExchangeLpSolver {
-  Simplex,  ///< Clp's dual simplex: a vertex to machine precision, fast and robust (the default)
-  Ipopt,    ///< the interior-point method, kept as an independent second opinion
-};
-
-/// Settings of the exchange method that were compared while building it (tests and
-/// measurements); the defaults are the measured choices.
-struct SosExchangeStudyOptions {
-  ExchangeLpSolver lp_solver = ExchangeLpSolver::Simplex;
-  double coefficient_bound_N = 1e7;    ///< |theta| box keeping early LPs bounded
-  double prune_slack_N = 20.0;         ///< after an LP, initial points with more slack are dropped
-  int initial_interior_points = 0;     ///< uniform points per segment imposed from the start, besides its end
-};
-
 /// Bounds on what the muscles can execute: 0 <= n(t) <= 1 and a_min <= a(t) <= 1 on [0, T].
-/// They are nonlinear in Y. When the reserves-only optimum violates them on the check grid, an
-/// NLP (Ipopt; exact first derivatives through each muscle's inverse, muscles/muscle_inverse.hpp;
-/// limited-memory Hessian) imposes them at time points found by exchange on that grid, started
+/// They are nonlinear in Y. When the reserves-only optimum violates them on a dense grid, they
+/// are imposed at time points found by exchange on that grid (a sequential LP in a trust region,
+/// exact first derivatives through each muscle's inverse, muscles/muscle_inverse.hpp), started
 /// from the reserves-only optimum; the reserves stay the exact, certified constraints.
-enum class BoundsSolver {
-  SequentialLp,  ///< linearized bounds in a trust region, LPs by Clp (the default: measured faster)
-  Ipopt,         ///< Ipopt, limited-memory Hessian (a second opinion)
-};
-
 struct ExcitationBoundsOptions {
   bool enforce = true;
-  BoundsSolver solver = BoundsSolver::SequentialLp;
   double min_activation = 0.0;       ///< a >= this; 0: each muscle's own activation floor
-  int check_points = 3001;           ///< the uniform grid on which the bounds hold
-  double tolerance = 1e-8;           ///< allowed excess of a and n on that grid
-  int initial_points_per_span = 1;   ///< uniform points imposed from the start (besides violators)
-  /// Rounds of the bounded exchange (each solves at the points, then adds violated grid points).
-  /// Fast transfers need more than 20: the arm in 0.61-0.64 s with quintic splines on 12 spans
-  /// took 21-25 (each round halves the reserves' dips between points).
-  int max_rounds = 40;
-  int max_slp_iterations = 200;       ///< per round
-  int max_ipopt_iterations = 1000;
 };
 
 /// The muscles along the plan's fixed joint path: what the bounds need besides the torque model.
@@ -88,49 +58,21 @@ struct MusclesAlongPath {
   plugin::ModelWorkspace& workspace;
 };
 
-/// How the reserves' program is solved.
-enum class SosProgramMethod {
-  Exchange,      ///< the exchange method, then certificates of the near-active pieces (the default)
-  /// The whole program as one Ipopt problem: theta and a single-square Markov-Lukacs certificate
-  /// f^2 + s(1-s) g^2 of every constraint polynomial theta moves (the reference formulation,
-  /// docs/method/whole_program_nlp.md). Excitation bounds are checked, not imposed.
-  WholeProgramNlp,
-};
-
-/// "exchange" or "whole_program_nlp": the names the programs, summaries and Python use.
-constexpr const char* to_string(SosProgramMethod m) {
-  return m == SosProgramMethod::WholeProgramNlp ? "whole_program_nlp" : "exchange";
-}
-/// The method of that name; std::invalid_argument naming the accepted ones otherwise.
-SosProgramMethod sos_program_method(const std::string& name);
-
-/// Settings of the whole-program NLP.
-struct WholeProgramOptions {
-  double tolerance = 1e-10;  ///< Ipopt's tol and constr_viol_tol (the equalities are scaled to order 1)
-  int max_iterations = 3000;
-};
-
+/// The flat outputs' basis and the bounds (sos_program_study.hpp holds the solver's settings).
 struct SosProgramOptions {
-  SosProgramMethod method = SosProgramMethod::Exchange;
-  WholeProgramOptions whole_program;
   int flat_output_degree = 4;          ///< d (>= 3 keeps the excitations continuous)
   int flat_output_spans = 1;           ///< S knot spans of the B-splines
   /// Each span this many times as long as the one before (1: uniform). A low-effort transfer
   /// spends its effort in a fast start and then settles: short spans there (above 1) put the
   /// coefficients where the forces change.
   double flat_output_span_growth = 1.0;
-  double feasibility_margin_N = 1e-6;  ///< constraints are imposed >= this at the LP points
-  int max_exchange_rounds = 40;
-  bool certify = true;                 ///< Lukacs certificates for the near-active pieces
-  double near_active_N = 1.0;          ///< pieces whose minimum is below this get certified
   ExcitationBoundsOptions bounds;      ///< used when the muscles along the path are given
-  SosExchangeStudyOptions study;
 };
 
 struct SosProgramResult {
   SolveStatus status = SolveStatus::Failed;
   std::string message;                 ///< why, when not solved
-  SosProgramMethod method = SosProgramMethod::Exchange;  ///< the one that solved (or failed)
+  std::string method = "exchange";     ///< the method that solved (or failed): "exchange" or "whole_program_nlp"
   double cost_N_s = 0.0;               ///< integral of sum Y
   /// The flat outputs (N): the optimum when solved; when the bounds are infeasible, the closest
   /// plan found (for diagnosis: it violates them); otherwise none.
@@ -163,7 +105,7 @@ struct SosProgramResult {
 /// Throws std::invalid_argument for bad sizes, NaN, T <= 0, a negative reserve or a basis too
 /// small for the equalities.
 /// With `muscles` (and options.bounds.enforce) the excitation and activation bounds are part of
-/// the program.
+/// the program. The solver's settings are the measured defaults (sos_program_study.hpp).
 SosProgramResult solve_sos_program(const FlatOutputMap& flat, const TorqueModel& torque, double duration_s,
                                    const FlatOutputBoundary& boundary, const Eigen::VectorXd& reserves_N,
                                    const SosProgramOptions& options = {}, const MusclesAlongPath* muscles = nullptr);

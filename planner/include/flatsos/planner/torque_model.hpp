@@ -24,14 +24,12 @@
 
 namespace flatsos::planner {
 
+/// The pieces (torque_model_study.hpp holds their degree and sampling).
 struct TorqueModelOptions {
   int pieces = 12;                  ///< K
   /// Each piece this many times as long as the one before (1: uniform). Above 1 the short
   /// pieces follow a fast start, where uniform cubic pieces leave large remainders.
   double piece_growth = 1.0;
-  int degree = 3;                   ///< r
-  int samples_per_piece = 16;
-  double remainder_inflation = 1.25;
 };
 
 struct TorquePiece {
@@ -58,8 +56,8 @@ struct TorqueModel {
   int torque_evaluations = 0;
 };
 
-/// Throws std::invalid_argument for K < 1, r < 0, samples < 2 or fewer samples than r + 1, or a
-/// piece growth that is not finite and > 0.
+/// Cubic pieces (r = 3) fitted on 16 samples each, remainders inflated by 1.25. Throws
+/// std::invalid_argument for K < 1 or a piece growth that is not finite and > 0.
 TorqueModel build_torque_model(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
                                const TorqueModelOptions& options);
 
