@@ -1,15 +1,21 @@
-// Ipopt's CPU timers are served by flatsos (numerics/ipopt_support.cpp): libipopt's own calls of
-// CpuTime reach the monotonic wall clock, not getrusage. A problem whose objective sleeps makes
-// the difference visible: a sleeping process uses no CPU time, so only the replacement counts
-// the sleep in Ipopt's statistics.
+// What flatsos changes in Ipopt's process-wide state is scoped to its own solves
+// (numerics/ipopt_support.cpp, numerics/ipopt_dense_kkt.cpp). Inside them libipopt's calls of
+// CpuTime reach the monotonic wall clock, not getrusage, and its ma27 slot holds flatsos's dense
+// solver; outside them another library's Ipopt problem meets Ipopt's own timers and an empty
+// slot. A problem whose objective sleeps makes the timers visible: a sleeping process uses no CPU
+// time, so only the monotonic clock counts the sleep in Ipopt's statistics.
 #include <gtest/gtest.h>
 
 #include <IpIpoptApplication.hpp>
 #include <IpSolveStatistics.hpp>
 #include <IpTNLP.hpp>
+#include <HSLLoader.h>
 
 #include <chrono>
 #include <thread>
+
+#include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
+#include "numerics/ipopt_support.hpp"
 
 namespace {
 
@@ -71,15 +77,55 @@ class SleepyQuadratic : public Ipopt::TNLP {
   bool slept_ = false;
 };
 
-}  // namespace
-
-TEST(IpoptTimers, IpoptsCpuClockIsTheMonotonicWallClock) {
+// A plain Ipopt application, as another library in the process makes one.
+Ipopt::SmartPtr<Ipopt::IpoptApplication> plain_ipopt(const char* linear_solver) {
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
   app->Options()->SetIntegerValue("print_level", 0);
   app->Options()->SetStringValue("sb", "yes");
+  app->Options()->SetStringValue("linear_solver", linear_solver);
+  return app;
+}
+
+}  // namespace
+
+TEST(IpoptProcessState, InsideFlatsosSolvesIpoptsCpuClockIsTheMonotonicWallClock) {
+  flatsos::planner::set_ipopt_linear_solver(flatsos::planner::IpoptLinearSolver::Automatic);
+  Ipopt::SmartPtr<Ipopt::TNLP> nlp = new SleepyQuadratic;
+  {
+    const flatsos::planner::detail::IpoptSession session = flatsos::planner::detail::make_ipopt(1e-8, 100, *nlp);
+    EXPECT_TRUE(flatsos::planner::detail::FlatsosSolveScope::active());
+    ASSERT_EQ(session.linear_solver, flatsos::planner::IpoptLinearSolver::DenseLdlt);  // 1 variable
+    EXPECT_TRUE(LSL_isMA27available());
+    ASSERT_EQ(session->OptimizeTNLP(nlp), Ipopt::Solve_Succeeded);
+    // getrusage would count (almost) none of the 50 ms asleep.
+    EXPECT_GE(session->Statistics()->TotalCpuTime(), 0.045);
+    EXPECT_EQ(session->Statistics()->TotalSysTime(), 0.0);
+  }
+  EXPECT_FALSE(flatsos::planner::detail::FlatsosSolveScope::active());
+  EXPECT_FALSE(LSL_isMA27available());  // the slot is emptied with the session
+}
+
+TEST(IpoptProcessState, AnotherIpoptProblemKeepsIpoptsOwnTimers) {
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = plain_ipopt("mumps");
   ASSERT_EQ(app->Initialize(""), Ipopt::Solve_Succeeded);
   ASSERT_EQ(app->OptimizeTNLP(new SleepyQuadratic), Ipopt::Solve_Succeeded);
-  // getrusage would count (almost) none of the 50 ms asleep.
-  EXPECT_GE(app->Statistics()->TotalCpuTime(), 0.045);
-  EXPECT_EQ(app->Statistics()->TotalSysTime(), 0.0);
+  // getrusage's user time: the 50 ms asleep are not in it.
+  EXPECT_LT(app->Statistics()->TotalCpuTime(), 0.04);
+  EXPECT_GE(app->Statistics()->TotalCpuTime(), 0.0);
+}
+
+TEST(IpoptProcessState, AnotherIpoptProblemFindsTheMa27SlotEmptyAfterAFlatsosSolve) {
+  flatsos::planner::set_ipopt_linear_solver(flatsos::planner::IpoptLinearSolver::Automatic);
+  {  // a flatsos solve with its dense solver in the slot
+    Ipopt::SmartPtr<Ipopt::TNLP> nlp = new SleepyQuadratic;
+    const flatsos::planner::detail::IpoptSession session = flatsos::planner::detail::make_ipopt(1e-8, 100, *nlp);
+    ASSERT_EQ(session->OptimizeTNLP(nlp), Ipopt::Solve_Succeeded);
+  }
+  // Ipopt's own behaviour without HSL: asking for ma27 fails instead of running flatsos's code.
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = plain_ipopt("ma27");
+  ASSERT_EQ(app->Initialize(""), Ipopt::Solve_Succeeded);
+  const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(new SleepyQuadratic);
+  EXPECT_NE(status, Ipopt::Solve_Succeeded);
+  EXPECT_NE(status, Ipopt::Solved_To_Acceptable_Level);
+  EXPECT_FALSE(LSL_isMA27available());
 }

@@ -239,9 +239,22 @@ void dense_kkt_solve(int* n, double* a, int* /*la*/, int* iw, int* /*liw*/, doub
   solve_ldlt_in_place(a + iw[1], *n, iw + kHeader, rhs);
 }
 
-void register_dense_kkt_solver() {
-  static std::once_flag once;
-  std::call_once(once, [] { LSL_setMA27(&dense_kkt_analyse, &dense_kkt_factor, &dense_kkt_solve, &dense_kkt_defaults); });
+namespace {
+int slot_claims = 0;  // guarded by the Ipopt session lock
+}  // namespace
+
+bool claim_dense_kkt_slot() {
+  if (slot_claims == 0) {
+    if (LSL_isMA27available()) return false;  // someone else's MA27
+    LSL_setMA27(&dense_kkt_analyse, &dense_kkt_factor, &dense_kkt_solve, &dense_kkt_defaults);
+  }
+  ++slot_claims;
+  return true;
+}
+
+void return_dense_kkt_slot() {
+  if (slot_claims == 0) return;
+  if (--slot_claims == 0) LSL_setMA27(nullptr, nullptr, nullptr, nullptr);
 }
 
 }  // namespace flatsos::planner::detail

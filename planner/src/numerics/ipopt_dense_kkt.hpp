@@ -10,9 +10,16 @@
 
 namespace flatsos::planner::detail {
 
-/// Registers the dense solver for Ipopt's ma27 slot (once per process; thread-safe). Must happen
-/// before the first solve that asks for it.
-void register_dense_kkt_solver();
+/// Fills Ipopt's ma27 slot with the dense solver, for flatsos's own solves only: the slot is
+/// filled while at least one claim is held and emptied when the last is returned, so that an
+/// Ipopt problem of another library that asks for ma27 outside flatsos's solves meets Ipopt's own
+/// behaviour (it looks for an HSL library). Returns false, leaving the slot alone, when it is
+/// already filled by someone else (an HSL library loaded into the process): the caller then uses
+/// another linear solver. Callers hold the Ipopt session lock (ipopt_support.hpp), which
+/// serializes claims.
+bool claim_dense_kkt_slot();
+/// Returns a successful claim.
+void return_dense_kkt_slot();
 
 /// The calls as Ipopt makes them (exposed for tests of the calling convention; Ipopt's Fortran
 /// integer is int, checked where they are defined). Indices

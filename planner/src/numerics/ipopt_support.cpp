@@ -27,13 +27,23 @@ double seconds_of(const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-
 // CpuTime and SysTime, each a getrusage system call). On this project's virtual machines such a
 // call costs microseconds: measured, 54 % of a small LP's solve (3.6 ms for 12 iterations, 1.3 ms
 // without). Ipopt has no switch for its timers before 3.13, but libipopt calls these two functions
-// through its procedure linkage table, so the program's own definitions take their place for the
-// whole process: Ipopt's timing statistics then count monotonic wall time as CPU time and no system
-// time. Nothing in flatsos reads them, and no solve depends on them (flatsos sets no CPU-time limit).
+// through its procedure linkage table, so the program's definitions take their place. Inside
+// flatsos's own solves (FlatsosSolveScope) they read the monotonic wall clock, counted as CPU time,
+// and no system time: nothing in flatsos reads them and no solve depends on them (flatsos sets no
+// CPU-time limit). Everywhere else they are Ipopt's own: getrusage's user and system time, so an
+// Ipopt problem of another library in the same process keeps its statistics and CPU-time limit.
 // They live in this file because every Ipopt solve goes through it, so a static link keeps them.
+namespace {
+thread_local int flatsos_solves_on_thread = 0;
+
+bool cheap_timers() {
+  return flatsos_solves_on_thread > 0 && !ipopt_timers_by_getrusage.load(std::memory_order_relaxed);
+}
+}  // namespace
+
 namespace Ipopt {
 Number CpuTime() {
-  if (ipopt_timers_by_getrusage.load(std::memory_order_relaxed)) {
+  if (!cheap_timers()) {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     return seconds_of(usage.ru_utime);
@@ -43,7 +53,7 @@ Number CpuTime() {
   return static_cast<Number>(now.tv_sec) + 1e-9 * static_cast<Number>(now.tv_nsec);
 }
 Number SysTime() {
-  if (!ipopt_timers_by_getrusage.load(std::memory_order_relaxed)) return 0.0;
+  if (cheap_timers()) return 0.0;
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   return seconds_of(usage.ru_stime);
@@ -91,6 +101,23 @@ void add_linear_solver_name(std::string& names, const std::string& name) {
 
 namespace detail {
 
+FlatsosSolveScope::FlatsosSolveScope(bool holds_dense_kkt_slot) : holds_slot_(holds_dense_kkt_slot) {
+  ++flatsos_solves_on_thread;
+}
+
+FlatsosSolveScope::FlatsosSolveScope(FlatsosSolveScope&& other) noexcept
+    : live_(other.live_), holds_slot_(other.holds_slot_) {
+  other.live_ = other.holds_slot_ = false;
+}
+
+FlatsosSolveScope::~FlatsosSolveScope() {
+  if (!live_) return;
+  --flatsos_solves_on_thread;
+  if (holds_slot_) return_dense_kkt_slot();
+}
+
+bool FlatsosSolveScope::active() { return flatsos_solves_on_thread > 0; }
+
 KktDimensions kkt_dimensions(Ipopt::TNLP& problem) {
   Ipopt::Index n = 0, m = 0, nnz_jac = 0, nnz_h = 0;
   Ipopt::TNLP::IndexStyleEnum style = Ipopt::TNLP::C_STYLE;
@@ -111,13 +138,16 @@ IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem) {
     const KktDimensions kkt = kkt_dimensions(problem);
     solver = ipopt_linear_solver_for(kkt.full, kkt.condensed);
   }
-  IpoptSession session{std::unique_lock<std::recursive_mutex>(mumps), IpoptApplicationFactory(), solver};
+  std::unique_lock<std::recursive_mutex> lock(mumps);
+  // flatsos's own dense LDL^T in the slot Ipopt names ma27 (numerics/ipopt_dense_kkt.hpp), for
+  // this session only; MUMPS where the slot holds another MA27.
+  const bool dense = solver == IpoptLinearSolver::DenseLdlt && claim_dense_kkt_slot();
+  if (!dense) solver = IpoptLinearSolver::Mumps;
+  IpoptSession session{std::move(lock), FlatsosSolveScope(dense), IpoptApplicationFactory(), solver};
   Ipopt::IpoptApplication* app = Ipopt::GetRawPtr(session.app);
   app->Options()->SetIntegerValue("print_level", 0);
   app->Options()->SetStringValue("sb", "yes");  // no banner
-  if (solver == IpoptLinearSolver::DenseLdlt) {
-    // flatsos's own dense LDL^T in the slot Ipopt names ma27 (numerics/ipopt_dense_kkt.hpp).
-    register_dense_kkt_solver();
+  if (dense) {
     app->Options()->SetStringValue("linear_solver", "ma27");
     // Ipopt would ask the HSL loader for MC19 to scale the system; none is loaded.
     app->Options()->SetStringValue("linear_system_scaling", "none");

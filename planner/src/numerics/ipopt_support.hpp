@@ -18,8 +18,27 @@ namespace flatsos::planner::detail {
 /// DMUMPS_F77", measured with two planning threads). The lock is held from creation until the
 /// application (and the MUMPS instance inside it) is destroyed; members are destroyed in reverse
 /// order, so the application goes first. The same thread may open nested sessions.
+/// Marks the calling thread as inside a flatsos solve for as long as it lives: Ipopt's CPU timers
+/// then read the cheap monotonic clock (ipopt_support.cpp), and a dense-KKT claim
+/// (ipopt_dense_kkt.hpp) it holds is returned when it ends. Outside every such scope both behave
+/// as Ipopt's own. Movable, not copyable.
+class FlatsosSolveScope {
+ public:
+  explicit FlatsosSolveScope(bool holds_dense_kkt_slot);
+  FlatsosSolveScope(FlatsosSolveScope&& other) noexcept;
+  FlatsosSolveScope& operator=(FlatsosSolveScope&&) = delete;
+  FlatsosSolveScope(const FlatsosSolveScope&) = delete;
+  ~FlatsosSolveScope();
+  /// Whether the calling thread is inside a flatsos solve.
+  static bool active();
+
+ private:
+  bool live_ = true, holds_slot_ = false;
+};
+
 struct IpoptSession {
   std::unique_lock<std::recursive_mutex> lock;
+  FlatsosSolveScope scope;  // ends after the application, before the lock
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app;
   IpoptLinearSolver linear_solver = IpoptLinearSolver::Mumps;  ///< the one this application uses
   Ipopt::IpoptApplication* operator->() const { return Ipopt::GetRawPtr(app); }

@@ -3,8 +3,8 @@
 //
 // Ipopt spends most of a small problem's time in its linear solver's fixed costs: Debian's MUMPS
 // costs 0.3-0.6 ms per iteration whatever the size. flatsos therefore factors small KKT systems
-// with its own dense Bunch-Kaufman LDL^T (served through Ipopt's ma27 slot; no HSL code is used)
-// and leaves large ones to MUMPS.
+// with its own dense Bunch-Kaufman LDL^T (served through Ipopt's ma27 slot for the length of its
+// own solves; no HSL code is used) and leaves large ones to MUMPS.
 
 #include <string>
 
@@ -44,9 +44,9 @@ IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension, int condensed_dimen
 std::string ipopt_linear_solver_name(IpoptLinearSolver solver);
 
 /// Ipopt 3.11 reads its CPU timers (getrusage, about 120 system calls per iteration) whether or
-/// not anyone looks at them. flatsos serves them from the monotonic wall clock for the whole
-/// process (docs/method/ipopt_linear_solver.md); `true` restores getrusage (benchmarks measure
-/// the difference in one run). Thread-safe.
+/// not anyone looks at them. Inside flatsos's own solves they read the monotonic wall clock
+/// (elsewhere in the process they stay Ipopt's own; docs/method/ipopt_linear_solver.md); `true`
+/// restores getrusage inside them too (benchmarks measure the difference in one run). Thread-safe.
 void set_ipopt_timers_by_getrusage(bool by_getrusage);
 
 /// Appends `name` to the comma-separated list `names` unless it is there (results that gather
