@@ -17,19 +17,19 @@
 #include "allocation_counter.hpp"
 #include "default_model.hpp"
 #include "example_support.hpp"
+#include "flatsos/planner/collocation.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
+#include "flatsos/planner/receding_horizon_controller.hpp"
+#include "flatsos/planner/receding_horizon_study.hpp"
+#include "flatsos/planner/rest_state.hpp"
+#include "flatsos/planner/slp_study.hpp"
+#include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
 #include "ipopt_linear_solvers.hpp"
 #include "scaling.hpp"
 #include "scenario_inputs.hpp"
 #include "timing.hpp"
-#include "flatsos/planner/collocation.hpp"
-#include "flatsos/planner/motion_planner_study.hpp"
-#include "flatsos/planner/receding_horizon_study.hpp"
-#include "flatsos/planner/slp_study.hpp"
-#include "flatsos/planner/receding_horizon_controller.hpp"
-#include "flatsos/planner/rest_state.hpp"
-#include "flatsos/plugin/integration/forward_simulation.hpp"
-#include "flatsos/plugin/model/static_equilibrium.hpp"
-#include "flatsos/plugin/stopwatch.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
@@ -162,7 +162,7 @@ int main(int argc, char** argv) try {
               {"duration_s", o.duration_s},
               {"bounds_imposed", last.sos.bounds_imposed},
               {"bounds_check_and_solve", stats(bounds, 1e3, "ms")},
-              {"sequential_lp_iterations", last.sos.bound_slp_iterations}};
+              {"sequential_lp_iterations", last.sos.bound_sequential_lp_iterations}};
     if (last.status == fpl::SolveStatus::Solved) r["cost_Ns"] = last.sos.cost_N_s;
     if (study.sos.method == fpl::SosProgramMethod::WholeProgramNlp)
       r["nlp"] = {{"variables", last.sos.nlp_variables},

@@ -11,15 +11,15 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "default_model.hpp"
+#include "example_support.hpp"
 #include "flatsos/planner/motion_planner.hpp"
-#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "flatsos/planner/shortest_transfer.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
-#include "default_model.hpp"
-#include "example_support.hpp"
 #include "scenario_inputs.hpp"
 
 namespace fp = flatsos::plugin;

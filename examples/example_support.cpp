@@ -201,7 +201,7 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   j["excitation_bounds"] = {{"imposed", s.bounds_imposed},
                             {"rounds", s.bound_rounds},
                             {"points", s.bound_points},
-                            {"sequential_lp_iterations", s.bound_slp_iterations},
+                            {"sequential_lp_iterations", s.bound_sequential_lp_iterations},
                             {"max_excess_on_check_grid", s.max_bound_excess},
                             {"seconds", s.bounds_seconds}};
   nlohmann::json qc = nlohmann::json::object();
@@ -240,7 +240,7 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
                       {"seconds", f.seconds}};
     if (!newton) {
       j["free_path"]["evaluations"] = f.evaluations;
-      j["free_path"]["sequential_lp_iterations"] = f.slp_iterations;
+      j["free_path"]["sequential_lp_iterations"] = f.sequential_lp_iterations;
     }
   }
   if (plan.Y) {

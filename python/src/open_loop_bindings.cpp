@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/planner/shortest_transfer.hpp"
 

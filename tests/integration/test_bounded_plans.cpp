@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "flatsos/planner/motion_planner_study.hpp"
 #include "../planner/executable_plan.hpp"
 #include "../planner/scenario_fixture.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 #include "open_loop_replay.hpp"
 
 namespace fpl = flatsos::planner;
@@ -62,8 +62,8 @@ TEST_F(BoundedPlans, SequentialLpAndIpoptReachTheSameBoundedOptimum) {
   const auto ipopt = fpl::plan_open_loop(arm.flat, s0, o, by_ipopt);
   ASSERT_EQ(slp.status, fpl::SolveStatus::Solved) << slp.message;
   ASSERT_EQ(ipopt.status, fpl::SolveStatus::Solved) << ipopt.message;
-  EXPECT_GT(slp.sos.bound_slp_iterations, 0);
-  EXPECT_EQ(ipopt.sos.bound_slp_iterations, 0);
+  EXPECT_GT(slp.sos.bound_sequential_lp_iterations, 0);
+  EXPECT_EQ(ipopt.sos.bound_sequential_lp_iterations, 0);
   EXPECT_NEAR(slp.sos.cost_N_s, ipopt.sos.cost_N_s, 1e-6 * ipopt.sos.cost_N_s);
 }
 

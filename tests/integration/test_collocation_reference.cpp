@@ -16,12 +16,12 @@
 #include <utility>
 #include <vector>
 
-#include "flatsos/planner/motion_planner_study.hpp"
 #include "../planner/executable_plan.hpp"
 #include "../planner/scenario_fixture.hpp"
-#include "open_loop_replay.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/planner/collocation.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
+#include "open_loop_replay.hpp"
 
 namespace fpl = flatsos::planner;
 using flatsos::test::deg;

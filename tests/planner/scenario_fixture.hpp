@@ -4,10 +4,10 @@
 #include <memory>
 
 #include "../plugin/arm_fixture.hpp"
-#include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/motion_planner.hpp"
-#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
+#include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace flatsos::test {
 

@@ -9,8 +9,8 @@
 
 #include <cmath>
 
+#include "bounds/bound_rows.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
-#include "sos/bound_rows.hpp"
 
 namespace fpd = flatsos::planner::detail;
 namespace fm = flatsos::muscles;

@@ -10,12 +10,13 @@
 #include <random>
 #include <vector>
 
+#include "bounds/bound_rows.hpp"
 #include "executable_plan.hpp"
-#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 #include "path/free_path.hpp"
 #include "path/path_rows.hpp"
 #include "scenario_fixture.hpp"
-#include "sos/bound_rows.hpp"
+#include "sos/bound_points.hpp"
 #include "sos/sos_bounds.hpp"
 #include "sos/sos_setup.hpp"
 
@@ -60,7 +61,7 @@ class FreePath : public ::testing::Test {
     auto ws = arm.flat.makeWorkspace();
     p.setup.emplace(fpd::set_up_sos_program(arm.flat, p.prescribed.torque, o.duration_s, boundary(), o.reserves_N, sos()));
     p.initial_q_jet = arm.flat.forward(ws, s0).q;
-    p.a_min = fpd::activation_minima(arm.flat, o.sos.bounds);
+    p.a_min = fpd::activation_minima(arm.flat, o.sos.bounds.min_activation);
     return p;
   }
 

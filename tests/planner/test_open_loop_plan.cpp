@@ -4,10 +4,10 @@
 // paper's single torque box reported infeasible with the reason; bad input rejected by name.
 #include <gtest/gtest.h>
 
-#include "flatsos/planner/motion_planner_study.hpp"
+#include "dense_grid_bound.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
-#include "dense_grid_bound.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;

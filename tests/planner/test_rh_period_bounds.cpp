@@ -133,7 +133,7 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   ASSERT_EQ(reused.buffers.bounded_alpha, reused.alpha());
   ASSERT_FALSE(reused.buffers.bounds_basis.bound_row.empty());
   fpl::RecedingHorizonStep without_basis = reused;
-  without_basis.buffers.bounds_basis = fpl::SlpBasis{};
+  without_basis.buffers.bounds_basis = fpl::SequentialLpBasis{};
   // One period later.
   q[0] -= 0.05;
   qd[0] = -1.1;

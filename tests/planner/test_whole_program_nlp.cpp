@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <random>
 
-#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 #include "scenario_fixture.hpp"
 #include "sos/whole_program_nlp.hpp"
 

@@ -8,9 +8,9 @@
 #include <utility>
 
 #include "collocation/hermite_simpson.hpp"
+#include "flatness/input_checks.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
-#include "input_checks.hpp"
 #include "numerics/ipopt_support.hpp"
 
 namespace flatsos::planner {

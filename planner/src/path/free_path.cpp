@@ -8,10 +8,10 @@
 
 #include <Eigen/Dense>
 
+#include "bounds/bound_rows.hpp"
+#include "bounds/sequential_lp.hpp"
 #include "path/joint_path_nlp.hpp"
 #include "path/path_rows.hpp"
-#include "sos/bound_rows.hpp"
-#include "sos/bounds_slp.hpp"
 
 namespace flatsos::planner::detail {
 
@@ -84,22 +84,22 @@ struct Evaluation {
   std::string failure;
   double cost_N_s = std::numeric_limits<double>::infinity();
   Eigen::VectorXd c, theta, gradient;
-  SlpBasis basis;
+  SequentialLpBasis basis;
   double radius = 0.0;
-  int slp_iterations = 0;
+  int sequential_lp_iterations = 0;
   int active_reserve_rows = 0, active_bound_rows = 0;
 };
 
 class ValueFunction {
  public:
   ValueFunction(const SosSetup& setup, const FlatOutputMap& flat, const std::vector<PathPoint>& points, int path_coefficients,
-                const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, int max_slp_iterations)
-      : setup_(setup), flat_(flat), points_(points), reserves_(reserves), a_min_(a_min), max_slp_(max_slp_iterations) {
+                const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min, int max_sequential_lp_iterations)
+      : setup_(setup), flat_(flat), points_(points), reserves_(reserves), a_min_(a_min), max_slp_(max_sequential_lp_iterations) {
     v_.thetas = setup.free_coefficients;
     v_.paths = path_coefficients;
   }
 
-  int evaluations = 0, slp_iterations = 0;
+  int evaluations = 0, sequential_lp_iterations = 0;
 
   // Starts the plan's SLP from `from` (theta, basis, radius).
   Evaluation operator()(const Eigen::VectorXd& c, const Evaluation& from) {
@@ -112,18 +112,18 @@ class ValueFunction {
     // would take many doublings to grow back (as after the exchange's new points).
     e.radius = std::max(from.radius, kRoundStartRadius * (1.0 + e.theta.cwiseAbs().maxCoeff()));
     const RowsAlongPath rows = rows_along_path(setup_, flat_, points_, c, reserves_);
-    const SlpLinearPart linear{rows.lp, rows.rows_per_group, kReserveMargin_N};
+    const SequentialLpLinearPart linear{rows.lp, rows.rows_per_group, kReserveMargin_N};
     // Every candidate row in each step LP (no working set): the path's quasi-Newton steps follow
     // the multipliers of degenerate step LPs, and with the working set's other optimal vertices
     // they stopped 0.1 % higher on the arm (281.4 against 281.1 N s, at a point a random move
     // of 0.01 rad still lowers by 1.3e-4).
-    SlpSettings settings;
+    SequentialLpSettings settings;
     settings.max_iterations = max_slp_;
     settings.working_set = false;
-    const SlpOutcome slp = solve_bounds_by_slp(linear, bound_rows_of(flat_, rows.bound_points, a_min_, kBoundMargin), e.theta,
+    const SequentialLpOutcome slp = solve_by_sequential_lp(linear, bound_rows_of(flat_, rows.bound_points, a_min_, kBoundMargin), e.theta,
                                                e.radius, e.basis, settings);
-    e.slp_iterations = slp.iterations;
-    slp_iterations += slp.iterations;
+    e.sequential_lp_iterations = slp.iterations;
+    sequential_lp_iterations += slp.iterations;
     if (!slp.converged || slp.rows_violated) {
       e.failure = slp.rows_violated ? "the rows cannot be met at every point" : slp.failure;
       return e;
@@ -139,7 +139,7 @@ class ValueFunction {
  private:
   // dV/dc = -sum_k lambda_k d g_k / d c over the rows that depend on c (reserves and bounds), at
   // the points where some multiplier is not zero.
-  Eigen::VectorXd gradient(const Eigen::VectorXd& c, const Eigen::VectorXd& theta, const SlpOutcome& slp,
+  Eigen::VectorXd gradient(const Eigen::VectorXd& c, const Eigen::VectorXd& theta, const SequentialLpOutcome& slp,
                            std::size_t count) const {
     const int m = flat_.numMuscles();
     constexpr int kRows = PathRows::kRows;
@@ -348,7 +348,7 @@ FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutput
   FreePathOutcome out;
   ExchangePoints pts(setup, flat, P, o.points_per_span);
   const std::vector<PathPoint>& points = pts.points;  // V reads them as they grow
-  ValueFunction V(setup, flat, points, P.free, reserves, a_min, o.max_slp_iterations);
+  ValueFunction V(setup, flat, points, P.free, reserves, a_min, o.max_sequential_lp_iterations);
   Evaluation start;
   start.theta = theta_start;
   start.radius = 0.1 * (1.0 + theta_start.cwiseAbs().maxCoeff());
@@ -372,7 +372,7 @@ FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutput
   if (!out.converged && out.failure.empty())
     out.failure = "the joint path's exchange did not converge in " + std::to_string(out.rounds) + " rounds";
   out.evaluations = V.evaluations;
-  out.slp_iterations = V.slp_iterations;
+  out.sequential_lp_iterations = V.sequential_lp_iterations;
   if (at.theta.size()) out.theta = at.theta;
   out.times_s = pts.times;
   if (at.c.size()) out.path = P.path(at.c);
@@ -409,7 +409,7 @@ PathValue path_value(const SosSetup& setup, const FlatOutputMap& flat, const Eig
   if (c.size() != P.free) throw std::invalid_argument("path value: c has " + std::to_string(c.size()) + " entries, the path " + std::to_string(P.free));
   std::vector<PathPoint> points;
   for (double t : times) points.push_back(make_path_point(setup, flat, P, t));
-  ValueFunction V(setup, flat, points, P.free, reserves, a_min, o.max_slp_iterations);
+  ValueFunction V(setup, flat, points, P.free, reserves, a_min, o.max_sequential_lp_iterations);
   Evaluation start;
   start.theta = theta_start;
   start.radius = 0.1 * (1.0 + theta_start.cwiseAbs().maxCoeff());

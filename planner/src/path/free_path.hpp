@@ -36,7 +36,7 @@ struct FreePathOutcome {
   bool infeasible = false;       // no plan at the points even along the start path
   int rounds = 0, points = 0;
   std::vector<double> times_s;   // the exchange's time points
-  int path_iterations = 0, evaluations = 0, slp_iterations = 0;
+  int path_iterations = 0, evaluations = 0, sequential_lp_iterations = 0;
   // On the dense grid at the last check (before the last round when the exchange ended on a
   // small change of cost: FreePathStudyOptions::exchange_relative_tolerance).
   double worst_bound_excess = 0.0, min_reserve_margin_N = 0.0;

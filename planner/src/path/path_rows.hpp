@@ -14,7 +14,7 @@
 
 #include "flatsos/planner/joint_paths.hpp"
 #include "path/free_path_settings.hpp"
-#include "sos/bound_rows.hpp"
+#include "sos/bound_points.hpp"
 #include "sos/sos_setup.hpp"
 
 namespace flatsos::planner::detail {

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "sos/bound_rows.hpp"
+#include "sos/bound_points.hpp"
 
 namespace flatsos::planner::detail {
 

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "bounds/sequential_lp.hpp"
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
-#include "sos/bound_rows.hpp"
+#include "sos/bound_points.hpp"
 #include "sos/bounds_nlp.hpp"
-#include "sos/bounds_slp.hpp"
 #include "sos/sos_exchange.hpp"
 
 namespace flatsos::planner::detail {
@@ -44,7 +44,7 @@ bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, 
   const Stopwatch wall;
   const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, o.bounds);
   const GridExcess excess =
-      grid_excess(setup, mp, jets, activation_minima(mp.flat, o.bounds), theta, o.bounds.check_points);
+      grid_excess(setup, mp, jets, activation_minima(mp.flat, o.bounds.min_activation), theta, o.bounds.check_points);
   result.max_bound_excess = excess.worst;
   result.bounds_seconds = wall.seconds();
   if (excess.worst <= o.bounds.tolerance) return true;
@@ -55,7 +55,7 @@ bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, 
 }
 
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosSettings& o,
-                              Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis,
+                              Eigen::VectorXd& theta, SosProgramResult& result, SequentialLpBasis basis,
                               const BoundsWarmStart* warm) {
   const Stopwatch wall;
   if (warm) {
@@ -69,7 +69,7 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
   const BoundsSettings& bo = o.bounds;
   const FlatOutputMap& flat = mp.flat;
   const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, bo);
-  const Eigen::VectorXd a_min = activation_minima(flat, bo);
+  const Eigen::VectorXd a_min = activation_minima(flat, bo.min_activation);
   const double h = setup.duration_s / (bo.check_points - 1);
 
   const int stride = (bo.check_points - 1) % kCoarseStride == 0 ? kCoarseStride : 1;
@@ -135,16 +135,16 @@ bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const
       // points this round added need moves of newtons: growing back by doubling took about ten
       // steps per round (85 steps in 9 rounds at T = 1.5 s, 33 with this floor).
       radius = std::max(radius, kRoundStartRadius * (1.0 + theta.cwiseAbs().maxCoeff()));
-      SlpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
+      SequentialLpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
       for (const auto& c : setup.constraints) linear.rows_per_group.push_back(c.points.size());
-      SlpSettings settings;
-      settings.max_iterations = bo.max_slp_iterations;
+      SequentialLpSettings settings;
+      settings.max_iterations = bo.max_sequential_lp_iterations;
       settings.closest_rows_per_coefficient = kClosestRowsPerCoefficient;
       append_rows(flat, points, rows_points, a_min, theta, true, kBoundMargin, rows_at_theta);
       rows_points = points.size();
-      const SlpOutcome slp = solve_bounds_by_slp(linear, bound_rows_of(flat, points, a_min, kBoundMargin), theta, radius,
+      const SequentialLpOutcome slp = solve_by_sequential_lp(linear, bound_rows_of(flat, points, a_min, kBoundMargin), theta, radius,
                                                  basis, settings, &rows_at_theta);
-      result.bound_slp_iterations += slp.iterations;
+      result.bound_sequential_lp_iterations += slp.iterations;
       result.simplex_pivots += slp.lp_pivots;
       if (!slp.converged) {
         result.status = SolveStatus::Failed;

@@ -42,7 +42,7 @@ struct BoundsWarmStart {
 /// keep their status; from scratch the first step LP took 484 pivots on the arm at T = 1.5 s).
 /// `warm`: when the bounds bind, the rounds start from it instead.
 bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& muscles, const SosSettings& options,
-                              Eigen::VectorXd& theta, SosProgramResult& result, SlpBasis basis = {},
+                              Eigen::VectorXd& theta, SosProgramResult& result, SequentialLpBasis basis = {},
                               const BoundsWarmStart* warm = nullptr);
 
 /// solve_sos_program (sos_program.hpp) with the bounded exchange started from `warm`.

@@ -4,14 +4,14 @@
 #include <cmath>
 #include <sstream>
 
-#include "flatsos/planner/numerics/simplex_lp.hpp"
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
+#include "flatsos/planner/numerics/simplex_lp.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner::detail {
 
 bool solve_by_exchange(SosSetup& setup, const SosSettings& o, Eigen::VectorXd& theta, SosProgramResult& result,
-                       SlpBasis* final_basis, double tolerance_N) {
+                       SequentialLpBasis* final_basis, double tolerance_N) {
   const Stopwatch solve;
   auto& constraints = setup.constraints;
   const LinearProgram& lp = setup.lp;

@@ -19,7 +19,7 @@ namespace flatsos::planner::detail {
 /// minimum may stay (kLooseConstraintTolerance_N: a start for the bounds' exchange, which
 /// finishes the reserves'). A second call goes on from the points the first one left.
 bool solve_by_exchange(SosSetup& setup, const SosSettings& options, Eigen::VectorXd& theta,
-                       SosProgramResult& result, SlpBasis* basis = nullptr, double tolerance_N = kConstraintTolerance_N);
+                       SosProgramResult& result, SequentialLpBasis* basis = nullptr, double tolerance_N = kConstraintTolerance_N);
 
 /// Lukacs certificates (one Ipopt problem) for the pieces whose constraint minimum is below
 /// options.near_active_N; fills the certification fields and certify_seconds.

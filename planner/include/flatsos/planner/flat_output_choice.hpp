@@ -22,6 +22,7 @@
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,14 @@
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::planner {
+
+/// Thrown when C = [R; E] violates Assumption 1 of the paper (in some posture), or E has the
+/// wrong shape.
+class FlatnessError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
 
 /// How well flat outputs E satisfy Assumption 1 over a grid of postures.
 struct FlatOutputMargin {

@@ -36,20 +36,13 @@
 
 #include <Eigen/Core>
 
-#include "flatsos/plugin/model/model_workspace.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
 #include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/flat_output_choice.hpp"
+#include "flatsos/plugin/model/model_workspace.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
 namespace flatsos::planner {
-
-/// Thrown when C = [R; E] violates Assumption 1 of the paper (in some posture), or E has the
-/// wrong shape.
-class FlatnessError : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
-};
 
 /// Derivatives 0..K-1 of a vector signal at one time, one column per order (N x K).
 using Jet = Eigen::MatrixXd;

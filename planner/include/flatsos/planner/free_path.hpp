@@ -49,7 +49,7 @@ struct FreePathReport {
   int rounds = 0, points = 0;     ///< exchange rounds, time points
   /// Quasi-Newton steps (ReducedQuasiNewton) or Ipopt iterations (JointNewton), then V(c)
   /// evaluations and their LP steps (ReducedQuasiNewton only).
-  int path_iterations = 0, evaluations = 0, slp_iterations = 0;
+  int path_iterations = 0, evaluations = 0, sequential_lp_iterations = 0;
   /// The torque model of the plan along the optimized path: its pieces (the options' pieces,
   /// doubled FreePathStudyOptions::max_torque_refinements times at most) and how many plans along
   /// the path were made.

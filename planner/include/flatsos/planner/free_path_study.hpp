@@ -29,7 +29,7 @@ struct FreePathStudyOptions {
   double relative_tolerance = 1e-6;  ///< stop when a step lowers the cost by less than this fraction
   int max_rounds = 20;
   int max_path_iterations = 200;  ///< quasi-Newton steps per exchange round
-  int max_slp_iterations = 200;   ///< sequential-LP steps per evaluation of V(c)
+  int max_sequential_lp_iterations = 200;   ///< sequential-LP steps per evaluation of V(c)
   int max_newton_iterations = 1000;  ///< Ipopt iterations per exchange round (JointNewton)
   /// The plan along the optimized path gets its own torque model, and the optimized path is
   /// faster than the prescribed one: its pieces may not follow it. They double (their growth its

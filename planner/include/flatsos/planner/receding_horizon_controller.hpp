@@ -28,8 +28,8 @@
 
 #include "flatsos/planner/disturbance_observer.hpp"
 #include "flatsos/planner/excitation_fitter.hpp"
-#include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/plan_excitations.hpp"
+#include "flatsos/planner/receding_horizon_step.hpp"
 #include "flatsos/plugin/integration/closed_loop.hpp"
 #include "flatsos/plugin/io/state_table.hpp"
 

@@ -4,7 +4,7 @@
 
 #include <optional>
 
-#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/receding_horizon_step.hpp"
 
 namespace flatsos::planner {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/open_loop.hpp"
 
 namespace flatsos::planner {
 

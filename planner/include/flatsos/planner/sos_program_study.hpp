@@ -59,7 +59,7 @@ struct BoundsStudyOptions {
   int initial_points_per_span = 1;   ///< uniform points imposed from the start (besides violators)
   /// Rounds of the bounded exchange (each solves at the points, then adds violated grid points).
   int max_rounds = 40;
-  int max_slp_iterations = 200;      ///< sequential-LP steps per round
+  int max_sequential_lp_iterations = 200;      ///< sequential-LP steps per round
   int max_ipopt_iterations = 1000;   ///< BoundsSolver::Ipopt
 };
 

@@ -38,7 +38,7 @@ struct SimplexBasis {
 /// The bounds' sequential LP's last step-LP basis by row identity, kept across its iterations,
 /// exchange rounds and receding-horizon periods: each step LP differs from the last by a small
 /// move, so it restarts a few pivots from its optimum.
-struct SlpBasis {
+struct SequentialLpBasis {
   std::vector<BasisStatus> step;                                     ///< per free coefficient
   std::vector<BasisStatus> bound_row, bound_slack;                   ///< per bound row (point, muscle, row)
   std::vector<std::vector<BasisStatus>> reserve_row, reserve_slack;  ///< per reserve constraint and point

@@ -8,7 +8,7 @@
 // an exact penalty once the penalty exceeds every multiplier; steps are accepted by the ratio of
 // actual to predicted merit decrease. Near t = 0 the initial state pins the flat outputs, rows
 // move little per newton and their multipliers are large: the penalty is steered by the LP of
-// the violation alone (SlpSettings::steering) and grows tenfold whenever the iteration settles
+// the violation alone (SequentialLpSettings::steering) and grows tenfold whenever the iteration settles
 // with rows still violated. Where the violation is stationary the rows cannot be met from here:
 // converged with rows_violated.
 
@@ -18,12 +18,12 @@
 
 #include <Eigen/Core>
 
+#include "bounds/bound_rows.hpp"
 #include "flatsos/planner/numerics/simplex_lp.hpp"
-#include "sos/bound_rows.hpp"
 
 namespace flatsos::planner::detail {
 
-struct SlpOutcome {
+struct SequentialLpOutcome {
   bool converged = false;
   bool rows_violated = false;  // settled with imposed rows violated although the LP paid for it at the largest penalty
   int iterations = 0, lp_pivots = 0;
@@ -41,7 +41,7 @@ struct SlpOutcome {
 /// lp.G theta >= lp.row_lower (the reserve rows, kept as they are) and lp's variable bounds. The
 /// reserve rows come in groups whose rows may be appended between calls (the exchange: one group
 /// per constraint, a row per point): `rows_per_group` identifies each row for the basis.
-struct SlpLinearPart {
+struct SequentialLpLinearPart {
   const LinearProgram& lp;
   std::vector<std::size_t> rows_per_group;
   double reserve_margin_N = 0.0;        // reserve rows hold to half of this
@@ -51,7 +51,7 @@ struct SlpLinearPart {
 /// between calls and between rounds (new rows are appended), which the LP basis relies on.
 using NonlinearRows = std::function<BoundRowsAt(const Eigen::VectorXd& x, bool jacobian)>;
 
-struct SlpSettings {
+struct SequentialLpSettings {
   int max_iterations = 100;         ///< LP steps
   /// Settles once the step LP predicts a merit decrease below this times (1 + |merit|) (and
   /// every row holds, or the penalty has done what it can).
@@ -76,8 +76,8 @@ struct SlpSettings {
 /// violated row. `rows_at_theta`, when given, holds rows_at(theta) with its Jacobian, which is then
 /// not evaluated again; on return it holds the rows at the returned theta. An exchange round
 /// starts where the last ended: only its new points' rows are new (bound_rows.hpp, append_rows).
-SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& rows_at, Eigen::VectorXd& theta,
-                               double& radius, SlpBasis& basis, const SlpSettings& settings = {},
+SequentialLpOutcome solve_by_sequential_lp(const SequentialLpLinearPart& linear, const NonlinearRows& rows_at, Eigen::VectorXd& theta,
+                               double& radius, SequentialLpBasis& basis, const SequentialLpSettings& settings = {},
                                BoundRowsAt* rows_at_theta = nullptr);
 
 /// The bound rows of `points` (bound_rows.hpp) for theta: what the bounds of a fixed joint path add.

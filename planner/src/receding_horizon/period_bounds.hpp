@@ -4,10 +4,10 @@
 // construction instead of by the muscle clamping it. With constant flat outputs the tendon forces
 // F = C_tau (tau - offset) + C_Y alpha are affine in alpha and their rates do not depend on it,
 // so the bounds are smooth rows in the p entries of alpha: the open-loop planner's bound rows and
-// sequential LP (sos/bound_rows.hpp, sos/bounds_slp.hpp) with the SLP's C_Y alpha >= B, alpha >= 0
+// sequential LP (bounds/bound_rows.hpp, bounds/sequential_lp.hpp) with the SLP's C_Y alpha >= B, alpha >= 0
 // as the linear part, started from the SLP's optimum.
 
-#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/receding_horizon_step.hpp"
 
 namespace flatsos::planner::detail {
 

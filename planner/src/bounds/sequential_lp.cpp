@@ -1,4 +1,4 @@
-#include "sos/bounds_slp.hpp"
+#include "bounds/sequential_lp.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -99,9 +99,9 @@ NonlinearRows bound_rows_of(const FlatOutputMap& flat, const std::vector<BoundPo
   };
 }
 
-SlpOutcome solve_bounds_by_slp(const SlpLinearPart& linear, const NonlinearRows& nonlinear_rows, Eigen::VectorXd& theta,
-                               double& radius, SlpBasis& basis, const SlpSettings& settings, BoundRowsAt* rows_at_theta) {
-  SlpOutcome out;
+SequentialLpOutcome solve_by_sequential_lp(const SequentialLpLinearPart& linear, const NonlinearRows& nonlinear_rows, Eigen::VectorXd& theta,
+                               double& radius, SequentialLpBasis& basis, const SequentialLpSettings& settings, BoundRowsAt* rows_at_theta) {
+  SequentialLpOutcome out;
   const LinearProgram& lp = linear.lp;
   const Eigen::Index n = theta.size();
   if (lp.cost.size() != n || lp.G.cols() != n) throw std::logic_error("bounds SLP: the linear part has other variables than theta");

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <random>
 
-#include "sos/bounds_slp.hpp"
+#include "bounds/sequential_lp.hpp"
 
 namespace fpd = flatsos::planner::detail;
 
@@ -64,18 +64,18 @@ struct Problem {
   }
 
   struct Solved {
-    fpd::SlpOutcome outcome;
+    fpd::SequentialLpOutcome outcome;
     Eigen::VectorXd x;
   };
   Solved solve(bool working_set, int closest_rows_per_coefficient = 8) const {
-    const fpd::SlpLinearPart linear{lp, {static_cast<std::size_t>(kReserveRows)}, 1e-6};
+    const fpd::SequentialLpLinearPart linear{lp, {static_cast<std::size_t>(kReserveRows)}, 1e-6};
     Solved s{{}, Eigen::VectorXd::Zero(kVariables)};
     double radius = 0.1;
-    flatsos::planner::SlpBasis basis;
-    fpd::SlpSettings settings;
+    flatsos::planner::SequentialLpBasis basis;
+    fpd::SequentialLpSettings settings;
     settings.working_set = working_set;
     settings.closest_rows_per_coefficient = closest_rows_per_coefficient;
-    s.outcome = fpd::solve_bounds_by_slp(linear, rows, s.x, radius, basis, settings);
+    s.outcome = fpd::solve_by_sequential_lp(linear, rows, s.x, radius, basis, settings);
     return s;
   }
 };
@@ -154,17 +154,17 @@ TEST(BoundsSlp, AnInfeasibleProblemEndsAtAStationaryPointOfTheViolationSoonerWhe
     }
     return out;
   };
-  const fpd::SlpLinearPart linear{problem.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
+  const fpd::SequentialLpLinearPart linear{problem.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
   auto solve = [&](bool steering, Eigen::VectorXd& x) {
     x = Eigen::VectorXd::Zero(Problem::kVariables);
     double radius = 0.1;
-    flatsos::planner::SlpBasis basis;
-    fpd::SlpSettings settings;
+    flatsos::planner::SequentialLpBasis basis;
+    fpd::SequentialLpSettings settings;
     settings.steering = steering;
-    return fpd::solve_bounds_by_slp(linear, rows, x, radius, basis, settings);
+    return fpd::solve_by_sequential_lp(linear, rows, x, radius, basis, settings);
   };
   Eigen::VectorXd x, x_unsteered;
-  const fpd::SlpOutcome outcome = solve(true, x), unsteered = solve(false, x_unsteered);
+  const fpd::SequentialLpOutcome outcome = solve(true, x), unsteered = solve(false, x_unsteered);
   ASSERT_TRUE(outcome.converged) << outcome.failure;
   EXPECT_TRUE(outcome.rows_violated);
   ASSERT_TRUE(unsteered.converged) << unsteered.failure;
@@ -194,7 +194,7 @@ TEST(BoundsSlp, RowsGivenAtTheStartAreNotEvaluatedAgainAndComeBackAtTheEnd) {
   // evaluated. The same steps to the bit, one evaluation fewer, and the rows handed back are those
   // at the returned point.
   const Problem problem;
-  const fpd::SlpLinearPart linear{problem.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
+  const fpd::SequentialLpLinearPart linear{problem.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
   int evaluations = 0;
   const fpd::NonlinearRows counted = [&](const Eigen::VectorXd& x, bool jacobian) {
     ++evaluations;
@@ -202,15 +202,15 @@ TEST(BoundsSlp, RowsGivenAtTheStartAreNotEvaluatedAgainAndComeBackAtTheEnd) {
   };
   auto solve = [&](fpd::BoundRowsAt* given, Eigen::VectorXd& x) {
     double radius = 0.1;
-    flatsos::planner::SlpBasis basis;
+    flatsos::planner::SequentialLpBasis basis;
     evaluations = 0;
-    return fpd::solve_bounds_by_slp(linear, counted, x, radius, basis, {}, given);
+    return fpd::solve_by_sequential_lp(linear, counted, x, radius, basis, {}, given);
   };
   Eigen::VectorXd x_own = Eigen::VectorXd::Zero(Problem::kVariables), x_given = x_own;
-  const fpd::SlpOutcome own = solve(nullptr, x_own);
+  const fpd::SequentialLpOutcome own = solve(nullptr, x_own);
   const int own_evaluations = evaluations;
   fpd::BoundRowsAt rows = problem.rows(x_given, true);
-  const fpd::SlpOutcome given = solve(&rows, x_given);
+  const fpd::SequentialLpOutcome given = solve(&rows, x_given);
   ASSERT_TRUE(own.converged && given.converged) << own.failure << given.failure;
   EXPECT_EQ(given.iterations, own.iterations);
   EXPECT_EQ(x_given, x_own);

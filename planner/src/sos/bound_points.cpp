@@ -1,4 +1,4 @@
-#include "sos/bound_rows.hpp"
+#include "sos/bound_points.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -13,13 +13,6 @@
 namespace flatsos::planner::detail {
 
 namespace fm = flatsos::muscles;
-
-Eigen::VectorXd activation_minima(const FlatOutputMap& flat, const ExcitationBoundsOptions& o) {
-  Eigen::VectorXd a_min(flat.numMuscles());
-  for (int j = 0; j < flat.numMuscles(); ++j)
-    a_min[j] = o.min_activation > 0.0 ? o.min_activation : flat.model().muscle(j).getParameters().activation_floor;
-  return a_min;
-}
 
 namespace {
 
@@ -74,110 +67,6 @@ BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double 
   BoundPoint bp = point_through(setup, flat.forceJetMap(q_jet), t, &tau.tau);
   for (int j = 0; j < flat.numMuscles(); ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
   return bp;
-}
-
-CompressedRow compress_row(double r) {
-  if (std::abs(r) <= 1.0) return {r, 1.0};
-  return {std::copysign(1.0 + std::log(std::abs(r)), r), 1.0 / std::abs(r)};
-}
-
-MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::SecondOrderJet& force,
-                                  const fm::SecondOrderJet& path, double a_min, bool gradients, double margin) {
-  const fm::MuscleInverse inv = fm::invert_muscle(p, force, path, gradients);
-  MuscleBoundRows rows;
-  if (inv.stage != fm::MuscleInverse::Stage::Complete) {
-    rows.value.fill(-(kOutsideDomain + inv.domain_distance));
-    for (std::size_t k = 0; k < rows.value.size(); ++k)
-      for (std::size_t o = 0; o < 3; ++o) {
-        rows.gradient[k][o] = -inv.domain_distance_gradient[o];
-        rows.path_gradient[k][o] = -inv.path_domain_distance_gradient[o];
-      }
-    return rows;
-  }
-  rows.in_domain = true;
-  const fm::ExcitationBoundMargins m = fm::excitation_bound_margins(p, inv.activation, inv.activation_rate_per_s);
-  // Imposed with a margin (kBoundMargin at least) wider than the step LPs resolve rows (about
-  // 4e-7 with Clp's scaling), so that a row met to that resolution still leaves the plan inside.
-  const std::array<double, kRowsPerMuscle> raw = {inv.activation - a_min - margin, 1.0 - inv.activation - margin,
-                                                  m.lower - margin, m.upper - margin};
-  std::array<double, kRowsPerMuscle> slope{};
-  for (std::size_t k = 0; k < raw.size(); ++k) {
-    const CompressedRow c = compress_row(raw[k]);
-    rows.value[k] = c.value;
-    slope[k] = c.slope;
-  }
-  if (gradients)
-    for (std::size_t o = 0; o < 3; ++o) {
-      const double da = inv.activation_gradient[o], dadot = inv.activation_rate_gradient[o];
-      rows.gradient[0][o] = slope[0] * da;
-      rows.gradient[1][o] = -slope[1] * da;
-      rows.gradient[2][o] = slope[2] * (m.lower_d_activation * da + m.lower_d_rate_s * dadot);
-      rows.gradient[3][o] = slope[3] * (m.upper_d_activation * da + m.upper_d_rate_s * dadot);
-      const double pa = inv.path_activation_gradient[o], padot = inv.path_activation_rate_gradient[o];
-      rows.path_gradient[0][o] = slope[0] * pa;
-      rows.path_gradient[1][o] = -slope[1] * pa;
-      rows.path_gradient[2][o] = slope[2] * (m.lower_d_activation * pa + m.lower_d_rate_s * padot);
-      rows.path_gradient[3][o] = slope[3] * (m.upper_d_activation * pa + m.upper_d_rate_s * padot);
-    }
-  return rows;
-}
-
-MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
-                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin) {
-  double F[3];
-  for (int k = 0; k < 3; ++k) {
-    double v = bp.base(j, k);
-    const auto& s = bp.slope[static_cast<std::size_t>(k)];
-    for (std::size_t c = 0; c < bp.columns.size(); ++c) v += s(j, static_cast<Eigen::Index>(c)) * theta[bp.columns[c]];
-    F[k] = v;
-  }
-  return muscle_bound_rows(flat.model().muscle(j).getParameters(), {F[0], F[1], F[2]}, bp.path[static_cast<std::size_t>(j)],
-                           a_min, gradients, margin);
-}
-
-double column_derivative(const BoundPoint& bp, const fm::TendonForceJetGradient& g, int j, std::size_t c) {
-  double v = 0.0;
-  for (std::size_t o = 0; o < 3; ++o) v += g[o] * bp.slope[o](j, static_cast<Eigen::Index>(c));
-  return v;
-}
-
-BoundRowsAt evaluate_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& a_min,
-                          const Eigen::VectorXd& theta, bool jacobian, double margin) {
-  BoundRowsAt out;
-  append_rows(flat, points, 0, a_min, theta, jacobian, margin, out);
-  return out;
-}
-
-void append_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, std::size_t first_point,
-                 const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, bool jacobian, double margin,
-                 BoundRowsAt& out) {
-  const int m = flat.numMuscles();
-  const auto per_point = static_cast<std::size_t>(m * kRowsPerMuscle);
-  out.value.reserve(points.size() * per_point);
-  if (jacobian) {
-    std::size_t entries = out.jacobian.size();
-    for (std::size_t k = first_point; k < points.size(); ++k) entries += points[k].columns.size() * per_point;
-    out.jacobian.reserve(entries);
-  }
-  auto row = static_cast<int>(out.value.size());
-  for (std::size_t point = first_point; point < points.size(); ++point) {
-    const BoundPoint& bp = points[point];
-    for (int j = 0; j < m; ++j) {
-      const MuscleBoundRows rows = bound_rows(flat, bp, j, a_min[j], theta, jacobian, margin);
-      for (int k = 0; k < kRowsPerMuscle; ++k, ++row) {
-        out.value.push_back(rows.value[static_cast<std::size_t>(k)]);
-        out.violation += std::max(0.0, -rows.value[static_cast<std::size_t>(k)]);
-        if (jacobian)
-          for (std::size_t c = 0; c < bp.columns.size(); ++c)
-            out.jacobian.emplace_back(row, bp.columns[c], column_derivative(bp, rows.gradient[static_cast<std::size_t>(k)], j, c));
-      }
-    }
-  }
-}
-
-double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta) {
-  if (lp.G.rows() == 0) return 0.0;
-  return (lp.row_lower - lp.G * theta).cwiseMax(0.0).sum();
 }
 
 namespace {

@@ -5,7 +5,7 @@
 // tests, benchmarks and studies change them. The product's programs do not include this header.
 
 #include "flatsos/planner/free_path_study.hpp"
-#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/open_loop.hpp"
 #include "flatsos/planner/shortest_transfer.hpp"
 #include "flatsos/planner/sos_program_study.hpp"
 #include "flatsos/planner/torque_model_study.hpp"

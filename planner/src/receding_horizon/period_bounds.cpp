@@ -1,4 +1,4 @@
-#include "period_bounds.hpp"
+#include "receding_horizon/period_bounds.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "sos/bound_rows.hpp"
-#include "sos/bounds_slp.hpp"
+#include "bounds/bound_rows.hpp"
+#include "bounds/sequential_lp.hpp"
 
 namespace flatsos::planner::detail {
 
@@ -133,8 +133,8 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   lp.row_upper = Eigen::VectorXd::Constant(step.bound_N.size(), 1e19);
   lp.x_lower = Eigen::VectorXd::Zero(p);
   lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
-  const SlpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
-  const NonlinearRows rows = bound_rows_of(flat, points, activation_minima(flat, ExcitationBoundsOptions{}), kSampleMargin);
+  const SequentialLpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
+  const NonlinearRows rows = bound_rows_of(flat, points, activation_minima(flat, 0.0), kSampleMargin);
   // Start from the previous bounded step's alpha when it violates less than the SLP's optimum:
   // consecutive periods' problems differ little, so a few Newton steps remain instead of the
   // whole way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3).
@@ -147,8 +147,8 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     if (violation(previous) < violation(alpha)) alpha = previous;
   }
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
-  const SlpOutcome slp =
-      solve_bounds_by_slp(linear, rows, alpha, radius, step.buffers.bounds_basis, {max_iterations, kRelativeDecrease});
+  const SequentialLpOutcome slp =
+      solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis, {max_iterations, kRelativeDecrease});
   step.bound_iterations = slp.iterations;
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;

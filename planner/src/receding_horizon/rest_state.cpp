@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/receding_horizon_step.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 
 namespace flatsos::planner {

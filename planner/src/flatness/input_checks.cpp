@@ -1,5 +1,6 @@
-#include "input_checks.hpp"
+#include "flatness/input_checks.hpp"
 
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -30,6 +31,20 @@ void require_initial_muscle_state(const FlatOutputMap& flat, const MuscleState& 
       throw std::invalid_argument("initial state: tendon of '" + mp.name + "' is slack (" +
                                   std::to_string(initial.tendon_length_m[j]) + " m <= slack length " +
                                   std::to_string(mp.tendon_slack_length_m) + " m): flat outputs need taut tendons");
+  }
+}
+
+void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, const Eigen::VectorXd& q, const char* what) {
+  for (int j = 0; j < model.numMuscles(); ++j) {
+    const double L = model.musculotendonLength(j, q);
+    const auto& mp = model.muscle(j).getParameters();
+    if (!(L > mp.tendon_slack_length_m)) {
+      std::ostringstream why;
+      why << what << ": the musculotendon path of '" << mp.name << "' would be " << L
+          << " m long there, not longer than its tendon slack length " << mp.tendon_slack_length_m
+          << " m, so its tendon cannot be taut (are the angles in radians?)";
+      throw std::invalid_argument(why.str());
+    }
   }
 }
 

@@ -48,7 +48,7 @@ SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, dou
     finish(setup, theta, result);
     return result;
   }
-  SlpBasis basis;
+  SequentialLpBasis basis;
   const double tolerance_N = bounds ? detail::kLooseConstraintTolerance_N : detail::kConstraintTolerance_N;
   if (!detail::solve_by_exchange(setup, options, theta, result, &basis, tolerance_N)) return result;
   if (bounds) {

@@ -6,7 +6,6 @@
 
 #include <Eigen/Dense>
 
-#include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/plugin/model/posture_grid.hpp"
 
 namespace flatsos::planner {

@@ -18,4 +18,10 @@ void require_reserves(const Eigen::VectorXd& reserves_N, int muscles);
 /// activation per muscle, activations in (0, 1], taut tendons.
 void require_initial_muscle_state(const FlatOutputMap& flat, const MuscleState& initial);
 
+/// A posture where every musculotendon path is longer than its tendon's slack length, as
+/// flatness needs taut tendons (failing that, typically degrees were given as radians).
+/// Allocates nothing when it passes.
+void require_taut_tendons_possible(const plugin::MusculoskeletalModel& model, const Eigen::VectorXd& q_rad,
+                                   const char* what);
+
 }  // namespace flatsos::planner::detail

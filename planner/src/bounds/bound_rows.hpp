@@ -1,24 +1,24 @@
 #pragma once
-// The excitation and activation bounds as rows over the free coefficients theta of the flat
-// outputs: at each time point and muscle four rows ">= 0" with exact gradients (through
-// muscles::invert_muscle and muscles::excitation_bound_margins), and the same bounds checked on a
-// dense grid through the inverse map.
+// The excitation and activation bounds as rows over coefficients theta that move the tendon
+// forces: at each time point and muscle four rows ">= 0" with exact gradients (through
+// muscles::invert_muscle and muscles::excitation_bound_margins). Used by the SOS program's bounds
+// (sos/), the free path (path/) and the receding-horizon step's period bounds (receding_horizon/),
+// with the sequential LP of sequential_lp.hpp.
 
 #include <array>
-#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
 #include "flatsos/muscles/muscle_inverse.hpp"
-#include "flatsos/planner/sos_program.hpp"
-#include "sos/sos_setup.hpp"
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/numerics/linear_program.hpp"
 
 namespace flatsos::planner::detail {
 
-/// a's lower bound per muscle: the options' min_activation, or each muscle's activation floor.
-Eigen::VectorXd activation_minima(const FlatOutputMap& flat, const ExcitationBoundsOptions& o);
+/// a's lower bound per muscle: min_activation, or where that is 0 each muscle's activation floor.
+Eigen::VectorXd activation_minima(const FlatOutputMap& flat, double min_activation);
 
 /// Everything about one time point that does not depend on theta: the tendon-force jets are
 /// F^(k) = base(:, k) + slope[k] * theta(columns), k = 0, 1, 2.
@@ -29,11 +29,6 @@ struct BoundPoint {
   std::array<Eigen::MatrixXd, 3> slope; // m x columns
   std::vector<muscles::SecondOrderJet> path; // per muscle
 };
-
-BoundPoint make_point(const SosSetup& setup, const MusclesAlongPath& mp, double t);
-/// The flat outputs' part alone (base = C_Y times Y's particular jet; no torque, no path): for a
-/// joint path that is itself a variable.
-BoundPoint flat_output_point(const SosSetup& setup, const FlatOutputMap& flat, double t);
 
 /// A row r >= 0 in units of activation, compressed where |r| > 1 to sign(r) (1 + ln|r|): the same
 /// sign, so the same feasible set, and C1 (slope 1 at |r| = 1). A fibre stretched far along the
@@ -91,36 +86,5 @@ void append_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& point
 
 /// Sum of the reserve rows' violations (N) of the exchange LP in setup.lp.
 double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta);
-
-// The bounds on the check grid for the flat outputs of theta: per grid time the largest excess
-// over any muscle's bounds (0 inside; +inf where the inverse is undefined), and the worst one.
-// With a stride, every stride-th time of the grid only (the excess then has one entry per time
-// visited; `points - 1` must be a multiple of the stride).
-//
-// With stride 1 the check also looks between the grid's points: the muscle inverse turns smooth
-// force jets into sharp excitation features (during a fast throw n dipped to -1.5e-4 between
-// points 1 ms apart that all held n >= 0), and a simulator clamps such a dip. Every local
-// maximum of a muscle's signed excess within kNearBound of its bounds is maximized over its two
-// neighbouring intervals (Brent's method); maxima above the tolerance count as violations at
-// their own times. The signed excess is the rows' (uncompressed, without the margin): in
-// activation units, and it sees the fastest possible deactivation, which n does not.
-constexpr double kNearBound = 1e-2;  // which grid maxima are searched between points
-struct GridExcess {
-  std::vector<double> excess;
-  double worst = 0.0;
-  std::string worst_text;
-  int stride = 1;
-  struct BetweenPoints {
-    double t_s = 0.0, excess = 0.0;
-  };
-  std::vector<BetweenPoints> between;  // maxima between the points, above 0 (stride 1 only)
-};
-
-GridExcess grid_excess(const SosSetup& setup, const MusclesAlongPath& mp, const std::vector<TorqueJet>& jets,
-                       const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, int points, int stride = 1);
-
-// Grid times where the excess is a local maximum above the tolerance (h: the full grid's
-// spacing), then the times of the maxima between points above it.
-std::vector<double> violated_times(const GridExcess& g, double h, double tolerance);
 
 }  // namespace flatsos::planner::detail

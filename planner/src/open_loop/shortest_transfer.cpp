@@ -1,5 +1,5 @@
 #include "flatsos/planner/shortest_transfer.hpp"
-#include "flatsos/planner/motion_planner_study.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,117 @@
+#pragma once
+// One receding-horizon step (the paper's "Linear Programming Solution"): a cubic joint path to
+// rest at the target over the horizon, the torque box over its grid, the SLP for constant flat
+// outputs, and the excitation bounds on the first control period. receding_horizon_study.hpp
+// holds its study settings.
+
+#include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
+#include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "flatsos/planner/flat_outputs.hpp"
+#include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/plan_excitations.hpp"
+#include "flatsos/planner/slp.hpp"
+
+namespace flatsos::planner {
+
+/// Bounds on what an RH step's plan asks of the muscles over its first control period (what the
+/// controller applies): 0 <= n <= 1 and floor <= a <= 1 at `samples` uniform times in
+/// [0, period_s]. The RH controller sets period_s and samples to its own control period and
+/// excitation samples, so it never has an excitation to clamp.
+struct PeriodExcitationBounds {
+  bool enforce = true;
+  double period_s = 0.05;
+  int samples = 11;
+};
+
+struct RecedingHorizonOptions {
+  double horizon_s = 0.5;
+  int grid_points = 11;               ///< torque box sampled here (the paper's grid)
+  Eigen::VectorXd target_q_rad;
+  Eigen::VectorXd reserves_N;
+  SlpSolver solver = SlpSolver::VertexEnumeration;
+  /// Joint torque the muscles need not produce (N m per joint; empty: none): the planned
+  /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
+  Eigen::VectorXd torque_offset_N_m;
+  PeriodExcitationBounds excitation_bounds;
+};
+
+struct RecedingHorizonStep {
+  SolveStatus status = SolveStatus::Failed;
+  std::string message;
+  JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon
+  Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
+  /// The SLP's rows G alpha >= B. Constant moment arms: G = C_Y and B = slp_bound_vector of the
+  /// box and reserves (m rows). Posture-dependent ones: at each grid posture q_i,
+  /// C_Y(q_i) alpha >= reserves - C_tau(q_i) tau_i (grid_points x m rows, exact at the grid).
+  Eigen::MatrixXd reserve_rows;
+  Eigen::VectorXd bound_N;
+  SlpResult slp;                      ///< alpha and its cost (moved inside the bounds when they were imposed)
+  Eigen::VectorXd torque_offset_N_m;  ///< the options' offset the step was planned with (may be empty)
+  /// The SLP's optimum left the excitation bounds on the first period and the bounds' sequential
+  /// LP moved alpha inside (cost raised); its LP steps.
+  bool bounds_imposed = false;
+  int bound_iterations = 0;
+  int bound_lp_pivots = 0;  ///< the simplex pivots of those LP steps
+  /// buffers.excitations hold this step's excitations (alpha, path, offset as returned) on the
+  /// bounds' samples of the first period, so a controller need not compute them again. Set by
+  /// plan_receding_horizon_step; a planner that changes the step afterwards must clear it.
+  bool first_period_sampled = false;
+  const Eigen::VectorXd& alpha() const { return slp.alpha; }  ///< constant Y, N
+  /// The excitations the plan asks for at `count` times tau0 + i h (s from the step's start;
+  /// after the horizon the target is held at rest): count x m, what the RH controller applies
+  /// (the inverse map with Y = alpha and the torque offset). Throws std::logic_error for a step
+  /// that was not solved, std::runtime_error where they are not finite, std::invalid_argument
+  /// for count < 1, h <= 0 or tau0 < 0.
+  Eigen::MatrixXd excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, double tau0_s, double h_s,
+                              int count) const;
+  double wall_seconds = 0.0;
+  /// Where the step's time went: the horizon's grid (joint path, inverse dynamics, the SLP's
+  /// rows), the SLP (slp.wall_seconds) and the excitation bounds (sampling the first period
+  /// and, when they bind, their sequential LP).
+  double grid_seconds = 0.0, bounds_seconds = 0.0;
+  /// Work storage the in-place plan_receding_horizon_step reuses (not part of the result).
+  struct Buffers {
+    Jet joint_jet;
+    Eigen::VectorXd torque_N_m;
+    SlpWorkspace slp;
+    PlanExcitationScratch period;                  ///< the first period's samples
+    Eigen::MatrixXd excitations, activations;      ///< there: samples x m
+    /// The last alpha the bounds' sequential LP converged to: the next bounded step of a
+    /// receding horizon may start there.
+    Eigen::VectorXd bounded_alpha;
+    /// ... and its sequential LP's last basis, where the next one restarts (the rows keep their
+    /// identity from period to period: sample, muscle, bound).
+    SequentialLpBasis bounds_basis;
+  } buffers;
+};
+
+/// Checks RH options against the model: horizon > 0 s, >= 2 grid points, target and reserves
+/// (>= 0 N) of the model's sizes and finite, a torque offset (if any) of one entry per joint,
+/// enforced excitation bounds on a period in (0, horizon] with >= 2 samples. Throws
+/// std::invalid_argument naming the field.
+void validate(const RecedingHorizonOptions& options, const FlatOutputMap& flat);
+
+/// One RH step from the measured joint state (the SLP formulation: no initial constraints on Y,
+/// terminal equilibrium), with the excitation bounds on its first period (options.
+/// excitation_bounds): Infeasible when no constant alpha meets them (the message names the
+/// muscle and time). Throws std::invalid_argument for bad options (see validate) or a
+/// joint state of the wrong size or not finite.
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
+                                               const RecedingHorizonOptions& options);
+/// The same into `step`, reusing its storage: with SlpSolver::VertexEnumeration and a step that
+/// has planned for this model before, nothing is allocated (the receding-horizon controller's
+/// inner loop) unless the bounds must move alpha (their sequential LP allocates, as does Clp).
+void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
+                                const RecedingHorizonOptions& options, RecedingHorizonStep& step);
+/// The same with a temporary workspace.
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad,
+                                               const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions& options);
+
+}  // namespace flatsos::planner

@@ -1,0 +1,146 @@
+#include "flatsos/planner/receding_horizon_step.hpp"
+#include "flatsos/planner/receding_horizon_study.hpp"
+#include "flatsos/planner/slp_study.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include "flatness/input_checks.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
+#include "receding_horizon/period_bounds.hpp"
+
+namespace flatsos::planner {
+
+using detail::require;
+using detail::require_reserves;
+using detail::require_taut_tendons_possible;
+
+Eigen::MatrixXd RecedingHorizonStep::excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                                 double tau0_s, double h_s, int count) const {
+  if (status != SolveStatus::Solved) throw std::logic_error("RH step: no excitations: the step was not solved (" + message + ")");
+  if (count < 1 || !(h_s > 0.0) || !(tau0_s >= 0.0)) throw std::invalid_argument("RH step excitations: need count >= 1, h > 0 s, tau0 >= 0 s");
+  PlanExcitationScratch scratch;
+  Eigen::MatrixXd out;
+  if (!sample_plan_excitations(flat, workspace, path, alpha(), torque_offset_N_m, tau0_s, h_s, count, scratch, out))
+    throw std::runtime_error("RH step excitations: not finite (the plan leaves the model's valid domain)");
+  return out;
+}
+
+void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
+  const int n = flat.numJoints();
+  if (!(o.horizon_s > 0.0) || !std::isfinite(o.horizon_s)) throw std::invalid_argument("RH step: horizon must be > 0 s");
+  if (o.grid_points < 2) throw std::invalid_argument("RH step: need at least 2 grid points");
+  require(o.target_q_rad, n, "target joint angles");
+  require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
+  require_reserves(o.reserves_N, flat.numMuscles());
+  if (o.torque_offset_N_m.size() > 0) require(o.torque_offset_N_m, n, "torque offset");
+  const PeriodExcitationBounds& b = o.excitation_bounds;
+  if (b.enforce) {
+    if (!(b.period_s > 0.0 && b.period_s <= o.horizon_s))
+      throw std::invalid_argument("RH step: excitation_bounds.period_s must be in (0, horizon]");
+    if (b.samples < 2) throw std::invalid_argument("RH step: excitation_bounds.samples must be >= 2");
+  }
+}
+
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
+                                               const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
+  return plan_receding_horizon_step(flat, q, qd, o, RecedingHorizonStudyOptions{});
+}
+
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
+                                               const Eigen::VectorXd& qd, const RecedingHorizonOptions& o,
+                                               const RecedingHorizonStudyOptions& study) {
+  plugin::ModelWorkspace workspace = flat.makeWorkspace();
+  RecedingHorizonStep step;
+  plan_receding_horizon_step(flat, workspace, q, qd, o, study, step);
+  return step;
+}
+
+RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                               const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                               const RecedingHorizonOptions& o) {
+  RecedingHorizonStep step;
+  plan_receding_horizon_step(flat, workspace, q, qd, o, step);
+  return step;
+}
+
+void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q,
+                                const Eigen::VectorXd& qd, const RecedingHorizonOptions& o, RecedingHorizonStep& step) {
+  static const RecedingHorizonStudyOptions kProduct;  // constant: no allocation per step
+  plan_receding_horizon_step(flat, workspace, q, qd, o, kProduct, step);
+}
+
+void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q,
+                                const Eigen::VectorXd& qd, const RecedingHorizonOptions& o,
+                                const RecedingHorizonStudyOptions& study, RecedingHorizonStep& step) {
+  const Stopwatch wall;
+  const int n = flat.numJoints();
+  validate(o, flat);
+  if (study.warm_start) require(*study.warm_start, flat.numFlatOutputs(), "SLP warm start");
+  if (study.bound_max_iterations < 1) throw std::invalid_argument("RH step: bound_max_iterations must be >= 1");
+  require(q, n, "joint angles");
+  require(qd, n, "joint speeds");
+
+  step.status = SolveStatus::Failed;
+  step.message.clear();
+  step.first_period_sampled = false;
+  step.grid_seconds = step.bounds_seconds = 0.0;
+  fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
+  step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation
+  const bool offset = o.torque_offset_N_m.size() > 0;
+  step.buffers.joint_jet.resize(n, 3);
+  step.buffers.torque_N_m.resize(n);
+  step.tau_min.setConstant(n, 1e300);
+  step.tau_max.setConstant(n, -1e300);
+  const bool varying = !flat.hasConstantMomentArms();
+  const int m = flat.numMuscles();
+  // The paper's cost (sum of the flat outputs) is the SLP's default; other effort weights give
+  // the cost c = C_Y^T w of the constant flat outputs.
+  const bool flat_output_sum = flat.effortIsFlatOutputSum();
+  if (flat_output_sum) step.buffers.slp.cost.resize(0);
+  else step.buffers.slp.cost.setZero(flat.numFlatOutputs());
+  if (varying) {
+    step.reserve_rows.resize(o.grid_points * m, flat.numFlatOutputs());
+    step.bound_N.resize(o.grid_points * m);
+  }
+  for (int i = 0; i < o.grid_points; ++i) {
+    Jet& j = step.buffers.joint_jet;
+    Eigen::VectorXd& tau = step.buffers.torque_N_m;
+    const double t = o.horizon_s * i / (o.grid_points - 1);
+    step.path.jetInto(t, j);
+    flat.model().inverseDynamics(workspace, j.col(0), j.col(1), j.col(2), tau);
+    if (offset) tau -= o.torque_offset_N_m;
+    step.tau_min = step.tau_min.cwiseMin(tau);
+    step.tau_max = step.tau_max.cwiseMax(tau);
+    if (!varying) continue;
+    // C(q) along the cubic: Assumption 1 at each grid posture, then the rows exact there.
+    const std::string failure = flat.assumption1FailureAt(j.col(0));
+    if (!failure.empty()) {
+      step.message = "the horizon's joint path leaves the postures where the flat outputs are valid, at t = " +
+                     std::to_string(t) + " s " + failure;
+      step.wall_seconds = wall.seconds();
+      return;
+    }
+    const ForceJetMap map = flat.forceJetMap(j.leftCols(1));
+    step.reserve_rows.middleRows(i * m, m) = map.CY;
+    step.bound_N.segment(i * m, m) = o.reserves_N - map.Ctau * tau;
+    // The effort's flat-output part, C_Y(q)^T w, averaged over the horizon's grid.
+    if (!flat_output_sum) step.buffers.slp.cost.noalias() += map.CY.transpose() * flat.effortWeights() / o.grid_points;
+  }
+  if (!varying) {
+    step.reserve_rows = flat.CY();  // no allocation once sized
+    slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N, step.bound_N);
+    if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortWeights();
+  }
+  step.grid_seconds = wall.seconds();
+  if (study.slp_by_ipopt) solve_slp_by_ipopt(step.reserve_rows, step.bound_N, study.warm_start, step.buffers.slp, step.slp);
+  else solve_slp(step.reserve_rows, step.bound_N, o.solver, step.buffers.slp, step.slp);
+  step.status = step.slp.status;
+  step.message = step.slp.message;
+  const double before_bounds = wall.seconds();
+  detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
+  step.wall_seconds = wall.seconds();
+  step.bounds_seconds = step.wall_seconds - before_bounds;
+}
+
+}  // namespace flatsos::planner
