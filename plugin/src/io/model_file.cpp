@@ -9,12 +9,16 @@
 #include <nlohmann/json.hpp>
 
 #include "flatsos/muscles/muscle_model.hpp"
+#include "model_file_fields.hpp"
 
 namespace flatsos::plugin {
 
 using nlohmann::json;
 
 namespace {
+
+using model_file::kMuscleModelKey;
+using model_file::kOptionalMuscleFields;
 
 std::string indexed(const std::string& list, std::size_t i) {
   return list + "[" + std::to_string(i) + "]";
@@ -176,30 +180,6 @@ JointDescription read_joint(const json& j, const std::string& path, const std::s
   r.reject_unknown_keys();
   return d;
 }
-
-// The optional MuscleParameters fields, by their JSON names (read and written alike).
-struct OptionalMuscleField {
-  const char* key;
-  double muscles::MuscleParameters::*member;
-};
-constexpr OptionalMuscleField kOptionalMuscleFields[] = {
-    {"tendon_strain_at_max_force", &muscles::MuscleParameters::tendon_strain_at_max_force},
-    {"force_length_width", &muscles::MuscleParameters::force_length_width},
-    {"max_shortening_velocity_in_optimal_lengths_per_s",
-     &muscles::MuscleParameters::max_shortening_velocity_in_optimal_lengths_per_s},
-    {"hill_constant", &muscles::MuscleParameters::hill_constant},
-    {"max_eccentric_force_ratio", &muscles::MuscleParameters::max_eccentric_force_ratio},
-    {"activation_time_constant_s", &muscles::MuscleParameters::activation_time_constant_s},
-    {"deactivation_time_constant_s", &muscles::MuscleParameters::deactivation_time_constant_s},
-    {"activation_floor", &muscles::MuscleParameters::activation_floor},
-    {"pennation_angle_at_optimal_rad", &muscles::MuscleParameters::pennation_angle_at_optimal_rad},
-    {"passive_fiber_strain_at_one_norm_force", &muscles::MuscleParameters::passive_fiber_strain_at_one_norm_force},
-    {"passive_force_length_shape", &muscles::MuscleParameters::passive_force_length_shape},
-    {"activation_dynamics_smoothing", &muscles::MuscleParameters::activation_dynamics_smoothing},
-};
-
-// "muscle_model": the laws the muscle follows, by name (muscle_model.hpp).
-constexpr const char* kMuscleModelKey = "muscle_model";
 
 void read_optional_muscle_fields(ObjectReader& r, muscles::MuscleParameters& p) {
   if (r.find(kMuscleModelKey)) {
@@ -421,102 +401,6 @@ ModelDescription load_model_file(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return parse_model_json(text.str(), path);
-}
-
-namespace {
-
-json vec3_json(const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); }
-json vector_json(const Eigen::VectorXd& v, double factor = 1.0) {
-  json out = json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(v[i] * factor);
-  return out;
-}
-
-json muscle_json(const MuscleDescription& m, const std::vector<JointDescription>& joints) {
-  const muscles::MuscleParameters& p = m.parameters;
-  json out = {{"name", p.name},
-              {"max_isometric_force_N", p.max_isometric_force_N},
-              {"optimal_fiber_length_m", p.optimal_fiber_length_m},
-              {"tendon_slack_length_m", p.tendon_slack_length_m}};
-  muscles::MuscleParameters defaults;
-  if (p.model && p.model != defaults.model) {
-    out[kMuscleModelKey] = p.model->name();
-    p.model->setDefaults(defaults);
-  }
-  for (const auto& field : kOptionalMuscleFields)
-    if (p.*field.member != defaults.*field.member) out[field.key] = p.*field.member;
-  if (m.polynomial_path) {
-    const PolynomialPathDescription& d = *m.polynomial_path;
-    out["path"] = {{"coordinates", d.coordinates}, {"order", d.order}, {"coefficients", d.coefficients}};
-    if (!d.held_coordinates_rad.empty()) out["path"]["held_coordinates"] = d.held_coordinates_rad;
-  } else {
-    out["length_at_zero_angles_m"] = m.length_at_zero_angles_m;
-    json arms = json::object();
-    for (std::size_t i = 0; i < joints.size(); ++i)
-      if (m.moment_arms_m[static_cast<Eigen::Index>(i)] != 0.0) arms[joints[i].name] = m.moment_arms_m[static_cast<Eigen::Index>(i)];
-    out["moment_arms_m"] = arms;
-  }
-  return out;
-}
-
-}  // namespace
-
-std::string model_json_text(const ModelDescription& model) {
-  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-  json out = json::object();
-  if (!model.name.empty()) out["name"] = model.name;
-  out["gravity_m_per_s2"] = vec3_json(model.gravity_m_per_s2);
-  for (const auto& b : model.bodies) {
-    json body = {{"name", b.name}, {"mass_kg", b.mass_kg}, {"mass_center_m", vec3_json(b.mass_center_m)}};
-    const Eigen::Vector3d& I = b.principal_inertia_kg_m2;
-    const Eigen::Vector3d& P = b.product_inertia_kg_m2;
-    body["inertia_about_mass_center_kg_m2"] = json::array({I[0], I[1], I[2], P[0], P[1], P[2]});
-    if (b.length_m > 0.0) body["length_m"] = b.length_m;
-    out["bodies"].push_back(body);
-  }
-  for (const auto& d : model.joints) {
-    json joint = {{"name", d.name},
-                  {"type", "pin"},
-                  {"parent", d.parent},
-                  {"child", d.child},
-                  {"location_in_parent_m", vec3_json(d.location_in_parent_m)},
-                  {"axis", vec3_json(d.axis)}};
-    if (!d.coordinate.empty()) joint["coordinate"] = d.coordinate;
-    if (d.hasRange()) joint["range_rad"] = json::array({d.range_rad[0], d.range_rad[1]});
-    if (d.limit.stiffness_N_m_per_rad > 0.0)
-      joint["limit_torque"] = {{"stiffness_N_m_per_rad", d.limit.stiffness_N_m_per_rad},
-                               {"transition_rad", d.limit.transition_rad},
-                               {"damping_N_m_s_per_rad", d.limit.damping_N_m_s_per_rad}};
-    out["joints"].push_back(joint);
-  }
-  for (const auto& m : model.muscles) out["muscles"].push_back(muscle_json(m, model.joints));
-  for (const auto& y : model.flat_outputs) {
-    json weights = json::object();
-    for (std::size_t j = 0; j < model.muscles.size(); ++j)
-      if (y.weights[static_cast<Eigen::Index>(j)] != 0.0) weights[model.muscles[j].parameters.name] = y.weights[static_cast<Eigen::Index>(j)];
-    out["flat_outputs"].push_back({{"name", y.name}, {"weights", weights}});
-  }
-  switch (model.effort_weights.kind) {
-    case EffortWeights::Kind::Default: break;
-    case EffortWeights::Kind::FlatOutputs: out["effort_weights"] = "flat_outputs"; break;
-    case EffortWeights::Kind::NormalizedTendonForce: out["effort_weights"] = "normalized_tendon_force"; break;
-    case EffortWeights::Kind::PerMuscle:
-      for (std::size_t j = 0; j < model.muscles.size(); ++j)
-        out["effort_weights"][model.muscles[j].parameters.name] = model.effort_weights.per_muscle[static_cast<Eigen::Index>(j)];
-      break;
-  }
-  for (const auto& [name, sc] : model.scenarios) {
-    json s = json::object();
-    if (sc.q0_rad.size()) s["q0_deg"] = vector_json(sc.q0_rad, kDegPerRad);
-    if (sc.qd0_rad_per_s.size()) s["qd0_deg_per_s"] = vector_json(sc.qd0_rad_per_s, kDegPerRad);
-    if (sc.activations.size()) s["activations"] = vector_json(sc.activations);
-    if (sc.target_q_rad.size()) s["target_deg"] = vector_json(sc.target_q_rad, kDegPerRad);
-    if (sc.duration_s > 0.0) s["duration_s"] = sc.duration_s;
-    if (sc.reserves_N.size()) s["reserves_N"] = vector_json(sc.reserves_N);
-    out["scenarios"][name] = s;
-  }
-  if (!model.provenance_json.empty()) out["provenance"] = json::parse(model.provenance_json);
-  return out.dump(2) + "\n";
 }
 
 }  // namespace flatsos::plugin

@@ -113,10 +113,11 @@ struct FrameRecord {
   std::string body;
   Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
 };
+using FrameRecords = std::vector<std::pair<std::string, FrameRecord>>;
 
 // A joint's socket: one of its own PhysicalOffsetFrames (by name or "<joint>/<frame>"), or a body.
-FrameRecord resolve_frame(const Reader& r, const std::string& socket, const std::vector<std::pair<std::string, FrameRecord>>& frames,
-                          const std::set<std::string>& bodies, const std::string& where) {
+FrameRecord resolve_frame(const Reader& r, const std::string& socket, const FrameRecords& frames, const std::set<std::string>& bodies,
+                          const std::string& where) {
   const std::string name = last_component(socket);
   for (const auto& [frame_name, record] : frames)
     if (frame_name == name) return record;
@@ -124,30 +125,30 @@ FrameRecord resolve_frame(const Reader& r, const std::string& socket, const std:
   r.fail(where, "frame '" + socket + "' is neither one of the joint's frames nor a body");
 }
 
-OpenSimJoint read_joint(const Reader& r, Element& e, const std::set<std::string>& bodies, std::vector<OpenSimCoordinate>& coordinates) {
-  OpenSimJoint j;
-  j.type = e.getElementTag();
-  j.name = e.getOptionalAttributeValue("name", "");
-  const std::string where = j.type + " '" + j.name + "'";
-  if (j.name.empty()) r.fail("JointSet", "a " + j.type + " without a name");
-
-  std::vector<std::pair<std::string, FrameRecord>> frames;
-  if (e.hasElement("frames")) {
-    Element list = e.getRequiredElement("frames");
-    for (auto it = list.element_begin("PhysicalOffsetFrame"); it != list.element_end(); ++it) {
-      Element f = *it;
-      const std::string frame_name = f.getOptionalAttributeValue("name", "");
-      const std::string at = where + ".frames." + frame_name;
-      if (!f.hasElement("socket_parent")) r.fail(at, "missing <socket_parent>");
-      const std::string parent = last_component(f.getRequiredElementValue("socket_parent"));
-      if (parent != "ground" && !bodies.count(parent))
-        r.fail(at + ".socket_parent", "'" + parent + "' is not a body (offsets of offsets are not read)");
-      FrameRecord record{parent, Eigen::Isometry3d::Identity()};
-      record.offset.translation() = r.vec3(f, "translation", at);
-      record.offset.linear() = body_fixed_xyz(r.vec3(f, "orientation", at));
-      frames.emplace_back(frame_name, record);
-    }
+// The joint's own PhysicalOffsetFrames, each on a body.
+FrameRecords read_offset_frames(const Reader& r, Element& e, const std::set<std::string>& bodies, const std::string& where) {
+  FrameRecords frames;
+  if (!e.hasElement("frames")) return frames;
+  Element list = e.getRequiredElement("frames");
+  for (auto it = list.element_begin("PhysicalOffsetFrame"); it != list.element_end(); ++it) {
+    Element f = *it;
+    const std::string frame_name = f.getOptionalAttributeValue("name", "");
+    const std::string at = where + ".frames." + frame_name;
+    if (!f.hasElement("socket_parent")) r.fail(at, "missing <socket_parent>");
+    const std::string parent = last_component(f.getRequiredElementValue("socket_parent"));
+    if (parent != "ground" && !bodies.count(parent))
+      r.fail(at + ".socket_parent", "'" + parent + "' is not a body (offsets of offsets are not read)");
+    FrameRecord record{parent, Eigen::Isometry3d::Identity()};
+    record.offset.translation() = r.vec3(f, "translation", at);
+    record.offset.linear() = body_fixed_xyz(r.vec3(f, "orientation", at));
+    frames.emplace_back(frame_name, record);
   }
+  return frames;
+}
+
+// The joint's parent and child bodies with the offsets of its frames on them.
+void read_sockets(const Reader& r, Element& e, const std::set<std::string>& bodies, const std::string& where, OpenSimJoint& j) {
+  const FrameRecords frames = read_offset_frames(r, e, bodies, where);
   for (const char* socket : {"socket_parent_frame", "socket_child_frame"})
     if (!e.hasElement(socket)) r.fail(where, std::string("missing <") + socket + ">");
   const FrameRecord parent = resolve_frame(r, e.getRequiredElementValue("socket_parent_frame"), frames, bodies, where + ".socket_parent_frame");
@@ -157,68 +158,83 @@ OpenSimJoint read_joint(const Reader& r, Element& e, const std::set<std::string>
   j.child_body = child.body;
   j.child_offset = child.offset;
   if (j.child_body == "ground") r.fail(where + ".socket_child_frame", "ground cannot be a joint's child");
+}
 
-  const std::size_t first_coordinate = coordinates.size();
-  if (e.hasElement("coordinates")) {
-    Element list = e.getRequiredElement("coordinates");
-    for (auto it = list.element_begin("Coordinate"); it != list.element_end(); ++it) {
-      Element c = *it;
-      OpenSimCoordinate coordinate;
-      coordinate.name = c.getOptionalAttributeValue("name", "");
-      coordinate.joint = j.name;
-      const std::string at = where + ".Coordinate '" + coordinate.name + "'";
-      if (coordinate.name.empty()) r.fail(where, "a Coordinate without a name");
-      coordinate.default_value = r.optional_number(c, "default_value", at, 0.0);
-      if (c.hasElement("range")) {
-        const std::vector<double> range = r.numbers(c, "range", at, 2);
-        if (!(range[0] <= range[1])) r.fail(at + ".range", "lower end above upper end");
-        coordinate.range = {range[0], range[1]};
-      } else {
-        coordinate.range = {-SimTK::Infinity, SimTK::Infinity};
-      }
-      coordinate.locked = c.getOptionalElementValueAs<bool>("locked", false);
-      coordinates.push_back(coordinate);
-      j.coordinates.push_back(coordinate.name);
+// The joint's coordinates, appended to the model's and named in the joint.
+void read_coordinates(const Reader& r, Element& e, const std::string& where, OpenSimJoint& j, std::vector<OpenSimCoordinate>& coordinates) {
+  if (!e.hasElement("coordinates")) return;
+  Element list = e.getRequiredElement("coordinates");
+  for (auto it = list.element_begin("Coordinate"); it != list.element_end(); ++it) {
+    Element c = *it;
+    OpenSimCoordinate coordinate;
+    coordinate.name = c.getOptionalAttributeValue("name", "");
+    coordinate.joint = j.name;
+    const std::string at = where + ".Coordinate '" + coordinate.name + "'";
+    if (coordinate.name.empty()) r.fail(where, "a Coordinate without a name");
+    coordinate.default_value = r.optional_number(c, "default_value", at, 0.0);
+    if (c.hasElement("range")) {
+      const std::vector<double> range = r.numbers(c, "range", at, 2);
+      if (!(range[0] <= range[1])) r.fail(at + ".range", "lower end above upper end");
+      coordinate.range = {range[0], range[1]};
+    } else {
+      coordinate.range = {-SimTK::Infinity, SimTK::Infinity};
     }
+    coordinate.locked = c.getOptionalElementValueAs<bool>("locked", false);
+    coordinates.push_back(coordinate);
+    j.coordinates.push_back(coordinate.name);
   }
+}
 
-  auto axis_of = [&](Element& a, const std::string& at) {
-    Eigen::Vector3d axis = r.vec3(a, "axis", at);
-    if (!(axis.norm() > 0.0)) r.fail(at + ".axis", "has length 0");
-    return Eigen::Vector3d(axis.normalized());
-  };
-  if (j.type == "PinJoint" || j.type == "SliderJoint") {
-    if (j.coordinates.size() != 1) r.fail(where, "needs exactly one coordinate");
+// A PinJoint's or SliderJoint's one axis: about z or along x, turned by its one coordinate.
+void add_pin_or_slider_axis(const Reader& r, const std::string& where, OpenSimJoint& j) {
+  if (j.coordinates.size() != 1) r.fail(where, "needs exactly one coordinate");
+  OpenSimTransformAxis axis;
+  axis.name = j.type == "PinJoint" ? "rotation" : "translation";
+  axis.rotation = j.type == "PinJoint";
+  axis.axis = j.type == "PinJoint" ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
+  axis.coordinates = j.coordinates;
+  axis.function = OpenSimFunction::identity();
+  j.axes.push_back(axis);
+}
+
+// A CustomJoint's SpatialTransform: its TransformAxes, rotations first.
+void read_spatial_transform(const Reader& r, Element& e, const std::string& where, OpenSimJoint& j) {
+  if (!e.hasElement("SpatialTransform")) r.fail(where, "missing <SpatialTransform>");
+  Element transform = e.getRequiredElement("SpatialTransform");
+  for (auto it = transform.element_begin("TransformAxis"); it != transform.element_end(); ++it) {
+    Element a = *it;
     OpenSimTransformAxis axis;
-    axis.name = j.type == "PinJoint" ? "rotation" : "translation";
-    axis.rotation = j.type == "PinJoint";
-    axis.axis = j.type == "PinJoint" ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
-    axis.coordinates = j.coordinates;
-    axis.function = OpenSimFunction::identity();
+    axis.name = a.getOptionalAttributeValue("name", "");
+    const std::string at = where + ".SpatialTransform." + axis.name;
+    axis.rotation = axis.name.rfind("rotation", 0) == 0;
+    if (!axis.rotation && axis.name.rfind("translation", 0) != 0)
+      r.fail(at, "a TransformAxis must be named rotation1..3 or translation1..3");
+    axis.axis = r.vec3(a, "axis", at);
+    if (!(axis.axis.norm() > 0.0)) r.fail(at + ".axis", "has length 0");
+    axis.axis.normalize();
+    axis.coordinates = words(a.getOptionalElementValue("coordinates", ""));
+    for (const std::string& c : axis.coordinates)
+      if (std::find(j.coordinates.begin(), j.coordinates.end(), c) == j.coordinates.end())
+        r.fail(at + ".coordinates", "'" + c + "' is not one of the joint's coordinates");
+    axis.function = r.function(a, at);
+    if (axis.function.typeName() == "(none)")
+      axis.function = axis.coordinates.size() == 1 ? OpenSimFunction::identity() : OpenSimFunction::constant(0.0);
     j.axes.push_back(axis);
-  } else if (j.type == "CustomJoint") {
-    if (!e.hasElement("SpatialTransform")) r.fail(where, "missing <SpatialTransform>");
-    Element transform = e.getRequiredElement("SpatialTransform");
-    for (auto it = transform.element_begin("TransformAxis"); it != transform.element_end(); ++it) {
-      Element a = *it;
-      OpenSimTransformAxis axis;
-      axis.name = a.getOptionalAttributeValue("name", "");
-      const std::string at = where + ".SpatialTransform." + axis.name;
-      axis.rotation = axis.name.rfind("rotation", 0) == 0;
-      if (!axis.rotation && axis.name.rfind("translation", 0) != 0)
-        r.fail(at, "a TransformAxis must be named rotation1..3 or translation1..3");
-      axis.axis = axis_of(a, at);
-      axis.coordinates = words(a.getOptionalElementValue("coordinates", ""));
-      for (const std::string& c : axis.coordinates)
-        if (std::find(j.coordinates.begin(), j.coordinates.end(), c) == j.coordinates.end())
-          r.fail(at + ".coordinates", "'" + c + "' is not one of the joint's coordinates");
-      axis.function = r.function(a, at);
-      if (axis.function.typeName() == "(none)")
-        axis.function = axis.coordinates.size() == 1 ? OpenSimFunction::identity() : OpenSimFunction::constant(0.0);
-      j.axes.push_back(axis);
-    }
-    std::stable_partition(j.axes.begin(), j.axes.end(), [](const OpenSimTransformAxis& a) { return a.rotation; });
   }
+  std::stable_partition(j.axes.begin(), j.axes.end(), [](const OpenSimTransformAxis& a) { return a.rotation; });
+}
+
+OpenSimJoint read_joint(const Reader& r, Element& e, const std::set<std::string>& bodies, std::vector<OpenSimCoordinate>& coordinates) {
+  OpenSimJoint j;
+  j.type = e.getElementTag();
+  j.name = e.getOptionalAttributeValue("name", "");
+  const std::string where = j.type + " '" + j.name + "'";
+  if (j.name.empty()) r.fail("JointSet", "a " + j.type + " without a name");
+  read_sockets(r, e, bodies, where, j);
+  const std::size_t first_coordinate = coordinates.size();
+  read_coordinates(r, e, where, j, coordinates);
+  if (j.type == "PinJoint" || j.type == "SliderJoint") add_pin_or_slider_axis(r, where, j);
+  else if (j.type == "CustomJoint") read_spatial_transform(r, e, where, j);
   // A coordinate is a translation when only translation axes use it.
   for (std::size_t k = first_coordinate; k < coordinates.size(); ++k) {
     bool rotates = false, translates = false;

@@ -96,28 +96,49 @@ muscles::MusculotendonPath build_path(const ModelDescription& model, int j, cons
   return path;
 }
 
-}  // namespace
+// validate()'s checks, in the order they run; each throws ModelFileError naming the field.
+class Validation {
+ public:
+  Validation(const ModelDescription& model, const std::string& source) : model_(model), source_(source) {}
 
-void validate(const ModelDescription& model, const std::string& source) {
-  auto fail = [&](const std::string& where, const std::string& what) {
-    throw ModelFileError("model file '" + source + "': " + where + ": " + what);
-  };
-  if (model.bodies.empty()) fail("bodies", "must not be empty");
-  if (model.joints.empty()) fail("joints", "must not be empty");
-  if (model.muscles.empty()) fail("muscles", "must not be empty");
-  if (!model.gravity_m_per_s2.allFinite()) fail("gravity_m_per_s2", "must be finite");
+  void run() const {
+    if (model_.bodies.empty()) fail("bodies", "must not be empty");
+    if (model_.joints.empty()) fail("joints", "must not be empty");
+    if (model_.muscles.empty()) fail("muscles", "must not be empty");
+    if (!model_.gravity_m_per_s2.allFinite()) fail("gravity_m_per_s2", "must be finite");
+    const std::set<std::string> body_names = checkBodies();
+    checkJointTree(body_names);
+    checkJointRangesAndLimits();
+    checkEffortWeights();
+    checkMuscles();
+    checkScenarios();
+    checkFlatOutputs();
+  }
 
-  std::set<std::string> body_names;
-  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
-    const auto& b = model.bodies[i];
-    if (b.name == "ground") fail(indexed("bodies", i) + ".name", "'ground' is reserved");
-    if (!body_names.insert(b.name).second)
-      fail(indexed("bodies", i) + ".name", "duplicate body name '" + b.name + "'");
-    if (!(b.mass_kg > 0.0) || !std::isfinite(b.mass_kg)) fail(indexed("bodies", i) + ".mass_kg", "must be > 0");
-    // Simbody stores the inertia about the body origin: a mass centre far out (found by the fuzzer:
-    // 1e38 m) swamps the central inertia in rounding and Simbody aborts on the result.
-    if (!b.mass_center_m.allFinite() || b.mass_center_m.norm() > 100.0)
-      fail(indexed("bodies", i) + ".mass_center_m", "must be finite and within 100 m of the body frame");
+ private:
+  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+    throw ModelFileError("model file '" + source_ + "': " + where + ": " + what);
+  }
+
+  // The bodies' names, once each checked.
+  std::set<std::string> checkBodies() const {
+    std::set<std::string> body_names;
+    for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
+      const auto& b = model_.bodies[i];
+      if (b.name == "ground") fail(indexed("bodies", i) + ".name", "'ground' is reserved");
+      if (!body_names.insert(b.name).second)
+        fail(indexed("bodies", i) + ".name", "duplicate body name '" + b.name + "'");
+      if (!(b.mass_kg > 0.0) || !std::isfinite(b.mass_kg)) fail(indexed("bodies", i) + ".mass_kg", "must be > 0");
+      // Simbody stores the inertia about the body origin: a mass centre far out (found by the fuzzer:
+      // 1e38 m) swamps the central inertia in rounding and Simbody aborts on the result.
+      if (!b.mass_center_m.allFinite() || b.mass_center_m.norm() > 100.0)
+        fail(indexed("bodies", i) + ".mass_center_m", "must be finite and within 100 m of the body frame");
+      checkInertia(b, i);
+    }
+    return body_names;
+  }
+
+  void checkInertia(const BodyDescription& b, std::size_t i) const {
     // The conditions Simbody's Inertia demands (it throws its own message otherwise).
     const Eigen::Vector3d& I = b.principal_inertia_kg_m2;
     const Eigen::Vector3d& P = b.product_inertia_kg_m2;  // Ixy, Ixz, Iyz
@@ -138,122 +159,151 @@ void validate(const ModelDescription& model, const std::string& source) {
       fail(indexed("bodies", i) + ".mass_kg", "too large for the body's inertia: its moment about the joint swamps "
                                               "the inertia about the mass centre in rounding");
   }
+
   // Joints: parents first, every body attached exactly once (a tree rooted at ground).
-  std::set<std::string> attached = {"ground"}, joint_names;
-  for (std::size_t i = 0; i < model.joints.size(); ++i) {
-    const auto& jd = model.joints[i];
-    const std::string at = indexed("joints", i);
-    if (!joint_names.insert(jd.name).second) fail(at + ".name", "duplicate joint name '" + jd.name + "'");
-    if (jd.coordinate.find('/') != std::string::npos) fail(at + ".coordinate", "must be a name without '/'");
-    if (!body_names.count(jd.child)) fail(at + ".child", "unknown body '" + jd.child + "'");
-    if (jd.parent != "ground" && !body_names.count(jd.parent))
-      fail(at + ".parent", "unknown body '" + jd.parent + "'");
-    if (!attached.count(jd.parent))
-      fail(at + ".parent", "body '" + jd.parent + "' is not attached yet: list parent joints first");
-    if (!attached.insert(jd.child).second)
-      fail(at + ".child", "body '" + jd.child + "' already has a joint");
+  void checkJointTree(const std::set<std::string>& body_names) const {
+    std::set<std::string> attached = {"ground"}, joint_names;
+    for (std::size_t i = 0; i < model_.joints.size(); ++i) {
+      const auto& jd = model_.joints[i];
+      const std::string at = indexed("joints", i);
+      if (!joint_names.insert(jd.name).second) fail(at + ".name", "duplicate joint name '" + jd.name + "'");
+      if (jd.coordinate.find('/') != std::string::npos) fail(at + ".coordinate", "must be a name without '/'");
+      if (!body_names.count(jd.child)) fail(at + ".child", "unknown body '" + jd.child + "'");
+      if (jd.parent != "ground" && !body_names.count(jd.parent))
+        fail(at + ".parent", "unknown body '" + jd.parent + "'");
+      if (!attached.count(jd.parent))
+        fail(at + ".parent", "body '" + jd.parent + "' is not attached yet: list parent joints first");
+      if (!attached.insert(jd.child).second)
+        fail(at + ".child", "body '" + jd.child + "' already has a joint");
+    }
+    for (const auto& b : model_.bodies)
+      if (!attached.count(b.name)) fail("bodies", "body '" + b.name + "' has no joint");
   }
-  for (const auto& b : model.bodies)
-    if (!attached.count(b.name)) fail("bodies", "body '" + b.name + "' has no joint");
-  for (std::size_t i = 0; i < model.joints.size(); ++i) {
-    const auto& r = model.joints[i].range_rad;
-    const bool unbounded = r[0] == -std::numeric_limits<double>::infinity() && r[1] == std::numeric_limits<double>::infinity();
-    if (!unbounded && !(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] < r[1]))
-      fail(indexed("joints", i) + ".range_rad", "must be [lower, upper] with finite lower < upper (got [" +
-                                                    std::to_string(r[0]) + ", " + std::to_string(r[1]) + "])");
-    const JointLimitTorque& limit = model.joints[i].limit;
-    const std::string at = indexed("joints", i) + ".limit_torque";
-    if (limit.stiffness_N_m_per_rad != 0.0 || limit.transition_rad != 0.0 || limit.damping_N_m_s_per_rad != 0.0) {
-      if (!(std::isfinite(limit.stiffness_N_m_per_rad) && limit.stiffness_N_m_per_rad > 0.0))
-        fail(at + ".stiffness_N_m_per_rad", "must be finite and > 0 (got " + std::to_string(limit.stiffness_N_m_per_rad) + ")");
-      if (!(std::isfinite(limit.transition_rad) && limit.transition_rad > 0.0))
-        fail(at + ".transition_rad", "must be finite and > 0 (got " + std::to_string(limit.transition_rad) + ")");
-      if (!(std::isfinite(limit.damping_N_m_s_per_rad) && limit.damping_N_m_s_per_rad >= 0.0))
-        fail(at + ".damping_N_m_s_per_rad", "must be finite and >= 0 (got " + std::to_string(limit.damping_N_m_s_per_rad) + ")");
-      if (!model.joints[i].hasRange()) fail(indexed("joints", i) + ".range_rad", "required: the joint has a limit torque, which acts beyond its range");
+
+  void checkJointRangesAndLimits() const {
+    for (std::size_t i = 0; i < model_.joints.size(); ++i) {
+      const auto& r = model_.joints[i].range_rad;
+      const bool unbounded = r[0] == -std::numeric_limits<double>::infinity() && r[1] == std::numeric_limits<double>::infinity();
+      if (!unbounded && !(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] < r[1]))
+        fail(indexed("joints", i) + ".range_rad", "must be [lower, upper] with finite lower < upper (got [" +
+                                                      std::to_string(r[0]) + ", " + std::to_string(r[1]) + "])");
+      const JointLimitTorque& limit = model_.joints[i].limit;
+      const std::string at = indexed("joints", i) + ".limit_torque";
+      if (limit.stiffness_N_m_per_rad != 0.0 || limit.transition_rad != 0.0 || limit.damping_N_m_s_per_rad != 0.0) {
+        if (!(std::isfinite(limit.stiffness_N_m_per_rad) && limit.stiffness_N_m_per_rad > 0.0))
+          fail(at + ".stiffness_N_m_per_rad", "must be finite and > 0 (got " + std::to_string(limit.stiffness_N_m_per_rad) + ")");
+        if (!(std::isfinite(limit.transition_rad) && limit.transition_rad > 0.0))
+          fail(at + ".transition_rad", "must be finite and > 0 (got " + std::to_string(limit.transition_rad) + ")");
+        if (!(std::isfinite(limit.damping_N_m_s_per_rad) && limit.damping_N_m_s_per_rad >= 0.0))
+          fail(at + ".damping_N_m_s_per_rad", "must be finite and >= 0 (got " + std::to_string(limit.damping_N_m_s_per_rad) + ")");
+        if (!model_.joints[i].hasRange())
+          fail(indexed("joints", i) + ".range_rad", "required: the joint has a limit torque, which acts beyond its range");
+      }
     }
   }
 
-  if (model.effort_weights.kind == EffortWeights::Kind::PerMuscle) {
-    const Eigen::VectorXd& w = model.effort_weights.per_muscle;
-    if (w.size() != static_cast<Eigen::Index>(model.muscles.size()))
-      fail("effort_weights", "needs one weight per muscle (" + std::to_string(model.muscles.size()) + "), got " +
+  void checkEffortWeights() const {
+    if (model_.effort_weights.kind != EffortWeights::Kind::PerMuscle) return;
+    const Eigen::VectorXd& w = model_.effort_weights.per_muscle;
+    if (w.size() != static_cast<Eigen::Index>(model_.muscles.size()))
+      fail("effort_weights", "needs one weight per muscle (" + std::to_string(model_.muscles.size()) + "), got " +
                                  std::to_string(w.size()));
     for (Eigen::Index j = 0; j < w.size(); ++j)
       if (!(std::isfinite(w[j]) && w[j] >= 0.0))
-        fail("effort_weights." + model.muscles[static_cast<std::size_t>(j)].parameters.name,
+        fail("effort_weights." + model_.muscles[static_cast<std::size_t>(j)].parameters.name,
              "must be finite and >= 0 (got " + std::to_string(w[j]) + ")");
     if (!(w.size() > 0 && w.maxCoeff() > 0.0)) fail("effort_weights", "every weight is 0: nothing to minimize");
   }
-  std::set<std::string> muscle_names;
-  for (std::size_t j = 0; j < model.muscles.size(); ++j) {
-    const auto& m = model.muscles[j];
-    const std::string at = indexed("muscles", j);
-    if (!muscle_names.insert(m.parameters.name).second)
-      fail(at + ".name", "duplicate muscle name '" + m.parameters.name + "'");
-    try {
-      muscles::validate(m.parameters);
-    } catch (const std::invalid_argument& e) {
-      fail(at, e.what());
+
+  void checkMuscles() const {
+    std::set<std::string> muscle_names;
+    for (std::size_t j = 0; j < model_.muscles.size(); ++j) {
+      const auto& m = model_.muscles[j];
+      const std::string at = indexed("muscles", j);
+      if (!muscle_names.insert(m.parameters.name).second)
+        fail(at + ".name", "duplicate muscle name '" + m.parameters.name + "'");
+      try {
+        muscles::validate(m.parameters);
+      } catch (const std::invalid_argument& e) {
+        fail(at, e.what());
+      }
+      checkMusclePath(j);
     }
-    const muscles::MusculotendonPath path = build_path(model, static_cast<int>(j), source);
+  }
+
+  void checkMusclePath(std::size_t j) const {
+    const auto& m = model_.muscles[j];
+    const std::string at = indexed("muscles", j);
+    const muscles::MusculotendonPath path = build_path(model_, static_cast<int>(j), source_);
     const std::vector<int>& crossed = path.crossedJoints();
     bool ranged = true;
-    for (int i : crossed) ranged = ranged && model.joints[static_cast<std::size_t>(i)].hasRange();
+    for (int i : crossed) ranged = ranged && model_.joints[static_cast<std::size_t>(i)].hasRange();
     if (!path.hasConstantMomentArms())
       for (int i : crossed)
-        if (!model.joints[static_cast<std::size_t>(i)].hasRange())
+        if (!model_.joints[static_cast<std::size_t>(i)].hasRange())
           fail(indexed("joints", static_cast<std::size_t>(i)) + ".range_rad",
                "required: muscle '" + m.parameters.name + "' has a path that depends on posture over this joint (a polynomial "
                "is trusted only over a stated range)");
     // Over the range of motion the unit must stay longer than its slack tendon: otherwise the
     // tendon goes slack (no force, no flatness) or the length is not even positive.
     if (ranged)
-      for_each_posture(model, crossed, 20000, [&](const Eigen::VectorXd& q) {
+      for_each_posture(model_, crossed, 20000, [&](const Eigen::VectorXd& q) {
         const double length = path.length(q.data());
         if (!(length > m.parameters.tendon_slack_length_m))
           fail(at + (m.polynomial_path ? ".path" : ".length_at_zero_angles_m"),
-               "the musculotendon length " + std::to_string(length) + " m at " + describe_posture(model, crossed, q) +
+               "the musculotendon length " + std::to_string(length) + " m at " + describe_posture(model_, crossed, q) +
                    " does not exceed the tendon slack length " + std::to_string(m.parameters.tendon_slack_length_m) +
                    " m: the tendon would be slack there");
       });
   }
-  for (const auto& [name, sc] : model.scenarios) {
-    const std::string at = "scenarios." + name;
-    auto sized = [&](const Eigen::VectorXd& v, int size, const char* field, const char* per) {
-      if (v.size() != 0 && v.size() != size)
-        fail(at + "." + field, "must have one value per " + std::string(per) + " (" + std::to_string(size) + "), got " +
-                                   std::to_string(v.size()));
-      if (!v.allFinite()) fail(at + "." + field, "must be finite");
-    };
-    sized(sc.q0_rad, model.numJoints(), "q0_deg", "joint");
-    sized(sc.qd0_rad_per_s, model.numJoints(), "qd0_deg_per_s", "joint");
-    sized(sc.target_q_rad, model.numJoints(), "target_deg", "joint");
-    sized(sc.activations, model.numMuscles(), "activations", "muscle");
-    if (sc.activations.size() && !(sc.activations.minCoeff() > 0.0 && sc.activations.maxCoeff() <= 1.0))
-      fail(at + ".activations", "must lie in (0, 1]");
-    if (sc.reserves_N.size() != 1) sized(sc.reserves_N, model.numMuscles(), "reserves_N", "muscle (or one for all)");
-    if (!sc.reserves_N.allFinite() || (sc.reserves_N.size() && sc.reserves_N.minCoeff() < 0.0))
-      fail(at + ".reserves_N", "must be finite and >= 0");
-    if (!(sc.duration_s >= 0.0) || !std::isfinite(sc.duration_s)) fail(at + ".duration_s", "must be > 0");
+
+  void checkScenarios() const {
+    for (const auto& [name, sc] : model_.scenarios) {
+      const std::string at = "scenarios." + name;
+      auto sized = [&](const Eigen::VectorXd& v, int size, const char* field, const char* per) {
+        if (v.size() != 0 && v.size() != size)
+          fail(at + "." + field, "must have one value per " + std::string(per) + " (" + std::to_string(size) + "), got " +
+                                     std::to_string(v.size()));
+        if (!v.allFinite()) fail(at + "." + field, "must be finite");
+      };
+      sized(sc.q0_rad, model_.numJoints(), "q0_deg", "joint");
+      sized(sc.qd0_rad_per_s, model_.numJoints(), "qd0_deg_per_s", "joint");
+      sized(sc.target_q_rad, model_.numJoints(), "target_deg", "joint");
+      sized(sc.activations, model_.numMuscles(), "activations", "muscle");
+      if (sc.activations.size() && !(sc.activations.minCoeff() > 0.0 && sc.activations.maxCoeff() <= 1.0))
+        fail(at + ".activations", "must lie in (0, 1]");
+      if (sc.reserves_N.size() != 1) sized(sc.reserves_N, model_.numMuscles(), "reserves_N", "muscle (or one for all)");
+      if (!sc.reserves_N.allFinite() || (sc.reserves_N.size() && sc.reserves_N.minCoeff() < 0.0))
+        fail(at + ".reserves_N", "must be finite and >= 0");
+      if (!(sc.duration_s >= 0.0) || !std::isfinite(sc.duration_s)) fail(at + ".duration_s", "must be > 0");
+    }
   }
-  if (!model.flat_outputs.empty()) {
-    const int expected = model.numMuscles() - model.numJoints();
-    if (static_cast<int>(model.flat_outputs.size()) != expected)
+
+  void checkFlatOutputs() const {
+    if (model_.flat_outputs.empty()) return;
+    const int expected = model_.numMuscles() - model_.numJoints();
+    if (static_cast<int>(model_.flat_outputs.size()) != expected)
       fail("flat_outputs", "E must have m - N = " + std::to_string(expected) + " rows (" +
-                               std::to_string(model.numMuscles()) + " muscles, " +
-                               std::to_string(model.numJoints()) + " joints), the file has " +
-                               std::to_string(model.flat_outputs.size()));
+                               std::to_string(model_.numMuscles()) + " muscles, " +
+                               std::to_string(model_.numJoints()) + " joints), the file has " +
+                               std::to_string(model_.flat_outputs.size()));
     std::set<std::string> names;
-    for (std::size_t k = 0; k < model.flat_outputs.size(); ++k) {
-      const auto& y = model.flat_outputs[k];
+    for (std::size_t k = 0; k < model_.flat_outputs.size(); ++k) {
+      const auto& y = model_.flat_outputs[k];
       if (!names.insert(y.name).second)
         fail(indexed("flat_outputs", k) + ".name", "duplicate flat output name '" + y.name + "'");
-      if (y.weights.size() != model.numMuscles() || !y.weights.allFinite())
+      if (y.weights.size() != model_.numMuscles() || !y.weights.allFinite())
         fail(indexed("flat_outputs", k) + ".weights", "must have one finite weight per muscle");
     }
   }
-}
+
+  const ModelDescription& model_;
+  const std::string& source_;
+};
+
+}  // namespace
+
+void validate(const ModelDescription& model, const std::string& source) { Validation(model, source).run(); }
 
 muscles::MusculotendonPath ModelDescription::musclePath(int j) const {
   if (j < 0 || j >= numMuscles()) throw std::out_of_range("muscle index " + std::to_string(j) + " out of range");
