@@ -82,7 +82,7 @@ struct Problem {
 
 }  // namespace
 
-TEST(BoundsSlp, AWorkingSetTakesTheFullStepLpsStepsInSmallerLps) {
+TEST(SequentialLp, AWorkingSetTakesTheFullStepLpsStepsInSmallerLps) {
   const Problem problem;
   const Problem::Solved full = problem.solve(false), working = problem.solve(true);
   // Without the closest rows the set starts from the violated and active rows alone: rows join
@@ -104,7 +104,7 @@ TEST(BoundsSlp, AWorkingSetTakesTheFullStepLpsStepsInSmallerLps) {
             << working.outcome.lp_solves << " LPs\n";
 }
 
-TEST(BoundsSlp, EndsAtAKktPointOfEveryRow) {
+TEST(SequentialLp, EndsAtAKktPointOfEveryRow) {
   const Problem problem;
   const Problem::Solved s = problem.solve(true);
   ASSERT_TRUE(s.outcome.converged) << s.outcome.failure;
@@ -137,7 +137,7 @@ TEST(BoundsSlp, EndsAtAKktPointOfEveryRow) {
 // concave ones: the SLP must end at a stationary point of the violation and say the rows are
 // violated. Steering the penalty by the violation's own LP gets there in fewer LP steps than
 // raising it only after settling at each price (41 against 94 when written), at the same point.
-TEST(BoundsSlp, AnInfeasibleProblemEndsAtAStationaryPointOfTheViolationSoonerWhenSteered) {
+TEST(SequentialLp, AnInfeasibleProblemEndsAtAStationaryPointOfTheViolationSoonerWhenSteered) {
   const Problem problem;
   auto rows = [&](const Eigen::VectorXd& x, bool jacobian) {
     fpd::BoundRowsAt out = problem.rows(x, jacobian);
@@ -189,7 +189,7 @@ TEST(BoundsSlp, AnInfeasibleProblemEndsAtAStationaryPointOfTheViolationSoonerWhe
   }
 }
 
-TEST(BoundsSlp, RowsGivenAtTheStartAreNotEvaluatedAgainAndComeBackAtTheEnd) {
+TEST(SequentialLp, RowsGivenAtTheStartAreNotEvaluatedAgainAndComeBackAtTheEnd) {
   // An exchange round starts where the last ended: the rows at its start are handed in instead of
   // evaluated. The same steps to the bit, one evaluation fewer, and the rows handed back are those
   // at the returned point.

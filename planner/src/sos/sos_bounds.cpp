@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "bounds/sequential_lp.hpp"
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
@@ -54,157 +56,211 @@ bool check_excitation_bounds(const SosSetup& setup, const MusclesAlongPath& mp, 
   return false;
 }
 
-bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosSettings& o,
-                              Eigen::VectorXd& theta, SosProgramResult& result, SequentialLpBasis basis,
-                              const BoundsWarmStart* warm) {
-  const Stopwatch wall;
-  if (warm) {
-    if (warm->theta.size() != setup.free_coefficients || !warm->theta.allFinite())
-      throw std::invalid_argument(
-          "SOS program: the warm start's coefficients are not finite or not in the program's basis");
-    for (double t : warm->times_s)
-      if (!(t >= 0.0 && t <= setup.duration_s))
-        throw std::invalid_argument("SOS program: the warm start's time " + std::to_string(t) + " s is outside [0, T]");
-  }
-  const BoundsSettings& bo = o.bounds;
-  const FlatOutputMap& flat = mp.flat;
-  const std::vector<TorqueJet> jets = check_grid_jets(setup, mp, bo);
-  const Eigen::VectorXd a_min = activation_minima(flat, bo.min_activation);
-  const double h = setup.duration_s / (bo.check_points - 1);
+namespace {
 
-  const int stride = (bo.check_points - 1) % kCoarseStride == 0 ? kCoarseStride : 1;
-  if (grid_excess(setup, mp, jets, a_min, theta, bo.check_points, stride).worst <= bo.tolerance) {
-    // The bounds may not bind: the reserves' exact optimum first. Its rounds and time add to the
-    // loose exchange's (this call's wall time is counted as the bounds').
-    const int rounds = result.exchange_rounds;
-    const double exchange_seconds = result.solve_seconds;
-    const bool solved = solve_by_exchange(setup, o, theta, result, &basis);
-    result.exchange_rounds += rounds;
-    result.solve_seconds = exchange_seconds;
-    if (!solved) {
-      result.bounds_seconds = wall.seconds();
+void require_warm_start_of(const SosSetup& setup, const BoundsWarmStart& warm) {
+  if (warm.theta.size() != setup.free_coefficients || !warm.theta.allFinite())
+    throw std::invalid_argument("SOS program: the warm start's coefficients are not finite or not in the program's basis");
+  for (double t : warm.times_s)
+    if (!(t >= 0.0 && t <= setup.duration_s))
+      throw std::invalid_argument("SOS program: the warm start's time " + std::to_string(t) + " s is outside [0, T]");
+}
+
+// One impose_excitation_bounds call: rounds that impose the bounds at their points (by the
+// sequential LP or Ipopt) and add the check grid's violations as points.
+class BoundedExchange {
+ public:
+  BoundedExchange(SosSetup& setup, const MusclesAlongPath& mp, const SosSettings& o, Eigen::VectorXd& theta,
+                  SosProgramResult& result, SequentialLpBasis basis, const BoundsWarmStart* warm)
+      : setup_(setup), mp_(mp), flat_(mp.flat), o_(o), bo_(o.bounds), theta_(theta), result_(result),
+        basis_(std::move(basis)), warm_(warm), jets_(check_grid_jets(setup, mp, o.bounds)),
+        a_min_(activation_minima(mp.flat, o.bounds.min_activation)), h_(setup.duration_s / (o.bounds.check_points - 1)),
+        stride_((o.bounds.check_points - 1) % kCoarseStride == 0 ? kCoarseStride : 1) {}
+
+  bool run() {
+    if (!reservesOptimumWhereTheBoundsMayNotBind()) return done(false);
+    excess_ = grid_excess(setup_, mp_, jets_, a_min_, theta_, bo_.check_points);
+    result_.max_bound_excess = excess_.worst;
+    if (excess_.worst <= bo_.tolerance) return done(true);
+    result_.bounds_imposed = true;
+    if (setup_.free_coefficients == 0) {
+      // The boundary conditions fix the flat outputs completely: nothing can move them inside.
+      result_.status = SolveStatus::Infeasible;
+      result_.message = "infeasible: the boundary conditions fix the flat outputs completely (no free coefficient in "
+                        "this basis) and they leave the bounds: " + excess_.worst_text;
+      result_.Y = flat_outputs_of(setup_, theta_);
+      return done(false);
+    }
+    addInitialPoints();
+    radius_ = 0.1 * (1.0 + theta_.cwiseAbs().maxCoeff());
+    for (int round = 0; round < bo_.max_rounds; ++round) {
+      result_.bound_rounds = round + 1;
+      result_.lp_points = build_exchange_rows(setup_, o_.feasibility_margin_N);
+      result_.bound_points = static_cast<int>(points_.size());
+      const bool imposed = bo_.solver == BoundsSolver::SequentialLp ? roundBySequentialLp() : roundByIpopt();
+      if (!imposed) return done(false);
+      if (last_rows_violated_) break;  // the rows at these points alone cannot be met: more points cannot help
+      switch (addViolations()) {
+        case Check::Holds: return done(true);
+        case Check::NothingNew: break;
+        case Check::PointsAdded: continue;
+      }
+      break;
+    }
+    result_.bounds_seconds = wall_.seconds();
+    return notMet();
+  }
+
+ private:
+  enum class Check { Holds, NothingNew, PointsAdded };
+
+  bool done(bool met) {
+    result_.bounds_seconds = wall_.seconds();
+    return met;
+  }
+
+  // Where the coarse grid sees no violation, the bounds may not bind: the reserves' exact optimum
+  // first. Its rounds and time add to the loose exchange's (this call's wall time is counted as
+  // the bounds').
+  bool reservesOptimumWhereTheBoundsMayNotBind() {
+    if (grid_excess(setup_, mp_, jets_, a_min_, theta_, bo_.check_points, stride_).worst > bo_.tolerance) return true;
+    const int rounds = result_.exchange_rounds;
+    const double exchange_seconds = result_.solve_seconds;
+    const bool solved = solve_by_exchange(setup_, o_, theta_, result_, &basis_);
+    result_.exchange_rounds += rounds;
+    result_.solve_seconds = exchange_seconds;
+    return solved;
+  }
+
+  bool addPoint(double t) {
+    for (const auto& bp : points_)
+      if (std::abs(bp.t_s - t) < 1e-9) return false;
+    points_.push_back(make_point(setup_, mp_, t));
+    return true;
+  }
+
+  // initial_points_per_span on every span (short spans get points of their own), the ends, the
+  // violations, and a warm start's points (theta starts there too).
+  void addInitialPoints() {
+    addPoint(0.0);
+    for (double t : setup_.basis.pointsPerSpan(bo_.initial_points_per_span)) addPoint(t);
+    if (bo_.initial_points_per_span > 0) addPoint(setup_.duration_s);
+    for (double t : violated_times(excess_, h_, bo_.tolerance)) addPoint(t);
+    if (!warm_) return;
+    for (double t : warm_->times_s) addPoint(t);
+    theta_ = warm_->theta;
+  }
+
+  bool roundBySequentialLp() {
+    // The last round ended with a radius as small as its last step (1e-4 N and less); the points
+    // this round added need moves of newtons: growing back by doubling took about ten steps per
+    // round (85 steps in 9 rounds at T = 1.5 s, 33 with this floor).
+    radius_ = std::max(radius_, kRoundStartRadius * (1.0 + theta_.cwiseAbs().maxCoeff()));
+    SequentialLpLinearPart linear{setup_.lp, {}, o_.feasibility_margin_N};
+    for (const auto& c : setup_.constraints) linear.rows_per_group.push_back(c.points.size());
+    SequentialLpSettings settings;
+    settings.max_iterations = bo_.max_sequential_lp_iterations;
+    settings.closest_rows_per_coefficient = kClosestRowsPerCoefficient;
+    // The bound rows at theta of the first rows_points_ points: a round starts at the theta where
+    // the last ended, so only the points it added need their rows.
+    append_rows(flat_, points_, rows_points_, a_min_, theta_, true, kBoundMargin, rows_at_theta_);
+    rows_points_ = points_.size();
+    const SequentialLpOutcome slp = solve_by_sequential_lp(linear, bound_rows_of(flat_, points_, a_min_, kBoundMargin),
+                                                           theta_, radius_, basis_, settings, &rows_at_theta_);
+    result_.bound_sequential_lp_iterations += slp.iterations;
+    result_.simplex_pivots += slp.lp_pivots;
+    if (!slp.converged) {
+      result_.status = SolveStatus::Failed;
+      result_.message = "the bounds were not met: " + slp.failure;
       return false;
     }
-  }
-  GridExcess excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points);
-  result.max_bound_excess = excess.worst;
-  if (excess.worst <= bo.tolerance) {
-    result.bounds_seconds = wall.seconds();
+    last_rows_violated_ = slp.rows_violated;
     return true;
-  }
-  result.bounds_imposed = true;
-  if (setup.free_coefficients == 0) {
-    // The boundary conditions fix the flat outputs completely: nothing can move them inside.
-    result.status = SolveStatus::Infeasible;
-    result.message = "infeasible: the boundary conditions fix the flat outputs completely (no free coefficient in "
-                     "this basis) and they leave the bounds: " + excess.worst_text;
-    result.Y = flat_outputs_of(setup, theta);
-    result.bounds_seconds = wall.seconds();
-    return false;
-  }
-  std::vector<BoundPoint> points;
-  auto add_point = [&](double t) {
-    for (const auto& bp : points)
-      if (std::abs(bp.t_s - t) < 1e-9) return false;
-    points.push_back(make_point(setup, mp, t));
-    return true;
-  };
-  // initial_points_per_span on every span (short spans get points of their own), and the ends.
-  add_point(0.0);
-  for (double t : setup.basis.pointsPerSpan(bo.initial_points_per_span)) add_point(t);
-  if (bo.initial_points_per_span > 0) add_point(setup.duration_s);
-  for (double t : violated_times(excess, h, bo.tolerance)) add_point(t);
-  if (warm) {
-    for (double t : warm->times_s) add_point(t);
-    theta = warm->theta;
   }
 
-  double radius = 0.1 * (1.0 + theta.cwiseAbs().maxCoeff());
-  bool last_rows_violated = false;
-  // The bound rows at theta of the first rows_points points: a round starts at the theta where
-  // the last ended, so only the points it added need their rows (one evaluation of every point's
-  // rows and Jacobian fewer per round, the same plans to the bit).
-  BoundRowsAt rows_at_theta;
-  std::size_t rows_points = 0;
-  for (int round = 0; round < bo.max_rounds; ++round) {
-    result.bound_rounds = round + 1;
-    result.lp_points = build_exchange_rows(setup, o.feasibility_margin_N);
-    result.bound_points = static_cast<int>(points.size());
-    if (bo.solver == BoundsSolver::SequentialLp) {
-      // The last round ended with a radius as small as its last step (1e-4 N and less); the
-      // points this round added need moves of newtons: growing back by doubling took about ten
-      // steps per round (85 steps in 9 rounds at T = 1.5 s, 33 with this floor).
-      radius = std::max(radius, kRoundStartRadius * (1.0 + theta.cwiseAbs().maxCoeff()));
-      SequentialLpLinearPart linear{setup.lp, {}, o.feasibility_margin_N};
-      for (const auto& c : setup.constraints) linear.rows_per_group.push_back(c.points.size());
-      SequentialLpSettings settings;
-      settings.max_iterations = bo.max_sequential_lp_iterations;
-      settings.closest_rows_per_coefficient = kClosestRowsPerCoefficient;
-      append_rows(flat, points, rows_points, a_min, theta, true, kBoundMargin, rows_at_theta);
-      rows_points = points.size();
-      const SequentialLpOutcome slp = solve_by_sequential_lp(linear, bound_rows_of(flat, points, a_min, kBoundMargin), theta, radius,
-                                                 basis, settings, &rows_at_theta);
-      result.bound_sequential_lp_iterations += slp.iterations;
-      result.simplex_pivots += slp.lp_pivots;
-      if (!slp.converged) {
-        result.status = SolveStatus::Failed;
-        result.message = "the bounds were not met: " + slp.failure;
-        result.bounds_seconds = wall.seconds();
-        return false;
-      }
-      last_rows_violated = slp.rows_violated;
-      // The rows at these points alone cannot be met: more points cannot help.
-      if (last_rows_violated) break;
-    } else {
-      const IpoptBoundsOutcome nlp = solve_bounds_by_ipopt(setup, flat, points, a_min, theta, bo.max_ipopt_iterations);
-      result.ipopt_iterations += nlp.iterations;
-      ++result.ipopt_calls;
-      add_linear_solver_name(result.ipopt_linear_solver, nlp.linear_solver);
-      if (!nlp.solved) {
-        const GridExcess at = nlp.x.size() ? grid_excess(setup, mp, jets, a_min, nlp.x, bo.check_points) : excess;
-        result.status = nlp.infeasible ? SolveStatus::Infeasible : SolveStatus::Failed;
-        result.message = std::string(nlp.infeasible ? "infeasible: " : "failed: ") + kBoundsUnmet + " (Ipopt: " +
-                         nlp.solver_status + "); where it stopped, " + at.worst_text;
-        result.bounds_seconds = wall.seconds();
-        return false;
-      }
-      theta = nlp.x;
+  bool roundByIpopt() {
+    const IpoptBoundsOutcome nlp = solve_bounds_by_ipopt(setup_, flat_, points_, a_min_, theta_, bo_.max_ipopt_iterations);
+    result_.ipopt_iterations += nlp.iterations;
+    ++result_.ipopt_calls;
+    add_linear_solver_name(result_.ipopt_linear_solver, nlp.linear_solver);
+    if (nlp.solved) {
+      theta_ = nlp.x;
+      return true;
     }
+    const GridExcess at = nlp.x.size() ? grid_excess(setup_, mp_, jets_, a_min_, nlp.x, bo_.check_points) : excess_;
+    result_.status = nlp.infeasible ? SolveStatus::Infeasible : SolveStatus::Failed;
+    result_.message = std::string(nlp.infeasible ? "infeasible: " : "failed: ") + kBoundsUnmet + " (Ipopt: " +
+                      nlp.solver_status + "); where it stopped, " + at.worst_text;
+    return false;
+  }
+
+  // The reserves' and the bounds' violations at theta become points of the next round.
+  Check addViolations() {
     double min_reserve = 0.0;
     const bool reserves_added =
-        add_violated_points(setup, theta, o.feasibility_margin_N, min_reserve, kConstraintTolerance_N, kLiftBelow_N);
-    result.min_constraint_value_N = min_reserve;
-    excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points, stride);
+        add_violated_points(setup_, theta_, o_.feasibility_margin_N, min_reserve, kConstraintTolerance_N, kLiftBelow_N);
+    result_.min_constraint_value_N = min_reserve;
+    excess_ = grid_excess(setup_, mp_, jets_, a_min_, theta_, bo_.check_points, stride_);
     bool bounds_added = false;
     // Every local maximum of the excess joins, not only those above the tolerance: along an arc
     // where a bound is active the dips between imposed points come back one by one otherwise.
-    for (double t : violated_times(excess, h, 0.0)) bounds_added |= add_point(t);
-    const bool reserves_hold_or_warm = !reserves_added || (warm && warm->whole_grid_every_round);
-    if (reserves_hold_or_warm && (excess.worst <= bo.tolerance || !bounds_added) && stride > 1) {
+    for (double t : violated_times(excess_, h_, 0.0)) bounds_added |= addPoint(t);
+    const bool reserves_hold_or_warm = !reserves_added || (warm_ && warm_->whole_grid_every_round);
+    if (reserves_hold_or_warm && (excess_.worst <= bo_.tolerance || !bounds_added) && stride_ > 1) {
       // Nothing left that the coarse grid sees: the whole grid decides (BoundsWarmStart).
-      excess = grid_excess(setup, mp, jets, a_min, theta, bo.check_points);
-      for (double t : violated_times(excess, h, 0.0)) bounds_added |= add_point(t);
+      excess_ = grid_excess(setup_, mp_, jets_, a_min_, theta_, bo_.check_points);
+      for (double t : violated_times(excess_, h_, 0.0)) bounds_added |= addPoint(t);
     }
-    result.max_bound_excess = excess.worst;
-    if (!reserves_added && excess.worst <= bo.tolerance && excess.stride == 1) {
-      result.bounds_seconds = wall.seconds();
-      return true;
-    }
-    if (!reserves_added && !bounds_added) break;  // violations at points already imposed: tolerance
+    result_.max_bound_excess = excess_.worst;
+    if (!reserves_added && excess_.worst <= bo_.tolerance && excess_.stride == 1) return Check::Holds;
+    if (!reserves_added && !bounds_added) return Check::NothingNew;  // violations at points already imposed: tolerance
+    return Check::PointsAdded;
   }
-  result.bounds_seconds = wall.seconds();
-  if (last_rows_violated) {
-    // A local minimum of the violation, even at a penalty of 1e12 per unit: the flat outputs of
-    // this basis cannot meet the bounds along this joint path (from this start).
-    result.status = SolveStatus::Infeasible;
-    result.message = std::string("infeasible: ") + kBoundsUnmet + " along this joint path";
-    result.Y = flat_outputs_of(setup, theta);  // the closest plan, for the caller's diagnosis
+
+  bool notMet() {
+    if (last_rows_violated_) {
+      // A local minimum of the violation, even at a penalty of 1e12 per unit: the flat outputs of
+      // this basis cannot meet the bounds along this joint path (from this start).
+      result_.status = SolveStatus::Infeasible;
+      result_.message = std::string("infeasible: ") + kBoundsUnmet + " along this joint path";
+      result_.Y = flat_outputs_of(setup_, theta_);  // the closest plan, for the caller's diagnosis
+      return false;
+    }
+    result_.status = SolveStatus::Failed;
+    result_.message = "the bounded exchange did not converge in " + std::to_string(result_.bound_rounds) +
+                      " rounds (worst bound excess " + std::to_string(excess_.worst) + ": " + excess_.worst_text + ")";
     return false;
   }
-  result.status = SolveStatus::Failed;
-  result.message = "the bounded exchange did not converge in " + std::to_string(result.bound_rounds) +
-                   " rounds (worst bound excess " + std::to_string(excess.worst) + ": " + excess.worst_text + ")";
-  return false;
+
+  const Stopwatch wall_;
+  SosSetup& setup_;
+  const MusclesAlongPath& mp_;
+  const FlatOutputMap& flat_;
+  const SosSettings& o_;
+  const BoundsSettings& bo_;
+  Eigen::VectorXd& theta_;
+  SosProgramResult& result_;
+  SequentialLpBasis basis_;
+  const BoundsWarmStart* warm_;
+  const std::vector<TorqueJet> jets_;
+  const Eigen::VectorXd a_min_;
+  const double h_;
+  const int stride_;
+  GridExcess excess_;
+  std::vector<BoundPoint> points_;
+  double radius_ = 0.0;
+  bool last_rows_violated_ = false;
+  BoundRowsAt rows_at_theta_;
+  std::size_t rows_points_ = 0;
+};
+
+}  // namespace
+
+bool impose_excitation_bounds(SosSetup& setup, const MusclesAlongPath& mp, const SosSettings& o,
+                              Eigen::VectorXd& theta, SosProgramResult& result, SequentialLpBasis basis,
+                              const BoundsWarmStart* warm) {
+  if (warm) require_warm_start_of(setup, *warm);
+  return BoundedExchange(setup, mp, o, theta, result, std::move(basis), warm).run();
 }
 
 }  // namespace flatsos::planner::detail

@@ -10,6 +10,7 @@
 #include "flatsos/plugin/stopwatch.hpp"
 #include "numerics/ipopt_support.hpp"
 #include "numerics/lukacs_squares.hpp"
+#include "sos/whole_program_start.hpp"
 
 namespace flatsos::planner::detail {
 
@@ -19,10 +20,6 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// The start's grid: points per segment (uniform, ends included) at which the start LPs impose
-// the constraints, and the slack they aim for (N): more only moves the start further inside.
-constexpr int kStartPoints = 9;
-constexpr double kStartSlackCap_N = 10.0;
 // The proximal rounds (measured on the arm's quartic: without them Ipopt's restoration fails;
 // falling a hundredfold per round fails too). Weights are of the factors, which are of order 1.
 constexpr double kFirstProximalWeight = 1.0;
@@ -204,77 +201,6 @@ class WholeProgramNlp : public Ipopt::TNLP {
 };
 
 // The start LP's dual: a weight (N s / N) on one constraint at one point.
-struct StartDual {
-  std::size_t constraint;
-  double s, weight;
-};
-
-// The highest power whose coefficient is not zero for every theta. A block sized by the
-// coefficient count instead would certify a degree-4 polynomial (padded to 7 coefficients on
-// spline spans) with f^2 + s(1-s) g^2 of degree 6, whose top coefficients must cancel: f and g
-// then share a root at infinity, and the equalities' Jacobian loses rank (Ipopt's restoration
-// failed on the quartic on 2 spans).
-Index structural_degree(const ConstraintPolynomial& c) {
-  Index d = c.base.size() - 1;
-  while (d > 0 && c.base[d] == 0.0 && (c.G.cols() == 0 || c.G.row(d).cwiseAbs().maxCoeff() == 0.0)) --d;
-  return d;
-}
-
-bool moves_with_theta(const ConstraintPolynomial& c) { return c.G.size() > 0 && c.G.cwiseAbs().maxCoeff() > 0.0; }
-
-// The start: on a grid of every segment, first the largest slack t (capped) with which every
-// constraint can hold (>= t s^margin_order, so values the initial state fixes need none), then
-// the cheapest theta with half of it. Returns false (with a reason) when the grid allows none.
-bool strictly_feasible_start(const SosSetup& setup, const SosSettings& o, VectorXd& theta,
-                             std::vector<StartDual>& duals, std::string& why) {
-  const int n_theta = setup.free_coefficients;
-  std::vector<std::pair<std::size_t, double>> points;  // (constraint, s)
-  for (std::size_t c = 0; c < setup.constraints.size(); ++c)
-    if (moves_with_theta(setup.constraints[c]))
-      for (int i = 0; i < kStartPoints; ++i) points.emplace_back(c, i / (kStartPoints - 1.0));
-  LinearProgram lp;
-  const Index rows = static_cast<Index>(points.size());
-  lp.G = MatrixXd::Zero(rows, n_theta + 1);
-  lp.row_lower.resize(rows);
-  lp.row_upper = VectorXd::Constant(rows, 1e19);
-  for (Index r = 0; r < rows; ++r) {
-    const ConstraintPolynomial& c = setup.constraints[points[static_cast<std::size_t>(r)].first];
-    const double s = points[static_cast<std::size_t>(r)].second;
-    const Eigen::RowVectorXd v = monomials(s, c.base.size());
-    lp.G.row(r).head(n_theta) = v * c.G;
-    lp.G(r, n_theta) = -std::pow(s, c.margin_order);
-    lp.row_lower[r] = -v.dot(c.base);
-  }
-  lp.x_lower = VectorXd::Constant(n_theta + 1, -o.exchange.coefficient_bound_N);
-  lp.x_upper = VectorXd::Constant(n_theta + 1, o.exchange.coefficient_bound_N);
-  lp.x_lower[n_theta] = -1e19;
-  lp.x_upper[n_theta] = kStartSlackCap_N;
-  lp.cost = VectorXd::Zero(n_theta + 1);
-  lp.cost[n_theta] = -1.0;
-  const LinearProgramResult widest = solve_linear_program_simplex(lp);
-  if (widest.status != SolveStatus::Solved || !(widest.x[n_theta] > 0.0)) {
-    why = widest.status == SolveStatus::Solved
-              ? "no flat outputs meet every constraint with a positive slack on the start grid"
-              : "the start's LP failed (" + widest.solver_status + ")";
-    return false;
-  }
-  lp.x_lower[n_theta] = lp.x_upper[n_theta] = 0.5 * widest.x[n_theta];
-  lp.cost.head(n_theta) = setup.lp.cost;
-  lp.cost[n_theta] = 0.0;
-  const LinearProgramResult cheapest = solve_linear_program_simplex(lp);
-  if (cheapest.status != SolveStatus::Solved) {
-    why = "the start's LP failed (" + cheapest.solver_status + ")";
-    return false;
-  }
-  theta = cheapest.x.head(n_theta);
-  duals.clear();
-  for (Index r = 0; r < rows; ++r)
-    if (cheapest.row_multipliers[r] != 0.0)
-      duals.push_back({points[static_cast<std::size_t>(r)].first, points[static_cast<std::size_t>(r)].second,
-                       cheapest.row_multipliers[r]});
-  return true;
-}
-
 }  // namespace
 
 Ipopt::SmartPtr<Ipopt::TNLP> make_whole_program_nlp(const std::vector<SquaresBlock>& blocks, const VectorXd& cost,
@@ -284,6 +210,52 @@ Ipopt::SmartPtr<Ipopt::TNLP> make_whole_program_nlp(const std::vector<SquaresBlo
   nlp->start_round(start, multipliers, proximal_weights);
   return Ipopt::GetRawPtr(nlp);
 }
+
+namespace {
+
+// A vanishing proximal term: rounds with (rho/2) |x - x_last|^2 (theta measured against its
+// start's size), each from the last round's point and multipliers, rho falling tenfold per round
+// and then to 0. A round that fails is tried again from the same point with a smaller fall (its
+// square root), down to kSmallestProximalFall. Empty on success, else why not.
+std::string solve_proximal_rounds(WholeProgramNlp& nlp, const SosSettings& o, int n_theta, double theta_scale, VectorXd x,
+                                  VectorXd lambda, SosProgramResult& result) {
+  const Index n = x.size();
+  double rho = kFirstProximalWeight, last_rho = 0.0, fall = kProximalFall;  // last_rho: of the last success
+  for (;;) {
+    VectorXd weights = VectorXd::Constant(n, rho);
+    weights.head(n_theta) /= theta_scale * theta_scale;
+    nlp.start_round(x, lambda, weights);
+    const double tol = rho == 0.0 ? o.whole_program.tolerance : kRoundTolerance;
+    const int budget = o.whole_program.max_iterations - result.ipopt_iterations;
+    const IpoptSession app = make_ipopt(tol, rho == 0.0 ? budget : std::min(budget, kRoundIterations), nlp);
+    app->Options()->SetNumericValue("constr_viol_tol", tol);
+    app->Options()->SetNumericValue("acceptable_tol", tol);
+    app->Options()->SetNumericValue("acceptable_constr_viol_tol", tol);
+    app->Options()->SetStringValue("warm_start_init_point", "yes");
+    const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(&nlp);
+    result.ipopt_calls += 1;
+    if (Ipopt::IsValid(app->Statistics())) result.ipopt_iterations += app->Statistics()->IterationCount();
+    add_linear_solver_name(result.ipopt_linear_solver, ipopt_linear_solver_name(app.linear_solver));
+    const bool solved = (status == Ipopt::Solve_Succeeded || (rho > 0.0 && ipopt_solved(status))) &&
+                        nlp.solution().size() == n && nlp.multipliers().size() == nlp.equalities();
+    if (solved && rho == 0.0) return {};
+    if (solved) {
+      x = nlp.solution();
+      lambda = nlp.multipliers();
+      last_rho = rho;
+      fall = std::min(kProximalFall, fall * fall);  // back to faster falls once a round succeeds
+    } else {
+      fall = std::sqrt(fall);
+      if (last_rho == 0.0 || fall < kSmallestProximalFall || result.ipopt_iterations >= o.whole_program.max_iterations)
+        return "the whole-program NLP stopped without an optimum: Ipopt " + ipopt_status_name(status) +
+               " at proximal weight " + std::to_string(rho);
+    }
+    // Below the last weight the next round is the problem itself, unless a round just failed.
+    rho = solved && last_rho / fall < kLastProximalWeight ? 0.0 : last_rho / fall;
+  }
+}
+
+}  // namespace
 
 bool solve_whole_program(const SosSetup& setup, const SosSettings& o, VectorXd& theta, SosProgramResult& result) {
   const Stopwatch solve;
@@ -295,18 +267,7 @@ bool solve_whole_program(const SosSetup& setup, const SosSettings& o, VectorXd& 
   };
   if (const std::string reason = fixed_violation(setup, o.feasibility_margin_N); !reason.empty())
     return fail(SolveStatus::Infeasible, reason);
-  // What theta cannot move is data: it must hold on its whole segment.
-  for (const ConstraintPolynomial& c : setup.constraints)
-    if (!moves_with_theta(c)) {
-      const IntervalMinimum low = minimum_on_interval(Polynomial(c.base), 0.0, 1.0);
-      if (low.value < -kConstraintTolerance_N) {
-        std::ostringstream why;
-        why << "infeasible: the boundary conditions fix the " << c.name << " on [" << c.t0_s << ", " << c.t1_s
-            << "] s, and it falls " << -low.value << " N below its bound at t = "
-            << c.t0_s + low.at * (c.t1_s - c.t0_s) << " s";
-        return fail(SolveStatus::Infeasible, why.str());
-      }
-    }
+  if (const std::string reason = fixed_data_violation(setup); !reason.empty()) return fail(SolveStatus::Infeasible, reason);
   if (setup.free_coefficients == 0) {  // the equalities fix Y, and every constraint holds
     theta = VectorXd();
     result.certified = true;
@@ -321,116 +282,23 @@ bool solve_whole_program(const SosSetup& setup, const SosSettings& o, VectorXd& 
   std::vector<StartDual> duals;
   if (!strictly_feasible_start(setup, o, theta_start, duals, why)) return fail(SolveStatus::Failed, why);
 
-  // The blocks, each scaled by its polynomial's size at the start, with its start factors.
   const int n_theta = setup.free_coefficients;
-  std::vector<SquaresBlock> blocks;
-  std::vector<int> block_of(setup.constraints.size(), -1);
-  std::vector<double> start(theta_start.data(), theta_start.data() + n_theta);  // theta, then each f and g
-  int m = 0;
-  for (std::size_t ci = 0; ci < setup.constraints.size(); ++ci) {
-    const ConstraintPolynomial& c = setup.constraints[ci];
-    if (!moves_with_theta(c)) continue;
-    SquaresBlock b;
-    b.constraint = ci;
-    b.half = static_cast<int>(structural_degree(c) + 1) / 2;  // D <= 2h
-    VectorXd at_start = c.base + c.G * theta_start;
-    at_start[0] += kConstraintTolerance_N;  // certified: constraint >= -1e-9 N, as the exchange stops
-    b.scale_N = std::max(1.0, at_start.cwiseAbs().maxCoeff());
-    // An odd degree 2h - 1 uses the even family: one more row, whose coefficient is zero.
-    const Index kept = std::min<Index>(b.rows(), c.base.size());
-    b.base = VectorXd::Zero(b.rows());
-    b.base.head(kept) = c.base.head(kept) / b.scale_N;
-    b.base[0] += kConstraintTolerance_N / b.scale_N;
-    b.G = MatrixXd::Zero(b.rows(), n_theta);
-    b.G.topRows(kept) = c.G.topRows(kept) / b.scale_N;
-    b.var_offset = static_cast<int>(start.size());
-    b.con_offset = m;
-    m += b.rows();
-    const LukacsSquares squares = lukacs_squares(Polynomial(at_start / b.scale_N), b.half);
-    start.insert(start.end(), squares.f.data(), squares.f.data() + squares.f.size());
-    start.insert(start.end(), squares.g.data(), squares.g.data() + squares.g.size());
-    block_of[ci] = static_cast<int>(blocks.size());
-    blocks.push_back(std::move(b));
-  }
-  const int n = static_cast<int>(start.size());
-  VectorXd start_multipliers = VectorXd::Zero(m);
-  // Multipliers from the start LP's dual measure mu: the cost's gradient is sum mu grad p(s), so
-  // row k of block b gets -scale_b sum mu s^k, and the Hessian starts as the blocks' moment
-  // matrices, positive semidefinite, as at the optimum.
-  for (const StartDual& d : duals) {
-    const SquaresBlock& b = blocks[static_cast<std::size_t>(block_of[d.constraint])];  // duals are on moving ones
-    for (int k = 0; k < b.rows(); ++k) start_multipliers[b.con_offset + k] -= b.scale_N * d.weight * std::pow(d.s, k);
-  }
-
-  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(blocks, setup.lp.cost);
+  const WholeProgramStart start = blocks_from(setup, theta_start);
+  Ipopt::SmartPtr<WholeProgramNlp> nlp = new WholeProgramNlp(start.blocks, setup.lp.cost);
   result.nlp_variables = nlp->variables();
   result.nlp_equalities = nlp->equalities();
-  // A vanishing proximal term: rounds with (rho/2) |x - x_last|^2 (theta measured against its
-  // start's size), each from the last round's point and multipliers, rho falling tenfold per
-  // round and then to 0. A round that fails is tried again from the same point with a smaller
-  // fall (its square root), down to kSmallestProximalFall.
   const double theta_scale = std::max(1.0, theta_start.cwiseAbs().maxCoeff());
-  VectorXd x = Eigen::Map<const VectorXd>(start.data(), n), lambda = start_multipliers;
-  double rho = kFirstProximalWeight, last_rho = 0.0, fall = kProximalFall;  // last_rho: of the last success
-  for (;;) {
-    VectorXd weights = VectorXd::Constant(n, rho);
-    weights.head(n_theta) /= theta_scale * theta_scale;
-    nlp->start_round(x, lambda, weights);
-    const double tol = rho == 0.0 ? o.whole_program.tolerance : kRoundTolerance;
-    const int budget = o.whole_program.max_iterations - result.ipopt_iterations;
-    const IpoptSession app = make_ipopt(tol, rho == 0.0 ? budget : std::min(budget, kRoundIterations), *nlp);
-    app->Options()->SetNumericValue("constr_viol_tol", tol);
-    app->Options()->SetNumericValue("acceptable_tol", tol);
-    app->Options()->SetNumericValue("acceptable_constr_viol_tol", tol);
-    app->Options()->SetStringValue("warm_start_init_point", "yes");
-    const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
-    result.ipopt_calls += 1;
-    if (Ipopt::IsValid(app->Statistics())) result.ipopt_iterations += app->Statistics()->IterationCount();
-    add_linear_solver_name(result.ipopt_linear_solver, ipopt_linear_solver_name(app.linear_solver));
-    const bool solved = (status == Ipopt::Solve_Succeeded || (rho > 0.0 && ipopt_solved(status))) &&
-                        nlp->solution().size() == n && nlp->multipliers().size() == nlp->equalities();
-    if (solved && rho == 0.0) break;
-    if (solved) {
-      x = nlp->solution();
-      lambda = nlp->multipliers();
-      last_rho = rho;
-      fall = std::min(kProximalFall, fall * fall);  // back to faster falls once a round succeeds
-    } else {
-      fall = std::sqrt(fall);
-      if (last_rho == 0.0 || fall < kSmallestProximalFall || result.ipopt_iterations >= o.whole_program.max_iterations)
-        return fail(SolveStatus::Failed, "the whole-program NLP stopped without an optimum: Ipopt " +
-                                             ipopt_status_name(status) + " at proximal weight " + std::to_string(rho));
-    }
-    // Below the last weight the next round is the problem itself, unless a round just failed.
-    rho = solved && last_rho / fall < kLastProximalWeight ? 0.0 : last_rho / fall;
-  }
+  const VectorXd x0 = Eigen::Map<const VectorXd>(start.x.data(), static_cast<Index>(start.x.size()));
+  if (std::string failure = solve_proximal_rounds(*nlp, o, n_theta, theta_scale, x0, start_multipliers(start, duals), result);
+      !failure.empty())
+    return fail(SolveStatus::Failed, std::move(failure));
   theta = nlp->solution().head(n_theta);
-
-  // Each block's factors certify its polynomial up to the residual (in N); a block counts as
-  // certified when that residual's l1 norm (a bound on its size over [0, 1]) is within the
-  // exchange's tolerance, so the constraint is proven >= -2e-9 N.
-  result.near_active_pieces = static_cast<int>(blocks.size());
-  result.certified_pieces = 0;
-  double worst_residual_N = 0.0;
-  for (const SquaresBlock& b : blocks) {
-    const LukacsSquares sq{nlp->solution().segment(b.var_offset, b.half + 1),
-                           nlp->solution().segment(b.var_offset + b.half + 1, b.half)};
-    const VectorXd residual = b.scale_N * (b.base + b.G * theta - lukacs_squares_polynomial(sq));
-    const double l1 = residual.cwiseAbs().sum();
-    worst_residual_N = std::max(worst_residual_N, l1);
-    if (l1 <= kConstraintTolerance_N) ++result.certified_pieces;
-  }
-  result.certified = result.certified_pieces == result.near_active_pieces;
-  result.min_constraint_value_N = std::numeric_limits<double>::infinity();
-  for (const ConstraintPolynomial& c : setup.constraints)
-    result.min_constraint_value_N =
-        std::min(result.min_constraint_value_N, minimum_on_interval(c.at(theta), 0.0, 1.0).value);
-  result.max_certificate_residual_N = worst_residual_N;
+  record_certificates(setup, start.blocks, nlp->solution(), theta, result);
   result.solve_seconds = solve.seconds();
   if (!result.certified) {
     std::ostringstream msg;
-    msg << "the whole-program NLP's certificates leave a residual of " << worst_residual_N << " N (allowed "
-        << kConstraintTolerance_N << " N)";
+    msg << "the whole-program NLP's certificates leave a residual of " << result.max_certificate_residual_N
+        << " N (allowed " << kConstraintTolerance_N << " N)";
     result.status = SolveStatus::Failed;
     result.message = msg.str();
     return false;
