@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -63,167 +64,177 @@ CertificationResult certify_nonnegative_on_unit_interval(const std::vector<Polyn
   return certify_nonnegative_on_unit_interval(polys, options);
 }
 
+namespace {
+
+// Closed form: diagonal Bernstein Gram (exact when the Bernstein coefficients are >= 0; always
+// used for degree <= 1, where the Bernstein coefficients are p(0), p(1)).
+bool closed_form_certifies(const VectorXd& q, double scale, const CertificationStudyOptions& options) {
+  return scale == 0.0 || q.size() <= 2 ||
+         (options.closed_form_shortcut && from_monomial(GramBasis::Bernstein, q).minCoeff() >= 0.0);
+}
+
+LukacsCertificate finished(const LukacsCertificate& qc, const std::vector<DeflationStep>& steps, double scale,
+                           const VectorXd& p) {
+  LukacsCertificate full = undo_deflation(qc, steps);
+  full.scale = scale;
+  full.deflation_steps = static_cast<int>(steps.size());
+  fill_residual(full, p);
+  return full;
+}
+
+// The Ipopt block for q (polynomial ip after deflation). A computed minimum slightly below zero
+// (within the tolerance, else refused before) would make the exact problem infeasible and Ipopt
+// would iterate to its limit: the block certifies q + delta instead, and delta counts in the
+// residual against p.
+Block ipopt_block(std::size_t ip, const Deflation& defl, double interval_minimum, double tol,
+                  const CertificationStudyOptions& options) {
+  const VectorXd& q = defl.q;
+  const int nq = static_cast<int>(q.size()) - 1;
+  const double q_scale = q.cwiseAbs().maxCoeff();
+  VectorXd target_poly = q;
+  if (options.precheck) {
+    const double q_min = defl.steps.empty() ? interval_minimum : minimum_on_interval(Polynomial(q), 0.0, 1.0).value;
+    if (q_min < 0.0) target_poly[0] += -q_min + 0.01 * tol * q_scale;
+  }
+  Block b;
+  b.poly = ip;
+  b.deflation = defl.steps;
+  b.op = make_operator(options.basis, nq);
+  const VectorXd fam = from_monomial(options.basis, target_poly);
+  b.normalization = fam.cwiseAbs().maxCoeff();
+  b.target = fam / b.normalization;
+  b.weight = to_monomial(options.basis, nq).cwiseAbs().rowwise().sum().maxCoeff() * b.normalization / q_scale;
+  // Start: the diagonal Bernstein Gram of the normalized Bernstein coefficients, clipped from
+  // below at start_floor times the largest.
+  const VectorXd beta_t = from_monomial(GramBasis::Bernstein, target_poly);
+  const double bmax = beta_t.cwiseAbs().maxCoeff();
+  const VectorXd beta_start = (beta_t / b.normalization).cwiseMax(options.start_floor * bmax / b.normalization);
+  const auto [l0, l1] = bernstein_diagonal(make_operator(GramBasis::Bernstein, nq), beta_start);
+  b.start_L0 = convert_diagonal_factor(options.basis, l0);
+  b.start_L1 = convert_diagonal_factor(options.basis, l1);
+  return b;
+}
+
+// Polynomial ip: refused by the precheck, certified in closed form (after deflation), or left to
+// Ipopt (its block appended to `blocks`).
+void prepare_polynomial(std::size_t ip, const Polynomial& poly, const CertificationStudyOptions& options,
+                        CertificationResult& res, std::vector<Block>& blocks) {
+  const double tol = options.tolerance;
+  const VectorXd& c = poly.coefficients();
+  LukacsCertificate& cert = res.certificates[ip];
+  const double scale = c.cwiseAbs().maxCoeff();
+  cert.scale = scale;
+  Index len = c.size();
+  while (len > 1 && std::abs(c[len - 1]) <= std::numeric_limits<double>::epsilon() * scale) --len;
+  cert.degree = static_cast<int>(len) - 1;
+  const VectorXd pc = c.head(len);
+  res.interval_minimum[ip] = minimum_on_interval(Polynomial(pc), 0.0, 1.0).value;
+  if (options.precheck && res.interval_minimum[ip] < -tol * scale) {
+    res.refused_by_precheck[ip] = true;
+    cert.L0.resize(0, 0);
+    cert.L1.resize(0, 0);
+    return;
+  }
+  if (closed_form_certifies(pc, scale, options)) {
+    cert = finished(bernstein_diagonal_certificate(pc), {}, scale, c);
+    return;
+  }
+  // Near-zero minima are split off exactly (at the global minimum: s, 1 - s or (s - r)^2, the
+  // small remainder certified apart): the L L^T program is nearly singular there.
+  Deflation defl;
+  defl.q = pc;
+  if (options.deflate_near_zeros) defl = deflate(pc, options.deflation_threshold, 0.01 * tol * scale);
+  if (closed_form_certifies(defl.q, scale, options)) {
+    cert = finished(bernstein_diagonal_certificate(defl.q), defl.steps, scale, c);
+    return;
+  }
+  blocks.push_back(ipopt_block(ip, defl, res.interval_minimum[ip], tol, options));
+}
+
+// Ipopt's factors of each block as certificates of their polynomials, kept where they beat the
+// certificate a polynomial has.
+void certify_blocks(const std::vector<Block>& bs, const IpoptRun& run, const std::vector<Polynomial>& polys,
+                    const CertificationStudyOptions& options, CertificationResult& res) {
+  if (run.factors.size() != bs.size()) return;  // Ipopt returned no point
+  for (std::size_t bi = 0; bi < bs.size(); ++bi) {
+    const Block& b = bs[bi];
+    LukacsCertificate cand;
+    cand.degree = b.op.degree;
+    cand.basis = options.basis;
+    const double root = std::sqrt(b.normalization);
+    cand.L0 = lower_triangular_factor(run.factors[bi].first * root);
+    cand.L1 = lower_triangular_factor(run.factors[bi].second * root);
+    cand = undo_deflation(cand, b.deflation);
+    cand.scale = res.certificates[b.poly].scale;
+    cand.deflation_steps = static_cast<int>(b.deflation.size());
+    cand.from_ipopt = true;
+    fill_residual(cand, polys[b.poly].coefficients());
+    LukacsCertificate& cert = res.certificates[b.poly];
+    if (!cert.from_ipopt || !(cert.max_coefficient_residual <= cand.max_coefficient_residual)) cert = cand;
+  }
+}
+
+// All blocks in one Ipopt call; those it leaves uncertified get one more chance, all in one more
+// call, with the other factor layout (they fail on different polynomials).
+void solve_blocks(std::vector<Block>& blocks, const std::vector<Polynomial>& polys,
+                  const CertificationStudyOptions& options, CertificationResult& res) {
+  const double tol = options.tolerance;
+  const Stopwatch ipopt_wall;
+  for (const Block& b : blocks) {  // until Ipopt gives something better
+    LukacsCertificate& cert = res.certificates[b.poly];
+    cert.L0.resize(0, 0);
+    cert.L1.resize(0, 0);
+    cert.from_ipopt = false;
+  }
+  FactorLayout layout;
+  layout.full = !options.triangular_factors;
+  const IpoptRun first = run_ipopt(blocks, layout, options, tol, options.derivative_test);
+  certify_blocks(blocks, first, polys, options, res);
+  res.ipopt_calls = 1;
+  res.ipopt_status = first.status;
+  add_linear_solver_name(res.ipopt_linear_solver, first.linear_solver);
+  res.ipopt_iterations = first.iterations;
+  res.ipopt_variables = first.variables;
+  res.ipopt_constraints = first.constraints;
+  res.derivative_test_report = first.derivative_report;
+  res.derivative_test_errors = first.derivative_errors;
+  std::vector<Block> again;
+  if (options.retry_other_layout)
+    for (const Block& b : blocks)
+      if (!(res.certificates[b.poly].max_coefficient_residual <= tol * res.certificates[b.poly].scale)) again.push_back(b);
+  if (!again.empty()) {
+    FactorLayout other = layout;
+    other.full = !layout.full;
+    const IpoptRun second = run_ipopt(again, other, options, tol, false);
+    certify_blocks(again, second, polys, options, res);
+    res.ipopt_calls = 2;
+    res.retried_blocks = static_cast<int>(again.size());
+    res.retry_status = second.status;
+    res.ipopt_iterations += second.iterations;
+    add_linear_solver_name(res.ipopt_linear_solver, second.linear_solver);
+  }
+  res.solve_seconds = ipopt_wall.seconds();
+}
+
+}  // namespace
+
 CertificationResult certify_nonnegative_on_unit_interval(const std::vector<Polynomial>& polys,
                                                          const CertificationStudyOptions& options) {
   const Stopwatch wall;
   const double tol = options.tolerance;
-  if (!(tol > 0.0) || !std::isfinite(tol))
-    throw std::invalid_argument("SOS certificate: tolerance must be > 0");
+  if (!(tol > 0.0) || !std::isfinite(tol)) throw std::invalid_argument("SOS certificate: tolerance must be > 0");
   for (const Polynomial& p : polys)
     if (!p.coefficients().allFinite())
       throw std::invalid_argument("SOS certificate: polynomial with non-finite coefficients");
-
   const std::size_t np = polys.size();
   CertificationResult res;
   res.certificates.resize(np);
   res.certified.assign(np, false);
   res.interval_minimum.assign(np, 0.0);
   res.refused_by_precheck.assign(np, false);
-
   std::vector<Block> blocks;
-  FactorLayout layout;
-  layout.full = !options.triangular_factors;
-  for (std::size_t ip = 0; ip < np; ++ip) {
-    const VectorXd& c = polys[ip].coefficients();
-    LukacsCertificate& cert = res.certificates[ip];
-    const double scale = c.cwiseAbs().maxCoeff();
-    cert.scale = scale;
-    Index len = c.size();
-    while (len > 1 && std::abs(c[len - 1]) <= std::numeric_limits<double>::epsilon() * scale) --len;
-    const int n = static_cast<int>(len) - 1;
-    cert.degree = n;
-    const VectorXd pc = c.head(len);
-    res.interval_minimum[ip] = minimum_on_interval(Polynomial(pc), 0.0, 1.0).value;
-    if (options.precheck && res.interval_minimum[ip] < -tol * scale) {
-      res.refused_by_precheck[ip] = true;
-      cert.L0.resize(0, 0);
-      cert.L1.resize(0, 0);
-      continue;
-    }
-
-    // Closed form: diagonal Bernstein Gram (exact when the Bernstein coefficients are >= 0;
-    // always used for degree <= 1, where the Bernstein coefficients are p(0), p(1)).
-    const auto closed_form = [&](const VectorXd& q) {
-      return scale == 0.0 || q.size() <= 2 ||
-             (options.closed_form_shortcut &&
-              from_monomial(GramBasis::Bernstein, q).minCoeff() >= 0.0);
-    };
-    const auto finish = [&](const LukacsCertificate& qc, const std::vector<DeflationStep>& steps) {
-      LukacsCertificate full = undo_deflation(qc, steps);
-      full.scale = scale;
-      full.deflation_steps = static_cast<int>(steps.size());
-      fill_residual(full, c);
-      return full;
-    };
-    if (closed_form(pc)) {
-      cert = finish(bernstein_diagonal_certificate(pc), {});
-      continue;
-    }
-    // Near-zero minima are split off exactly (at the global minimum: s, 1 - s or (s - r)^2,
-    // the small remainder certified apart): the L L^T program is nearly singular there.
-    Deflation defl;
-    defl.q = pc;
-    if (options.deflate_near_zeros)
-      defl = deflate(pc, options.deflation_threshold, 0.01 * tol * scale);
-    const VectorXd& q = defl.q;
-    const int nq = static_cast<int>(q.size()) - 1;
-    if (closed_form(q)) {
-      cert = finish(bernstein_diagonal_certificate(q), defl.steps);
-      continue;
-    }
-
-    // Ipopt block for q. A computed minimum slightly below zero (within the tolerance, else
-    // refused above) would make the exact problem infeasible and Ipopt would iterate to its
-    // limit: the block certifies q + delta instead, and delta counts in the residual against p.
-    const double q_scale = q.cwiseAbs().maxCoeff();
-    VectorXd target_poly = q;
-    if (options.precheck) {
-      const double q_min = defl.steps.empty() ? res.interval_minimum[ip]
-                                              : minimum_on_interval(Polynomial(q), 0.0, 1.0).value;
-      if (q_min < 0.0) target_poly[0] += -q_min + 0.01 * tol * q_scale;
-    }
-    Block b;
-    b.poly = ip;
-    b.deflation = defl.steps;
-    b.op = make_operator(options.basis, nq);
-    const VectorXd fam = from_monomial(options.basis, target_poly);
-    b.normalization = fam.cwiseAbs().maxCoeff();
-    b.target = fam / b.normalization;
-    b.weight = to_monomial(options.basis, nq).cwiseAbs().rowwise().sum().maxCoeff() *
-               b.normalization / q_scale;
-    // Start: the diagonal Bernstein Gram of the normalized Bernstein coefficients, clipped from
-    // below at start_floor times the largest.
-    const VectorXd beta_t = from_monomial(GramBasis::Bernstein, target_poly);
-    const double bmax = beta_t.cwiseAbs().maxCoeff();
-    const VectorXd beta_start =
-        (beta_t / b.normalization).cwiseMax(options.start_floor * bmax / b.normalization);
-    const auto [l0, l1] = bernstein_diagonal(make_operator(GramBasis::Bernstein, nq), beta_start);
-    b.start_L0 = convert_diagonal_factor(options.basis, l0);
-    b.start_L1 = convert_diagonal_factor(options.basis, l1);
-    blocks.push_back(std::move(b));
-  }
-
-  if (!blocks.empty()) {
-    const Stopwatch ipopt_wall;
-    const auto certify_blocks = [&](const std::vector<Block>& bs, const IpoptRun& run) {
-      for (std::size_t bi = 0; bi < bs.size(); ++bi) {
-        const Block& b = bs[bi];
-        if (run.factors.size() != bs.size()) continue;  // Ipopt returned no point
-        LukacsCertificate cand;
-        cand.degree = b.op.degree;
-        cand.basis = options.basis;
-        const double root = std::sqrt(b.normalization);
-        cand.L0 = lower_triangular_factor(run.factors[bi].first * root);
-        cand.L1 = lower_triangular_factor(run.factors[bi].second * root);
-        cand = undo_deflation(cand, b.deflation);
-        cand.scale = res.certificates[b.poly].scale;
-        cand.deflation_steps = static_cast<int>(b.deflation.size());
-        cand.from_ipopt = true;
-        fill_residual(cand, polys[b.poly].coefficients());
-        LukacsCertificate& cert = res.certificates[b.poly];
-        if (!cert.from_ipopt || !(cert.max_coefficient_residual <= cand.max_coefficient_residual))
-          cert = cand;
-      }
-    };
-    for (const Block& b : blocks) {  // until Ipopt gives something better
-      LukacsCertificate& cert = res.certificates[b.poly];
-      cert.L0.resize(0, 0);
-      cert.L1.resize(0, 0);
-      cert.from_ipopt = false;
-    }
-    const IpoptRun first = run_ipopt(blocks, layout, options, tol, options.derivative_test);
-    certify_blocks(blocks, first);
-    res.ipopt_calls = 1;
-    res.ipopt_status = first.status;
-    add_linear_solver_name(res.ipopt_linear_solver, first.linear_solver);
-    res.ipopt_iterations = first.iterations;
-    res.ipopt_variables = first.variables;
-    res.ipopt_constraints = first.constraints;
-    res.derivative_test_report = first.derivative_report;
-    res.derivative_test_errors = first.derivative_errors;
-    // Blocks the first layout left uncertified get one more chance, all in one more call, with
-    // the other factor layout (they fail on different polynomials, see the measurements below).
-    if (options.retry_other_layout) {
-      std::vector<Block> again;
-      for (const Block& b : blocks)
-        if (!(res.certificates[b.poly].max_coefficient_residual <=
-              tol * res.certificates[b.poly].scale))
-          again.push_back(b);
-      if (!again.empty()) {
-        FactorLayout other = layout;
-        other.full = !layout.full;
-        const IpoptRun second = run_ipopt(again, other, options, tol, false);
-        certify_blocks(again, second);
-        res.ipopt_calls = 2;
-        res.retried_blocks = static_cast<int>(again.size());
-        res.retry_status = second.status;
-        res.ipopt_iterations += second.iterations;
-        add_linear_solver_name(res.ipopt_linear_solver, second.linear_solver);
-      }
-    }
-    res.solve_seconds = ipopt_wall.seconds();
-  }
-
+  for (std::size_t ip = 0; ip < np; ++ip) prepare_polynomial(ip, polys[ip], options, res, blocks);
+  if (!blocks.empty()) solve_blocks(blocks, polys, options, res);
   res.all_certified = true;
   for (std::size_t ip = 0; ip < np; ++ip) {
     const LukacsCertificate& cert = res.certificates[ip];
