@@ -1,13 +1,14 @@
 #include "flatsos/planner/numerics/sos_certificate.hpp"
 
-#include <Eigen/Dense>
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <Eigen/Dense>
 
 #include "flatsos/planner/numerics/sos_certificate_study.hpp"
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
