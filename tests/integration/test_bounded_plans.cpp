@@ -63,6 +63,7 @@ TEST_F(BoundedPlans, SequentialLpAndIpoptReachTheSameBoundedOptimum) {
   ASSERT_EQ(slp.status, fpl::SolveStatus::Solved) << slp.message;
   ASSERT_EQ(ipopt.status, fpl::SolveStatus::Solved) << ipopt.message;
   EXPECT_GT(slp.sos.bound_sequential_lp_iterations, 0);
+  EXPECT_EQ(slp.sos.bound_slp_iterations, slp.sos.bound_sequential_lp_iterations);  // the deprecated spelling
   EXPECT_EQ(ipopt.sos.bound_sequential_lp_iterations, 0);
   EXPECT_NEAR(slp.sos.cost_N_s, ipopt.sos.cost_N_s, 1e-6 * ipopt.sos.cost_N_s);
 }

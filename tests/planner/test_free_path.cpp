@@ -237,6 +237,8 @@ TEST_F(FreePath, TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost)
             << " steps, " << plan.free_path.evaluations << " evaluations, " << plan.free_path.rounds << " rounds, "
             << plan.free_path.seconds << " s\n";
   EXPECT_LT(plan.sos.cost_N_s, 0.8 * plan.free_path.prescribed_cost_N_s);
+  EXPECT_GT(plan.free_path.sequential_lp_iterations, 0);
+  EXPECT_EQ(plan.free_path.slp_iterations, plan.free_path.sequential_lp_iterations);  // the deprecated spelling
   // The certified plan along the path costs what the path optimization found at its points.
   EXPECT_NEAR(plan.sos.cost_N_s, plan.free_path.cost_at_points_N_s, 1e-3 * plan.sos.cost_N_s);
   flatsos::test::expect_executable(arm.flat, plan, o.reserves_N);
@@ -509,13 +511,14 @@ TEST_F(FreePath, BadOptionsAreNamed) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   };
+  // A bad study setting with the fixture's options.
+  auto rejects_study = [&](auto spoil, const std::string& field) {
+    fpl::OpenLoopStudyOptions bad_study;
+    spoil(bad_study.free_path);
+    rejects(o, field, bad_study);
+  };
+  rejects_study([](auto& f) { f.degree = 4; }, "free_path.degree");
   auto bad = o;
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.degree = 4;
-    rejects(o, "free_path.degree", s);
-  }
-  bad = o;
   bad.free_path.spans = 1;
   rejects(bad, "free_path.spans");
   bad = o;
@@ -526,49 +529,12 @@ TEST_F(FreePath, BadOptionsAreNamed) {
   rejects(bad, "free_path.span_growth");
   bad.free_path.span_growth = std::nan("");
   rejects(bad, "free_path.span_growth");
-  bad = o;
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.start_min_spans = -1;
-    rejects(o, "free_path.start_min_spans", s);
-  }
-  bad = o;
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.relative_tolerance = 0.0;
-    rejects(o, "free_path.relative_tolerance", s);
-  }
-  bad = o;
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.exchange_relative_tolerance = -1e-4;
-    rejects(o, "free_path.exchange_relative_tolerance", s);
-  }
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.exchange_relative_tolerance = std::numeric_limits<double>::infinity();
-    rejects(o, "free_path.exchange_relative_tolerance", s);
-  }
-  bad = o;
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.max_torque_refinements = -1;
-    rejects(o, "free_path.max_torque_refinements", s);
-  }
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.max_torque_refinements = 11;
-    rejects(o, "free_path.max_torque_refinements", s);
-  }
-  bad = o;
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.torque_model_relative_gap = -1e-3;
-    rejects(o, "free_path.torque_model_relative_gap", s);
-  }
-  {
-    fpl::OpenLoopStudyOptions s;
-    s.free_path.torque_model_relative_gap = std::nan("");
-    rejects(o, "free_path.torque_model_relative_gap", s);
-  }
+  rejects_study([](auto& f) { f.start_min_spans = -1; }, "free_path.start_min_spans");
+  rejects_study([](auto& f) { f.relative_tolerance = 0.0; }, "free_path.relative_tolerance");
+  rejects_study([](auto& f) { f.exchange_relative_tolerance = -1e-4; }, "free_path.exchange_relative_tolerance");
+  rejects_study([](auto& f) { f.exchange_relative_tolerance = std::numeric_limits<double>::infinity(); }, "free_path.exchange_relative_tolerance");
+  rejects_study([](auto& f) { f.max_torque_refinements = -1; }, "free_path.max_torque_refinements");
+  rejects_study([](auto& f) { f.max_torque_refinements = 11; }, "free_path.max_torque_refinements");
+  rejects_study([](auto& f) { f.torque_model_relative_gap = -1e-3; }, "free_path.torque_model_relative_gap");
+  rejects_study([](auto& f) { f.torque_model_relative_gap = std::nan(""); }, "free_path.torque_model_relative_gap");
 }

@@ -51,8 +51,8 @@ namespace {
 class OpenLoopPlanning {
  public:
   OpenLoopPlanning(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
-                   const OpenLoopOptions& options, const OpenLoopStudyOptions& study)
-      : flat_(flat), workspace_(workspace), initial_(initial), o_(options), study_(study) {}
+                   OpenLoopOptions options, const OpenLoopStudyOptions& study)
+      : flat_(flat), workspace_(workspace), initial_(initial), o_(std::move(options)), study_(study) {}
 
   OpenLoopPlan plan() {
     const Stopwatch setup;

@@ -146,7 +146,7 @@ void plan_along_free_path(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   report.points = free.points;
   report.path_iterations = free.path_iterations;
   report.evaluations = free.evaluations;
-  report.sequential_lp_iterations = free.sequential_lp_iterations;
+  report.sequential_lp_iterations = report.slp_iterations = free.sequential_lp_iterations;
   if (!free.converged) {
     report.seconds = wall.seconds();
     plan.status = free.infeasible ? SolveStatus::Infeasible : SolveStatus::Failed;

@@ -168,6 +168,7 @@ class BoundedExchange {
     const SequentialLpOutcome slp = solve_by_sequential_lp(linear, bound_rows_of(flat_, points_, a_min_, kBoundMargin),
                                                            theta_, radius_, basis_, settings, &rows_at_theta_);
     result_.bound_sequential_lp_iterations += slp.iterations;
+    result_.bound_slp_iterations = result_.bound_sequential_lp_iterations;
     result_.simplex_pivots += slp.lp_pivots;
     if (!slp.converged) {
       result_.status = SolveStatus::Failed;

@@ -50,6 +50,7 @@ struct FreePathReport {
   /// Quasi-Newton steps (ReducedQuasiNewton) or Ipopt iterations (JointNewton), then V(c)
   /// evaluations and their LP steps (ReducedQuasiNewton only).
   int path_iterations = 0, evaluations = 0, sequential_lp_iterations = 0;
+  int slp_iterations = 0;  ///< deprecated: sequential_lp_iterations, kept for existing callers
   /// The torque model of the plan along the optimized path: its pieces (the options' pieces,
   /// doubled FreePathStudyOptions::max_torque_refinements times at most) and how many plans along
   /// the path were made.

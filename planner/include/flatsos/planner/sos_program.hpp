@@ -95,6 +95,7 @@ struct SosProgramResult {
   int bound_rounds = 0;                ///< NLP solves
   int bound_points = 0;                ///< times at which the NLP imposed the bounds
   int bound_sequential_lp_iterations = 0;        ///< LP steps of the sequential LP, over all rounds
+  int bound_slp_iterations = 0;  ///< deprecated: bound_sequential_lp_iterations, kept for existing callers
   /// Largest excess of a or n over its bounds on the check grid (<= tolerance when solved; 0
   /// without bounds).
   double max_bound_excess = 0.0;

@@ -38,6 +38,9 @@ struct SimplexBasis {
 /// The bounds' sequential LP's last step-LP basis by row identity, kept across its iterations,
 /// exchange rounds and receding-horizon periods: each step LP differs from the last by a small
 /// move, so it restarts a few pivots from its optimum.
+struct SequentialLpBasis;
+/// Deprecated: SequentialLpBasis, kept for existing callers.
+using SlpBasis = SequentialLpBasis;
 struct SequentialLpBasis {
   std::vector<BasisStatus> step;                                     ///< per free coefficient
   std::vector<BasisStatus> bound_row, bound_slack;                   ///< per bound row (point, muscle, row)
