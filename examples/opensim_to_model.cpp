@@ -44,7 +44,7 @@ double number(const std::string& text, const std::string& option) {
 
 int main(int argc, char** argv) {
   CLI::App app{"A flatsos model from an OpenSim model and its fitted muscle paths.\n"
-               "The pelvis (the root body) is welded to ground; every kept coordinate becomes a pin joint in one plane, "
+               "The pelvis (the root body) is welded to ground; every kept coordinate becomes a pin joint about its OpenSim axis (exact for a joint that is one rotation), "
                "with OpenSim's name, sign and range; every other coordinate is held at its --hold value or 0, in the "
                "kinematics and inside the path polynomials (a coordinate coupled to another follows it). Bodies beyond a "
                "kept joint are lumped into its child body. Every muscle whose fitted length depends on a kept "

@@ -16,7 +16,8 @@ import tempfile
 
 import numpy as np
 
-_PARALLEL = 1e-6  # |sin| of the angle between two joint axes that still counts as parallel
+_PLANAR_COS = np.cos(np.radians(45.0))  # a joint axis this near the view's normal moves in its plane
+_PARALLEL = 1e-6  # |sin| of the angle between two directions that still counts as parallel
 
 
 class _Skeleton:
@@ -50,21 +51,23 @@ class _Skeleton:
         self.plane = self._plane()
 
     def _plane(self):
-        """Two unit vectors spanning the plane of motion: every joint axis (in ground, at the
-        zero posture) must be parallel; the second vector is 'up' (against gravity) in it."""
+        """Two unit vectors spanning the plane the motion is drawn in: the ground plane (OpenSim's
+        views) whose normal is nearest the first joint's axis (in ground, at the zero posture);
+        the motion is projected on it. A joint whose axis is more than 45 deg from that normal
+        does not move in it (the model is not planar). The second vector is 'up' (against
+        gravity) in the plane."""
         _, rotations = self.model.body_frames(np.zeros(len(self.model.joints)))
         normals = []
         for i, axis in enumerate(self.axes):
             r = np.eye(3) if self.parent[i] < 0 else rotations[self.parent[i]]
             normals.append(r @ axis / np.linalg.norm(axis))
-        n = normals[0]
+        n = np.zeros(3)
+        n[np.argmax(np.abs(normals[0]))] = 1.0
         for name, other in zip(self.model.joints, normals):
-            if np.linalg.norm(np.cross(n, other)) > _PARALLEL:
+            if abs(n @ other) < _PLANAR_COS:
                 raise ValueError(f"animation: model '{self.model.name}' is not planar: joint '{name}' turns about "
-                                 f"{np.round(other, 3).tolist()}, joint '{self.model.joints[0]}' about "
-                                 f"{np.round(n, 3).tolist()}")
-        if n @ np.array([0.0, 0.0, 1.0]) < 0 or (abs(n[2]) < _PARALLEL and n @ np.array([1.0, 1.0, 0.0]) < 0):
-            n = -n  # seen from +z (OpenSim's view of the sagittal plane) whatever the axis' sign
+                                 f"{np.round(other, 3).tolist()}, more than 45 deg from the drawing plane's normal "
+                                 f"{n.tolist()}")
         up = self.up - (self.up @ n) * n
         if np.linalg.norm(up) < _PARALLEL:  # gravity along the axis: any in-plane 'up'
             up = np.cross(n, [1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.cross(n, [0.0, 1.0, 0.0])

@@ -5,6 +5,7 @@
 // part of a clone), the seated knee and the sagittal leg: muscle counts, anatomy's signs, and
 // lengths and moment arms equal to the fitted polynomials evaluated independently.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <fstream>
@@ -354,8 +355,33 @@ TEST(OpenSimImport, EveryRefusedInputIsNamed) {
   expect(with([](auto& o) { o.keep = {"hip_flexion", "hip_adduction"}; o.hold.clear(); }), "hip");
   // A muscle across the knee that the paths file does not fit.
   expect(seated(), "muscle 'unfitted': its path runs across a kept joint", small_osim(muscle("unfitted", 500.0, 0.1, 0.1, "thigh shank")));
-  // Keeping the hip's adduction and the knee: axes 90 deg apart are not one plane.
-  expect(with([](auto& o) { o.keep = {"hip_adduction", "knee_angle"}; o.hold.clear(); }), "from the plane's normal");
+}
+
+// Pins keep OpenSim's axes in 3-D: the hip's adduction (rotation2, about x after the flexion's
+// rotation1 about z held at 90 deg) turns about F's y, 90 deg from the knee's axis, and both
+// joints, being one rotation each, are reproduced exactly (the importer's pins go through the
+// joint frames' origins and every body that turns with them follows OpenSim's to rounding).
+TEST(OpenSimImport, PinsKeepOpenSimsAxesAndJointsOfOneRotationAreExact) {
+  fp::OpenSimImportOptions o;
+  o.keep = {"hip_adduction", "knee_angle"};
+  o.hold = {{"hip_flexion", kPi / 2}};
+  const fp::OpenSimImport imported = fp::import_opensim_model(fp::parse_opensim_model(small_osim(), "small.osim"), small_paths(), o);
+  const fp::ModelDescription& model = imported.model;
+  ASSERT_EQ(model.numJoints(), 2);
+  EXPECT_EQ(model.joints[0].name, "hip");
+  EXPECT_LT((model.joints[0].axis - Eigen::Vector3d::UnitY()).norm(), 1e-12);
+  // The knee's frames are both turned half a turn about y, so its z axis is -z in ground.
+  EXPECT_LT((model.joints[1].axis + Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+  const nlohmann::json provenance = nlohmann::json::parse(model.provenance_json);
+  for (const char* joint : {"hip", "knee"}) {
+    EXPECT_TRUE(provenance["pins"][joint]["exact"].get<bool>()) << joint;
+    EXPECT_LT(provenance["pins"][joint]["joint_point_error_m"].get<double>(), 1e-12) << joint;
+  }
+  // The hip carries the thigh alone (the knee's bodies hang from the knee): its mass centre too.
+  EXPECT_LT(provenance["pins"]["hip"]["mass_center_error_m"].get<double>(), 1e-12);
+  // The patella follows the knee through a coupler on its own path and is lumped where it is at
+  // the reference posture: the shank's lumped mass centre is off elsewhere, and said so.
+  EXPECT_GT(provenance["pins"]["knee"]["mass_center_error_m"].get<double>(), 1e-4);
 }
 
 // ---- OpenSim's example model, where it is present ------------------------------------------

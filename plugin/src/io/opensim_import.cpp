@@ -24,7 +24,6 @@ using opensim_import::fail;
 using opensim_import::fixed;
 using opensim_import::kDegPerRad;
 using opensim_import::Reduction;
-constexpr double kMaxAxisTiltRad = 45.0 / kDegPerRad;
 
 struct Lumped {
   double mass_kg = 0.0;
@@ -51,22 +50,29 @@ Lumped lump(const OpenSimModel& osim, const std::vector<std::string>& bodies, co
 }
 
 constexpr int kRangeSamples = 60;
+// A pin whose body follows OpenSim's joint this closely over the range is exact (rounding only).
+constexpr double kExactPinTolerance_m = 1e-9;
 
-// The point in the plane through `joint_origin` about which the bodies' origins and mass centres
+// The point in the plane through `joint_origin` normal to the pin's axis about which the bodies' origins and mass centres
 // (those that move with the joint, not through a coupler), turned by the pin, come closest (least squares over the range) to where OpenSim's
 // joint puts them: c_true(q) - R(q) c0 = (I - R(q)) p is linear in p.
+// The origins and mass centres of the bodies that move with a kept joint (not those that follow
+// it through a coupler, which move on their own paths), in ground.
+std::vector<Eigen::Vector3d> points_moving_with_joint(const OpenSimModel& osim, const Reduction& reduction,
+                                                      const std::vector<std::string>& bodies, const OpenSimCoordinateValues& q) {
+  std::vector<Eigen::Vector3d> out;
+  for (const std::string& b : bodies) {
+    if (reduction.coupledToKept(b)) continue;
+    const Eigen::Isometry3d X = opensim_body_in_ground(osim, b, q);
+    out.push_back(X.translation());
+    out.push_back(X * osim.body(b)->mass_center_m);
+  }
+  return out;
+}
+
 Eigen::Vector3d fitted_center(const OpenSimModel& osim, const Reduction& reduction, const std::vector<std::string>& bodies,
                               const std::string& coordinate, const JointDescription& pin, const Eigen::Vector3d& joint_origin) {
-  auto points = [&](const OpenSimCoordinateValues& q) {
-    std::vector<Eigen::Vector3d> out;
-    for (const std::string& b : bodies) {
-      if (reduction.coupledToKept(b)) continue;  // moves on its own path, not with the joint
-      const Eigen::Isometry3d X = opensim_body_in_ground(osim, b, q);
-      out.push_back(X.translation());
-      out.push_back(X * osim.body(b)->mass_center_m);
-    }
-    return out;
-  };
+  auto points = [&](const OpenSimCoordinateValues& q) { return points_moving_with_joint(osim, reduction, bodies, q); };
   const std::vector<Eigen::Vector3d> at_reference = points(reduction.reference());
   const Eigen::Vector3d u = pin.axis.unitOrthogonal(), v = pin.axis.cross(u);
   Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
@@ -86,6 +92,22 @@ Eigen::Vector3d fitted_center(const OpenSimModel& osim, const Reduction& reducti
   // A is singular only when the range has no width; then the joint's own origin is the answer.
   const Eigen::Vector2d x = A.determinant() > 1e-12 ? Eigen::Vector2d(A.ldlt().solve(b)) : Eigen::Vector2d::Zero();
   return joint_origin + x[0] * u + x[1] * v;
+}
+
+// The farthest any of those points is, over the range, from where the pin puts it: 0 to
+// rounding when OpenSim's joint is one rotation about the pin's axis.
+double pin_point_error_m(const OpenSimModel& osim, const Reduction& reduction, const std::vector<std::string>& bodies,
+                         const std::string& coordinate, const JointDescription& pin, const Eigen::Vector3d& center) {
+  const std::vector<Eigen::Vector3d> at_reference = points_moving_with_joint(osim, reduction, bodies, reduction.reference());
+  double worst_m = 0.0;
+  for (int s = 0; s <= kRangeSamples; ++s) {
+    const double q = pin.range_rad[0] + (pin.range_rad[1] - pin.range_rad[0]) * s / kRangeSamples;
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(q, pin.axis).toRotationMatrix();
+    const std::vector<Eigen::Vector3d> truth = points_moving_with_joint(osim, reduction, bodies, reduction.moved(coordinate, q));
+    for (std::size_t i = 0; i < truth.size(); ++i)
+      worst_m = std::max(worst_m, (truth[i] - (center + R * (at_reference[i] - center))).norm());
+  }
+  return worst_m;
 }
 
 json range_deg(const std::array<double, 2>& r) { return json::array({r[0] * kDegPerRad, r[1] * kDegPerRad}); }
@@ -153,10 +175,11 @@ class Importer {
     }
   }
 
-  // A pin about the rotation the kept coordinate turns fastest at the reference posture,
-  // projected on the plane's normal (the ground axis nearest the first pin's), through the
-  // point in the plane about which the child's bodies best follow OpenSim's joint over the
-  // range (least squares; the joint frame's origin when the joint is a true pin).
+  // A pin about the rotation the kept coordinate turns fastest at the reference posture (in 3-D:
+  // OpenSim's axis as it is), through the point about which the child's bodies best follow
+  // OpenSim's joint over the range (least squares). A joint whose motion is that one rotation
+  // (a PinJoint, or a CustomJoint with one rotation of the coordinate) is then reproduced
+  // exactly: the point is on its axis and every body follows it to rounding.
   void addPin(const KeptJoint& k) {
     const OpenSimCoordinateValues& q0 = reduction_.reference();
     const OpenSimJoint& j = *k.joint;
@@ -164,36 +187,28 @@ class Importer {
     const Eigen::Isometry3d X_GM = X_GF * opensim_joint_transform(j, q0);
     const Eigen::Vector3d axis = X_GF.linear() * opensim_joint_rate(j, q0, k.coordinate).dominant_axis;
     if (!(axis.norm() > 0.5)) fail("kept coordinate '" + k.coordinate + "': joint '" + j.name + "' does not rotate with it");
-    if (normal_.isZero()) {
-      Eigen::Index i = 0;
-      axis.cwiseAbs().maxCoeff(&i);
-      normal_ = Eigen::Vector3d::Unit(i);
-    }
-    const double along = axis.dot(normal_);
-    const double tilt_rad = std::acos(std::min(1.0, std::abs(along)));
-    if (tilt_rad > kMaxAxisTiltRad)
-      fail("kept coordinate '" + k.coordinate + "': its axis is " + fixed(tilt_rad * kDegPerRad, 1) +
-           " deg from the plane's normal (the importer builds planar models: keep coordinates that rotate in one plane)");
     JointDescription d;
     d.name = j.name;
     d.coordinate = k.coordinate;
     d.parent = reduction_.owner(j.parent_body);
     d.child = j.child_body;
-    d.axis = along > 0.0 ? normal_ : Eigen::Vector3d(-normal_);
+    // Every flatsos body frame is parallel to ground at the reference posture, so an axis in
+    // ground is the axis in the parent's frame.
+    d.axis = axis.normalized();
     d.range_rad = osim_.coordinate(k.coordinate)->range;
     if (const auto r = options_.ranges.find(k.coordinate); r != options_.ranges.end()) d.range_rad = r->second;
     const Eigen::Vector3d center = fitted_center(osim_, reduction_, members_.at(d.child), k.coordinate, d, X_GM.translation());
     d.location_in_parent_m = center - origin_.at(d.parent);
     origin_[d.child] = center;
     model_.joints.push_back(d);
+    const double joint_error_m = pin_point_error_m(osim_, reduction_, members_.at(d.child), k.coordinate, d, center);
     pins_[j.name] = {{"coordinate", k.coordinate},
                      {"opensim_joint_type", j.type},
-                     {"axis_tilt_dropped_deg", tilt_rad * kDegPerRad},
+                     {"exact", joint_error_m <= kExactPinTolerance_m},
+                     {"joint_point_error_m", joint_error_m},
+                     {"axis_in_ground", {d.axis[0], d.axis[1], d.axis[2]}},
                      {"center_shift_from_joint_frame_m", (center - X_GM.translation()).norm()},
                      {"range_deg", range_deg(d.range_rad)}};
-    if (tilt_rad > 1e-9)
-      out_.notes.push_back("pin '" + j.name + "': OpenSim's axis is tilted " + fixed(tilt_rad * kDegPerRad, 2) +
-                           " deg from the plane's normal; the pin turns about the normal");
   }
 
   // The kept joint's child with the mass properties of everything lumped into it.
@@ -220,32 +235,29 @@ class Importer {
   }
 
   // How far the pin puts its body's mass centre from where OpenSim's joint does over the range:
-  // in the plane (what the planar model's dynamics sees) and out of it (the tilt dropped).
+  // what the dynamics sees of an inexact pin and of bodies lumped where they are at the reference.
   void recordMassCenterError(const KeptJoint& k, const Lumped& lumped) {
     const std::string& name = k.joint->child_body;
     const JointDescription& d = *std::find_if(model_.joints.begin(), model_.joints.end(), [&](const auto& j) { return j.child == name; });
-    double worst_in_plane_m = 0.0, worst_at_rad = 0.0, worst_out_of_plane_m = 0.0;
+    double worst_m = 0.0, worst_at_rad = 0.0;
     for (int s = 0; s <= kRangeSamples; ++s) {
       const double q = d.range_rad[0] + (d.range_rad[1] - d.range_rad[0]) * s / kRangeSamples;
       const Eigen::Vector3d truth = lump(osim_, members_.at(name), reduction_.moved(k.coordinate, q)).mass_center;
       const Eigen::Vector3d by_pin = origin_.at(name) + Eigen::AngleAxisd(q, d.axis) * (lumped.mass_center - origin_.at(name));
-      const Eigen::Vector3d error = truth - by_pin;
-      const double out_of_plane = std::abs(error.dot(d.axis)), in_plane = (error - error.dot(d.axis) * d.axis).norm();
-      if (in_plane > worst_in_plane_m) worst_in_plane_m = in_plane, worst_at_rad = q;
-      worst_out_of_plane_m = std::max(worst_out_of_plane_m, out_of_plane);
+      const double error_m = (truth - by_pin).norm();
+      if (error_m > worst_m) worst_m = error_m, worst_at_rad = q;
     }
     json& pin = pins_[k.joint->name];
-    pin["mass_center_error_in_plane_m"] = worst_in_plane_m;
+    pin["mass_center_error_m"] = worst_m;
     pin["mass_center_error_at_deg"] = worst_at_rad * kDegPerRad;
-    pin["mass_center_error_out_of_plane_m"] = worst_out_of_plane_m;
     std::vector<std::string> others;
     for (const std::string& m : members_.at(name))
       if (m != name) others.push_back(m);
     if (!others.empty()) pin["lumped_bodies"] = others;
-    if (worst_in_plane_m > 1e-6 || worst_out_of_plane_m > 1e-6)
+    if (worst_m > kExactPinTolerance_m)
       out_.notes.push_back("pin '" + k.joint->name + "' (" + k.joint->type + "): " + name + "'s mass centre is up to " +
-                           fixed(worst_in_plane_m * 1e3, 1) + " mm in the plane (at " + fixed(worst_at_rad * kDegPerRad, 1) +
-                           " deg) and " + fixed(worst_out_of_plane_m * 1e3, 1) + " mm out of it from where OpenSim's joint puts it");
+                           fixed(worst_m * 1e3, 1) + " mm (at " + fixed(worst_at_rad * kDegPerRad, 1) +
+                           " deg) from where OpenSim's joint puts it");
   }
 
   void noteCoupledBodies(const KeptJoint& k) {
@@ -386,9 +398,11 @@ class Importer {
     provenance_["welded_to_ground"] = welded_;
     provenance_["pins"] = pins_;
     provenance_["approximations"] = {
-        "each kept coordinate is a pin about the plane's normal through its joint's child frame at the reference posture "
-        "(kept coordinates 0): a CustomJoint's other motions with that coordinate (the walker knee's translations and "
-        "small rotations) and axis tilts out of the plane are dropped; pins.*.mass_center_error_* measure the effect",
+        "each kept coordinate is a pin about the axis it turns fastest at the reference posture (kept coordinates 0), "
+        "through the point its bodies best turn about: exact for a joint that is one rotation (pins.*.exact, "
+        "pins.*.joint_point_error_m); a "
+        "CustomJoint's other motions with that coordinate (the walker knee's translations and small rotations) are "
+        "dropped, and pins.*.mass_center_error_m measures the effect",
         "bodies that follow a kept coordinate through a coupler are lumped where they are at the reference posture",
         "muscles: OpenSim's maximum isometric force, optimal fibre length, tendon slack length, pennation, maximum "
         "contraction velocity and curve strains with flatsos' Hill laws in place of the OpenSim muscle's curves",
@@ -411,7 +425,6 @@ class Importer {
   std::map<std::string, std::vector<std::string>> members_;  // flatsos body -> OpenSim bodies
   std::vector<std::string> welded_;
   std::map<std::string, Eigen::Vector3d> origin_ = {{"ground", Eigen::Vector3d::Zero()}};  // flatsos body -> its pin's point in ground
-  Eigen::Vector3d normal_ = Eigen::Vector3d::Zero();  // the plane's
   json pins_ = json::object();
   json left_out_ = json::array(), moment_arms_ = json::object();
   std::mt19937_64 rng_{20261124};

@@ -1,6 +1,6 @@
 #pragma once
 // An OpenSim model and its fitted muscle paths reduced to a flatsos model: the kept coordinates
-// become pin joints in one plane, every other coordinate is held (in the kinematics and inside
+// become pin joints about their own axes (exact for a joint that is one rotation), every other coordinate is held (in the kinematics and inside
 // the path polynomials), bodies welded to ground are dropped and bodies beyond a kept joint are
 // lumped into its child, and every muscle whose fitted length depends on a kept coordinate is
 // brought along with its OpenSim parameters. What is approximated is measured and recorded in
@@ -42,8 +42,7 @@ struct OpenSimImport {
 
 /// Throws OpenSimModelError naming the coordinate, joint, muscle or value for: a kept or held
 /// coordinate the model does not have, one given twice or both kept and held, two kept
-/// coordinates of one joint, a kept translation or coupled coordinate, a kept axis more than
-/// 45 degrees from the plane's normal, a held value or range outside the coordinate's range, a
+/// coordinates of one joint, a kept translation or coupled coordinate, a held value or range outside the coordinate's range, a
 /// muscle that crosses a kept joint without a fitted path (or whose path names a coordinate the
 /// model lacks), a slack muscle with refuse_slack_muscles, no muscle left.
 OpenSimImport import_opensim_model(const OpenSimModel& osim, const std::vector<OpenSimPolynomialPath>& paths,
