@@ -12,6 +12,7 @@
 // corners are C2 (not C3: the third derivative jumps at the joints and at the curve's ends).
 
 #include <array>
+#include <cstddef>
 #include <string>
 #include <vector>
 
