@@ -119,7 +119,8 @@ void check_fiber(Checker& c, const MuscleParameters& p) {
   for (double t : grid(-0.95, 0.95, 38)) velocities.push_back(t * vmax);
   check_curve(c, p, &MuscleModel::forceVelocity, "forceVelocity", velocities, vmax, 1.0);
   c.compare("forceVelocity at 0", 0.0, m.forceVelocity(p, 0.0).value, 1.0, 1.0);
-  const double z_hi = m.forceRatioExactUpperBound(p);
+  // A model exact at every force ratio is checked up to 2 (beyond any Flen in use).
+  const double z_hi = std::min(m.forceRatioExactUpperBound(p), 2.0);
   for (double u : velocities) {
     const double z = m.forceVelocity(p, u).value;
     if (z > 0.0 && z < z_hi)
@@ -132,6 +133,22 @@ void check_fiber(Checker& c, const MuscleParameters& p) {
     c.derivative("fiberVelocityFromForceRatio.slope", [&](double y) { return m.fiberVelocityFromForceRatio(p, y).value; },
                  z, u.slope, kRelativeStep, vmax);
   }
+}
+
+// k(a) = Vmax(a) / Vmax: its derivatives, k(1) = 1 (the muscle's Vmax is at full activation),
+// and k > 0 over the activations the dynamics use; exactly 1 when the model says it is.
+void check_max_velocity_scale(Checker& c, const MuscleParameters& p) {
+  const MuscleModel& m = *p.model;
+  for (double a : grid(p.activation_floor, 1.0, 12)) {
+    const CurveJet k = m.maxVelocityScale(p, a);
+    c.derivative("maxVelocityScale.slope", [&](double y) { return m.maxVelocityScale(p, y).value; }, a, k.slope,
+                 kRelativeStep, 1.0);
+    c.derivative("maxVelocityScale.curvature", [&](double y) { return m.maxVelocityScale(p, y).slope; }, a, k.curvature,
+                 kRelativeStep, 1.0);
+    c.compare("maxVelocityScale > 0", a, k.value > 0.0 ? 1.0 : 0.0, 1.0, 1.0);
+    if (!m.scalesMaxVelocityWithActivation()) c.compare("maxVelocityScale = 1 (not scaling)", a, k.value, 1.0, 1.0);
+  }
+  c.compare("maxVelocityScale at full activation", 1.0, m.maxVelocityScale(p, 1.0).value, 1.0, 1.0);
 }
 
 void check_activation(Checker& c, const MuscleParameters& p) {
@@ -202,6 +219,7 @@ MuscleModelCheck check_muscle_model(const MuscleParameters& p, double relative_t
   Checker c(relative_tolerance);
   check_tendon(c, p);
   check_fiber(c, p);
+  check_max_velocity_scale(c, p);
   check_activation(c, p);
   return c.result();
 }

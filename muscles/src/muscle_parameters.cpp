@@ -40,6 +40,8 @@ void validate(const MuscleParameters& p) {
   const double e0 = p.passive_fiber_strain_at_one_norm_force;
   if (!std::isfinite(e0) || e0 < 0.0)
     reject(p, "passive_fiber_strain_at_one_norm_force", e0, "must be > 0, or 0 for no passive force");
+  if (!std::isfinite(p.fiber_damping) || p.fiber_damping < 0.0)
+    reject(p, "fiber_damping", p.fiber_damping, "must be >= 0 (0: no damping)");
   if (!p.model)
     throw std::invalid_argument("muscle '" + (p.name.empty() ? std::string("<unnamed>") : p.name) +
                                 "': no muscle model");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "parameter_checks.hpp"
@@ -128,14 +129,22 @@ CurveJet Thelen2003Muscle::passiveFiberForce(const MuscleParameters& p, double f
   return {scale * std::expm1(y), scale * rate * e, scale * rate * rate * e};
 }
 
+// OpenSim's Thelen muscle defines its force-velocity relation by the velocity it computes from the
+// force ratio (fiberVelocityFromForceRatio): Thelen's two branches, continued linearly below z = 0
+// and above z_lin = 0.95 Flen. g is the inverse of all of it, so the forward model is g's exact
+// inverse at every force ratio, as in OpenSim.
 CurveJet Thelen2003Muscle::forceVelocity(const MuscleParameters& p, double u) const {
   const double vmax = p.max_shortening_velocity_m_per_s();
   const double af = p.hill_constant, flen = p.max_eccentric_force_ratio;
+  if (u > vmax) return {(u - vmax) / (vmax * velocity_exact_slope(p, 0.0)), 1.0 / (vmax * velocity_exact_slope(p, 0.0)), 0.0};
   if (u >= 0.0) {  // z = Af (Vmax - u) / (Af Vmax + u), the inverse of the concentric branch
     const double den = af * vmax + u;
     return {af * (vmax - u) / den, -af * vmax * (1.0 + af) / (den * den),
             2.0 * af * vmax * (1.0 + af) / (den * den * den)};
   }
+  const double z_lin = kLinearExtrapolationThreshold * flen;
+  const double u_lin = vmax * velocity_exact(p, z_lin), slope_lin = vmax * velocity_exact_slope(p, z_lin);
+  if (u < u_lin) return {z_lin + (u - u_lin) / slope_lin, 1.0 / slope_lin, 0.0};
   // Eccentric: with w = -u / Vmax and k = (2 + 2 / Af) / (Flen - 1), z = (1 + k w Flen) / (1 + k w).
   const double k = (2.0 + 2.0 / af) / (flen - 1.0);
   const double w = -u / vmax;
@@ -145,19 +154,18 @@ CurveJet Thelen2003Muscle::forceVelocity(const MuscleParameters& p, double u) co
 }
 
 double Thelen2003Muscle::forceVelocityInverse(const MuscleParameters& p, double z) const {
-  if (!(z > -p.hill_constant && z < p.max_eccentric_force_ratio))
-    detail::domain_failure(p, "force-velocity inverse needs a force ratio in (-Af, Flen)", z);
-  return p.max_shortening_velocity_m_per_s() * velocity_exact(p, z);
+  if (!std::isfinite(z)) detail::domain_failure(p, "force-velocity inverse needs a finite force ratio", z);
+  return fiberVelocityFromForceRatio(p, z).value;
 }
 
-double Thelen2003Muscle::forceRatioExactUpperBound(const MuscleParameters& p) const {
-  return kLinearExtrapolationThreshold * p.max_eccentric_force_ratio;
+double Thelen2003Muscle::forceRatioExactUpperBound(const MuscleParameters&) const {
+  return std::numeric_limits<double>::infinity();
 }
 
 CurveJet Thelen2003Muscle::fiberVelocityFromForceRatio(const MuscleParameters& p, double z) const {
   const double vmax = p.max_shortening_velocity_m_per_s();
-  const double z_hi = forceRatioExactUpperBound(p);
-  const double at = std::clamp(z, 0.0, z_hi);
+  const double z_lin = kLinearExtrapolationThreshold * p.max_eccentric_force_ratio;
+  const double at = std::clamp(z, 0.0, z_lin);
   const double slope = vmax * velocity_exact_slope(p, at);
   return {vmax * velocity_exact(p, at) + slope * (z - at), slope, 0.0};
 }

@@ -31,7 +31,17 @@ std::vector<fm::MuscleParameters> variants() {
   pennated.name = "biceps, pennated with passive force";
   pennated.pennation_angle_at_optimal_rad = 0.4;
   pennated.passive_fiber_strain_at_one_norm_force = 0.5;
-  return {biceps(), pennated};
+  // Damping makes the force balance implicit in the velocity; Thelen's maximum velocity scales
+  // with activation.
+  fm::MuscleParameters damped = pennated;
+  damped.name = "biceps, pennated, passive and damped";
+  damped.fiber_damping = 0.1;
+  fm::MuscleParameters thelen = biceps();
+  thelen.name = "biceps, Thelen 2003, damped";
+  thelen.model = fm::muscle_model_named("thelen2003");
+  thelen.model->setDefaults(thelen);
+  thelen.fiber_damping = 0.05;
+  return {biceps(), pennated, damped, thelen};
 }
 
 using flatsos::test::central_difference;
@@ -214,8 +224,9 @@ TEST(ContractionDynamics, TendonOdePartialsMatchFiniteDifferences) {
           const auto d = fm::tendon_length_derivative_partials(p, ls, a, L);
           auto ode = [&](double x, double y) { return fm::tendon_length_derivative(p, x, y, L, 0.0); };
           // Lengths on the scale of the tendon's stretch at Fmax (0.04 L_slack, ~9 mm), which the
-          // samples keep away from slack; activations on their own scale.
-          const double hl = default_step(0.0, 1e-3 * p.tendon_slack_length_m), ha = default_step(0.0, 1e-2 * std::max(a, 1e-3));
+          // samples keep away from slack; activations on their own scale (down to 1e-4: below it the
+          // ODE curves on the scale of a itself).
+          const double hl = default_step(0.0, 1e-3 * p.tendon_slack_length_m), ha = default_step(0.0, 1e-2 * std::max(a, 1e-4));
           if (std::abs(ls - p.tendon_slack_length_m) > 3 * hl) {  // slack is a kink
             EXPECT_MATCHES_FINITE_DIFFERENCE(d.d_tendon_length_per_s, central_difference([&](double x) { return ode(x, a); }, ls, hl))
                 << a << " " << ls << " " << L;

@@ -7,6 +7,7 @@
 #include "example_muscles.hpp"
 #include "finite_difference.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -21,20 +22,33 @@ namespace {
 
 fm::MuscleParameters triceps() { return flatsos::test::example_triceps(); }
 
-// The same muscle with pennation (0.35 rad) and passive fibre force (e0 = 0.6).
+// The same muscle with pennation (0.35 rad) and passive fibre force (e0 = 0.6); with fibre
+// damping; and as Thelen's muscle, whose maximum velocity scales with activation, alone and
+// pennated, passive and damped.
 std::vector<fm::MuscleParameters> variants() {
   fm::MuscleParameters pennated = triceps();
   pennated.name = "triceps, pennated with passive force";
   pennated.pennation_angle_at_optimal_rad = 0.35;
   pennated.passive_fiber_strain_at_one_norm_force = 0.6;
-  return {triceps(), pennated};
+  fm::MuscleParameters damped = triceps();
+  damped.name = "triceps, damped";
+  damped.fiber_damping = 0.1;
+  fm::MuscleParameters thelen = triceps();
+  thelen.name = "triceps, Thelen 2003";
+  thelen.model = fm::muscle_model_named("thelen2003");
+  thelen.model->setDefaults(thelen);
+  fm::MuscleParameters thelen_all = thelen;
+  thelen_all.name = "triceps, Thelen 2003, pennated, passive and damped";
+  thelen_all.pennation_angle_at_optimal_rad = 0.35;
+  thelen_all.fiber_damping = 0.05;
+  return {triceps(), pennated, damped, thelen, thelen_all};
 }
 
 struct Sample {
   fm::SecondOrderJet force, path;
 };
 
-// States with activations in (0.005, 1) and real excitations, spread over the fibre's range.
+// States with activations in (max(0.005, floor), 1) and real excitations, spread over the fibre's range.
 std::vector<Sample> samples(const fm::MuscleParameters& p, int count) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -45,8 +59,11 @@ std::vector<Sample> samples(const fm::MuscleParameters& p, int count) {
     const double ls = fm::tendon_length_from_force(p, s.force.value);
     s.path = {ls + p.optimal_fiber_length_m * (0.6 + 0.8 * unit(rng)), -0.3 + 0.6 * unit(rng), -3.0 + 6.0 * unit(rng)};
     const fm::MuscleInverse inv = fm::invert_muscle(p, s.force, s.path, false);
-    if (inv.stage == fm::MuscleInverse::Stage::Complete && inv.excitation_real && inv.activation > 0.005 &&
-        inv.activation < 1.0 && std::abs(inv.shortening_velocity_m_per_s) > 1e-3)
+    // Where the forward model is the inverse's exact twin: above the activation floor, and g
+    // where the forward model uses its exact inverse.
+    if (inv.stage == fm::MuscleInverse::Stage::Complete && inv.excitation_real &&
+        inv.activation > std::max(0.005, p.activation_floor) && inv.activation < 1.0 &&
+        inv.force_ratio <= fm::force_ratio_exact_upper_bound(p) && std::abs(inv.shortening_velocity_m_per_s) > 1e-3)
       out.push_back(s);
   }
   return out;

@@ -161,12 +161,45 @@ TEST(Thelen2003, ForceVelocityHasThelensShape) {
   const double vmax = p.max_shortening_velocity_m_per_s();
   EXPECT_DOUBLE_EQ(fm::force_velocity(p, 0.0), 1.0);
   EXPECT_NEAR(fm::force_velocity(p, vmax), 0.0, 1e-15);
-  EXPECT_NEAR(fm::force_velocity(p, -1e6 * vmax), p.max_eccentric_force_ratio, 1e-5);
+  // Beyond 0.95 Flen (and below 0) the relation continues linearly, as OpenSim computes it.
+  const double z_lin = 0.95 * p.max_eccentric_force_ratio;
+  const double u_lin = fm::force_velocity_inverse(p, z_lin);
+  EXPECT_NEAR(fm::force_velocity(p, 2.0 * u_lin) - z_lin, u_lin * fm::force_velocity_derivative(p, u_lin - 1e-12), 1e-12);
+  EXPECT_NEAR(fm::force_velocity(p, 1.5 * vmax), 0.5 * vmax * fm::force_velocity_derivative(p, vmax + 1e-12), 1e-12);
   // Thelen's eccentric b is (2 + 2 / Af) a f, twice the concentric a f (1 + 1 / Af) at z = 1:
   // the curve's slope doubles across isometric.
   EXPECT_NEAR(fm::force_velocity_derivative(p, -1e-12) / fm::force_velocity_derivative(p, 0.0), 2.0, 1e-9);
   // Half of Vmax concentric: z = Af (1 - 0.5) / (Af + 0.5) = 1/6 at Af = 0.25.
   EXPECT_NEAR(fm::force_velocity(p, 0.5 * vmax), 1.0 / 6.0, 1e-14);
+}
+
+// OpenSim's Thelen2003Muscle computes the normalized lengthening velocity from F = fse / cos - fpe
+// and A = a fal, with k = 0.25 + 0.75 a, c = 2 + 2 / Af, F0 = 0.95 Flen A (Thelen 2003 with
+// OpenSim's extensions), written out here independently of the model's code:
+namespace {
+double opensim_thelen_lengthening_velocity(double F, double A, double a, double af, double flen) {
+  const double k = 0.25 + 0.75 * a, c = 2.0 + 2.0 / af, f0 = 0.95 * flen * A;
+  if (F <= 0.0) return -k + k * (1.0 + 1.0 / af) * F / A;
+  if (F <= A) return k * (F - A) / (A + F / af);
+  if (F < f0) return k * (F - A) * (flen - 1.0) / (c * (flen * A - F));
+  const double b0 = c * (flen * A - f0) / (flen - 1.0), v0 = k * (f0 - A) / b0;
+  const double s0 = k / b0 + k * (f0 - A) * c / ((flen - 1.0) * b0 * b0);
+  return v0 + s0 * (F - f0);
+}
+}  // namespace
+
+TEST(Thelen2003, TheFibreVelocityIsOpenSims) {
+  const fm::MuscleParameters p = muscle("thelen2003");
+  const double lopt = p.optimal_fiber_length_m, fmax = p.max_isometric_force_N;
+  for (double a : {0.01, 0.05, 0.3, 1.0})
+    for (double ratio : {-0.1, 0.0, 0.2, 0.7, 1.0, 1.2, 1.32, 1.36, 1.6}) {
+      // At the optimal length, unpennated: fal = 1, no passive force, F = the tendon's force.
+      const double F = ratio * a * fmax;
+      const double expected = -opensim_thelen_lengthening_velocity(ratio, 1.0, a, p.hill_constant,
+                                                                     p.max_eccentric_force_ratio) *
+                              p.max_shortening_velocity_m_per_s();
+      EXPECT_NEAR(fm::fiber_shortening_velocity(p, F, a, lopt), expected, 1e-12 * lopt) << a << " " << ratio;
+    }
 }
 
 TEST(Thelen2003, ActivationDynamicsAreOpenSimsFirstOrderModel) {

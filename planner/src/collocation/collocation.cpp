@@ -171,6 +171,10 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
     if (p.pennation_angle_at_optimal_rad != 0.0 || p.hasPassiveFiberForce())
       throw std::invalid_argument("collocation: muscle '" + p.name +
                                   "' has pennation or passive fibre force, which the collocation reference does not model");
+    if (p.fiber_damping != 0.0 || p.model->scalesMaxVelocityWithActivation())
+      throw std::invalid_argument("collocation: muscle '" + p.name +
+                                  "' has fibre damping or a maximum velocity that depends on activation, which the "
+                                  "collocation reference does not model");
     // Newton's method stalls on a law whose slope jumps (measured on Thelen's muscles: 3000
     // Ipopt iterations without convergence; either kink removed, 46-48).
     if (const std::string kinks = p.model->slopeJumps(); !kinks.empty())

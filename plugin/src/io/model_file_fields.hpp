@@ -25,6 +25,7 @@ inline constexpr OptionalMuscleField kOptionalMuscleFields[] = {
     {"passive_fiber_strain_at_one_norm_force", &muscles::MuscleParameters::passive_fiber_strain_at_one_norm_force},
     {"passive_force_length_shape", &muscles::MuscleParameters::passive_force_length_shape},
     {"activation_dynamics_smoothing", &muscles::MuscleParameters::activation_dynamics_smoothing},
+    {"fiber_damping", &muscles::MuscleParameters::fiber_damping},
 };
 
 // "muscle_model": the laws the muscle follows, by name (muscle_model.hpp).

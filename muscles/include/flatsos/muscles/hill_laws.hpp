@@ -92,20 +92,23 @@ FiberGeometry fiber_geometry(const MuscleParameters& p, double along_tendon_m);
 
 // ---- Contraction dynamics. ----
 // The tendon carries the fibre's force projected on its line:
-//   Phi_S(L_S) = (a Fmax f(L_M) g(u) + Phi_P(L_M)) cos(phi),
-// with L_M, phi from x = L - L_S (fiber_geometry) and u the fibre's shortening velocity along
-// itself, so x shortens at u / cos(phi).
+//   Phi_S(L_S) = (a Fmax f(L_M) g(u / k(a)) + Phi_P(L_M) + D(u)) cos(phi),
+// with L_M, phi from x = L - L_S (fiber_geometry), u the fibre's shortening velocity along
+// itself (so x shortens at u / cos(phi)), k(a) the model's maximum-velocity scale (1 for most)
+// and D(u) = -fiber_damping Fmax u / Vmax the fibre's damping.
 
 /// The activation the contraction dynamics use: max(a, activation_floor).
 double effective_activation(const MuscleParameters& p, double activation);
 
-/// z = (F_S / cos(phi) - Phi_P(L_M)) / (max(a, floor) Fmax f(L_M)) at the muscle length along
-/// the tendon x = L - L_S. Finite for every finite input: f is floored at 1e-12 (an absurd fibre
-/// length underflows exp), cos(phi) at 1e-2 (a fibre squeezed to its thickness).
+/// The force ratio z = g(u / k) of the force balance at the muscle length along the tendon
+/// x = L - L_S: without damping (F_S / cos(phi) - Phi_P(L_M)) / (max(a, floor) Fmax f(L_M)),
+/// with damping the root of the balance (one, found by a safeguarded Newton iteration). Finite
+/// for every finite input: f is floored at 1e-12 (an absurd fibre length underflows exp),
+/// cos(phi) at 1e-2 (a fibre squeezed to its thickness).
 double force_ratio(const MuscleParameters& p, double tendon_force_N, double activation,
                    double along_tendon_m);
 
-/// Fibre shortening velocity u = g^-1(z) along the fibre, of the forward model (safe
+/// Fibre shortening velocity u = k(a) g^-1(z) along the fibre, of the forward model (safe
 /// extension included).
 double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N,
                                  double activation, double along_tendon_m);

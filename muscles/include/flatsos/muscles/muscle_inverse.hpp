@@ -9,7 +9,9 @@
 //   L_S = Phi_S^-1(F), dL_S = dF / Phi_S', ddL_S = (ddF - Phi_S'' dL_S^2) / Phi_S'
 //   x = L - L_S (the muscle along the tendon), L_M = sqrt(x^2 + h^2), cos = x / L_M (pennation
 //   at constant thickness h; h = 0: L_M = x, cos = 1), u = -dL_M/dt = -cos dx/dt (shortening)
-//   f = f(L_M), g = g(u), a = (F / cos - Phi_P(L_M)) / (Fmax f g), da/dt by the chain rule
+//   f = f(L_M), g = g(u), a = (F / cos - Phi_P(L_M) - D(u)) / (Fmax f g), da/dt by the chain rule
+//   (D the fibre's damping; a model whose maximum velocity scales with activation has g(u / k(a))
+//   there, and a is the root of that one-dimensional equation, differentiated implicitly)
 //   n: the inverse of the model's activation dynamics.
 // Every law is the muscle's own model's (muscle_model.hpp); the gradients are carried through
 // every line in forward mode.

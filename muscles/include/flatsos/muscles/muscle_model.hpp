@@ -6,9 +6,11 @@
 // muscle_models.cpp), not a copy of each caller.
 //
 // What every model shares, and so is not a law here: the fibre's force acts as
-//   F_S = (a Fmax f(L_M) g(u) + Phi_P(L_M)) cos(phi)
-// on the tendon, with pennation at constant fibre thickness (contraction.hpp), and the
-// activation a in [0, 1] follows da/dt = rate(n, a) from the excitation n in [0, 1].
+//   F_S = (a Fmax f(L_M) g(u / k(a)) + Phi_P(L_M) + D(u)) cos(phi)
+// on the tendon, with pennation at constant fibre thickness (hill_laws.hpp), the fibre's
+// damping D(u) = -beta Fmax u / Vmax (MuscleParameters::fiber_damping; 0 without), and the
+// activation a in [0, 1] following da/dt = rate(n, a) from the excitation n in [0, 1]. k(a) =
+// Vmax(a) / Vmax is 1 unless the model's maximum shortening velocity depends on activation.
 //
 // Units: SI (m, m/s, N, s). u is the fibre's *shortening* velocity (u > 0 concentric).
 
@@ -89,11 +91,19 @@ class MuscleModel {
   /// Exact inverse of g; throws std::domain_error outside the range where it exists.
   virtual double forceVelocityInverse(const MuscleParameters& p, double force_ratio) const = 0;
   /// Upper end of the force ratios on which the forward model uses the exact inverse of g; a
-  /// plan whose g goes above it is not what the simulation executes.
+  /// plan whose g goes above it is not what the simulation executes. Infinite for a model whose
+  /// g is the inverse of its forward model everywhere.
   virtual double forceRatioExactUpperBound(const MuscleParameters& p) const = 0;
   /// The inverse of g the forward model uses (value and slope in z): finite and strictly
   /// decreasing for every finite z, exact on [0, forceRatioExactUpperBound].
   virtual CurveJet fiberVelocityFromForceRatio(const MuscleParameters& p, double force_ratio) const = 0;
+
+  /// k(a) = Vmax(a) / Vmax, with its derivatives in a: the force-velocity law at activation a is
+  /// g(u / k(a)) (Thelen 2003: 0.25 + 0.75 a). `activation` is the one the contraction dynamics
+  /// use (clamped to [activation_floor, 1]). 1 for models whose g does not depend on a.
+  virtual CurveJet maxVelocityScale(const MuscleParameters&, double /*activation*/) const { return {1.0, 0.0, 0.0}; }
+  /// True when maxVelocityScale is not 1 at every activation.
+  virtual bool scalesMaxVelocityWithActivation() const { return false; }
 
   // ---- Activation dynamics.
   virtual ActivationRate activationRate(const MuscleParameters& p, double excitation, double activation) const = 0;

@@ -40,6 +40,10 @@ struct MuscleParameters {
   double passive_fiber_strain_at_one_norm_force = 0.0;
   /// Shape k of the passive curve's exponential growth (Thelen's KshapePassive).
   double passive_force_length_shape = 4.0;
+  /// Fibre damping beta (OpenSim's fiber_damping): a force -beta Fmax u / Vmax along the fibre at
+  /// shortening velocity u, i.e. beta Fmax per maximum lengthening velocity. 0: none (the paper's
+  /// muscles, Thelen's); Millard's OpenSim muscle has 0.1 by default.
+  double fiber_damping = 0.0;
   /// Steepness b of the tanh that smooths the switch between activation and deactivation time
   /// constants (De Groote et al. 2016; OpenSim's activation_dynamics_smoothing).
   double activation_dynamics_smoothing = 0.1;

@@ -17,17 +17,19 @@
 //            (about 1.712 / e0) exactly such that F(e0) = Fmax with a continuous slope;
 //   active   f = exp(-(l - 1)^2 / KshapeActive);
 //   passive  Fmax (exp(KshapePassive (l - 1) / e0) - 1) / (exp(KshapePassive) - 1) for l > 1;
-//   velocity Thelen's inverse: the shortening velocity from the force ratio z,
+//   velocity Thelen's inverse: the shortening velocity from the force ratio z, at full activation,
 //            u / Vmax = (1 - z) / (1 + z / Af)                               for z <= 1,
 //            u / Vmax = -(z - 1) (Flen - 1) / ((2 + 2 / Af) (Flen - z))      for z > 1,
 //            continued linearly above z = 0.95 Flen (fv_linear_extrap_threshold) and below 0;
-//            g is its inverse (continuous at u = 0, its slope doubles there);
+//            g is the inverse of all of it (continuous at u = 0, its slope doubles there), so the
+//            forward model is exact at every force ratio (forceRatioExactUpperBound is infinite);
 //   activation da/dt = (n - a) / tau, tau = T_act (0.5 + 1.5 a) when n > a, T_deact / (0.5 + 1.5 a)
 //            otherwise, with a clamped to [minimum_activation, 1] (n is not, as in OpenSim 4); the
 //            excitation's own bounds are [minimum_activation, 1] (OpenSim's min_control).
-// Not yet as OpenSim: Thelen's maximum velocity scales with activation, (0.25 + 0.75 a) Vmax,
-// which the seam's g(u) cannot express (this model uses Vmax at every activation), and OpenSim
-// caps pennation at acos(0.1) where the shared geometry lets cos(phi) fall to 0.01.
+//   maximum velocity Vmax (0.25 + 0.75 a): g at activation a is g(u / (0.25 + 0.75 a)) (k(a),
+//            muscle_model.hpp), as OpenSim scales the shortening velocity it computes.
+// Not yet as OpenSim: OpenSim caps pennation at acos(0.1) where the shared geometry lets cos(phi)
+// fall to 0.01.
 
 #include "flatsos/muscles/muscle_model.hpp"
 
@@ -54,6 +56,11 @@ class Thelen2003Muscle final : public MuscleModel {
   double forceVelocityInverse(const MuscleParameters& p, double force_ratio) const override;
   double forceRatioExactUpperBound(const MuscleParameters& p) const override;
   CurveJet fiberVelocityFromForceRatio(const MuscleParameters& p, double force_ratio) const override;
+  /// k(a) = 0.25 + 0.75 a: Thelen's maximum shortening velocity falls to a quarter at rest.
+  CurveJet maxVelocityScale(const MuscleParameters&, double activation) const override {
+    return {0.25 + 0.75 * activation, 0.75, 0.0};
+  }
+  bool scalesMaxVelocityWithActivation() const override { return true; }
 
   ActivationRate activationRate(const MuscleParameters& p, double excitation, double activation) const override;
   ExcitationFromActivation excitationFromActivation(const MuscleParameters& p, double activation,
