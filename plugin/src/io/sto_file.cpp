@@ -56,7 +56,7 @@ void write_file_atomically(const std::string& path, const std::string& contents)
 void write_sto(const std::string& path, const StoTable& t) {
   std::ostringstream out;
   out << t.name << "\nversion=1\nnRows=" << t.rows.size() << "\nnColumns=" << t.columns.size()
-      << "\ninDegrees=no\n";
+      << "\ninDegrees=" << (t.in_degrees ? "yes" : "no") << '\n';
   for (const auto& [k, v] : t.metadata) out << k << '=' << v << '\n';
   out << "endheader\n";
   for (std::size_t c = 0; c < t.columns.size(); ++c) out << (c ? "\t" : "") << t.columns[c];
@@ -95,6 +95,7 @@ StoTable read_sto(const std::string& path) {
     const auto eq = line.find('=');
     if (eq == std::string::npos) continue;  // free text is allowed in headers
     const std::string key = line.substr(0, eq);
+    if (key == "inDegrees") t.in_degrees = line.substr(eq + 1) == "yes";
     if (key != "version" && key != "nRows" && key != "nColumns" && key != "inDegrees")
       t.metadata.emplace_back(key, line.substr(eq + 1));
   }

@@ -15,6 +15,9 @@ struct StoTable {
   std::vector<std::pair<std::string, std::string>> metadata;  ///< extra key=value lines
   std::vector<std::string> columns;                           ///< including "time" first
   std::vector<std::vector<double>> rows;
+  /// The header's inDegrees flag: angles in the table are in degrees ("inDegrees=yes", as in
+  /// OpenSim's .mot files); false when the flag is absent or "no".
+  bool in_degrees = false;
 
   int columnIndex(const std::string& label) const;  ///< -1 when absent
   std::vector<double> column(const std::string& label) const;  ///< throws if absent
