@@ -95,6 +95,39 @@ TEST(SecondMuscleModel, TheOpenLoopPlanIsCertifiedAndExecutedAsPlanned) {
   EXPECT_GT(mismatched.max_q_error_rad, deg(1.0));
 }
 
+// Fibre damping (OpenSim's fiber_damping) makes the forward force balance implicit in the fibre
+// velocity: Simbody's muscles solve it, the planner's inverse is explicit. A damped elbow's plan is
+// executed as planned; without damping the same excitations are not; the collocation reference,
+// which does not model damping, says so.
+TEST(SecondMuscleModel, ADampedMusclePlanIsExecutedAsPlanned) {
+  fp::ModelDescription d = elbow("thelen2003", true);
+  for (fp::MuscleDescription& m : d.muscles) m.parameters.fiber_damping = 0.1;
+  const Elbow damped(d);
+  const fpl::OpenLoopOptions o = damped.openLoopOptions();
+  const fpl::MuscleState s0 = damped.rest(damped.scenario("open_loop"));
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(damped.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  const auto replay = flatsos::test::replay_open_loop(damped.flat, s0, plan, 1e-10, 0.005);
+  ASSERT_TRUE(replay.sim.finite) << replay.sim.message;
+  std::cout << "damped Thelen elbow: replayed within " << replay.max_q_error_rad / deg(1) << " deg, activation "
+            << replay.max_activation_error << "\n";
+  EXPECT_LT(replay.max_q_error_rad, deg(1e-5));
+  EXPECT_LT(replay.max_activation_error, 1e-6);
+  const Elbow undamped(elbow("thelen2003", true));
+  EXPECT_GT(flatsos::test::replay_open_loop(undamped.flat, s0, plan, 1e-10, 0.005).max_q_error_rad, deg(0.1));
+
+  fp::ModelDescription smooth = elbow("richter_warner", false);
+  for (fp::MuscleDescription& m : smooth.muscles) m.parameters.fiber_damping = 0.1;
+  const Elbow reference(smooth);
+  fp::ModelWorkspace workspace(*reference.model);
+  try {
+    fpl::solve_collocation_along_path(reference.flat, workspace, plan.path, s0, o.reserves_N);
+    FAIL() << "the collocation reference accepted damped muscles";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("fibre damping"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SecondMuscleModel, TheRecedingHorizonLoopReachesItsTarget) {
   const Elbow thelen(elbow("thelen2003", true));
   const fp::ScenarioDescription& s = thelen.scenario("receding_horizon");

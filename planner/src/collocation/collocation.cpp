@@ -171,10 +171,6 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
     if (p.pennation_angle_at_optimal_rad != 0.0 || p.hasPassiveFiberForce())
       throw std::invalid_argument("collocation: muscle '" + p.name +
                                   "' has pennation or passive fibre force, which the collocation reference does not model");
-    if (p.fiber_damping != 0.0 || p.model->scalesMaxVelocityWithActivation())
-      throw std::invalid_argument("collocation: muscle '" + p.name +
-                                  "' has fibre damping or a maximum velocity that depends on activation, which the "
-                                  "collocation reference does not model");
     // Newton's method stalls on a law whose slope jumps (measured on Thelen's muscles: 3000
     // Ipopt iterations without convergence; either kink removed, 46-48).
     if (const std::string kinks = p.model->slopeJumps(); !kinks.empty())
@@ -182,6 +178,10 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
                                   " model, whose " + kinks +
                                   "; the collocation reference needs laws with continuous slopes, as direct "
                                   "collocation tools advise");
+    if (p.fiber_damping != 0.0 || p.model->scalesMaxVelocityWithActivation())
+      throw std::invalid_argument("collocation: muscle '" + p.name +
+                                  "' has fibre damping or a maximum velocity that depends on activation, which the "
+                                  "collocation reference does not model");
   }
   if (o.effort || o.effort_weights.size() > 0) {
     try {
