@@ -14,6 +14,7 @@
 #include <random>
 #include <string>
 
+#include "flatsos/muscles/muscle_model.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/io/opensim_function.hpp"
 #include "flatsos/plugin/io/opensim_import.hpp"
@@ -21,6 +22,7 @@
 #include "flatsos/plugin/io/opensim_model.hpp"
 #include "flatsos/plugin/io/opensim_paths.hpp"
 
+namespace fm = flatsos::muscles;
 namespace fp = flatsos::plugin;
 
 namespace {
@@ -382,6 +384,40 @@ TEST(OpenSimImport, PinsKeepOpenSimsAxesAndJointsOfOneRotationAreExact) {
   // The patella follows the knee through a coupler on its own path and is lumped where it is at
   // the reference posture: the shank's lumped mass centre is off elsewhere, and said so.
   EXPECT_GT(provenance["pins"]["knee"]["mass_center_error_m"].get<double>(), 1e-4);
+}
+
+// A Thelen2003Muscle keeps OpenSim's model and every property the file states (arm26's values
+// here); what it leaves out takes OpenSim's Thelen defaults, not another model's. A Millard muscle
+// keeps flatsos' laws for now, with its parameters.
+TEST(OpenSimImport, AThelenMuscleKeepsOpenSimsModelAndProperties) {
+  std::string vas = muscle("vas", 1000.0, 0.1, 0.15, "thigh shank");
+  const std::string from = "<Millard2012EquilibriumMuscle name=\"vas\">", to = "</Millard2012EquilibriumMuscle>";
+  vas.replace(0, from.size(), "<Thelen2003Muscle name=\"vas\">");
+  vas.replace(vas.size() - to.size(), to.size(),
+              "<FmaxTendonStrain>0.033</FmaxTendonStrain><KshapeActive>0.5</KshapeActive><KshapePassive>4</KshapePassive>"
+              "<Af>0.3</Af><Flen>1.8</Flen><activation_time_constant>0.01</activation_time_constant></Thelen2003Muscle>");
+  std::string osim = small_osim();
+  const std::string millard_vas = muscle("vas", 1000.0, 0.1, 0.15, "thigh shank");
+  osim.replace(osim.find(millard_vas), millard_vas.size(), vas);
+  const fp::ModelDescription model = fp::import_opensim_model(fp::parse_opensim_model(osim, "small.osim"), small_paths(), seated()).model;
+  const fm::MuscleParameters& p = model.muscles[static_cast<std::size_t>(model.muscleIndex("vas"))].parameters;
+  EXPECT_EQ(p.model->name(), "thelen2003");
+  EXPECT_DOUBLE_EQ(p.tendon_strain_at_max_force, 0.033);
+  EXPECT_DOUBLE_EQ(p.force_length_width * p.force_length_width, 0.5);
+  EXPECT_DOUBLE_EQ(p.passive_force_length_shape, 4.0);
+  EXPECT_DOUBLE_EQ(p.hill_constant, 0.3);
+  EXPECT_DOUBLE_EQ(p.max_eccentric_force_ratio, 1.8);
+  EXPECT_DOUBLE_EQ(p.activation_time_constant_s, 0.01);
+  EXPECT_DOUBLE_EQ(p.deactivation_time_constant_s, 0.05);  // Thelen's default: the file leaves it out
+  EXPECT_DOUBLE_EQ(p.passive_fiber_strain_at_one_norm_force, 0.6);
+  EXPECT_DOUBLE_EQ(p.pennation_angle_at_optimal_rad, 0.05);
+  const fm::MuscleParameters& ham = model.muscles[static_cast<std::size_t>(model.muscleIndex("ham"))].parameters;
+  EXPECT_EQ(ham.model->name(), fm::default_muscle_model()->name());
+  // A property the model refuses is named with the muscle.
+  std::string bad = osim;
+  bad.replace(bad.find("<Flen>1.8</Flen>"), 16, "<Flen>0.9</Flen>");
+  EXPECT_NE(import_error(bad, seated()).find("muscle 'vas': max_eccentric_force_ratio"), std::string::npos)
+      << import_error(bad, seated());
 }
 
 // ---- OpenSim's example model, where it is present ------------------------------------------

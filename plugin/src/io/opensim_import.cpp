@@ -13,6 +13,7 @@
 #include "flatsos/muscles/length_polynomial.hpp"
 #include "flatsos/plugin/io/opensim_kinematics.hpp"
 #include "flatsos/plugin/model/posture_grid.hpp"
+#include "opensim_muscle_models.hpp"
 #include "opensim_reduction.hpp"
 
 namespace flatsos::plugin {
@@ -334,22 +335,9 @@ class Importer {
     return depends;
   }
 
-  static MuscleDescription muscleOf(const OpenSimMuscle& m, const PolynomialPathDescription& path) {
+  MuscleDescription muscleOf(const OpenSimMuscle& m, const PolynomialPathDescription& path) {
     MuscleDescription md;
-    muscles::MuscleParameters& p = md.parameters;
-    p.name = m.name;
-    p.max_isometric_force_N = m.max_isometric_force_N;
-    p.optimal_fiber_length_m = m.optimal_fiber_length_m;
-    p.tendon_slack_length_m = m.tendon_slack_length_m;
-    p.pennation_angle_at_optimal_rad = m.pennation_angle_at_optimal_rad;
-    p.max_shortening_velocity_in_optimal_lengths_per_s = m.max_contraction_velocity_in_optimal_lengths_per_s;
-    p.activation_time_constant_s = m.activation_time_constant_s;
-    p.deactivation_time_constant_s = m.deactivation_time_constant_s;
-    // OpenSim's minimum activation is flatsos' activation floor: the same clamp from below, and
-    // the bound every plan keeps.
-    p.activation_floor = m.minimum_activation;
-    p.tendon_strain_at_max_force = m.tendon_strain_at_one_norm_force;
-    p.passive_fiber_strain_at_one_norm_force = m.passive_fiber_strain_at_one_norm_force;
+    md.parameters = opensim_import::muscle_parameters_of(m, out_.notes);
     md.polynomial_path = path;
     return md;
   }
@@ -404,8 +392,10 @@ class Importer {
         "CustomJoint's other motions with that coordinate (the walker knee's translations and small rotations) are "
         "dropped, and pins.*.mass_center_error_m measures the effect",
         "bodies that follow a kept coordinate through a coupler are lumped where they are at the reference posture",
-        "muscles: OpenSim's maximum isometric force, optimal fibre length, tendon slack length, pennation, maximum "
-        "contraction velocity and curve strains with flatsos' Hill laws in place of the OpenSim muscle's curves",
+        "muscles: Thelen2003Muscle and DeGrooteFregly2016Muscle as OpenSim models them, with the file's properties; "
+        "other types (Millard2012EquilibriumMuscle) with OpenSim's maximum isometric force, optimal fibre length, "
+        "tendon slack length, pennation, maximum contraction velocity and curve strains and flatsos' Hill laws in place "
+        "of their curves",
         "muscle lengths: OpenSim's fitted polynomials (FunctionBasedPath) with held coordinates inserted, trusted only inside "
         "the ranges where they were fitted"};
     provenance_["left_out_muscles"] = left_out_;

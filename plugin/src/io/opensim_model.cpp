@@ -288,6 +288,15 @@ OpenSimMuscle read_muscle(const Reader& r, Element& e) {
     Element c = find_below(e, curve);
     if (c.isValid()) *value = r.optional_number(c, "strain_at_one_norm_force", where + "." + curve, *value);
   }
+  // Every number the muscle states directly (its model's own properties: Af, fiber_damping, ...).
+  for (auto it = e.element_begin(); it != e.element_end(); ++it) {
+    Element child = *it;
+    if (child.hasElement("objects") || child.element_begin() != child.element_end()) continue;
+    std::istringstream text(child.getValue());
+    double value = 0.0;
+    std::string rest;
+    if (text >> value && !(text >> rest)) m.properties[child.getElementTag()] = value;
+  }
   Element path = find_below(e, "GeometryPath");
   if (path.isValid()) read_muscle_path_bodies(path, m.path_bodies);
   return m;

@@ -9,6 +9,7 @@
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
 #include <array>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -79,6 +80,9 @@ struct OpenSimMuscle {
   double tendon_strain_at_one_norm_force = 0.049;  ///< Millard's default
   double passive_fiber_strain_at_one_norm_force = 0.7;  ///< Millard's default
   std::vector<std::string> path_bodies;  ///< the bodies its path points are fixed to (file order, unique)
+  /// Every number the muscle's element states directly, by OpenSim's property name (its model's
+  /// own properties: "FmaxTendonStrain", "Af", "fiber_damping", ...).
+  std::map<std::string, double> properties;
 };
 
 struct OpenSimModel {
