@@ -77,13 +77,16 @@ std::vector<std::string> plausibility_warnings(const ModelDescription& model, co
 std::vector<std::string> joint_angle_warnings(const ModelDescription& model, const Eigen::VectorXd& q_rad,
                                               const std::string& what, const PlausibilityLimits& limits) {
   std::vector<std::string> warnings;
-  for (int i = 0; i < q_rad.size() && i < model.numJoints(); ++i)
-    if (std::abs(q_rad[i]) > limits.joint_angle_rad) {
-      std::ostringstream out;
-      out << what << '.' << model.joints[static_cast<std::size_t>(i)].name << ": " << q_rad[i]
-          << " rad is beyond one turn (degrees given as radians?)";
-      warnings.push_back(out.str());
-    }
+  for (int i = 0; i < q_rad.size() && i < model.numJoints(); ++i) {
+    const JointDescription& joint = model.joints[static_cast<std::size_t>(i)];
+    std::ostringstream out;
+    if (!joint.isSlider() && std::abs(q_rad[i]) > limits.joint_angle_rad)
+      out << what << '.' << joint.name << ": " << q_rad[i] << " rad is beyond one turn (degrees given as radians?)";
+    if (joint.isSlider() && std::abs(q_rad[i]) > limits.slider_translation_m)
+      out << what << '.' << joint.name << ": " << q_rad[i] << " m is beyond " << limits.slider_translation_m
+          << " m along the slider (millimetres or centimetres given as metres?)";
+    if (!out.str().empty()) warnings.push_back(out.str());
+  }
   return warnings;
 }
 
