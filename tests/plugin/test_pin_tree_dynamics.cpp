@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <random>
 #include <tuple>
 
@@ -21,6 +23,13 @@
 namespace {
 
 namespace fp = flatsos::plugin;
+
+// Small errors as "1.23e-15" (what std::to_string would show as 0.000000).
+std::string scientific(double x) {
+  std::ostringstream out;
+  out << std::scientific << std::setprecision(2) << x;
+  return out.str();
+}
 
 Eigen::Vector3d random_vector(std::mt19937& rng, double scale) {
   std::uniform_real_distribution<double> u(-scale, scale);
@@ -113,11 +122,11 @@ double worst_disagreement_with_simbody(unsigned seed, double slider_fraction) {
 }
 
 TEST(PinTreeDynamics, AgreesWithSimbodyOnRandomTrees) {
-  RecordProperty("worst_relative_error", std::to_string(worst_disagreement_with_simbody(20261123, 0.0)));
+  RecordProperty("worst_relative_error", scientific(worst_disagreement_with_simbody(20261123, 0.0)));
 }
 
 TEST(PinTreeDynamics, AgreesWithSimbodyOnRandomTreesWithSliders) {
-  RecordProperty("worst_relative_error", std::to_string(worst_disagreement_with_simbody(20261125, 0.5)));
+  RecordProperty("worst_relative_error", scientific(worst_disagreement_with_simbody(20261125, 0.5)));
 }
 
 // Property: without gravity, at rest and with qdd = 0 nothing is needed; the torque is linear
@@ -225,10 +234,10 @@ double check_torque_jet_against_time_differences(double slider_fraction) {
 }
 
 TEST(PinTreeDynamics, TorqueJetIsTheTimeDerivativeOfInverseDynamicsAlongTheMotion) {
-  RecordProperty("worst_relative_error", std::to_string(check_torque_jet_against_time_differences(0.0)));
+  RecordProperty("worst_relative_error", scientific(check_torque_jet_against_time_differences(0.0)));
 }
 TEST(PinTreeDynamics, TorqueJetIsTheTimeDerivativeOfInverseDynamicsWithSliders) {
-  RecordProperty("worst_relative_error", std::to_string(check_torque_jet_against_time_differences(0.5)));
+  RecordProperty("worst_relative_error", scientific(check_torque_jet_against_time_differences(0.5)));
 }
 
 void check_torque_jet_gradient(double slider_fraction) {
@@ -309,7 +318,12 @@ void check_torque_jet_hessian(double slider_fraction) {
         largest = std::max(largest, std::abs(H(b, c)));
       }
     }
-    EXPECT_GT(largest, 1e-3 * scale);  // a Hessian that is really there
+    // A Hessian that is really there, where a pin turns something: a tree of sliders alone has
+    // a constant mass matrix and no velocity terms, so its torques are linear (Hessian 0).
+    const auto is_pin = [](const fp::JointDescription& j) { return !j.isSlider(); };
+    const auto& joints = model.description().joints;
+    if (std::any_of(joints.begin(), joints.end(), is_pin)) EXPECT_GT(largest, 1e-3 * scale);
+    else EXPECT_EQ(largest, 0.0);
   }
 }
 
@@ -456,7 +470,8 @@ TEST(PinTreeDynamics, ABlockOnATiltedSliderNeedsMassTimesAccelerationPlusGravity
     const SimTK::Transform& X = model.joint(0).getBodyTransform(s);
     const SimTK::Vec3 expected(0.1 + 0.25 * std::cos(theta), 0.2 + 0.25 * std::sin(theta), 0.0);
     EXPECT_LT((X.p() - expected).norm(), 1e-14);
-    EXPECT_LT((X.R().asMat33() - SimTK::Mat33(1)).norm(), 1e-14);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(X.R().asMat33()[r][c], r == c ? 1.0 : 0.0, 1e-15);
   }
 }
 
@@ -495,5 +510,5 @@ TEST(PinTreeDynamics, APinSliderPinChainIn3DAgreesWithSimbody) {
   const Eigen::VectorXd sliding = model.inverseDynamics(ws, q, Eigen::Vector3d(2.0, 1.5, 0.0), qdd);
   const Eigen::VectorXd still = model.inverseDynamics(ws, q, Eigen::Vector3d(2.0, 0.0, 0.0), qdd);
   EXPECT_GT(std::abs(sliding[0] - still[0]), 1e-3);
-  RecordProperty("worst_relative_error", std::to_string(worst));
+  RecordProperty("worst_relative_error", scientific(worst));
 }

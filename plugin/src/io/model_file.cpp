@@ -171,7 +171,7 @@ JointDescription read_joint(const json& j, const std::string& path, const std::s
   if (const json* axis = r.find("axis")) {
     d.axis = r.vec3(*axis, r.at("axis"));
     if (d.axis.norm() < 1e-12) r.fail(r.at("axis"), "must not be the zero vector");
-    d.axis.normalize();
+    if (std::abs(d.axis.norm() - 1.0) > 1e-12) d.axis.normalize();  // a unit axis as written: the round trip is exact
   }
   if (r.has("coordinate")) d.coordinate = r.string("coordinate");
   // A range or limit in the other type's units is refused, not converted.

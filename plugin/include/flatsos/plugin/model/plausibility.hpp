@@ -28,6 +28,9 @@ struct PlausibilityLimits {
   double gravity_m_per_s2 = 30.0;
   double joint_angle_rad = 6.283185307179586;  ///< one turn
   double slider_translation_m = 3.0;            ///< a slider's coordinate
+  /// A muscle's length change per metre a slider moves (its "moment arm" there, m per m): a
+  /// straight muscle changes at most 1 m per m.
+  double slider_length_rate = 1.5;
 };
 
 /// Implausible values of a model description, e.g.
