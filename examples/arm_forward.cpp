@@ -3,6 +3,7 @@
 // OUT/controls.sto.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 
@@ -35,8 +36,8 @@ int main(int argc, char** argv) {
   bool equilibrate = false;
   double duration = 1.0, accuracy = 1e-8, report_interval = 0.01;
   app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
-  app.add_option("--q0-deg", q0_deg, "initial joint angles, deg (default 0)")->delimiter(',');
-  app.add_option("--qd0-deg-per-s", qd0_deg_per_s, "initial joint speeds, deg/s (default 0)")->delimiter(',');
+  app.add_option("--q0-deg", q0_deg, "initial joint angles, deg (a slider's in m; default 0)")->delimiter(',');
+  app.add_option("--qd0-deg-per-s", qd0_deg_per_s, "initial joint speeds, deg/s (a slider's in m/s; default 0)")->delimiter(',');
   app.add_option("--a0", a0, "initial activations (default 0.05 each)")->delimiter(',');
   auto* ls_opt = app.add_option("--ls0-m", ls0, "initial tendon lengths, m, one per muscle (required unless --equilibrate-tendons)")
                      ->delimiter(',');
@@ -74,12 +75,13 @@ int main(int argc, char** argv) {
       std::cerr << "arm_forward: " << e.what() << "\n" << app.help();
       return 2;
     }
-    const Eigen::VectorXd q0 = q0_deg.empty() ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(ex::to_vector(q0_deg) * ex::kRadPerDeg);
+    const fp::ModelDescription& description = model->description();
+    const Eigen::VectorXd q0 = q0_deg.empty() ? Eigen::VectorXd::Zero(n) : ex::from_display(description, ex::to_vector(q0_deg));
     ex::print_warnings("arm_forward", model->warnings(),
                        fp::joint_angle_warnings(model->description(), q0, "initial joint angles"));
     SimTK::State s = model->defaultState();
     model->setJointAngles(s, q0);
-    model->setJointSpeeds(s, qd0_deg_per_s.empty() ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(ex::to_vector(qd0_deg_per_s) * ex::kRadPerDeg));
+    model->setJointSpeeds(s, qd0_deg_per_s.empty() ? Eigen::VectorXd::Zero(n) : ex::from_display(description, ex::to_vector(qd0_deg_per_s)));
     const Eigen::VectorXd a = a0.empty() ? Eigen::VectorXd::Constant(m, 0.05) : ex::to_vector(a0);
     if (equilibrate) {
       fp::equilibrate_tendons(*model, s, a);
@@ -116,10 +118,14 @@ int main(int argc, char** argv) {
     fp::write_sto(out_file, table);
     fp::write_sto((std::filesystem::path(out_dir) / "controls.sto").string(), result.controls);
 
-    const Eigen::VectorXd q = model->jointAngles(result.final_state) / ex::kRadPerDeg;
-    std::cout << "arm_forward: " << model->description().name << ", " << duration << " s, "
-              << result.integrator_steps << " integrator steps\n  final joint angles (deg):";
-    for (int i = 0; i < n; ++i) std::cout << ' ' << model->description().joints[i].name << '=' << q[i];
+    const Eigen::VectorXd q = ex::to_display(description, model->jointAngles(result.final_state));
+    std::cout << "arm_forward: " << description.name << ", " << duration << " s, "
+              << result.integrator_steps << " integrator steps\n  final joint angles (deg"
+              << (std::any_of(description.joints.begin(), description.joints.end(), [](const auto& j) { return j.isSlider(); })
+                      ? "; sliders in m"
+                      : "")
+              << "):";
+    for (int i = 0; i < n; ++i) std::cout << ' ' << description.joints[i].name << '=' << q[i];
     std::cout << "\n  wrote " << out_file << " and controls.sto\n";
     if (!result.completed()) {
       std::cerr << "arm_forward: simulation failed: " << result.message << "\n";

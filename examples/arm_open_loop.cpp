@@ -206,7 +206,8 @@ int main(int argc, char** argv) {
                              {"accuracy", accuracy},
                              {"integrator_steps", sim.integrator_steps},
                              {"wall_seconds", sim_seconds}};
-    summary["max_abs_q_error_deg"] = err.max_q_error_rad / ex::kRadPerDeg;
+    summary["max_abs_q_error_deg"] = err.max_q_error_rad / ex::kRadPerDeg;  // over the pins
+    summary["max_abs_slider_error_m"] = err.max_slider_error_m;
     summary["max_abs_activation_error"] = err.max_activation_error;
     summary["max_abs_tendon_length_error_m"] = err.max_tendon_length_error_m;
 
@@ -223,7 +224,9 @@ int main(int argc, char** argv) {
     const double simulated_s = sim.final_state.getTime() - s.getTime();
     std::cout << "  simulated open loop " << simulated_s << (sim.completed() ? "" : " of " + ex::format(duration_s)) << " s in "
               << sim_seconds << " s: max |q error| "
-              << err.max_q_error_rad / ex::kRadPerDeg << " deg, max |a error| " << err.max_activation_error
+              << err.max_q_error_rad / ex::kRadPerDeg << " deg"
+              << (err.max_slider_error_m > 0.0 ? ", " + ex::format(err.max_slider_error_m) + " m along sliders" : "")
+              << ", max |a error| " << err.max_activation_error
               << ", max |L_S error| " << err.max_tendon_length_error_m << " m\n  wrote " << out_dir << "/{plan.sto, plan_controls.sto, simulation.sto, simulation_controls.sto, summary.json}\n";
     if (!sim.completed()) {
       std::cerr << "arm_open_loop: simulation failed: " << sim.message << "\n";

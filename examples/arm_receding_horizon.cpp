@@ -130,7 +130,7 @@ int main(int argc, char** argv) {
     const bool finite = run.finite;
     const double settling = rh_run.settling_time_s;
     const Eigen::VectorXd target = options.plan.target_q_rad;
-    const Eigen::VectorXd q_final = model->jointAngles(run.final_state) / ex::kRadPerDeg;
+    const Eigen::VectorXd q_final = ex::to_display(model->description(), model->jointAngles(run.final_state));
     // The task: reach the target and stay within 1 deg of it, with every plan solved. A run that
     // fails it still writes its (complete) files, says why in the summary and exits 1.
     std::string message;
@@ -140,7 +140,8 @@ int main(int argc, char** argv) {
     summary["message"] = message;
     summary["final_q_deg"] = std::vector<double>(q_final.data(), q_final.data() + n);
     summary["target_q_deg"] = std::vector<double>(n);
-    for (int i = 0; i < n; ++i) summary["target_q_deg"][i] = target[i] / ex::kRadPerDeg;
+    const Eigen::VectorXd target_shown = ex::to_display(model->description(), target);  // a slider's in m
+    for (int i = 0; i < n; ++i) summary["target_q_deg"][i] = target_shown[i];
     summary["model_file"] = model_path;
     summary["problem"] = ex::problem_summary(flat);
     summary["inputs"] = in.describe();

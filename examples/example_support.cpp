@@ -11,6 +11,20 @@ Eigen::VectorXd to_vector(const std::vector<double>& v) {
   return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
 }
 
+Eigen::VectorXd to_display(const plugin::ModelDescription& model, const Eigen::VectorXd& q_si) {
+  Eigen::VectorXd out = q_si;
+  for (Eigen::Index i = 0; i < out.size(); ++i)
+    out[i] = i < model.numJoints() ? out[i] * model.joints[static_cast<std::size_t>(i)].displayPerSI() : out[i] / kRadPerDeg;
+  return out;
+}
+
+Eigen::VectorXd from_display(const plugin::ModelDescription& model, const Eigen::VectorXd& q_shown) {
+  Eigen::VectorXd out = q_shown;
+  for (Eigen::Index i = 0; i < out.size(); ++i)
+    if (i >= model.numJoints() || !model.joints[static_cast<std::size_t>(i)].isSlider()) out[i] *= kRadPerDeg;
+  return out;
+}
+
 void require_count(const std::vector<double>& v, int n, const std::string& option) {
   if (static_cast<int>(v.size()) != n)
     throw CLI::ValidationError(option, "expects " + std::to_string(n) + " comma-separated values, got " + std::to_string(v.size()));
@@ -91,8 +105,10 @@ Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTab
     for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) d = std::max(d, std::abs(x[i] - y[i]));
     return d;
   };
-  for (int i = 0; i < model.numJoints(); ++i)
-    e.max_q_error_rad = std::max(e.max_q_error_rad, max_diff(plugin::coordinate_value_column(model, i)));
+  for (int i = 0; i < model.numJoints(); ++i) {
+    double& worst = model.description().joints[static_cast<std::size_t>(i)].isSlider() ? e.max_slider_error_m : e.max_q_error_rad;
+    worst = std::max(worst, max_diff(plugin::coordinate_value_column(model, i)));
+  }
   for (const auto& m : model.description().muscles) {
     const std::string base = "/forceset/" + m.parameters.name + "/";
     e.max_activation_error = std::max(e.max_activation_error, max_diff(base + "activation"));
@@ -115,8 +131,8 @@ nlohmann::json problem_summary(const planner::FlatOutputMap& flat) {
   if (!flat.hasConstantMomentArms() && y.margin.posture_rad.size() > 0) {  // else the same everywhere
     nlohmann::json posture = nlohmann::json::object();
     for (int i = 0; i < flat.numJoints(); ++i)
-      posture[d.joints[static_cast<std::size_t>(i)].name] = y.margin.posture_rad[i] / kRadPerDeg;
-    margin["posture_deg"] = posture;
+      posture[d.joints[static_cast<std::size_t>(i)].name] = y.margin.posture_rad[i] * d.joints[static_cast<std::size_t>(i)].displayPerSI();
+    margin["posture_deg"] = posture;  // a slider's in m
   }
   if (y.margin.muscle >= 0) margin["muscle"] = d.muscles[static_cast<std::size_t>(y.margin.muscle)].parameters.name;
   nlohmann::json effort = nlohmann::json::object();
@@ -131,11 +147,14 @@ nlohmann::json problem_summary(const planner::FlatOutputMap& flat) {
   }
   nlohmann::json limits = nlohmann::json::object();
   for (const auto& joint : d.joints)
-    if (joint.limit.enabled())
-      limits[joint.name] = {{"range_deg", {joint.range_rad[0] / kRadPerDeg, joint.range_rad[1] / kRadPerDeg}},
-                            {"stiffness_N_m_per_rad", joint.limit.stiffness_N_m_per_rad},
-                            {"transition_rad", joint.limit.transition_rad},
-                            {"damping_N_m_s_per_rad", joint.limit.damping_N_m_s_per_rad}};
+    if (joint.limit.enabled()) {
+      const plugin::JointFieldNames& field = plugin::joint_field_names(joint.type);
+      limits[joint.name] = {{joint.isSlider() ? "range_m" : "range_deg",
+                             {joint.range_rad[0] * joint.displayPerSI(), joint.range_rad[1] * joint.displayPerSI()}},
+                            {field.stiffness, joint.limit.stiffness_N_m_per_rad},
+                            {field.transition, joint.limit.transition_rad},
+                            {field.damping, joint.limit.damping_N_m_s_per_rad}};
+    }
   return {{"flat_outputs",
            {{"chosen_by", y.automatic ? "library" : "model"}, {"rows", rows}, {"assumption1_margin", margin}}},
           {"effort_weights", {{"kind", kind}, {"per_muscle", effort}}},

@@ -19,6 +19,11 @@ namespace flatsos::examples {
 constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
 
 Eigen::VectorXd to_vector(const std::vector<double>& v);
+/// A model's coordinates as the programs read and write them: degrees for a pin, metres for a
+/// slider (OpenSim's inDegrees converts only rotations), and back to SI (rad, m). Vectors of
+/// another size than the model's joints are converted as if every joint were a pin.
+Eigen::VectorXd to_display(const plugin::ModelDescription& model, const Eigen::VectorXd& q_si);
+Eigen::VectorXd from_display(const plugin::ModelDescription& model, const Eigen::VectorXd& q_shown);
 /// Throws CLI::ValidationError unless v has n entries.
 void require_count(const std::vector<double>& v, int n, const std::string& option);
 /// Parses the command line: -1 to go on, otherwise the exit code (0 after --help, 2 for bad
@@ -47,6 +52,7 @@ PlanTables plan_tables(const planner::FlatOutputMap& flat, const planner::OpenLo
 
 struct Tracking {
   double max_q_error_rad = 0.0, max_activation_error = 0.0, max_tendon_length_error_m = 0.0;
+  double max_slider_error_m = 0.0;  ///< over the sliders (max_q_error_rad: over the pins)
 };
 /// Largest differences between two state tables with the same rows and columns.
 Tracking compare(const plugin::MusculoskeletalModel& model, const plugin::StoTable& a, const plugin::StoTable& b);

@@ -55,11 +55,13 @@ int main(int argc, char** argv) {
   bool refuse_slack = false;
   app.add_option("--osim", osim, "OpenSim model file (.osim)")->required();
   app.add_option("--paths", paths_file, "OpenSim FunctionBasedPathSet file (fitted muscle lengths)")->required();
-  app.add_option("--keep", keep, "a coordinate that becomes a pin joint (repeat for more; at most one per joint)")->required();
+  app.add_option("--keep", keep,
+                 "a coordinate that becomes a pin joint (a translation: a slider joint; repeat for more; at most one per joint)")
+      ->required();
   app.add_option("--hold", hold, "COORD=VALUE: hold a coordinate at VALUE (deg for rotations, m for translations); repeat");
   app.add_option("--range", ranges,
-                 "COORD=LOW:HIGH: the range of a kept coordinate in deg, inside OpenSim's (keep it where the fitted "
-                 "paths were fitted); repeat");
+                 "COORD=LOW:HIGH: the range of a kept coordinate in deg (m for translations), inside OpenSim's (keep it "
+                 "where the fitted paths were fitted); repeat");
   app.add_option("--name", name, "the model's name (default: the OpenSim model's)");
   app.add_option("--scenarios", scenarios_file,
                  "a JSON object of named scenarios to include (the model file's \"scenarios\": q0_deg, target_deg, ...)");
@@ -89,8 +91,10 @@ int main(int argc, char** argv) {
         const std::size_t colon = value.find(':');
         if (colon == std::string::npos) throw CLI::ValidationError("--range", "'" + r + "' is not COORD=LOW:HIGH");
         if (options.ranges.count(coordinate)) throw CLI::ValidationError("--range", "'" + coordinate + "' given twice");
-        options.ranges[coordinate] = {number(value.substr(0, colon), "--range") * ex::kRadPerDeg,
-                                      number(value.substr(colon + 1), "--range") * ex::kRadPerDeg};
+        const fp::OpenSimCoordinate* c = model.coordinate(coordinate);
+        const double scale = c && !c->rotational ? 1.0 : ex::kRadPerDeg;  // an unknown one: the importer names it
+        options.ranges[coordinate] = {number(value.substr(0, colon), "--range") * scale,
+                                      number(value.substr(colon + 1), "--range") * scale};
       }
     } catch (const CLI::Error& e) {
       std::cerr << "opensim_to_model: " << e.what() << "\n";

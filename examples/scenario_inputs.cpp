@@ -8,11 +8,12 @@ namespace {
 
 constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
 constexpr double kFallbackTargetStepDeg = 30.0;
+constexpr double kFallbackTargetStepSlider_m = 0.05;
 
 std::vector<double> as_std(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
-// Given (size checked, scaled) > the model's (already validated) > fallback; records the source.
-Eigen::VectorXd pick(const std::vector<double>& given, double scale, int size, const std::string& option,
+// Given (size checked, each entry scaled) > the model's (already validated) > fallback; records the source.
+Eigen::VectorXd pick(const std::vector<double>& given, const Eigen::VectorXd& scale, int size, const std::string& option,
                      const Eigen::VectorXd* from_model, const Eigen::VectorXd& fallback, nlohmann::json& sources,
                      const char* key) {
   if (!given.empty()) {
@@ -20,7 +21,7 @@ Eigen::VectorXd pick(const std::vector<double>& given, double scale, int size, c
       throw CLI::ValidationError(option, "expects " + std::to_string(size) + " comma-separated values (the model's count), got " +
                                              std::to_string(given.size()));
     sources[key] = "command line";
-    return Eigen::Map<const Eigen::VectorXd>(given.data(), size) * scale;
+    return Eigen::Map<const Eigen::VectorXd>(given.data(), size).cwiseProduct(scale);
   }
   if (from_model && from_model->size()) {
     sources[key] = "model";
@@ -35,9 +36,13 @@ Eigen::VectorXd pick(const std::vector<double>& given, double scale, int size, c
 nlohmann::json ScenarioInputs::describe() const {
   nlohmann::json j;
   j["scenario"] = scenario;
-  j["q0_deg"] = as_std(q0_rad / kRadPerDeg);
-  j["qd0_deg_per_s"] = as_std(qd0_rad_per_s / kRadPerDeg);
-  j["target_deg"] = as_std(target_q_rad / kRadPerDeg);
+  auto shown = [&](Eigen::VectorXd v) {  // degrees, a slider's metres
+    for (Eigen::Index i = 0; i < v.size(); ++i) v[i] = i < shown_per_si.size() && shown_per_si[i] == 1.0 ? v[i] : v[i] / kRadPerDeg;
+    return as_std(v);
+  };
+  j["q0_deg"] = shown(q0_rad);
+  j["qd0_deg_per_s"] = shown(qd0_rad_per_s);
+  j["target_deg"] = shown(target_q_rad);
   j["duration_s"] = duration_s;
   j["reserves_N"] = as_std(reserves_N);
   j["a0"] = activations ? nlohmann::json(as_std(*activations)) : nlohmann::json("minimum-effort rest state");
@@ -48,9 +53,9 @@ nlohmann::json ScenarioInputs::describe() const {
 void add_scenario_options(CLI::App& app, ScenarioOptions& o, const std::string& scenario, bool initial_muscle_state,
                           double fallback_duration_s, double fallback_reserve_N) {
   const std::string from = " (default: the model's scenario '" + scenario + "', else ";
-  app.add_option("--q0-deg", o.q0_deg, "initial joint angles, deg, one per joint" + from + "0)")->delimiter(',');
+  app.add_option("--q0-deg", o.q0_deg, "initial joint angles, deg (a slider's in m), one per joint" + from + "0)")->delimiter(',');
   if (initial_muscle_state) {
-    app.add_option("--qd0-deg-per-s", o.qd0_deg_per_s, "initial joint speeds, deg/s, one per joint" + from + "0)")
+    app.add_option("--qd0-deg-per-s", o.qd0_deg_per_s, "initial joint speeds, deg/s (a slider's in m/s), one per joint" + from + "0)")
         ->delimiter(',');
     app.add_option("--a0", o.a0,
                    "initial activations in (0, 1], one per muscle; tendons start in static equilibrium" + from +
@@ -58,7 +63,8 @@ void add_scenario_options(CLI::App& app, ScenarioOptions& o, const std::string& 
         ->delimiter(',');
   }
   app.add_option("--target-deg", o.target_deg,
-                 "target joint angles, deg, one per joint" + from + "q0 + " + std::to_string(int(kFallbackTargetStepDeg)) + ")")
+                 "target joint angles, deg (a slider's in m), one per joint" + from + "q0 + " +
+                     std::to_string(int(kFallbackTargetStepDeg)) + " deg, a slider's + 0.05 m)")
       ->delimiter(',');
   app.add_option("--duration-s", o.duration_s, "duration, s" + from + CLI::detail::to_string(fallback_duration_s) + ")")
       ->check(CLI::PositiveNumber);
@@ -75,13 +81,21 @@ ScenarioInputs resolve_scenario(const plugin::MusculoskeletalModel& model, const
   ScenarioInputs in;
   in.scenario = scenario;
   in.sources = nlohmann::json::object();
-  in.q0_rad = pick(given.q0_deg, kRadPerDeg, n, "--q0-deg", sc ? &sc->q0_rad : nullptr, Eigen::VectorXd::Zero(n), in.sources, "q0");
-  in.qd0_rad_per_s = pick(given.qd0_deg_per_s, kRadPerDeg, n, "--qd0-deg-per-s", sc ? &sc->qd0_rad_per_s : nullptr,
+  in.shown_per_si.resize(n);
+  Eigen::VectorXd rad_per_shown(n), fallback_step(n);
+  for (int i = 0; i < n; ++i) {
+    const plugin::JointDescription& joint = model.description().joints[static_cast<std::size_t>(i)];
+    in.shown_per_si[i] = joint.displayPerSI();
+    rad_per_shown[i] = joint.isSlider() ? 1.0 : kRadPerDeg;
+    fallback_step[i] = joint.isSlider() ? kFallbackTargetStepSlider_m : kFallbackTargetStepDeg * kRadPerDeg;
+  }
+  in.q0_rad = pick(given.q0_deg, rad_per_shown, n, "--q0-deg", sc ? &sc->q0_rad : nullptr, Eigen::VectorXd::Zero(n), in.sources, "q0");
+  in.qd0_rad_per_s = pick(given.qd0_deg_per_s, rad_per_shown, n, "--qd0-deg-per-s", sc ? &sc->qd0_rad_per_s : nullptr,
                           Eigen::VectorXd::Zero(n), in.sources, "qd0");
-  in.target_q_rad = pick(given.target_deg, kRadPerDeg, n, "--target-deg", sc ? &sc->target_q_rad : nullptr,
-                         (in.q0_rad.array() + kFallbackTargetStepDeg * kRadPerDeg).matrix(), in.sources, "target");
+  in.target_q_rad = pick(given.target_deg, rad_per_shown, n, "--target-deg", sc ? &sc->target_q_rad : nullptr,
+                         in.q0_rad + fallback_step, in.sources, "target");
   if (!given.a0.empty() || (sc && sc->activations.size())) {
-    in.activations = pick(given.a0, 1.0, m, "--a0", sc ? &sc->activations : nullptr, Eigen::VectorXd(), in.sources, "a0");
+    in.activations = pick(given.a0, Eigen::VectorXd::Ones(m), m, "--a0", sc ? &sc->activations : nullptr, Eigen::VectorXd(), in.sources, "a0");
     if (!(in.activations->minCoeff() > 0.0 && in.activations->maxCoeff() <= 1.0))
       throw CLI::ValidationError("--a0", "activations must lie in (0, 1]");
   } else {

@@ -1,7 +1,8 @@
 #pragma once
 // The inputs of a run (start posture and activations, target, duration, reserves) for any model:
 // what the command line gives, else the model file's scenario of that name, else a fallback
-// sized from the model (start at 0 deg at the minimum-effort rest, target 30 deg further).
+// sized from the model (start at 0 deg at the minimum-effort rest, target 30 deg further; a
+// slider's coordinates in m, its fallback target 0.05 m further).
 
 #include <optional>
 #include <string>
@@ -16,7 +17,7 @@
 
 namespace flatsos::examples {
 
-/// As given on the command line (empty / 0: not given). Angles in degrees.
+/// As given on the command line (empty / 0: not given). Angles in degrees, a slider's in m.
 struct ScenarioOptions {
   std::vector<double> q0_deg, qd0_deg_per_s, a0, target_deg, reserves_N;
   double duration_s = 0.0;
@@ -28,6 +29,7 @@ struct ScenarioInputs {
   std::optional<Eigen::VectorXd> activations;  ///< none: the minimum-effort rest state at q0
   double duration_s = 0.0;
   nlohmann::json sources;                  ///< per input: "command line", "model" or "default"
+  Eigen::VectorXd shown_per_si;            ///< per joint: deg per rad for a pin, 1 for a slider
   nlohmann::json describe() const;         ///< the inputs in the programs' units, with sources
 };
 

@@ -46,28 +46,38 @@ class _Skeleton:
         self.base = [np.array(j["location_in_parent_m"], dtype=float) if self.parent[i] < 0 else None
                      for i, j in enumerate(joints)]
         self.axes = [np.array(j.get("axis", [0.0, 0.0, 1.0]), dtype=float) for j in joints]
+        self.types = [j.get("type", "pin") for j in joints]
         gravity = np.array(description.get("gravity_m_per_s2", [0.0, -9.81, 0.0]), dtype=float)
         self.up = -gravity / np.linalg.norm(gravity) if np.linalg.norm(gravity) > 0 else np.array([0.0, 1.0, 0.0])
         self.plane = self._plane()
 
     def _plane(self):
         """Two unit vectors spanning the plane the motion is drawn in: the ground plane (OpenSim's
-        views) whose normal is nearest the first joint's axis (in ground, at the zero posture);
-        the motion is projected on it. A joint whose axis is more than 45 deg from that normal
-        does not move in it (the model is not planar). The second vector is 'up' (against
-        gravity) in the plane."""
+        views) whose normal is nearest the first pin's axis (in ground, at the zero posture; with
+        sliders only, the one that best holds the first slider's direction and 'up'); the motion
+        is projected on it. A pin whose axis is more than 45 deg from that normal, or a slider
+        whose direction is more than 45 deg out of the plane, does not move in it (the model is
+        not planar). The second vector is 'up' (against gravity) in the plane."""
         _, rotations = self.model.body_frames(np.zeros(len(self.model.joints)))
-        normals = []
+        directions = []
         for i, axis in enumerate(self.axes):
             r = np.eye(3) if self.parent[i] < 0 else rotations[self.parent[i]]
-            normals.append(r @ axis / np.linalg.norm(axis))
+            directions.append(r @ axis / np.linalg.norm(axis))
+        pins = [d for d, kind in zip(directions, self.types) if kind != "slider"]
         n = np.zeros(3)
-        n[np.argmax(np.abs(normals[0]))] = 1.0
-        for name, other in zip(self.model.joints, normals):
-            if abs(n @ other) < _PLANAR_COS:
+        if pins:
+            n[np.argmax(np.abs(pins[0]))] = 1.0
+        else:
+            n[np.argmin(np.abs(directions[0]) + np.abs(self.up))] = 1.0
+        for name, kind, other in zip(self.model.joints, self.types, directions):
+            if kind != "slider" and abs(n @ other) < _PLANAR_COS:
                 raise ValueError(f"animation: model '{self.model.name}' is not planar: joint '{name}' turns about "
                                  f"{np.round(other, 3).tolist()}, more than 45 deg from the drawing plane's normal "
                                  f"{n.tolist()}")
+            if kind == "slider" and abs(n @ other) > _PLANAR_COS:
+                raise ValueError(f"animation: model '{self.model.name}' is not planar: slider '{name}' moves along "
+                                 f"{np.round(other, 3).tolist()}, more than 45 deg out of the drawing plane (normal "
+                                 f"{n.tolist()})")
         up = self.up - (self.up @ n) * n
         if np.linalg.norm(up) < _PARALLEL:  # gravity along the axis: any in-plane 'up'
             up = np.cross(n, [1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.cross(n, [0.0, 1.0, 0.0])

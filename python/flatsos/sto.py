@@ -69,7 +69,8 @@ def muscle_activations(model, table, source="table"):
 
 def write_motion(model, time, q, path, name="flatsos"):
     """An OpenSim motion file: time, then each joint's coordinate and each coordinate the model
-    held fixed (imported models), in degrees (inDegrees=yes). Written whole or not at all."""
+    held fixed (imported models), in degrees (inDegrees=yes: a slider's coordinate stays in metres, as
+    OpenSim converts only rotational coordinates). Written whole or not at all."""
     time = np.asarray(time, dtype=float)
     q = np.asarray(q, dtype=float)
     if time.ndim != 1 or q.shape != (time.size, len(model.joints)):
@@ -80,7 +81,8 @@ def write_motion(model, time, q, path, name="flatsos"):
         raise ValueError("time: must increase strictly")
     held = model.held_coordinates
     labels = ["time"] + list(model.coordinates) + sorted(held)
-    columns = [time] + [np.degrees(q[:, i]) for i in range(q.shape[1])] + \
+    types = model.joint_types
+    columns = [time] + [q[:, i] if types[i] == "slider" else np.degrees(q[:, i]) for i in range(q.shape[1])] + \
         [np.full(time.size, math.degrees(held[c])) for c in sorted(held)]
     data = np.column_stack(columns)
     path = pathlib.Path(path)

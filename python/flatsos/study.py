@@ -14,6 +14,8 @@ The study description (a dict, or a JSON file on the command line):
                 target_deg, duration_s, reserves_N (one number or one per muscle) and
                 "options" (plan_open_loop's keywords); what it leaves out comes from the
                 model file's "open_loop" scenario, else q0 = 0, at rest, 30 deg on, 1 s, 10 N.
+                A slider's entries are in m (m/s), as in the model file; its default
+                target is 0.05 m on.
     "strength": {"low": l, "high": h}: each muscle's maximum isometric force times a factor
                 drawn uniformly from [l, h], independently (absent: the model's forces).
     "target_deg": {"low": [...], "high": [...]}: the target drawn uniformly in this box, one
@@ -84,6 +86,7 @@ class Study:
         joints = [j["name"] for j in model["joints"]]
         muscles = [m["name"] for m in model["muscles"]]
         self.model_text, self.source, self.joints, self.muscles = model_text, source, joints, muscles
+        self.sliders = np.array([j.get("type", "pin") == "slider" for j in model["joints"]], dtype=bool)
         n, m = len(joints), len(muscles)
         scenario = model.get("scenarios", {}).get("open_loop", {})
         plan = description.get("plan", {})
@@ -98,7 +101,8 @@ class Study:
         self.q0_deg = _numbers(given.get("q0_deg", [0.0] * n), n, "plan.q0_deg")
         self.qd0_deg_per_s = _numbers(given.get("qd0_deg_per_s", [0.0] * n), n, "plan.qd0_deg_per_s")
         self.a0 = None if given.get("a0") is None else _numbers(given["a0"], m, "plan.a0")
-        self.target_deg = _numbers(given.get("target_deg", self.q0_deg + 30.0), n, "plan.target_deg")
+        self.target_deg = _numbers(given.get("target_deg", self.q0_deg + np.where(self.sliders, 0.05, 30.0)), n,
+                                   "plan.target_deg")
         self.duration_s = float(given.get("duration_s", 1.0))
         if not (self.duration_s > 0.0 and math.isfinite(self.duration_s)):
             raise StudyError("plan.duration_s: must be a positive number of seconds")
@@ -113,6 +117,11 @@ class Study:
         self.target_box = _range(description["target_deg"], n, "target_deg", False) \
             if "target_deg" in description else None
         self.description = description
+
+    def to_si(self, shown):
+        """Per joint from the description's units: degrees to radians, a slider's metres kept."""
+        shown = np.asarray(shown, dtype=float)
+        return np.where(self.sliders, shown, np.radians(shown))
 
     def draw(self, samples, seed):
         """(strength factors, targets in degrees): one row per sample."""
@@ -165,8 +174,8 @@ def _plan_one(model, study, index, strength, target_deg):
     peaks = (math.nan, math.nan, math.nan)
     try:
         subject = model.with_strength(strength) if study.strength else model
-        plan = plan_open_loop(subject, np.radians(study.q0_deg), np.radians(study.qd0_deg_per_s), study.a0,
-                              np.radians(target_deg), study.duration_s, study.reserves_N, **study.options)
+        plan = plan_open_loop(subject, study.to_si(study.q0_deg), study.to_si(study.qd0_deg_per_s), study.a0,
+                              study.to_si(target_deg), study.duration_s, study.reserves_N, **study.options)
         status, cost, message, seconds = plan.status, plan.cost, plan.message, plan.seconds
         if status == "solved":
             s = plan.sample(np.linspace(0.0, study.duration_s, _SAMPLES_FOR_PEAKS))

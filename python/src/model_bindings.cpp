@@ -48,7 +48,7 @@ Model with_strength(const Model& self, const py::object& factors) {
 py::tuple body_frames(const Model& self, const py::object& q) {
   const plugin::MusculoskeletalModel& model = *self.model;
   const Eigen::VectorXd q_rad = vector_argument(q, model.numJoints(), "q");
-  if (!q_rad.allFinite()) throw py::value_error("q: angles must be finite");
+  if (!q_rad.allFinite()) throw py::value_error("q: coordinates must be finite");
   SimTK::State s = model.defaultState();
   model.setJointAngles(s, q_rad);
   model.system().realize(s, SimTK::Stage::Position);
@@ -87,6 +87,14 @@ void register_model(py::module_& m) {
           },
           "joint names, in model order")
       .def_property_readonly(
+          "joint_types",
+          [](const Model& self) {
+            std::vector<std::string> types;
+            for (const auto& j : self.model->description().joints) types.push_back(plugin::joint_type_name(j.type));
+            return types;
+          },
+          "each joint's type, \"pin\" (coordinate in rad) or \"slider\" (coordinate in m), in model order")
+      .def_property_readonly(
           "muscles",
           [](const Model& self) {
             std::vector<std::string> names;
@@ -122,8 +130,8 @@ void register_model(py::module_& m) {
           },
           "coordinates of the original model held fixed in this one (rad, by name; imported models)")
       .def("body_frames", &body_frames, py::arg("q"),
-           "Each joint's child body in the ground frame at posture q (rad): (origins, joints x 3, m; rotations, "
-           "joints x 3 x 3, body to ground).")
+           "Each joint's child body in the ground frame at posture q (rad; a slider's m): (origins, joints x 3, m; "
+           "rotations, joints x 3 x 3, body to ground).")
       .def("with_strength", &with_strength, py::arg("factors"),
            "A copy with each muscle's maximum isometric force multiplied by its factor (one number for all, or one "
            "per muscle; positive), with the same flat outputs. Bad factors raise ValueError.")

@@ -96,7 +96,7 @@ TEST(ModelFile, EveryBadFileIsRejectedWithTheFieldNamed) {
       {"typo key in body", [](json& j) { j["bodies"][0]["mass"] = 2.0; }, {"bodies[0].mass", "unknown key"}},
       {"ground as body name", [](json& j) { j["bodies"][0]["name"] = "ground"; }, {"reserved"}},
       {"duplicate body", [](json& j) { j["bodies"][1]["name"] = "upper_arm"; }, {"duplicate body"}},
-      {"slider joint", [](json& j) { j["joints"][0]["type"] = "slider"; }, {"joints[0].type", "slider"}},
+      {"unknown joint type", [](json& j) { j["joints"][0]["type"] = "ball"; }, {"joints[0].type", "ball", "slider"}},
       {"unknown parent", [](json& j) { j["joints"][1]["parent"] = "torso"; }, {"joints[1].parent", "torso"}},
       {"unknown child", [](json& j) { j["joints"][1]["child"] = "hand"; }, {"joints[1].child", "hand"}},
       {"children first", [](json& j) { std::swap(j["joints"][0], j["joints"][1]); }, {"joints[0].parent", "not attached"}},

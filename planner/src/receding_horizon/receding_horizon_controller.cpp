@@ -208,10 +208,17 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
   constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
   if (!run.loop.finite) run.failures.push_back("the simulation became non-finite");
   if (run.loop.finite && run.settling_time_s < 0.0) {
-    const double error_rad = (controller.plant().jointAngles(run.loop.final_state) - target).cwiseAbs().maxCoeff();
+    const Eigen::VectorXd error = (controller.plant().jointAngles(run.loop.final_state) - target).cwiseAbs();
+    double error_rad = 0.0, error_m = 0.0;  // pins', sliders'
+    for (int j = 0; j < error.size(); ++j) {
+      double& worst = controller.plant().description().joints[static_cast<std::size_t>(j)].isSlider() ? error_m : error_rad;
+      worst = std::max(worst, error[j]);
+    }
     std::ostringstream why;
     why << "never settled within " << settle_tolerance_rad * kDegPerRad << " deg of the target in " << o.duration_s
-        << " s (final error " << error_rad * kDegPerRad << " deg)";
+        << " s (final error " << error_rad * kDegPerRad << " deg";
+    if (error_m > 0.0) why << ", " << error_m << " m along sliders";
+    why << ")";
     run.failures.push_back(why.str());
   }
   if (controller.planFailures() > 0) {

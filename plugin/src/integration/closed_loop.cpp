@@ -52,13 +52,15 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
 }
 
 double settling_time(const MusculoskeletalModel& model, const StoTable& states, const Eigen::VectorXd& target,
-                     double tolerance) {
+                     double tolerance_rad, double slider_tolerance_m) {
   if (target.size() != model.numJoints()) throw std::invalid_argument("settling time: target must have one angle per joint");
   double settled = -1.0;
   for (std::size_t r = states.rows.size(); r-- > 0;) {
     bool inside = true;
-    for (int j = 0; j < model.numJoints(); ++j)  // columns: time, then q and qdot per joint
+    for (int j = 0; j < model.numJoints(); ++j) {  // columns: time, then q and qdot per joint
+      const double tolerance = model.description().joints[static_cast<std::size_t>(j)].isSlider() ? slider_tolerance_m : tolerance_rad;
       inside = inside && std::abs(states.rows[r][static_cast<std::size_t>(1 + 2 * j)] - target[j]) <= tolerance;
+    }
     if (!inside) break;
     settled = states.rows[r][0];
   }

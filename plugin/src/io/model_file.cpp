@@ -142,40 +142,56 @@ BodyDescription read_body(const json& j, const std::string& path, const std::str
   return b;
 }
 
+// A joint's limit (joint_limit.hpp) under its type's field names.
+JointLimitTorque read_joint_limit(const json& j, const std::string& path, const std::string& source, const JointFieldNames& field) {
+  ObjectReader l(j, path, source);
+  JointLimitTorque limit;
+  limit.stiffness_N_m_per_rad = l.positive(field.stiffness);
+  limit.transition_rad = l.positive(field.transition);
+  if (l.has(field.damping)) {
+    limit.damping_N_m_s_per_rad = l.number(field.damping);
+    if (limit.damping_N_m_s_per_rad < 0.0)
+      l.fail(l.at(field.damping), "must be >= 0 (got " + std::to_string(limit.damping_N_m_s_per_rad) + ")");
+  }
+  l.reject_unknown_keys();
+  return limit;
+}
+
 JointDescription read_joint(const json& j, const std::string& path, const std::string& source) {
   ObjectReader r(j, path, source);
   JointDescription d;
   d.name = r.string("name");
   const std::string type = r.string("type");
-  if (type != "pin") r.fail(r.at("type"), "unsupported joint type '" + type + "' (only \"pin\")");
+  if (type != "pin" && type != "slider") r.fail(r.at("type"), "unsupported joint type '" + type + "' (\"pin\" or \"slider\")");
+  d.type = type == "slider" ? JointType::Slider : JointType::Pin;
   d.parent = r.string("parent");
   d.child = r.string("child");
   d.location_in_parent_m = r.vec3("location_in_parent_m");
+  if (d.isSlider() && !r.has("axis")) r.fail(r.at("axis"), "required for a slider: the direction it translates along");
   if (const json* axis = r.find("axis")) {
     d.axis = r.vec3(*axis, r.at("axis"));
     if (d.axis.norm() < 1e-12) r.fail(r.at("axis"), "must not be the zero vector");
-    d.axis.normalize();
+    if (std::abs(d.axis.norm() - 1.0) > 1e-12) d.axis.normalize();  // a unit axis as written: the round trip is exact
   }
   if (r.has("coordinate")) d.coordinate = r.string("coordinate");
-  if (r.has("range_rad")) {
-    const Eigen::VectorXd range = r.numbers("range_rad");
-    if (range.size() != 2) r.fail(r.at("range_rad"), "must be [lower, upper] (2 numbers)");
+  // A range or limit in the other type's units is refused, not converted.
+  const JointFieldNames& field = joint_field_names(d.type);
+  const JointFieldNames& other = joint_field_names(d.isSlider() ? JointType::Pin : JointType::Slider);
+  for (const char* key : {other.range, other.limit})
+    if (r.has(key))
+      r.fail(r.at(key), std::string("not a field of a ") + type + " (its coordinate is in " + d.coordinateUnit() + "): give \"" +
+                            (key == other.range ? field.range : field.limit) + "\"");
+  if (r.has(field.range)) {
+    const Eigen::VectorXd range = r.numbers(field.range);
+    if (range.size() != 2) r.fail(r.at(field.range), "must be [lower, upper] (2 numbers)");
     if (!(range[0] < range[1]))
-      r.fail(r.at("range_rad"), "lower " + std::to_string(range[0]) + " must be below upper " + std::to_string(range[1]));
+      r.fail(r.at(field.range), "lower " + std::to_string(range[0]) + " must be below upper " + std::to_string(range[1]));
     d.range_rad = {range[0], range[1]};
   }
-  if (const json* limit = r.find("limit_torque")) {
-    if (!r.has("range_rad"))
-      r.fail(r.at("range_rad"), "required: the joint has a limit_torque, which acts beyond its range");
-    ObjectReader l(*limit, r.at("limit_torque"), source);
-    d.limit.stiffness_N_m_per_rad = l.positive("stiffness_N_m_per_rad");
-    d.limit.transition_rad = l.positive("transition_rad");
-    if (l.has("damping_N_m_s_per_rad")) {
-      d.limit.damping_N_m_s_per_rad = l.number("damping_N_m_s_per_rad");
-      if (d.limit.damping_N_m_s_per_rad < 0.0)
-        l.fail(l.at("damping_N_m_s_per_rad"), "must be >= 0 (got " + std::to_string(d.limit.damping_N_m_s_per_rad) + ")");
-    }
-    l.reject_unknown_keys();
+  if (const json* limit = r.find(field.limit)) {
+    if (!r.has(field.range))
+      r.fail(r.at(field.range), std::string("required: the joint has a ") + field.limit + ", which acts beyond its range");
+    d.limit = read_joint_limit(*limit, r.at(field.limit), source, field);
   }
   r.reject_unknown_keys();
   return d;
@@ -323,15 +339,23 @@ EffortWeights read_effort_weights(const json& j, const std::string& source, cons
   return w;
 }
 
-// Angles in the file are in degrees (people write postures that way); radians inside.
-ScenarioDescription read_scenario(const json& j, const std::string& path, const std::string& source) {
+// Angles in the file are in degrees (people write postures that way), a slider's coordinate in
+// metres; SI inside. A vector of the wrong size is kept as it is, for validate() to name.
+Eigen::VectorXd coordinates_from_display(Eigen::VectorXd v, const std::vector<JointDescription>& joints) {
   constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (i >= static_cast<Eigen::Index>(joints.size()) || !joints[static_cast<std::size_t>(i)].isSlider()) v[i] *= kRadPerDeg;
+  return v;
+}
+
+ScenarioDescription read_scenario(const json& j, const std::string& path, const std::string& source,
+                                  const std::vector<JointDescription>& joints) {
   ObjectReader r(j, path, source);
   ScenarioDescription sc;
-  if (r.has("q0_deg")) sc.q0_rad = r.numbers("q0_deg") * kRadPerDeg;
-  if (r.has("qd0_deg_per_s")) sc.qd0_rad_per_s = r.numbers("qd0_deg_per_s") * kRadPerDeg;
+  if (r.has("q0_deg")) sc.q0_rad = coordinates_from_display(r.numbers("q0_deg"), joints);
+  if (r.has("qd0_deg_per_s")) sc.qd0_rad_per_s = coordinates_from_display(r.numbers("qd0_deg_per_s"), joints);
   if (r.has("activations")) sc.activations = r.numbers("activations");
-  if (r.has("target_deg")) sc.target_q_rad = r.numbers("target_deg") * kRadPerDeg;
+  if (r.has("target_deg")) sc.target_q_rad = coordinates_from_display(r.numbers("target_deg"), joints);
   if (r.has("duration_s")) sc.duration_s = r.positive("duration_s");
   if (r.has("reserves_N")) sc.reserves_N = r.numbers("reserves_N", true);
   r.reject_unknown_keys();
@@ -383,7 +407,7 @@ ModelDescription parse_model_json(const std::string& json_text, const std::strin
   if (const json* scenarios = top.find("scenarios")) {
     if (!scenarios->is_object()) top.fail("scenarios", "must be an object of named scenarios");
     for (const auto& item : scenarios->items())
-      model.scenarios[item.key()] = read_scenario(item.value(), "scenarios." + item.key(), source);
+      model.scenarios[item.key()] = read_scenario(item.value(), "scenarios." + item.key(), source, model.joints);
   }
   if (const json* provenance = top.find("provenance")) {
     if (!provenance->is_object()) top.fail("provenance", "must be an object");

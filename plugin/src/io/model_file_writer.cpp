@@ -16,10 +16,35 @@ using model_file::kMuscleModelKey;
 using model_file::kOptionalMuscleFields;
 
 json vec3_json(const Eigen::Vector3d& v) { return json::array({v[0], v[1], v[2]}); }
-json vector_json(const Eigen::VectorXd& v, double factor = 1.0) {
+json vector_json(const Eigen::VectorXd& v) {
   json out = json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(v[i] * factor);
+  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(v[i]);
   return out;
+}
+// Per joint as people read it: degrees for a pin, metres for a slider (the reader's inverse).
+json display_json(const Eigen::VectorXd& v, const std::vector<JointDescription>& joints) {
+  json out = json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    out.push_back(v[i] * (i < static_cast<Eigen::Index>(joints.size()) ? joints[static_cast<std::size_t>(i)].displayPerSI()
+                                                                        : 180.0 / 3.14159265358979323846));
+  return out;
+}
+
+json joint_json(const JointDescription& d) {
+  const JointFieldNames& field = joint_field_names(d.type);
+  json joint = {{"name", d.name},
+                {"type", joint_type_name(d.type)},
+                {"parent", d.parent},
+                {"child", d.child},
+                {"location_in_parent_m", vec3_json(d.location_in_parent_m)},
+                {"axis", vec3_json(d.axis)}};
+  if (!d.coordinate.empty()) joint["coordinate"] = d.coordinate;
+  if (d.hasRange()) joint[field.range] = json::array({d.range_rad[0], d.range_rad[1]});
+  if (d.limit.stiffness_N_m_per_rad > 0.0)
+    joint[field.limit] = {{field.stiffness, d.limit.stiffness_N_m_per_rad},
+                          {field.transition, d.limit.transition_rad},
+                          {field.damping, d.limit.damping_N_m_s_per_rad}};
+  return joint;
 }
 
 json muscle_json(const MuscleDescription& m, const std::vector<JointDescription>& joints) {
@@ -52,7 +77,6 @@ json muscle_json(const MuscleDescription& m, const std::vector<JointDescription>
 }  // namespace
 
 std::string model_json_text(const ModelDescription& model) {
-  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
   json out = json::object();
   if (!model.name.empty()) out["name"] = model.name;
   out["gravity_m_per_s2"] = vec3_json(model.gravity_m_per_s2);
@@ -64,21 +88,7 @@ std::string model_json_text(const ModelDescription& model) {
     if (b.length_m > 0.0) body["length_m"] = b.length_m;
     out["bodies"].push_back(body);
   }
-  for (const auto& d : model.joints) {
-    json joint = {{"name", d.name},
-                  {"type", "pin"},
-                  {"parent", d.parent},
-                  {"child", d.child},
-                  {"location_in_parent_m", vec3_json(d.location_in_parent_m)},
-                  {"axis", vec3_json(d.axis)}};
-    if (!d.coordinate.empty()) joint["coordinate"] = d.coordinate;
-    if (d.hasRange()) joint["range_rad"] = json::array({d.range_rad[0], d.range_rad[1]});
-    if (d.limit.stiffness_N_m_per_rad > 0.0)
-      joint["limit_torque"] = {{"stiffness_N_m_per_rad", d.limit.stiffness_N_m_per_rad},
-                               {"transition_rad", d.limit.transition_rad},
-                               {"damping_N_m_s_per_rad", d.limit.damping_N_m_s_per_rad}};
-    out["joints"].push_back(joint);
-  }
+  for (const auto& d : model.joints) out["joints"].push_back(joint_json(d));
   for (const auto& m : model.muscles) out["muscles"].push_back(muscle_json(m, model.joints));
   for (const auto& y : model.flat_outputs) {
     json weights = json::object();
@@ -97,10 +107,10 @@ std::string model_json_text(const ModelDescription& model) {
   }
   for (const auto& [name, sc] : model.scenarios) {
     json s = json::object();
-    if (sc.q0_rad.size()) s["q0_deg"] = vector_json(sc.q0_rad, kDegPerRad);
-    if (sc.qd0_rad_per_s.size()) s["qd0_deg_per_s"] = vector_json(sc.qd0_rad_per_s, kDegPerRad);
+    if (sc.q0_rad.size()) s["q0_deg"] = display_json(sc.q0_rad, model.joints);
+    if (sc.qd0_rad_per_s.size()) s["qd0_deg_per_s"] = display_json(sc.qd0_rad_per_s, model.joints);
     if (sc.activations.size()) s["activations"] = vector_json(sc.activations);
-    if (sc.target_q_rad.size()) s["target_deg"] = vector_json(sc.target_q_rad, kDegPerRad);
+    if (sc.target_q_rad.size()) s["target_deg"] = display_json(sc.target_q_rad, model.joints);
     if (sc.duration_s > 0.0) s["duration_s"] = sc.duration_s;
     if (sc.reserves_N.size()) s["reserves_N"] = vector_json(sc.reserves_N);
     out["scenarios"][name] = s;

@@ -15,6 +15,7 @@
 #include "flatsos/plugin/model/posture_grid.hpp"
 #include "opensim_muscle_models.hpp"
 #include "opensim_reduction.hpp"
+#include "opensim_slider.hpp"
 
 namespace flatsos::plugin {
 
@@ -182,6 +183,7 @@ class Importer {
   // (a PinJoint, or a CustomJoint with one rotation of the coordinate) is then reproduced
   // exactly: the point is on its axis and every body follows it to rounding.
   void addPin(const KeptJoint& k) {
+    if (!osim_.coordinate(k.coordinate)->rotational) return addSlider(k);
     const OpenSimCoordinateValues& q0 = reduction_.reference();
     const OpenSimJoint& j = *k.joint;
     const Eigen::Isometry3d X_GF = opensim_body_in_ground(osim_, j.parent_body, q0) * j.parent_offset;
@@ -210,6 +212,12 @@ class Importer {
                      {"axis_in_ground", {d.axis[0], d.axis[1], d.axis[2]}},
                      {"center_shift_from_joint_frame_m", (center - X_GM.translation()).norm()},
                      {"range_deg", range_deg(d.range_rad)}};
+  }
+
+  void addSlider(const KeptJoint& k) {  // a kept translation (opensim_slider.hpp)
+    const auto s = opensim_import::import_slider(osim_, reduction_, options_, *k.joint, k.coordinate, origin_, members_.at(k.joint->child_body));
+    origin_[s.joint.child] = s.child_origin_in_ground, sliders_[k.joint->name] = s.provenance;
+    model_.joints.push_back(s.joint);
   }
 
   // The kept joint's child with the mass properties of everything lumped into it.
@@ -244,21 +252,22 @@ class Importer {
     for (int s = 0; s <= kRangeSamples; ++s) {
       const double q = d.range_rad[0] + (d.range_rad[1] - d.range_rad[0]) * s / kRangeSamples;
       const Eigen::Vector3d truth = lump(osim_, members_.at(name), reduction_.moved(k.coordinate, q)).mass_center;
-      const Eigen::Vector3d by_pin = origin_.at(name) + Eigen::AngleAxisd(q, d.axis) * (lumped.mass_center - origin_.at(name));
+      const Eigen::Vector3d by_pin = opensim_import::placed_by_joint(d, q, origin_.at(name), lumped.mass_center);
       const double error_m = (truth - by_pin).norm();
       if (error_m > worst_m) worst_m = error_m, worst_at_rad = q;
     }
-    json& pin = pins_[k.joint->name];
+    json& pin = (d.isSlider() ? sliders_ : pins_)[k.joint->name];
     pin["mass_center_error_m"] = worst_m;
-    pin["mass_center_error_at_deg"] = worst_at_rad * kDegPerRad;
+    pin[d.isSlider() ? "mass_center_error_at_m" : "mass_center_error_at_deg"] = worst_at_rad * d.displayPerSI();
     std::vector<std::string> others;
     for (const std::string& m : members_.at(name))
       if (m != name) others.push_back(m);
     if (!others.empty()) pin["lumped_bodies"] = others;
     if (worst_m > kExactPinTolerance_m)
-      out_.notes.push_back("pin '" + k.joint->name + "' (" + k.joint->type + "): " + name + "'s mass centre is up to " +
-                           fixed(worst_m * 1e3, 1) + " mm (at " + fixed(worst_at_rad * kDegPerRad, 1) +
-                           " deg) from where OpenSim's joint puts it");
+      out_.notes.push_back(joint_type_name(d.type) + (" '" + k.joint->name) + "' (" + k.joint->type + "): " + name +
+                           "'s mass centre is up to " + fixed(worst_m * 1e3, 1) + " mm (at " +
+                           fixed(worst_at_rad * d.displayPerSI(), d.isSlider() ? 4 : 1) + " " + d.displayUnit() +
+                           ") from where OpenSim's joint puts it");
   }
 
   void noteCoupledBodies(const KeptJoint& k) {
@@ -385,6 +394,7 @@ class Importer {
     provenance_["held_coordinates"] = {{"values_deg_or_m", held}, {"every_other_coordinate", 0.0}};
     provenance_["welded_to_ground"] = welded_;
     provenance_["pins"] = pins_;
+    if (!sliders_.empty()) provenance_["sliders"] = sliders_;
     provenance_["approximations"] = {
         "each kept coordinate is a pin about the axis it turns fastest at the reference posture (kept coordinates 0), "
         "through the point its bodies best turn about: exact for a joint that is one rotation (pins.*.exact, "
@@ -415,7 +425,7 @@ class Importer {
   std::map<std::string, std::vector<std::string>> members_;  // flatsos body -> OpenSim bodies
   std::vector<std::string> welded_;
   std::map<std::string, Eigen::Vector3d> origin_ = {{"ground", Eigen::Vector3d::Zero()}};  // flatsos body -> its pin's point in ground
-  json pins_ = json::object();
+  json pins_ = json::object(), sliders_ = json::object();
   json left_out_ = json::array(), moment_arms_ = json::object();
   std::mt19937_64 rng_{20261124};
 };

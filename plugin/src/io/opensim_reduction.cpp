@@ -67,7 +67,6 @@ void Reduction::checkKeptAndHeld() const {
     if (!c) fail("kept coordinate '" + k + "': the OpenSim model has no such coordinate");
     if (!seen.insert(k).second) fail("kept coordinate '" + k + "': given twice");
     if (options_.hold.count(k)) fail("coordinate '" + k + "': both kept and held");
-    if (!c->rotational) fail("kept coordinate '" + k + "': a translation (only rotations become pin joints)");
     if (const OpenSimCoupler* coupler = osim_.couplerOf(k))
       fail("kept coordinate '" + k + "': it follows '" + coupler->independent + "' (CoordinateCouplerConstraint '" +
            coupler->name + "'); keep '" + coupler->independent + "' instead");

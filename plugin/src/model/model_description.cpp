@@ -180,24 +180,32 @@ class Validation {
       if (!attached.count(b.name)) fail("bodies", "body '" + b.name + "' has no joint");
   }
 
+  // Each joint's type and axis; its range and limit under the field names of its type.
   void checkJointRangesAndLimits() const {
     for (std::size_t i = 0; i < model_.joints.size(); ++i) {
-      const auto& r = model_.joints[i].range_rad;
+      const JointDescription& jd = model_.joints[i];
+      if (jd.type != JointType::Pin && jd.type != JointType::Slider)
+        fail(indexed("joints", i) + ".type", "unknown joint type (\"pin\" or \"slider\")");
+      if (!jd.axis.allFinite() || !(jd.axis.norm() > 1e-12))
+        fail(indexed("joints", i) + ".axis", "must be a finite vector, not the zero vector");
+      const JointFieldNames& field = joint_field_names(jd.type);
+      const auto& r = jd.range_rad;
       const bool unbounded = r[0] == -std::numeric_limits<double>::infinity() && r[1] == std::numeric_limits<double>::infinity();
       if (!unbounded && !(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] < r[1]))
-        fail(indexed("joints", i) + ".range_rad", "must be [lower, upper] with finite lower < upper (got [" +
-                                                      std::to_string(r[0]) + ", " + std::to_string(r[1]) + "])");
-      const JointLimitTorque& limit = model_.joints[i].limit;
-      const std::string at = indexed("joints", i) + ".limit_torque";
+        fail(indexed("joints", i) + "." + field.range, "must be [lower, upper] with finite lower < upper (got [" +
+                                                         std::to_string(r[0]) + ", " + std::to_string(r[1]) + "])");
+      const JointLimitTorque& limit = jd.limit;
+      const std::string at = indexed("joints", i) + "." + field.limit + ".";
       if (limit.stiffness_N_m_per_rad != 0.0 || limit.transition_rad != 0.0 || limit.damping_N_m_s_per_rad != 0.0) {
         if (!(std::isfinite(limit.stiffness_N_m_per_rad) && limit.stiffness_N_m_per_rad > 0.0))
-          fail(at + ".stiffness_N_m_per_rad", "must be finite and > 0 (got " + std::to_string(limit.stiffness_N_m_per_rad) + ")");
+          fail(at + field.stiffness, "must be finite and > 0 (got " + std::to_string(limit.stiffness_N_m_per_rad) + ")");
         if (!(std::isfinite(limit.transition_rad) && limit.transition_rad > 0.0))
-          fail(at + ".transition_rad", "must be finite and > 0 (got " + std::to_string(limit.transition_rad) + ")");
+          fail(at + field.transition, "must be finite and > 0 (got " + std::to_string(limit.transition_rad) + ")");
         if (!(std::isfinite(limit.damping_N_m_s_per_rad) && limit.damping_N_m_s_per_rad >= 0.0))
-          fail(at + ".damping_N_m_s_per_rad", "must be finite and >= 0 (got " + std::to_string(limit.damping_N_m_s_per_rad) + ")");
-        if (!model_.joints[i].hasRange())
-          fail(indexed("joints", i) + ".range_rad", "required: the joint has a limit torque, which acts beyond its range");
+          fail(at + field.damping, "must be finite and >= 0 (got " + std::to_string(limit.damping_N_m_s_per_rad) + ")");
+        if (!jd.hasRange())
+          fail(indexed("joints", i) + "." + field.range, std::string("required: the joint has a ") + field.limit +
+                                                             ", which acts beyond its range");
       }
     }
   }
@@ -241,7 +249,7 @@ class Validation {
     if (!path.hasConstantMomentArms())
       for (int i : crossed)
         if (!model_.joints[static_cast<std::size_t>(i)].hasRange())
-          fail(indexed("joints", static_cast<std::size_t>(i)) + ".range_rad",
+          fail(indexed("joints", static_cast<std::size_t>(i)) + "." + joint_field_names(model_.joints[static_cast<std::size_t>(i)].type).range,
                "required: muscle '" + m.parameters.name + "' has a path that depends on posture over this joint (a polynomial "
                "is trusted only over a stated range)");
     // Over the range of motion the unit must stay longer than its slack tendon: otherwise the
@@ -304,6 +312,14 @@ class Validation {
 }  // namespace
 
 void validate(const ModelDescription& model, const std::string& source) { Validation(model, source).run(); }
+
+const char* joint_type_name(JointType type) { return type == JointType::Slider ? "slider" : "pin"; }
+
+const JointFieldNames& joint_field_names(JointType type) {
+  static const JointFieldNames pin{"range_rad", "limit_torque", "stiffness_N_m_per_rad", "transition_rad", "damping_N_m_s_per_rad"};
+  static const JointFieldNames slider{"range_m", "limit_force", "stiffness_N_per_m", "transition_m", "damping_N_s_per_m"};
+  return type == JointType::Slider ? slider : pin;
+}
 
 muscles::MusculotendonPath ModelDescription::musclePath(int j) const {
   if (j < 0 || j >= numMuscles()) throw std::out_of_range("muscle index " + std::to_string(j) + " out of range");

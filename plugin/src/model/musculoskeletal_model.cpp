@@ -18,12 +18,18 @@ SimTK::MassProperties mass_properties(const BodyDescription& b) {
   return SimTK::MassProperties(b.mass_kg, com, about_com.shiftFromMassCenter(com, b.mass_kg));
 }
 
-// Pin mobilizers rotate about their frames' z axis: orient both frames so z is the joint axis.
-SimTK::Rotation axis_frame(const Eigen::Vector3d& axis) {
-  return SimTK::Rotation(SimTK::UnitVec3(to_vec3(axis)), SimTK::ZAxis);
+// Pin mobilizers rotate about their frames' z axis, Slider mobilizers translate along their x
+// axis: orient both frames so that axis is the joint's (the child's frame is then the parent's
+// at coordinate 0).
+SimTK::MobilizedBody add_mobilizer(SimTK::MobilizedBody& parent, const JointDescription& jd, const SimTK::Body::Rigid& body) {
+  const SimTK::Rotation r(SimTK::UnitVec3(to_vec3(jd.axis)), SimTK::CoordinateAxis(jd.isSlider() ? 0 : 2));  // x or z
+  const SimTK::Transform inboard(r, to_vec3(jd.location_in_parent_m)), outboard(r, SimTK::Vec3(0));
+  if (jd.isSlider()) return SimTK::MobilizedBody::Slider(parent, inboard, body, outboard);
+  return SimTK::MobilizedBody::Pin(parent, inboard, body, outboard);
 }
 
-// An external joint torque given as a function of time (disturbances, tests).
+// An external joint torque given as a function of time (disturbances, tests); a force along a
+// slider.
 class JointTorqueImpl : public SimTK::Force::Custom::Implementation {
  public:
   JointTorqueImpl(SimTK::MobilizedBody joint, std::shared_ptr<const ExcitationSignal> torque)
@@ -40,8 +46,8 @@ class JointTorqueImpl : public SimTK::Force::Custom::Implementation {
   std::shared_ptr<const ExcitationSignal> torque_;
 };
 
-// A joint's passive limit torque (joint_limit.hpp), with its spring's potential energy so that
-// the system's energy accounts for it.
+// A joint's passive limit torque (joint_limit.hpp; a force for a slider), with its spring's
+// potential energy so that the system's energy accounts for it.
 class JointLimitImpl : public SimTK::Force::Custom::Implementation {
  public:
   JointLimitImpl(SimTK::MobilizedBody joint, JointLimitTorque limit, std::array<double, 2> range_rad)
@@ -86,12 +92,10 @@ MusculoskeletalModel::MusculoskeletalModel(ModelDescription description, std::ve
   for (const auto& b : description_.bodies) bodies[b.name] = &b;
   std::map<std::string, SimTK::MobilizedBody> built = {{"ground", matter_.Ground()}};
   for (const auto& jd : description_.joints) {
-    const SimTK::Rotation r = axis_frame(jd.axis);
-    SimTK::MobilizedBody::Pin pin(built.at(jd.parent), SimTK::Transform(r, to_vec3(jd.location_in_parent_m)),
-                                  SimTK::Body::Rigid(mass_properties(*bodies.at(jd.child))),
-                                  SimTK::Transform(r, SimTK::Vec3(0)));
-    built[jd.child] = pin;
-    joints_.push_back(pin);
+    const SimTK::MobilizedBody joint =
+        add_mobilizer(built.at(jd.parent), jd, SimTK::Body::Rigid(mass_properties(*bodies.at(jd.child))));
+    built[jd.child] = joint;
+    joints_.push_back(joint);
   }
 
   if (description_.hasConstantMomentArms()) moment_arms_ = description_.momentArmMatrix();

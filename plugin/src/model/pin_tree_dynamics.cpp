@@ -31,6 +31,7 @@ PinTreeDynamics::PinTreeDynamics(const ModelDescription& description)
   for (const auto& jd : description.joints) {
     Joint j;
     j.parent = jd.parent == "ground" ? -1 : joint_of_body.at(jd.parent);
+    j.slider = jd.isSlider();
     j.location_in_parent_m = jd.location_in_parent_m;
     j.axis = jd.axis.normalized();
     j.axis_cross << 0.0, -j.axis[2], j.axis[1], j.axis[2], 0.0, -j.axis[0], -j.axis[1], j.axis[0], 0.0;
@@ -161,11 +162,76 @@ Vec3<S> along_constant(const S& x, const Eigen::Vector3d& v) {
 }
 }  // namespace
 
+// A pin: the child turns by q about the axis fixed in the parent.
 template <class S>
-void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const {
+void PinTreeDynamics::pinKinematicsOf(const Joint& j, const BodyOf<S>* parent, const S& q, const S& qd, const S& qdd,
+                                      BodyOf<S>& b) {
   using Vec = Vec3<S>;
   using std::cos;
   using std::sin;
+  // Rodrigues: the rotation by q about the unit axis, R = I + sin q K + (1 - cos q) K^2, turned
+  // by the parent's rotation P: P R = P + sin q (P K) + (1 - cos q) (P K^2).
+  const S sin_q = sin(q), one_minus_cos_q = S(1.0) - cos(q);
+  if (!parent) {  // on the ground: the parent's frame is the ground's, at rest
+    b.origin_m = j.location_in_parent_m.cast<S>();
+    b.axis = j.axis.cast<S>();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        S entry(r == c ? 1.0 : 0.0);
+        if (j.axis_cross(r, c) != 0.0) entry += scaled(sin_q, j.axis_cross(r, c));
+        if (j.axis_cross_squared(r, c) != 0.0) entry += scaled(one_minus_cos_q, j.axis_cross_squared(r, c));
+        b.rotation(r, c) = entry;
+      }
+    b.origin_acceleration = Vec::Zero();
+    b.angular_velocity = along_constant(qd, j.axis);
+    b.angular_acceleration = along_constant(qdd, j.axis);
+    return;
+  }
+  const BodyOf<S>& p = *parent;
+  const Vec r = times_constant(p.rotation, j.location_in_parent_m);  // parent origin -> joint
+  b.axis = times_constant(p.rotation, j.axis);
+  b.rotation = p.rotation + sin_q * times_constant(p.rotation, j.axis_cross) +
+               one_minus_cos_q * times_constant(p.rotation, j.axis_cross_squared);
+  b.origin_m = p.origin_m + r;
+  const Vec& w = p.angular_velocity;
+  b.origin_acceleration = p.origin_acceleration + p.angular_acceleration.cross(r) + w.cross(w.cross(r));
+  b.angular_velocity = w + b.axis * qd;
+  // The axis is fixed in the parent, so it turns with the parent's angular velocity.
+  b.angular_acceleration = p.angular_acceleration + b.axis * qdd + w.cross(b.axis) * qd;
+}
+
+// A slider: the child keeps the parent's orientation and its origin moves by q along the axis
+// fixed in the parent, r = P (location + q axis), so its acceleration adds to the parent's
+// alpha x r + w x (w x r) the Coriolis term 2 w x (P axis qd) and P axis qdd.
+template <class S>
+void PinTreeDynamics::sliderKinematicsOf(const Joint& j, const BodyOf<S>* parent, const S& q, const S& qd, const S& qdd,
+                                         BodyOf<S>& b) {
+  using Vec = Vec3<S>;
+  if (!parent) {
+    b.axis = j.axis.cast<S>();
+    b.rotation = Mat3<S>::Identity();
+    b.origin_m = j.location_in_parent_m.cast<S>() + along_constant(q, j.axis);
+    b.angular_velocity = Vec::Zero();
+    b.angular_acceleration = Vec::Zero();
+    b.origin_acceleration = along_constant(qdd, j.axis);
+    return;
+  }
+  const BodyOf<S>& p = *parent;
+  b.axis = times_constant(p.rotation, j.axis);
+  const Vec r = times_constant(p.rotation, j.location_in_parent_m) + b.axis * q;  // parent origin -> child origin
+  b.rotation = p.rotation;
+  b.origin_m = p.origin_m + r;
+  const Vec& w = p.angular_velocity;
+  b.angular_velocity = w;
+  b.angular_acceleration = p.angular_acceleration;
+  const Vec sliding = b.axis * qd;
+  b.origin_acceleration = p.origin_acceleration + p.angular_acceleration.cross(r) + w.cross(w.cross(r)) +
+                          S(2.0) * w.cross(sliding) + b.axis * qdd;
+}
+
+template <class S>
+void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const {
+  using Vec = Vec3<S>;
   const int n = numJoints();
   scratch.bodies.resize(joints_.size());  // no allocation once sized
   // Outward: kinematics of each body from its parent's (parents come first), and the body's own
@@ -173,35 +239,11 @@ void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, cons
   for (int i = 0; i < n; ++i) {
     const Joint& j = joints_[static_cast<std::size_t>(i)];
     auto& b = scratch.bodies[static_cast<std::size_t>(i)];
-    // Rodrigues: the rotation by q about the unit axis, R = I + sin q K + (1 - cos q) K^2, turned
-    // by the parent's rotation P: P R = P + sin q (P K) + (1 - cos q) (P K^2).
-    const S sin_q = sin(q[i]), one_minus_cos_q = S(1.0) - cos(q[i]);
-    if (j.parent < 0) {  // on the ground: the parent's frame is the ground's, at rest
-      b.origin_m = j.location_in_parent_m.cast<S>();
-      b.axis = j.axis.cast<S>();
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-          S entry(r == c ? 1.0 : 0.0);
-          if (j.axis_cross(r, c) != 0.0) entry += scaled(sin_q, j.axis_cross(r, c));
-          if (j.axis_cross_squared(r, c) != 0.0) entry += scaled(one_minus_cos_q, j.axis_cross_squared(r, c));
-          b.rotation(r, c) = entry;
-        }
-      b.origin_acceleration = Vec::Zero();
-      b.angular_velocity = along_constant(qd[i], j.axis);
-      b.angular_acceleration = along_constant(qdd[i], j.axis);
-    } else {
-      const auto& p = scratch.bodies[static_cast<std::size_t>(j.parent)];
-      const Vec r = times_constant(p.rotation, j.location_in_parent_m);  // parent origin -> joint
-      b.axis = times_constant(p.rotation, j.axis);
-      b.rotation = p.rotation + sin_q * times_constant(p.rotation, j.axis_cross) +
-                   one_minus_cos_q * times_constant(p.rotation, j.axis_cross_squared);
-      b.origin_m = p.origin_m + r;
-      const Vec& w = p.angular_velocity;
-      b.origin_acceleration = p.origin_acceleration + p.angular_acceleration.cross(r) + w.cross(w.cross(r));
-      b.angular_velocity = w + b.axis * qd[i];
-      // The axis is fixed in the parent, so it turns with the parent's angular velocity.
-      b.angular_acceleration = p.angular_acceleration + b.axis * qdd[i] + w.cross(b.axis) * qd[i];
-    }
+    const BodyOf<S>* parent = j.parent < 0 ? nullptr : &scratch.bodies[static_cast<std::size_t>(j.parent)];
+    if (j.slider)
+      sliderKinematicsOf<S>(j, parent, q[i], qd[i], qdd[i], b);
+    else
+      pinKinematicsOf<S>(j, parent, q[i], qd[i], qdd[i], b);
     const Vec& wb = b.angular_velocity;
     const Vec c = times_constant(b.rotation, j.mass_center_m);  // origin -> mass center
     const Vec com_acceleration = b.origin_acceleration + b.angular_acceleration.cross(c) + wb.cross(wb.cross(c));
@@ -214,11 +256,12 @@ void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, cons
     for (int k = 0; k < 3; ++k) b.force_N[k] = scaled(load[k], j.mass_kg);
     b.moment_N_m = inertia_times(b.angular_acceleration) + wb.cross(inertia_times(wb)) + c.cross(b.force_N);
   }
-  // Inward: children add their loads to their parents (children come after their parents).
+  // Inward: children add their loads to their parents (children come after their parents). A
+  // pin's torque is the moment's component along its axis, a slider's force the force's.
   for (int i = n - 1; i >= 0; --i) {
     const Joint& j = joints_[static_cast<std::size_t>(i)];
     const auto& b = scratch.bodies[static_cast<std::size_t>(i)];
-    tau[i] = b.axis.dot(b.moment_N_m);
+    tau[i] = j.slider ? b.axis.dot(b.force_N) : b.axis.dot(b.moment_N_m);
     if (j.parent >= 0) {
       auto& p = scratch.bodies[static_cast<std::size_t>(j.parent)];
       p.force_N += b.force_N;
@@ -227,208 +270,16 @@ void PinTreeDynamics::rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, cons
   }
 }
 
-namespace {
-
-// The buffers of torque_jet_from_seeds, kept across the passes of one gradient or Hessian.
-template <class S>
-struct TorqueJetBuffers {
-  std::vector<TimeJet<S>> q, qd, qdd, tau;
-  PinTreeDynamics::ScratchOf<TimeJet<S>> scratch;
-};
-
-// tau along a motion as a time jet: each of q, qd, qdd is (x, x', x'') read from the jet, so tau
-// comes out with d/dt and d2/dt2 of tau(t) = ID(q(t), qd(t), qdd(t)). `seed(joint, block)` gives
-// that jet for q (block 0), qd (1) or qdd (2) of a joint.
-template <class S, class SeedAt>
-void torque_jet_from_seeds(const PinTreeDynamics& tree, const SeedAt& seed, std::vector<S>& tau_out,
-                           TorqueJetBuffers<S>& buffers) {
-  using H = TimeJet<S>;
-  const int n = tree.numJoints();
-  const auto size = static_cast<std::size_t>(n);
-  buffers.q.resize(size), buffers.qd.resize(size), buffers.qdd.resize(size), buffers.tau.resize(size);
-  for (int i = 0; i < n; ++i) {
-    buffers.q[static_cast<std::size_t>(i)] = seed(i, 0);
-    buffers.qd[static_cast<std::size_t>(i)] = seed(i, 1);
-    buffers.qdd[static_cast<std::size_t>(i)] = seed(i, 2);
-  }
-  tree.inverseDynamicsOf<H>(buffers.scratch, buffers.q.data(), buffers.qd.data(), buffers.qdd.data(), buffers.tau.data());
-  tau_out.resize(static_cast<std::size_t>(3 * n));
-  for (int i = 0; i < n; ++i) {
-    const H& t = buffers.tau[static_cast<std::size_t>(i)];
-    tau_out[static_cast<std::size_t>(3 * i)] = t.value;
-    tau_out[static_cast<std::size_t>(3 * i + 1)] = t.rate;
-    tau_out[static_cast<std::size_t>(3 * i + 2)] = t.acceleration;
-  }
-}
-
-// The same with every seed read from the jet: jet(joint, order), orders 0..4.
-template <class S, class JetAt>
-void torque_jet_of(const PinTreeDynamics& tree, const JetAt& jet, std::vector<S>& tau_out, TorqueJetBuffers<S>& buffers) {
-  torque_jet_from_seeds<S>(
-      tree,
-      [&](int joint, int block) {
-        return TimeJet<S>(jet(joint, block), jet(joint, block + 1), jet(joint, block + 2));
-      },
-      tau_out, buffers);
-}
-
-void require_jet(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::MatrixXd>& q_jet) {
-  if (q_jet.rows() != tree.numJoints() || q_jet.cols() < 5)
-    throw std::invalid_argument("torque jet: the joint jet must be " + std::to_string(tree.numJoints()) +
-                                " x 5 (q and four derivatives), not " + std::to_string(q_jet.rows()) + " x " +
-                                std::to_string(q_jet.cols()));
-}
-
-}  // namespace
-
-Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet) const {
-  require_jet(*this, q_jet);
-  std::vector<double> tau;
-  TorqueJetBuffers<double> buffers;
-  torque_jet_of<double>(*this, [&](int r, int l) { return q_jet(r, l); }, tau, buffers);
-  Eigen::MatrixXd out(numJoints(), 3);
-  for (int i = 0; i < numJoints(); ++i)
-    for (int k = 0; k < 3; ++k) out(i, k) = tau[static_cast<std::size_t>(3 * i + k)];
-  return out;
-}
-
-Eigen::MatrixXd PinTreeDynamics::torqueJet(const Eigen::Ref<const Eigen::MatrixXd>& q_jet,
-                                           Eigen::MatrixXd& gradient) const {
-  require_jet(*this, q_jet);
-  const int n = numJoints();
-  gradient.setZero(3 * n, 5 * n);
-  Eigen::MatrixXd out(n, 3);
-  std::vector<Dual<double>> tau;
-  TorqueJetBuffers<Dual<double>> buffers;
-  // tau(t) = ID(x(t)) with x = (q, qd, qdd), so d tau^(k) / d x^(j) = binom(k, j) A^(k-j),
-  // where A(t) = dID/dx along the motion (the Jacobian of a Taylor expansion is lower
-  // block-Toeplitz in the Jacobian's own expansion). One pass per entry of x (3N), with a third
-  // infinitesimal constant in time on that entry, gives A e and its first two time derivatives;
-  // q^(l) is block l - j of x^(j). One pass per entry of the jet took 5N.
-  constexpr double kBinomial[3][3] = {{1.0, 0.0, 0.0}, {1.0, 1.0, 0.0}, {1.0, 2.0, 1.0}};
-  using D = Dual<double>;
-  for (int r = 0; r < n; ++r)
-    for (int b = 0; b < 3; ++b) {
-      torque_jet_from_seeds<D>(
-          *this,
-          [&](int joint, int block) {
-            const double x = q_jet(joint, block), x1 = q_jet(joint, block + 1), x2 = q_jet(joint, block + 2);
-            return TimeJet<D>(D(x, joint == r && block == b ? 1.0 : 0.0), D(x1), D(x2));
-          },
-          tau, buffers);
-      for (int i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k)
-          for (int j = 0; j <= k; ++j)
-            gradient(3 * i + k, 5 * r + b + j) +=
-                kBinomial[k][j] * tau[static_cast<std::size_t>(3 * i + k - j)].derivative;
-    }
-  for (int i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) out(i, k) = tau[static_cast<std::size_t>(3 * i + k)].value;
-  return out;
-}
-
-Eigen::MatrixXd PinTreeDynamics::torqueJetHessian(const Eigen::Ref<const Eigen::MatrixXd>& q_jet,
-                                                  const Eigen::Ref<const Eigen::MatrixXd>& weights) const {
-  require_jet(*this, q_jet);
-  const int n = numJoints();
-  if (weights.rows() != n || weights.cols() != 3)
-    throw std::invalid_argument("torque jet Hessian: the weights must be " + std::to_string(n) + " x 3, not " +
-                                std::to_string(weights.rows()) + " x " + std::to_string(weights.cols()));
-  using S = Dual<Dual<double>>;
-  std::vector<S> tau;
-  TorqueJetBuffers<S> buffers;
-  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(5 * n, 5 * n);
-  for (int a = 0; a < 5 * n; ++a)
-    for (int b = 0; b <= a; ++b) {
-      const int la = std::max(a % 5, b % 5), lb = std::min(a % 5, b % 5);
-      if ((la == 4 && lb >= 1) || (la == 3 && lb >= 2)) continue;  // structurally zero (above)
-      // Entry a carries e3, entry b e4: the e3 e4 coefficient of each tau^(k) is its d2 / da db.
-      torque_jet_of<S>(
-          *this,
-          [&](int joint, int order) {
-            const int entry = 5 * joint + order;
-            return S(Dual<double>(q_jet(joint, order), entry == b ? 1.0 : 0.0), Dual<double>(entry == a ? 1.0 : 0.0, 0.0));
-          },
-          tau, buffers);
-      double sum = 0.0;
-      for (int i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) sum += weights(i, k) * tau[static_cast<std::size_t>(3 * i + k)].derivative.derivative;
-      hessian(a, b) = hessian(b, a) = sum;
-    }
-  return hessian;
-}
-
-namespace {
-void require_state(const PinTreeDynamics& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
-                   const Eigen::Ref<const Eigen::VectorXd>& qd, const Eigen::Ref<const Eigen::VectorXd>& qdd) {
-  const int n = tree.numJoints();
-  if (q.size() != n || qd.size() != n || qdd.size() != n)
-    throw std::invalid_argument("inverse dynamics derivatives: q, qd and qdd must have " + std::to_string(n) +
-                                " entries, not " + std::to_string(q.size()) + ", " + std::to_string(qd.size()) +
-                                " and " + std::to_string(qdd.size()));
-}
-// x = (q, qd, qdd) stacked by kind.
-double stacked(const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& qd,
-               const Eigen::Ref<const Eigen::VectorXd>& qdd, int k) {
-  const int n = static_cast<int>(q.size());
-  return k < n ? q[k] : k < 2 * n ? qd[k - n] : qdd[k - 2 * n];
-}
-}  // namespace
-
-Eigen::VectorXd PinTreeDynamics::inverseDynamicsJacobian(const Eigen::Ref<const Eigen::VectorXd>& q,
-                                                         const Eigen::Ref<const Eigen::VectorXd>& qd,
-                                                         const Eigen::Ref<const Eigen::VectorXd>& qdd,
-                                                         Eigen::MatrixXd& jacobian) const {
-  require_state(*this, q, qd, qdd);
-  using D = Dual<double>;
-  const int n = numJoints();
-  std::vector<D> x(static_cast<std::size_t>(3 * n)), tau(static_cast<std::size_t>(n));
-  ScratchOf<D> scratch;
-  jacobian.resize(n, 3 * n);
-  Eigen::VectorXd out(n);
-  for (int c = 0; c < 3 * n; ++c) {  // one pass per entry of x, its infinitesimal on that entry
-    for (int k = 0; k < 3 * n; ++k) x[static_cast<std::size_t>(k)] = D(stacked(q, qd, qdd, k), k == c ? 1.0 : 0.0);
-    inverseDynamicsOf<D>(scratch, x.data(), x.data() + n, x.data() + 2 * n, tau.data());
-    for (int i = 0; i < n; ++i) jacobian(i, c) = tau[static_cast<std::size_t>(i)].derivative;
-  }
-  for (int i = 0; i < n; ++i) out[i] = tau[static_cast<std::size_t>(i)].value;
-  return out;
-}
-
-Eigen::MatrixXd PinTreeDynamics::inverseDynamicsHessian(const Eigen::Ref<const Eigen::VectorXd>& q,
-                                                        const Eigen::Ref<const Eigen::VectorXd>& qd,
-                                                        const Eigen::Ref<const Eigen::VectorXd>& qdd,
-                                                        const Eigen::Ref<const Eigen::VectorXd>& w) const {
-  require_state(*this, q, qd, qdd);
-  const int n = numJoints();
-  if (w.size() != n)
-    throw std::invalid_argument("inverse dynamics Hessian: the weights must have " + std::to_string(n) + " entries");
-  using H = Dual<Dual<double>>;
-  std::vector<H> x(static_cast<std::size_t>(3 * n)), tau(static_cast<std::size_t>(n));
-  ScratchOf<H> scratch;
-  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  for (int a = 0; a < 3 * n; ++a)
-    for (int b = 0; b <= a; ++b) {
-      if (a >= 2 * n && b >= n) continue;  // qdd-qd and qdd-qdd: tau is linear in qdd
-      // x + e1 delta_a + e2 delta_b: the e1 e2 coefficient of tau is d2 tau / dx_a dx_b.
-      for (int k = 0; k < 3 * n; ++k)
-        x[static_cast<std::size_t>(k)] = H(Dual<double>(stacked(q, qd, qdd, k), k == a ? 1.0 : 0.0),
-                                           Dual<double>(k == b ? 1.0 : 0.0, 0.0));
-      inverseDynamicsOf<H>(scratch, x.data(), x.data() + n, x.data() + 2 * n, tau.data());
-      double sum = 0.0;
-      for (int i = 0; i < n; ++i) sum += w[i] * tau[static_cast<std::size_t>(i)].derivative.derivative;
-      hessian(a, b) = hessian(b, a) = sum;
-    }
-  return hessian;
-}
-
-template void PinTreeDynamics::inverseDynamicsOf<double>(ScratchOf<double>&, const double*, const double*, const double*,
-                                                         double*) const;
-template void PinTreeDynamics::inverseDynamicsOf<Dual<double>>(ScratchOf<Dual<double>>&, const Dual<double>*,
-                                                               const Dual<double>*, const Dual<double>*,
-                                                               Dual<double>*) const;
-template void PinTreeDynamics::inverseDynamicsOf<Dual<Dual<double>>>(ScratchOf<Dual<Dual<double>>>&,
-                                                                     const Dual<Dual<double>>*, const Dual<Dual<double>>*,
-                                                                     const Dual<Dual<double>>*, Dual<Dual<double>>*) const;
+// Every scalar type the tree is evaluated in: plain, dual numbers (Jacobians, Hessians) and time
+// jets of them (torque jets, their gradients and Hessians: pin_tree_derivatives.cpp).
+#define FLATSOS_INSTANTIATE_INVERSE_DYNAMICS(S) \
+  template void PinTreeDynamics::inverseDynamicsOf<S>(ScratchOf<S>&, const S*, const S*, const S*, S*) const;
+FLATSOS_INSTANTIATE_INVERSE_DYNAMICS(double)
+FLATSOS_INSTANTIATE_INVERSE_DYNAMICS(Dual<double>)
+FLATSOS_INSTANTIATE_INVERSE_DYNAMICS(Dual<Dual<double>>)
+FLATSOS_INSTANTIATE_INVERSE_DYNAMICS(TimeJet<double>)
+FLATSOS_INSTANTIATE_INVERSE_DYNAMICS(TimeJet<Dual<double>>)
+FLATSOS_INSTANTIATE_INVERSE_DYNAMICS(TimeJet<Dual<Dual<double>>>)
+#undef FLATSOS_INSTANTIATE_INVERSE_DYNAMICS
 
 }  // namespace flatsos::plugin

@@ -19,6 +19,16 @@ std::string item(const char* list, std::size_t i, const std::string& name) {
   return std::string(list) + "[" + std::to_string(i) + "] '" + name + "'";
 }
 
+// A muscle's moment arm about joint i, or for a slider its length's rate along it (m per m, at
+// most about 1 for a straight muscle), when implausibly large.
+bool implausible_arm(const ModelDescription& model, std::size_t i, double arm, const PlausibilityLimits& limits) {
+  return std::abs(arm) > (model.joints[i].isSlider() ? limits.slider_length_rate : limits.moment_arm_m);
+}
+const char* arm_unit(const ModelDescription& model, std::size_t i) { return model.joints[i].isSlider() ? "m per m" : "m"; }
+double arm_limit(const ModelDescription& model, std::size_t i, const PlausibilityLimits& limits) {
+  return model.joints[i].isSlider() ? limits.slider_length_rate : limits.moment_arm_m;
+}
+
 }  // namespace
 
 std::vector<std::string> plausibility_warnings(const ModelDescription& model, const PlausibilityLimits& limits) {
@@ -38,10 +48,12 @@ std::vector<std::string> plausibility_warnings(const ModelDescription& model, co
     const auto& m = model.muscles[j];
     const auto& p = m.parameters;
     const std::string at = item("muscles", j, p.name);
-    for (int i = 0; i < m.moment_arms_m.size() && i < model.numJoints(); ++i)
-      if (std::abs(m.moment_arms_m[i]) > limits.moment_arm_m)
-        warnings.push_back(above(at + ".moment_arms_m." + model.joints[static_cast<std::size_t>(i)].name,
-                                 std::abs(m.moment_arms_m[i]), limits.moment_arm_m, "m", "centimetres given as metres?"));
+    for (int i = 0; i < m.moment_arms_m.size() && i < model.numJoints(); ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (implausible_arm(model, k, m.moment_arms_m[i], limits))
+        warnings.push_back(above(at + ".moment_arms_m." + model.joints[k].name, std::abs(m.moment_arms_m[i]),
+                                 arm_limit(model, k, limits), arm_unit(model, k), "centimetres given as metres?"));
+    }
     if (m.polynomial_path) {
       // A path that depends on posture: judged at the middle of the joints' ranges.
       const muscles::MusculotendonPath path = model.musclePath(static_cast<int>(j));
@@ -50,9 +62,9 @@ std::vector<std::string> plausibility_warnings(const ModelDescription& model, co
         if (model.joints[i].hasRange()) q[i] = 0.5 * (model.joints[i].range_rad[0] + model.joints[i].range_rad[1]);
       path.momentArms(q.data(), r.data());
       for (std::size_t i = 0; i < r.size(); ++i)
-        if (std::abs(r[i]) > limits.moment_arm_m)
+        if (implausible_arm(model, i, r[i], limits))
           warnings.push_back(above(at + ".path: moment arm about " + model.joints[i].name + " at mid-range", std::abs(r[i]),
-                                   limits.moment_arm_m, "m", "centimetres given as metres?"));
+                                   arm_limit(model, i, limits), arm_unit(model, i), "centimetres given as metres?"));
       const double length = path.length(q.data());
       if (length > limits.musculotendon_length_m)
         warnings.push_back(above(at + ".path: length at mid-range", length, limits.musculotendon_length_m, "m",
@@ -77,13 +89,16 @@ std::vector<std::string> plausibility_warnings(const ModelDescription& model, co
 std::vector<std::string> joint_angle_warnings(const ModelDescription& model, const Eigen::VectorXd& q_rad,
                                               const std::string& what, const PlausibilityLimits& limits) {
   std::vector<std::string> warnings;
-  for (int i = 0; i < q_rad.size() && i < model.numJoints(); ++i)
-    if (std::abs(q_rad[i]) > limits.joint_angle_rad) {
-      std::ostringstream out;
-      out << what << '.' << model.joints[static_cast<std::size_t>(i)].name << ": " << q_rad[i]
-          << " rad is beyond one turn (degrees given as radians?)";
-      warnings.push_back(out.str());
-    }
+  for (int i = 0; i < q_rad.size() && i < model.numJoints(); ++i) {
+    const JointDescription& joint = model.joints[static_cast<std::size_t>(i)];
+    std::ostringstream out;
+    if (!joint.isSlider() && std::abs(q_rad[i]) > limits.joint_angle_rad)
+      out << what << '.' << joint.name << ": " << q_rad[i] << " rad is beyond one turn (degrees given as radians?)";
+    if (joint.isSlider() && std::abs(q_rad[i]) > limits.slider_translation_m)
+      out << what << '.' << joint.name << ": " << q_rad[i] << " m is beyond " << limits.slider_translation_m
+          << " m along the slider (millimetres or centimetres given as metres?)";
+    if (!out.str().empty()) warnings.push_back(out.str());
+  }
   return warnings;
 }
 

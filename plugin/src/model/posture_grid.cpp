@@ -6,10 +6,6 @@
 
 namespace flatsos::plugin {
 
-namespace {
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-}
-
 void for_each_posture(const ModelDescription& model, const std::vector<int>& joints, long budget,
                       const std::function<void(const Eigen::VectorXd&)>& visit) {
   const int k = static_cast<int>(joints.size());
@@ -32,7 +28,8 @@ std::string describe_posture(const ModelDescription& model, const std::vector<in
   std::string out;
   for (int i : joints) {
     if (!out.empty()) out += ", ";
-    out += model.joints[static_cast<std::size_t>(i)].name + " = " + std::to_string(q[i] * kDegPerRad) + " deg";
+    const JointDescription& joint = model.joints[static_cast<std::size_t>(i)];
+    out += joint.name + " = " + std::to_string(q[i] * joint.displayPerSI()) + " " + joint.displayUnit();
   }
   return out;
 }

@@ -154,6 +154,7 @@ struct RecedingHorizonRun {
   std::vector<std::string> failures;
   bool success() const { return failures.empty(); }
 };
+/// Settled: every pin within settle_tolerance_rad of the target, every slider within 1 mm.
 RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, const SimTK::State& initial,
                                         const plugin::ClosedLoopOptions& options,
                                         double settle_tolerance_rad = 3.14159265358979323846 / 180.0);

@@ -53,9 +53,10 @@ struct ClosedLoopResult {
 ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Controller& controller,
                                       const SimTK::State& initial, const ClosedLoopOptions& options);
 
-/// The first time of `states` (a make_state_table of `model`) from which every joint stays within
-/// `tolerance_rad` of `target_q_rad` until the end; -1 when the last row is outside.
+/// The first time of `states` (a make_state_table of `model`) from which every pin stays within
+/// `tolerance_rad` and every slider within `slider_tolerance_m` of `target_q_rad` until the end;
+/// -1 when the last row is outside.
 double settling_time(const MusculoskeletalModel& model, const StoTable& states, const Eigen::VectorXd& target_q_rad,
-                     double tolerance_rad);
+                     double tolerance_rad, double slider_tolerance_m = 1e-3);
 
 }  // namespace flatsos::plugin

@@ -1,6 +1,8 @@
 #pragma once
 // An OpenSim model and its fitted muscle paths reduced to a flatsos model: the kept coordinates
-// become pin joints about their own axes (exact for a joint that is one rotation), every other coordinate is held (in the kinematics and inside
+// become pin joints about their own axes (exact for a joint that is one rotation), or, when they
+// are translations, slider joints along them (a joint that is one translation at 1 m per m;
+// opensim_slider.hpp), every other coordinate is held (in the kinematics and inside
 // the path polynomials), bodies welded to ground are dropped and bodies beyond a kept joint are
 // lumped into its child, and every muscle whose fitted length depends on a kept coordinate is
 // brought along with its OpenSim parameters. What is approximated is measured and recorded in
@@ -19,11 +21,11 @@ namespace flatsos::plugin {
 
 struct OpenSimImportOptions {
   std::string name;               ///< the model's name; empty: the OpenSim model's
-  std::vector<std::string> keep;  ///< coordinates that become pin joints (at most one per joint)
+  std::vector<std::string> keep;  ///< coordinates that become pin or slider joints (at most one per joint)
   /// Values of coordinates that are not kept (rad, or m for translations); others are held at 0,
   /// and a coordinate coupled to another (CoordinateCouplerConstraint) follows it.
   std::map<std::string, double> hold;
-  /// Ranges of kept coordinates (rad), inside the OpenSim coordinate's own range; a kept
+  /// Ranges of kept coordinates (rad, or m for translations), inside the OpenSim coordinate's own range; a kept
   /// coordinate not listed keeps its OpenSim range.
   std::map<std::string, std::array<double, 2>> ranges;
   /// A muscle whose tendon is slack somewhere in the range (the fitted length does not exceed
@@ -42,7 +44,8 @@ struct OpenSimImport {
 
 /// Throws OpenSimModelError naming the coordinate, joint, muscle or value for: a kept or held
 /// coordinate the model does not have, one given twice or both kept and held, two kept
-/// coordinates of one joint, a kept translation or coupled coordinate, a held value or range outside the coordinate's range, a
+/// coordinates of one joint, a kept coupled coordinate, a kept translation whose joint does not slide 1 m per m
+/// along one direction, a held value or range outside the coordinate's range, a
 /// muscle that crosses a kept joint without a fitted path (or whose path names a coordinate the
 /// model lacks), a slack muscle with refuse_slack_muscles, no muscle left.
 OpenSimImport import_opensim_model(const OpenSimModel& osim, const std::vector<OpenSimPolynomialPath>& paths,

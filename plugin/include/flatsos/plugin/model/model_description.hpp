@@ -1,6 +1,6 @@
 #pragma once
-// A musculoskeletal model as data: bodies, pin joints, gravity, muscles with constant moment
-// arms, and the flat-output matrix E. Loaded from JSON (models/*.json) and validated whole:
+// A musculoskeletal model as data: bodies, pin and slider joints, gravity, muscles with constant
+// moment arms, and the flat-output matrix E. Loaded from JSON (models/*.json) and validated whole:
 // a bad file throws ModelFileError naming the field, never yields a half-built model.
 //
 // File format (SI units; see models/arm_richter_warner.json):
@@ -10,14 +10,18 @@
 //   "bodies": [{"name", "mass_kg", "mass_center_m": [x,y,z] (body frame, origin at its joint),
 //               "inertia_about_mass_center_kg_m2": Izz | [Ixx,Iyy,Izz] | [Ixx,Iyy,Izz,Ixy,Ixz,Iyz],
 //               "length_m" (optional, for drawing and chains)}],
-//   "joints": [{"name", "type": "pin", "parent": "ground" | body, "child": body,
-//               "location_in_parent_m": [x,y,z], "axis": [0,0,1] (optional),
+//   "joints": [{"name", "type": "pin" | "slider", "parent": "ground" | body, "child": body,
+//               "location_in_parent_m": [x,y,z],
+//               "axis": [x,y,z] (parent frame; a pin turns about it, optional, default [0,0,1];
+//               a slider translates along it, required),
 //               "coordinate": "elbow_flexion" (optional; default: the joint's name),
-//               "range_rad": [lower, upper] (optional; required for the joints of a muscle
+//               a pin: "range_rad": [lower, upper] (optional; required for the joints of a muscle
 //               whose moment arms change with posture),
 //               "limit_torque": {"stiffness_N_m_per_rad", "transition_rad",
 //                                "damping_N_m_s_per_rad" (optional, 0)} (optional; needs
-//               range_rad: a passive torque beyond the range, joint_limit.hpp)}],
+//               range_rad: a passive torque beyond the range, joint_limit.hpp);
+//               a slider: the same in metres and newtons: "range_m", "limit_force":
+//               {"stiffness_N_per_m", "transition_m", "damping_N_s_per_m"}}],
 //   "muscle_defaults": {any MuscleParameters field except the three below} (optional),
 //   "muscles": [{"name", "max_isometric_force_N", "optimal_fiber_length_m",
 //                "tendon_slack_length_m",
@@ -38,7 +42,9 @@
 //   "scenarios": {"<name>": {"q0_deg": [per joint], "qd0_deg_per_s": [per joint],
 //                            "activations": [per muscle], "target_deg": [per joint],
 //                            "duration_s", "reserves_N": one | [per muscle]}}  (optional; every
-//                 field optional: defaults for the programs, e.g. "open_loop", "receding_horizon")
+//                 field optional: defaults for the programs, e.g. "open_loop", "receding_horizon";
+//                 a slider's entries are in m and m/s, as OpenSim's inDegrees converts only
+//                 rotations)
 //   "provenance": {...}   (optional, free-form: where the model came from, e.g. what
 //                 opensim_to_model read and approximated; kept, not interpreted)
 // }
@@ -78,21 +84,49 @@ struct BodyDescription {
   double length_m = 0.0;  ///< 0 when not given
 };
 
+/// A pin turns its child about the axis (coordinate in rad); a slider translates it along the
+/// axis without turning it (coordinate in m). The child's frame is the parent's at coordinate 0,
+/// moved to location_in_parent_m.
+enum class JointType { Pin, Slider };
+
 struct JointDescription {
   std::string name;
+  JointType type = JointType::Pin;
   std::string parent;  ///< "ground" or a body name
   std::string child;
   Eigen::Vector3d location_in_parent_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit vector, parent frame
+  /// Unit vector, parent frame: a pin's rotation axis, a slider's direction of translation.
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   std::string coordinate;  ///< its coordinate's name (OpenSim's /jointset/<joint>/<coordinate>); empty: `name`
-  /// The range of motion [lower, upper] (rad); unbounded when not given.
+  /// The range of motion [lower, upper] in the coordinate's unit: rad for a pin, m for a slider
+  /// (coordinateUnit()); unbounded when not given.
   std::array<double, 2> range_rad{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   /// A passive torque beyond the range (joint_limit.hpp); off unless its stiffness is > 0, and
-  /// then the range must be given.
+  /// then the range must be given. A slider's is a force: its fields read N/m, m and N s/m.
   JointLimitTorque limit;
   const std::string& coordinateName() const { return coordinate.empty() ? name : coordinate; }
   bool hasRange() const { return std::isfinite(range_rad[0]) && std::isfinite(range_rad[1]); }
+  bool isSlider() const { return type == JointType::Slider; }
+  /// "rad" or "m": the unit of the coordinate, its range and its limit's transition.
+  const char* coordinateUnit() const { return isSlider() ? "m" : "rad"; }
+  /// People read a pin's coordinate in degrees and a slider's in metres: the factor from the
+  /// coordinate's SI value, and the unit's name ("deg" or "m").
+  double displayPerSI() const { return isSlider() ? 1.0 : 180.0 / 3.14159265358979323846; }
+  const char* displayUnit() const { return isSlider() ? "m" : "deg"; }
 };
+
+/// "pin" or "slider", as the model file names the type.
+const char* joint_type_name(JointType type);
+
+/// The model file's names of a joint's range and limit fields, which carry the units of its type.
+struct JointFieldNames {
+  const char* range;       ///< "range_rad" | "range_m"
+  const char* limit;       ///< "limit_torque" | "limit_force"
+  const char* stiffness;   ///< "stiffness_N_m_per_rad" | "stiffness_N_per_m"
+  const char* transition;  ///< "transition_rad" | "transition_m"
+  const char* damping;     ///< "damping_N_m_s_per_rad" | "damping_N_s_per_m"
+};
+const JointFieldNames& joint_field_names(JointType type);
 
 /// A muscle path as a polynomial of coordinates, as written in the file (OpenSim's
 /// MultivariatePolynomialFunction convention: see muscles/length_polynomial.hpp).

@@ -1,8 +1,10 @@
 #pragma once
-// A Simbody system built from a ModelDescription: a tree of Pin mobilizers with gravity, the
-// joints' limit torques (where the description gives them) and one
+// A Simbody system built from a ModelDescription: a tree of Pin and Slider mobilizers with
+// gravity, the joints' limit torques (where the description gives them) and one
 // HillMuscle per muscle. Vectors are in the description's order (joints = generalized
-// coordinates, muscles). Not copyable: Simbody subsystems refer to each other.
+// coordinates, muscles). Not copyable: Simbody subsystems refer to each other. "Angles" and
+// "torques" below are generalized: a slider's coordinate is in m (speed m/s) and its torque is a
+// force in N.
 //
 // Immutable once built and meant to be shared (std::shared_ptr<const MusculoskeletalModel>):
 // every const member is safe to call from several threads at once. Calculations that need
@@ -26,7 +28,8 @@
 
 namespace flatsos::plugin {
 
-/// A torque tau(t) (N m, a function of time) applied on one joint, e.g. a disturbance pulse.
+/// A torque tau(t) (N m, a function of time; N along a slider) applied on one joint, e.g. a
+/// disturbance pulse.
 struct ExternalJointTorque {
   int joint = -1;  ///< joint index (description order)
   std::shared_ptr<const ExcitationSignal> torque_N_m;

@@ -1,8 +1,10 @@
 #pragma once
-// Inverse dynamics of a model's tree of pin joints by the recursive Newton-Euler algorithm:
-// an outward pass for each body's angular velocity, angular acceleration and origin
-// acceleration, an inward pass summing the forces and moments each joint transmits, and each
-// joint's torque as the moment's component along its axis. The same tree, masses and frames that
+// Inverse dynamics of a model's tree of pin and slider joints by the recursive Newton-Euler
+// algorithm (Featherstone, Rigid Body Dynamics Algorithms, 2008, ch. 5): an outward pass for each
+// body's angular velocity, angular acceleration and origin acceleration, an inward pass summing
+// the forces and moments each joint transmits, and each joint's generalized force: a pin's torque
+// is the moment's component along its axis, a slider's force (N) the force's component along
+// its axis. The same tree, masses and frames that
 // MusculoskeletalModel builds in Simbody (tested against Simbody's inverse dynamics), but
 // evaluated in caller-owned scratch: no heap allocation per call, which the receding-horizon
 // controller needs (Simbody's calcResidualForceIgnoringConstraints allocates ~11 temporaries per
@@ -33,7 +35,7 @@ class PinTreeDynamics {
   struct ScratchOf {
     struct Body {
       Eigen::Matrix<S, 3, 3> rotation;             ///< body frame -> ground
-      Eigen::Matrix<S, 3, 1> origin_m, axis;       ///< joint position and axis in ground
+      Eigen::Matrix<S, 3, 1> origin_m, axis;       ///< body origin (a pin's joint position) and joint axis in ground
       Eigen::Matrix<S, 3, 1> angular_velocity, angular_acceleration, origin_acceleration;
       Eigen::Matrix<S, 3, 1> force_N, moment_N_m;  ///< transmitted through the joint (moment about the origin)
     };
@@ -110,6 +112,7 @@ class PinTreeDynamics {
  private:
   struct Joint {
     int parent = -1;                       ///< joint index of the parent body; -1: ground
+    bool slider = false;                   ///< translates along the axis instead of turning about it
     Eigen::Vector3d location_in_parent_m;  ///< joint origin in the parent's frame
     Eigen::Vector3d axis;                  ///< unit axis, parent frame (fixed in the child too)
     Eigen::Matrix3d axis_cross, axis_cross_squared;  ///< K (K v = axis x v) and K^2, for Rodrigues
@@ -119,6 +122,15 @@ class PinTreeDynamics {
     JointLimitTorque limit;
     std::array<double, 2> range_rad{};
   };
+  template <class S>
+  using BodyOf = typename ScratchOf<S>::Body;
+  /// A body's rotation, origin, axis, velocities and accelerations from its parent's (nullptr:
+  /// ground) and its joint's q, qd, qdd.
+  template <class S>
+  static void pinKinematicsOf(const Joint& j, const BodyOf<S>* parent, const S& q, const S& qd, const S& qdd, BodyOf<S>& b);
+  template <class S>
+  static void sliderKinematicsOf(const Joint& j, const BodyOf<S>* parent, const S& q, const S& qd, const S& qdd,
+                                 BodyOf<S>& b);
   template <class S>
   void rigidBodyTorquesOf(ScratchOf<S>& scratch, const S* q, const S* qd, const S* qdd, S* tau) const;
   bool has_limits_ = false;

@@ -27,6 +27,10 @@ struct PlausibilityLimits {
   double max_isometric_force_N = 2e4;
   double gravity_m_per_s2 = 30.0;
   double joint_angle_rad = 6.283185307179586;  ///< one turn
+  double slider_translation_m = 3.0;            ///< a slider's coordinate
+  /// A muscle's length change per metre a slider moves (its "moment arm" there, m per m): a
+  /// straight muscle changes at most 1 m per m.
+  double slider_length_rate = 1.5;
 };
 
 /// Implausible values of a model description, e.g.
@@ -34,7 +38,8 @@ struct PlausibilityLimits {
 std::vector<std::string> plausibility_warnings(const ModelDescription& model, const PlausibilityLimits& limits = {});
 
 /// Joint angles beyond one turn, e.g. "target joint angles.elbow: 90 rad is beyond one turn
-/// (degrees given as radians?)". `what` names the vector. Sizes are not checked here.
+/// (degrees given as radians?)", and slider coordinates beyond slider_translation_m. `what`
+/// names the vector. Sizes are not checked here.
 std::vector<std::string> joint_angle_warnings(const ModelDescription& model, const Eigen::VectorXd& q_rad,
                                               const std::string& what, const PlausibilityLimits& limits = {});
 

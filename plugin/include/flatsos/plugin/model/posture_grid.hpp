@@ -23,7 +23,8 @@ namespace flatsos::plugin {
 void for_each_posture(const ModelDescription& model, const std::vector<int>& joints, long budget,
                       const std::function<void(const Eigen::VectorXd& q_rad)>& visit);
 
-/// "elbow = 90.000000 deg, shoulder = 10.000000 deg" for the listed joints of q.
+/// "elbow = 90.000000 deg, shoulder = 10.000000 deg" for the listed joints of q (a slider's
+/// coordinate in m: "rail = 0.100000 m").
 std::string describe_posture(const ModelDescription& model, const std::vector<int>& joints, const Eigen::VectorXd& q_rad);
 /// The same for every joint of the model.
 std::string describe_posture(const ModelDescription& model, const Eigen::VectorXd& q_rad);
