@@ -40,6 +40,11 @@
 //   fibre floor  minimumFiberLength: OpenSim's clamp, max(SignificantReal, min_norm_active_fiber_length
 //            Lopt, h / sin(maximum_pennation_angle)) (0.01 Lopt without maximum pennation); the
 //            shared forward model holds the fibre there while it would shorten.
+// The damped fL is 0 below min_norm_active_fiber_length and above max_norm_active_fiber_length
+// (the seam expects f > 0): the forward model floors it as for every model, but the flatness
+// inverse has no finite activation there (invert_muscle gives a = +-inf, its rate, excitation
+// and gradients NaN, at stage Complete; the planner reports an activation outside [0, 1]).
+// From below, the fibre floor keeps the forward model out of that region.
 // Curves that depend on the configuration: OpenSim's muscle adjusts its fL minimum and fV end
 // slopes to damped or undamped (millard2012_muscle_curve_parameters); an instance is built for
 // one of them and validate() rejects a muscle whose fiber_damping is of the other kind.
