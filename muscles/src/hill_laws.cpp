@@ -53,7 +53,8 @@ struct ForceBalance {
   double z = 0.0;
   CurveJet velocity;           // V(z) and V'(z), per unit k
   double phi_z = 1.0;          // dPhi/dz
-  double shortening_velocity() const { return scale.value * velocity.value; }
+  bool fiber_held = false;     // at or below the model's minimum fibre length (u = 0)
+  double shortening_velocity() const { return fiber_held ? 0.0 : scale.value * velocity.value; }
 };
 
 double solve_damped_force_ratio(const MuscleParameters& p, const ForceBalance& r, double numerator_N) {
@@ -76,6 +77,9 @@ double solve_damped_force_ratio(const MuscleParameters& p, const ForceBalance& r
     if (value == 0.0) return z;
     (value < 0.0 ? lo : hi) = z;
     const double newton = z - value / (r.denominator - r.damping * r.scale.value * v.slope);
+    // A step below the tolerance has converged (it may land on z itself, which is not inside
+    // the bracket and would otherwise restart bisection from the far end).
+    if (std::abs(newton - z) <= 1e-15 * (1.0 + std::abs(z))) return newton;
     z = newton > lo && newton < hi ? newton : 0.5 * (lo + hi);
   }
   return z;
@@ -98,6 +102,12 @@ ForceBalance force_balance(const MuscleParameters& p, double tendon_force_N, dou
   r.z = r.damping == 0.0 ? numerator_N / r.denominator : solve_damped_force_ratio(p, r, numerator_N);
   r.velocity = p.model->fiberVelocityFromForceRatio(p, r.z);
   r.phi_z = r.denominator - r.damping * r.scale.value * r.velocity.slope;
+  // OpenSim's Millard clamp: a fibre below its minimum length, or at it and shortening, holds.
+  const double minimum_m = p.model->minimumFiberLength(p);
+  if (minimum_m > 0.0) {
+    const double length = r.geometry.length_m;
+    r.fiber_held = length < minimum_m || (length <= minimum_m && r.scale.value * r.velocity.value >= 0.0);
+  }
   return r;
 }
 }  // namespace
@@ -130,6 +140,7 @@ TendonLengthDerivativePartials tendon_length_derivative_partials(const MusclePar
   // Phi = den z - b k V(z) - (F / cos - Phi_P) (force_balance): dz = -dPhi / Phi_z.
   const CurveJet tendon = p.model->tendonForce(p, tendon_length_m);
   const ForceBalance r = force_balance(p, tendon.value, activation, musculotendon_length_m - tendon_length_m);
+  if (r.fiber_held) return {};  // dL_S/dt = dL/dt: only the path moves it
   const double c = r.cos_pennation, k = r.scale.value, u = r.shortening_velocity();
   const double dc_dx = r.cos_floored ? 0.0 : r.geometry.cos_pennation_d_along;
   const double dlength_dx = r.geometry.length_d_along;

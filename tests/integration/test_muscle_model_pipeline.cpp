@@ -1,8 +1,9 @@
 // A second muscle model through the whole pipeline. The 3-muscle elbow (models/elbow_1dof.json)
 // with every muscle switched to Thelen's (2003) laws at OpenSim's defaults is planned and
 // certified, executed by Simbody and controlled by the receding-horizon loop; the collocation
-// reference refuses its laws' slope jumps by name. With De Groote and Fregly's (2016) smooth laws
-// the collocation reference runs too. Planned and simulated motion agree only because
+// reference refuses its laws' slope jumps by name. OpenSim's damped Millard (2012) muscles execute
+// their open-loop plan too. With De Groote and Fregly's (2016) smooth laws the collocation
+// reference runs too. Planned and simulated motion agree only because
 // planner and plant read the same model's laws through the seam: the same plan on the default
 // model's plant misses.
 #include <gtest/gtest.h>
@@ -126,6 +127,24 @@ TEST(SecondMuscleModel, ADampedMusclePlanIsExecutedAsPlanned) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("fibre damping"), std::string::npos) << e.what();
   }
+}
+
+TEST(SecondMuscleModel, MillardsDampedMusclesExecuteTheOpenLoopPlan) {
+  // OpenSim's default Millard muscle (Bezier curves, fibre damping 0.1, a fibre-length floor):
+  // planned by the flatness inverse, executed by Simbody's damped force balance.
+  const Elbow millard(elbow("millard2012", true));
+  const fpl::OpenLoopOptions o = millard.openLoopOptions();
+  const fpl::MuscleState s0 = millard.rest(millard.scenario("open_loop"));
+  const fpl::OpenLoopPlan plan = fpl::plan_open_loop(millard.flat, s0, o);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  EXPECT_TRUE(plan.sos.certified);
+  const auto replay = flatsos::test::replay_open_loop(millard.flat, s0, plan, 1e-10, 0.005);
+  ASSERT_TRUE(replay.sim.finite) << replay.sim.message;
+  std::cout << "Millard elbow: cost " << plan.sos.cost_N_s << " N s; replayed within "
+            << replay.max_q_error_rad / deg(1) << " deg, activation " << replay.max_activation_error << ", tendon "
+            << replay.max_tendon_length_error_m << " m\n";
+  EXPECT_LT(replay.max_q_error_rad, deg(1e-5));
+  EXPECT_LT(replay.max_activation_error, 1e-6);
 }
 
 TEST(SecondMuscleModel, TheRecedingHorizonLoopReachesItsTarget) {

@@ -23,8 +23,8 @@ namespace {
 fm::MuscleParameters triceps() { return flatsos::test::example_triceps(); }
 
 // The same muscle with pennation (0.35 rad) and passive fibre force (e0 = 0.6); with fibre
-// damping; and as Thelen's muscle, whose maximum velocity scales with activation, alone and
-// pennated, passive and damped.
+// damping; as Thelen's muscle, whose maximum velocity scales with activation, alone and
+// pennated, passive and damped; and as OpenSim's default Millard muscle, alone and pennated.
 std::vector<fm::MuscleParameters> variants() {
   fm::MuscleParameters pennated = triceps();
   pennated.name = "triceps, pennated with passive force";
@@ -41,7 +41,15 @@ std::vector<fm::MuscleParameters> variants() {
   thelen_all.name = "triceps, Thelen 2003, pennated, passive and damped";
   thelen_all.pennation_angle_at_optimal_rad = 0.35;
   thelen_all.fiber_damping = 0.05;
-  return {triceps(), pennated, damped, thelen, thelen_all};
+  // OpenSim's default Millard muscle: Bezier curves, damped, a fibre-length floor; and pennated.
+  fm::MuscleParameters millard = triceps();
+  millard.name = "triceps, Millard 2012";
+  millard.model = fm::muscle_model_named("millard2012");
+  millard.model->setDefaults(millard);
+  fm::MuscleParameters millard_pennated = millard;
+  millard_pennated.name = "triceps, Millard 2012, pennated";
+  millard_pennated.pennation_angle_at_optimal_rad = 0.35;
+  return {triceps(), pennated, damped, thelen, thelen_all, millard, millard_pennated};
 }
 
 struct Sample {

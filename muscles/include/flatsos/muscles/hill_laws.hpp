@@ -109,7 +109,8 @@ double force_ratio(const MuscleParameters& p, double tendon_force_N, double acti
                    double along_tendon_m);
 
 /// Fibre shortening velocity u = k(a) g^-1(z) along the fibre, of the forward model (safe
-/// extension included).
+/// extension included); 0 while the fibre is held at the model's minimum length
+/// (MuscleModel::minimumFiberLength: below it, or at it with u >= 0).
 double fiber_shortening_velocity(const MuscleParameters& p, double tendon_force_N,
                                  double activation, double along_tendon_m);
 

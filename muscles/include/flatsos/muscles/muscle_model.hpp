@@ -72,6 +72,10 @@ class MuscleModel {
   virtual std::string slopeJumps() const = 0;
   /// The least excitation the muscle accepts (its control's lower bound); the upper is 1.
   virtual double minimumExcitation(const MuscleParameters&) const { return 0.0; }
+  /// The fibre length (m) the forward model does not let the fibre shorten below (OpenSim's
+  /// Millard muscle clamps its fibre there): a fibre below it, or at it and shortening, holds its
+  /// length (u = 0) and the tendon takes the path's motion. 0: no such floor.
+  virtual double minimumFiberLength(const MuscleParameters&) const { return 0.0; }
 
   // ---- Tendon: force from its length (0 at slack; below slack 0, or a model's small
   // compression), and the inverse for forces > 0.
@@ -113,7 +117,8 @@ class MuscleModel {
                                                         double activation_rate_per_s) const = 0;
 };
 
-/// The model a model file names ("richter_warner", "thelen2003", "degroote_fregly2016"); throws
+/// The model a model file names ("richter_warner", "thelen2003", "degroote_fregly2016",
+/// "millard2012": OpenSim's default damped Millard muscle); throws
 /// std::invalid_argument listing the known names for any other.
 std::shared_ptr<const MuscleModel> muscle_model_named(const std::string& name);
 /// The names muscle_model_named accepts.
