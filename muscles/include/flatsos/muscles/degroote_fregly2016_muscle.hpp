@@ -26,8 +26,8 @@
 //   activation da/dt = [(f + 1/2) / (T_act s) + (1/2 - f) s / T_deact] (n - a), s = 1/2 + 3/2 a,
 //            f = tanh(b (n - a)) / 2: the switch between Thelen's two time constants smoothed.
 // Not as OpenSim: the forward model's inverse of g continues linearly outside OpenSim's domain
-// v in [-1, 1] (g in [0, 1.794]) where sinh would grow exponentially; fibre damping is not
-// modelled (OpenSim's default is 0).
+// v in [-1, 1] (g in [0, 1.794]) where sinh would grow exponentially. Fibre damping is the
+// seam's (MuscleParameters::fiber_damping, OpenSim's form; its default is 0).
 
 #include "flatsos/muscles/muscle_model.hpp"
 
