@@ -128,8 +128,10 @@ void GeometryPathEvaluator::compute(const OpenSimCoordinateValues& q, Workspace&
     w.poses[b] = bodies_[b] == "ground" ? Eigen::Isometry3d::Identity() : opensim_body_in_ground(model_, bodies_[b], q);
   w.path.clear();
   w.surfaces.resize(wraps_.size());
+  w.seen.resize(wraps_.size());
+  w.seen_set.assign(wraps_.size(), {false, false});
   if (add_active_points(q, w)) apply_wraps(w, surfaces);
-  w.length = path_length(w.path);
+  w.length = w.path_length();
 }
 
 void GeometryPathEvaluator::apply_wraps(Workspace& w, bool surfaces) const {
@@ -150,7 +152,7 @@ void GeometryPathEvaluator::apply_wraps(Workspace& w, bool surfaces) const {
       if (!wraps_[w.order[i]].object->active) continue;
       if (!apply_one_wrap(w.order[i], w, surfaces, w.results[i])) return;  // OpenSim abandons all wraps
     }
-    const double length = path_length(w.path);
+    const double length = w.path_length();
     if (std::abs(length - last_length) < 0.0005) break;
     last_length = length;
     if (pass == 0 && count > 1 && w.results[0] == WrapAction::NoWrap && w.results[1] == WrapAction::InsideRadius) {
@@ -202,7 +204,9 @@ bool GeometryPathEvaluator::apply_one_wrap(int k, Workspace& w, bool surfaces, W
     }
     if (r.action != WrapAction::Wrapped) continue;
     const Eigen::Vector3d r1 = w.poses[info.body] * r.r1, r2 = w.poses[info.body] * r.r2;
-    const double change = (p1.ground - r1).norm() + r.surface_length_m + (p2.ground - r2).norm() - (p1.ground - p2.ground).norm();
+    const Eigen::Vector3d& g1 = w.ground_as_seen(p1);
+    const Eigen::Vector3d& g2 = w.ground_as_seen(p2);
+    const double change = (g1 - r1).norm() + r.surface_length_m + (g2 - r2).norm() - (g1 - g2).norm();
     if (change < least_change) {
       best = r, insert_at = a + 1, least_change = change;
       if (surfaces) w.surfaces[k] = w.scratch;

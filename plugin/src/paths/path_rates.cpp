@@ -3,6 +3,8 @@
 // point also along its functions; the moment arm sums the unit segment directions' work over
 // segments joining different bodies (GeometryPath::produceForces), the speed over all segments
 // (Point::calcSpeedBetween). Coincident points (OpenSim: NaN) add nothing here.
+// Segment directions use the ground locations OpenSim's caches hold, the points' motion their
+// current places (as OpenSim applies forces at getLocation and maps them by its Jacobian).
 
 #include <algorithm>
 
@@ -19,7 +21,7 @@ double value_of(const OpenSimCoordinateValues& q, const std::string& name) {
 
 }  // namespace
 
-double GeometryPathEvaluator::rate_along_path(const OpenSimCoordinateValues& q, const Workspace& w, const std::string& coordinate,
+double GeometryPathEvaluator::rate_along_path(const OpenSimCoordinateValues& q, Workspace& w, const std::string& coordinate,
                                               bool all_segments) const {
   // Each body's angular velocity and origin velocity (in ground) per unit rate of the coordinate.
   auto pose_of = [&](const std::string& body) -> const Eigen::Isometry3d& {
@@ -49,7 +51,8 @@ double GeometryPathEvaluator::rate_along_path(const OpenSimCoordinateValues& q, 
     const Node& a = w.path[i - 1];
     const Node& b = w.path[i];
     if (!all_segments && a.body == b.body) continue;
-    const Eigen::Vector3d d = b.ground - a.ground;
+    // Directions from the ground locations OpenSim has cached (see Workspace::ground_as_seen).
+    const Eigen::Vector3d d = w.ground_as_seen(b) - w.ground_as_seen(a);
     const double length = d.norm();
     if (!(length > 0.0)) continue;
     rate += d.dot(node_rate(b) - node_rate(a)) / length;

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace flatsos::plugin::wrap_math {
 

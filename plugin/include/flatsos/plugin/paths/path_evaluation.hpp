@@ -82,7 +82,7 @@ class GeometryPathEvaluator {
   bool add_active_points(const OpenSimCoordinateValues& q, Workspace& w) const;
   void apply_wraps(Workspace& w, bool surfaces) const;
   bool apply_one_wrap(int k, Workspace& w, bool surfaces, WrapAction& last_result) const;
-  double rate_along_path(const OpenSimCoordinateValues& q, const Workspace& w, const std::string& coordinate, bool all_segments) const;
+  double rate_along_path(const OpenSimCoordinateValues& q, Workspace& w, const std::string& coordinate, bool all_segments) const;
 };
 
 }  // namespace flatsos::plugin
