@@ -90,42 +90,51 @@ std::vector<std::string> GeometryPathEvaluator::coordinates() const {
   return out;
 }
 
+Eigen::Vector3d GeometryPathEvaluator::point_location(int i, const OpenSimCoordinateValues& q, Eigen::Vector3d* rate) const {
+  const OpenSimPathPoint& p = path_.points[i];
+  if (p.kind != OpenSimPathPointKind::Moving) return p.frame_in_body * p.location_m;
+  // OpenSim clamps the coordinate to its range for the place, not for the rate.
+  double x = 0.0, unclamped = 0.0;
+  if (!p.coordinate.empty()) {
+    const auto& range = model_.coordinate(p.coordinate)->range;
+    unclamped = value_of(q, p.coordinate);
+    x = std::clamp(unclamped, range[0], range[1]);
+  }
+  Eigen::Vector3d location, local_rate = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    location[k] = p.moving_location[k].value(x);
+    if (!p.coordinate.empty()) local_rate[k] = p.moving_location[k].derivative(unclamped);
+  }
+  if (rate) *rate = p.frame_in_body.linear() * local_rate;
+  return p.frame_in_body * location;
+}
+
 bool GeometryPathEvaluator::add_active_points(const OpenSimCoordinateValues& q, Workspace& w) const {
   for (std::size_t i = 0; i < path_.points.size(); ++i) {
     const OpenSimPathPoint& p = path_.points[i];
-    Node node;
-    node.body = point_body_[i];
-    node.point = static_cast<int>(i);
-    Eigen::Vector3d location = p.location_m;
     if (p.kind == OpenSimPathPointKind::Conditional) {
       if (p.coordinate.empty()) continue;
       const double v = value_of(q, p.coordinate);
       if (!(v >= p.active_range[0] - 1e-5 && v <= p.active_range[1] + 1e-5)) continue;
-    } else if (p.kind == OpenSimPathPointKind::Moving) {
-      double x = 0.0, unclamped = 0.0;
-      if (!p.coordinate.empty()) {
-        const auto& range = model_.coordinate(p.coordinate)->range;
-        unclamped = value_of(q, p.coordinate);
-        x = std::clamp(unclamped, range[0], range[1]);
-      }
-      Eigen::Vector3d rate = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 3; ++k) {
-        location[k] = p.moving_location[k].value(x);
-        if (!p.coordinate.empty()) rate[k] = p.moving_location[k].derivative(unclamped);
-      }
-      node.moving_rate_local = p.frame_in_body.linear() * rate;
     }
-    node.local = p.frame_in_body * location;
+    Node node;
+    node.body = point_body_[i];
+    node.point = static_cast<int>(i);
+    node.local = point_location(static_cast<int>(i), q, &node.moving_rate_local);
     node.ground = w.poses[node.body] * node.local;
     w.path.push_back(node);
   }
   return w.path.size() >= 2;
 }
 
-void GeometryPathEvaluator::compute(const OpenSimCoordinateValues& q, Workspace& w, bool surfaces) const {
-  w.poses.resize(bodies_.size());
+void GeometryPathEvaluator::body_poses(const OpenSimCoordinateValues& q, std::vector<Eigen::Isometry3d>& poses) const {
+  poses.resize(bodies_.size());
   for (std::size_t b = 0; b < bodies_.size(); ++b)
-    w.poses[b] = bodies_[b] == "ground" ? Eigen::Isometry3d::Identity() : opensim_body_in_ground(model_, bodies_[b], q);
+    poses[b] = bodies_[b] == "ground" ? Eigen::Isometry3d::Identity() : opensim_body_in_ground(model_, bodies_[b], q);
+}
+
+void GeometryPathEvaluator::compute(const OpenSimCoordinateValues& q, Workspace& w, bool surfaces) const {
+  body_poses(q, w.poses);
   w.path.clear();
   w.surfaces.resize(wraps_.size());
   w.seen.resize(wraps_.size());

@@ -81,4 +81,22 @@ double GeometryPathEvaluator::lengtheningSpeed(const OpenSimCoordinateValues& q,
   return speed;
 }
 
+double GeometryPathEvaluator::lengthWithPathHeld(const OpenSimCoordinateValues& q_path, const OpenSimCoordinateValues& q) const {
+  Workspace w;
+  compute(q_path, w, false);
+  std::vector<Eigen::Isometry3d> poses;
+  body_poses(q, poses);
+  auto place = [&](const Node& n) {
+    const Eigen::Vector3d local = n.point >= 0 ? point_location(n.point, q, nullptr) : n.local;
+    return Eigen::Vector3d(poses[n.body] * local);
+  };
+  double length = 0.0;
+  for (std::size_t i = 1; i < w.path.size(); ++i) {
+    const Node& a = w.path[i - 1];
+    const Node& b = w.path[i];
+    length += a.object >= 0 && a.object == b.object ? b.surface_length : (place(b) - place(a)).norm();
+  }
+  return length;
+}
+
 }  // namespace flatsos::plugin

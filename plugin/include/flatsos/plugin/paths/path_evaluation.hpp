@@ -62,6 +62,11 @@ class GeometryPathEvaluator {
   /// dL/dt (m/s) for coordinate speeds qdot (those not listed are 0), as OpenSim sums the
   /// speeds between consecutive points.
   double lengtheningSpeed(const OpenSimCoordinateValues& q, const OpenSimCoordinateValues& qdot) const;
+  /// The length at q of the path as built at q_path: its points, tangent points included, held
+  /// in their bodies (moving points moving with their coordinate), the surface lengths kept.
+  /// For a path whose tangent points OpenSim sees where they are (see path_workspace.hpp; all
+  /// paths with one PathWrap), momentArm(q_path, c) is minus its derivative in c at q_path.
+  double lengthWithPathHeld(const OpenSimCoordinateValues& q_path, const OpenSimCoordinateValues& q) const;
 
  private:
   struct Node;       // a path point or tangent point while the path is built
@@ -78,6 +83,8 @@ class GeometryPathEvaluator {
   std::vector<WrapInfo> wraps_;
 
   int body_index(const std::string& body, const std::string& where);
+  Eigen::Vector3d point_location(int i, const OpenSimCoordinateValues& q, Eigen::Vector3d* rate) const;
+  void body_poses(const OpenSimCoordinateValues& q, std::vector<Eigen::Isometry3d>& poses) const;
   void compute(const OpenSimCoordinateValues& q, Workspace& w, bool surfaces) const;
   bool add_active_points(const OpenSimCoordinateValues& q, Workspace& w) const;
   void apply_wraps(Workspace& w, bool surfaces) const;
