@@ -1,6 +1,6 @@
-// opensim_to_model: a flatsos model (JSON) from an OpenSim model (.osim) and its fitted muscle
-// paths (a FunctionBasedPathSet, OpenSim 4.5+): kept coordinates become pin joints, the others
-// are held; see plugin/io/opensim_import.hpp.
+// opensim_to_model: a flatsos model (JSON) from an OpenSim model (.osim), its muscle paths fitted
+// to the model's GeometryPaths or read from a FunctionBasedPathSet (OpenSim 4.5+): kept
+// coordinates become pin or slider joints, the others are held; see plugin/io/opensim_import.hpp.
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
@@ -43,7 +43,10 @@ double number(const std::string& text, const std::string& option) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"A flatsos model from an OpenSim model and its fitted muscle paths.\n"
+  CLI::App app{"A flatsos model from an OpenSim model (.osim).\n"
+               "Muscle lengths are polynomials of the kept coordinates fitted to the model's GeometryPaths (via points, "
+               "wrapping) over the kept ranges, as OpenSim's PolynomialPathFitter fits them, each muscle's error reported; "
+               "--paths uses a FunctionBasedPathSet instead.\n"
                "The pelvis (the root body) is welded to ground; every kept coordinate becomes a pin joint about its OpenSim axis (exact for a joint that is one rotation), "
                "with OpenSim's name, sign and range; every other coordinate is held at its --hold value or 0, in the "
                "kinematics and inside the path polynomials (a coordinate coupled to another follows it). Bodies beyond a "
@@ -54,7 +57,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> keep, hold, ranges;
   bool refuse_slack = false;
   app.add_option("--osim", osim, "OpenSim model file (.osim)")->required();
-  app.add_option("--paths", paths_file, "OpenSim FunctionBasedPathSet file (fitted muscle lengths)")->required();
+  app.add_option("--paths", paths_file,
+                 "OpenSim FunctionBasedPathSet file (fitted muscle lengths) to use instead of fitting the model's GeometryPaths");
   app.add_option("--keep", keep,
                  "a coordinate that becomes a pin joint (a translation: a slider joint; repeat for more; at most one per joint)")
       ->required();
@@ -77,7 +81,7 @@ int main(int argc, char** argv) {
     options.refuse_slack_muscles = refuse_slack;
     // File names only: a model must not point into the machine it was made on.
     options.osim_source = std::filesystem::path(osim).filename().string();
-    options.paths_source = std::filesystem::path(paths_file).filename().string();
+    if (!paths_file.empty()) options.paths_source = std::filesystem::path(paths_file).filename().string();
     try {
       for (const std::string& h : hold) {
         const auto [coordinate, value] = split_assignment(h, "--hold");
@@ -100,7 +104,9 @@ int main(int argc, char** argv) {
       std::cerr << "opensim_to_model: " << e.what() << "\n";
       return 2;
     }
-    const fp::OpenSimImport imported = fp::import_opensim_model(model, fp::read_opensim_function_based_paths(paths_file), options);
+    const fp::OpenSimImport imported =
+        paths_file.empty() ? fp::import_opensim_model(model, fp::read_opensim_geometry_paths(osim), options)
+                           : fp::import_opensim_model(model, fp::read_opensim_function_based_paths(paths_file), options);
     nlohmann::json document = nlohmann::json::parse(fp::model_json_text(imported.model));
     if (!scenarios_file.empty()) {
       std::ifstream in(scenarios_file);

@@ -39,4 +39,8 @@ expect 0 "1 joint(s), 2 muscles, 1 bodies" -- "$convert" "${args[@]}" --keep kne
 grep -q '"coordinate": "knee_angle"' "$tmp/m.json" || { echo "FAILED: the model lacks the kept coordinate"; fail=1; }
 grep -q '"osim": "knee.osim"' "$tmp/m.json" || { echo "FAILED: the provenance lacks the source (by file name)"; fail=1; }
 expect 0 "plan solved" -- "$ol" --model "$tmp/m.json" --q0-deg -80 --target-deg -20 --duration-s 1 --out "$tmp/ol"
+# Without --paths the muscle paths are fitted to the model's GeometryPaths, each fit reported.
+arm26="$(dirname "${BASH_SOURCE[0]}")/../../models/opensim/arm26/arm26.osim"
+expect 0 "path of BRA fitted (order" -- "$convert" --osim "$arm26" --keep r_elbow_flex --hold r_shoulder_elev=0 --range r_elbow_flex=10:120 --out "$tmp/arm26.json"
+grep -q '"path_fit"' "$tmp/arm26.json" || { echo "FAILED: the provenance lacks the path fit"; fail=1; }
 exit $fail

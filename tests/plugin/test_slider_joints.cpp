@@ -488,7 +488,7 @@ TEST(SliderImport, TugOfWarsSliderIsReadAndItsUnfittedMusclesAreRefusedByName) {
   fp::OpenSimImportOptions o;
   o.keep = {"block_tz"};
   try {
-    fp::import_opensim_model(osim, {}, o);
+    fp::import_opensim_model(osim, std::vector<fp::OpenSimPolynomialPath>{}, o);
     ADD_FAILURE() << "muscles without fitted paths were accepted";
   } catch (const fp::OpenSimModelError& e) {
     const std::string what = e.what();

@@ -153,8 +153,14 @@ class Importer {
     model_.name = options_.name.empty() ? osim_.name : options_.name;
     model_.gravity_m_per_s2 = osim_.gravity_m_per_s2;
     provenance_ = {{"generator", "opensim_to_model (flatsos)"},
-                   {"sources", {{"osim", options_.osim_source}, {"function_based_paths", options_.paths_source}}},
+                   {"sources", {{"osim", options_.osim_source}}},
                    {"opensim_model", osim_.name}};
+    if (options_.path_fit_json.empty()) {
+      provenance_["sources"]["function_based_paths"] = options_.paths_source;
+    } else {
+      provenance_["sources"]["paths"] = "the osim's GeometryPaths, fitted";
+      provenance_["path_fit"] = json::parse(options_.path_fit_json);
+    }
     if (!osim_.credits.empty()) provenance_["opensim_credits"] = osim_.credits;
   }
 
@@ -406,8 +412,12 @@ class Importer {
         "other types (Millard2012EquilibriumMuscle) with OpenSim's maximum isometric force, optimal fibre length, "
         "tendon slack length, pennation, maximum contraction velocity and curve strains and flatsos' Hill laws in place "
         "of their curves",
-        "muscle lengths: OpenSim's fitted polynomials (FunctionBasedPath) with held coordinates inserted, trusted only inside "
-        "the ranges where they were fitted"};
+        options_.path_fit_json.empty()
+            ? "muscle lengths: OpenSim's fitted polynomials (FunctionBasedPath) with held coordinates inserted, trusted only "
+              "inside the ranges where they were fitted"
+            : "muscle lengths: polynomials of the kept coordinates fitted to the GeometryPaths (via points, wrapping) over the "
+              "kept ranges with the other coordinates held, as OpenSim's PolynomialPathFitter fits; path_fit gives each "
+              "muscle's length and moment-arm errors (m) between the fitting samples"};
     provenance_["left_out_muscles"] = left_out_;
     provenance_["moment_arm_ranges_mm"] = moment_arms_;
     provenance_["notes"] = out_.notes;

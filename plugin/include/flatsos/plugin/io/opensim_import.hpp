@@ -16,6 +16,7 @@
 #include "flatsos/plugin/io/opensim_model.hpp"
 #include "flatsos/plugin/io/opensim_paths.hpp"
 #include "flatsos/plugin/model/model_description.hpp"
+#include "flatsos/plugin/paths/geometry_path.hpp"
 
 namespace flatsos::plugin {
 
@@ -33,6 +34,8 @@ struct OpenSimImportOptions {
   bool refuse_slack_muscles = false;
   std::string osim_source, paths_source;  ///< file names, for the provenance
   long slack_check_postures = 20000;      ///< postures per muscle for the slack check
+  /// Set by the GeometryPath overload: the fit's report as JSON (provenance "path_fit").
+  std::string path_fit_json;
 };
 
 struct OpenSimImport {
@@ -49,6 +52,13 @@ struct OpenSimImport {
 /// muscle that crosses a kept joint without a fitted path (or whose path names a coordinate the
 /// model lacks), a slack muscle with refuse_slack_muscles, no muscle left.
 OpenSimImport import_opensim_model(const OpenSimModel& osim, const std::vector<OpenSimPolynomialPath>& paths,
+                                   const OpenSimImportOptions& options);
+
+/// The same from the model's own GeometryPaths: each muscle's length is fitted by a polynomial
+/// of the kept coordinates over their ranges, the others held (polynomial_path_fit.hpp); the
+/// fit's errors per muscle go into the provenance ("path_fit") and the notes. Throws as above
+/// and as fit_polynomial_paths does.
+OpenSimImport import_opensim_model(const OpenSimModel& osim, const OpenSimGeometryPaths& geometry,
                                    const OpenSimImportOptions& options);
 
 }  // namespace flatsos::plugin
