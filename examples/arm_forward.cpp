@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   std::vector<double> q0_deg, qd0_deg_per_s, a0, ls0;
   bool equilibrate = false;
   double duration = 1.0, accuracy = 1e-8, report_interval = 0.01;
-  app.add_option("--model", model_path, "model file (JSON)")->capture_default_str();
+  app.add_option("--model", model_path, "model file (JSON), or an OpenSim model (.osim) imported on the way")->capture_default_str();
   app.add_option("--q0-deg", q0_deg, "initial joint angles, deg (a slider's in m; default 0)")->delimiter(',');
   app.add_option("--qd0-deg-per-s", qd0_deg_per_s, "initial joint speeds, deg/s (a slider's in m/s; default 0)")->delimiter(',');
   app.add_option("--a0", a0, "initial activations (default 0.05 each)")->delimiter(',');
@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
-    const auto model = fp::MusculoskeletalModel::fromFile(model_path);
+    const auto model = ex::load_model(model_path, "arm_forward");
     const int n = model->numJoints(), m = model->numMuscles();
     try {
       require_count_if_given(q0_deg, n, "--q0-deg");

@@ -5,6 +5,10 @@
 #include <iostream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
+#include "flatsos/plugin/io/model_file.hpp"
+
 namespace flatsos::examples {
 
 Eigen::VectorXd to_vector(const std::vector<double>& v) {
@@ -302,6 +306,17 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program) {
+  auto model = plugin::MusculoskeletalModel::fromFile(path);
+  if (plugin::is_opensim_model_file(path)) {
+    const auto provenance = nlohmann::json::parse(model->description().provenance_json);
+    std::cout << program << ": imported " << path << ": " << model->numJoints() << " joint(s), " << model->numMuscles()
+              << " muscles\n";
+    for (const auto& note : provenance.value("notes", nlohmann::json::array())) std::cout << "  " << note.get<std::string>() << "\n";
+  }
+  return model;
 }
 
 }  // namespace flatsos::examples

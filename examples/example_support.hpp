@@ -78,4 +78,8 @@ void write_json(const std::string& path, const nlohmann::json& j);
 
 double median(std::vector<double> v);
 
+/// The model a program is given: a model file (JSON), or an OpenSim model (.osim) imported on
+/// the way with its own settings, the import's notes printed as "<program>: import: ...".
+std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program);
+
 }  // namespace flatsos::examples

@@ -43,4 +43,8 @@ expect 0 "plan solved" -- "$ol" --model "$tmp/m.json" --q0-deg -80 --target-deg 
 arm26="$(dirname "${BASH_SOURCE[0]}")/../../models/opensim/arm26/arm26.osim"
 expect 0 "path of BRA fitted (order" -- "$convert" --osim "$arm26" --keep r_elbow_flex --hold r_shoulder_elev=0 --range r_elbow_flex=10:120 --out "$tmp/arm26.json"
 grep -q '"path_fit"' "$tmp/arm26.json" || { echo "FAILED: the provenance lacks the path fit"; fail=1; }
+# An .osim where a model is expected is imported on the way, with the import's report.
+tug="$(dirname "${BASH_SOURCE[0]}")/../../models/opensim/Tug_of_War_Millard.osim"
+expect 0 "range of block_tz narrowed" -- "$ol" --model "$tug" --q0-deg 0 --target-deg 0.05 --duration-s 1 --out "$tmp/tug"
+grep -q '"status": "solved"' "$tmp/tug/summary.json" || { echo "FAILED: the block's 5 cm plan was not solved"; fail=1; }
 exit $fail

@@ -1,5 +1,6 @@
 #include "flatsos/plugin/io/model_file.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -9,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "flatsos/muscles/muscle_model.hpp"
+#include "flatsos/plugin/io/opensim_import.hpp"
 #include "model_file_fields.hpp"
 
 namespace flatsos::plugin {
@@ -419,7 +421,16 @@ ModelDescription parse_model_json(const std::string& json_text, const std::strin
   return model;
 }
 
+bool is_opensim_model_file(const std::string& path) {
+  const std::string suffix = ".osim";
+  if (path.size() < suffix.size()) return false;
+  for (std::size_t i = 0; i < suffix.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(path[path.size() - suffix.size() + i])) != suffix[i]) return false;
+  return true;
+}
+
 ModelDescription load_model_file(const std::string& path) {
+  if (is_opensim_model_file(path)) return import_opensim_file(path).model;
   std::ifstream in(path);
   if (!in) throw ModelFileError("model file '" + path + "': cannot be opened");
   std::ostringstream text;

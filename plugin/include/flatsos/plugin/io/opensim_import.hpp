@@ -61,4 +61,11 @@ OpenSimImport import_opensim_model(const OpenSimModel& osim, const std::vector<O
 OpenSimImport import_opensim_model(const OpenSimModel& osim, const OpenSimGeometryPaths& geometry,
                                    const OpenSimImportOptions& options);
 
+/// An .osim file as a user downloads it, imported with OpenSim's own settings: every coordinate
+/// that is not locked, not driven by a coupler and the only free one of its joint is kept, with
+/// OpenSim's range; the others are held at their default values (noted); the muscle paths are
+/// fitted to the GeometryPaths. Throws as the reader and the importer do, and OpenSimModelError
+/// when no coordinate can be kept (naming the joints with several, which need --keep).
+OpenSimImport import_opensim_file(const std::string& osim_file);
+
 }  // namespace flatsos::plugin
