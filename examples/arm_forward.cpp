@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "default_model.hpp"
+#include "flatsos/plugin/io/initial_states.hpp"
 #include "example_support.hpp"
 #include "flatsos/plugin/io/excitation_file.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -36,13 +37,23 @@ int main(int argc, char** argv) {
   bool equilibrate = false;
   double duration = 1.0, accuracy = 1e-8, report_interval = 0.01;
   app.add_option("--model", model_path, "model file (JSON), or an OpenSim model (.osim) imported on the way")->capture_default_str();
+  ex::OpenSimModelOptions osim_options;
+  ex::add_opensim_model_options(app, osim_options);
   app.add_option("--q0-deg", q0_deg, "initial joint angles, deg (a slider's in m; default 0)")->delimiter(',');
   app.add_option("--qd0-deg-per-s", qd0_deg_per_s, "initial joint speeds, deg/s (a slider's in m/s; default 0)")->delimiter(',');
   app.add_option("--a0", a0, "initial activations (default 0.05 each)")->delimiter(',');
   auto* ls_opt = app.add_option("--ls0-m", ls0, "initial tendon lengths, m, one per muscle (required unless --equilibrate-tendons)")
                      ->delimiter(',');
-  app.add_flag("--equilibrate-tendons", equilibrate,
-               "start tendons at static equilibrium for a0 at q0 (required unless --ls0-m)")->excludes(ls_opt);
+  auto* equilibrate_opt = app.add_flag("--equilibrate-tendons", equilibrate,
+                                       "start tendons at static equilibrium for a0 at q0 (required unless --ls0-m)")
+                              ->excludes(ls_opt);
+  std::string initial_states_path;
+  app.add_option("--initial-states", initial_states_path,
+                 "a states file (.sto, OpenSim 3 or 4 columns) whose first row is the initial state, as OpenSim's "
+                 "forward tool takes it; what it lacks comes from the options above, a missing fibre length from "
+                 "static equilibrium")
+      ->excludes(ls_opt)
+      ->excludes(equilibrate_opt);
   app.add_option("--excitations", excitation_path,
                  "excitations over time: a controls .sto (OpenSim/Moco: time, /forceset/<muscle>, ...) or a CSV "
                  "(time,<muscle>,...); linear interpolation, held after the last row; default: excitation = "
@@ -62,15 +73,15 @@ int main(int argc, char** argv) {
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
-    const auto model = ex::load_model(model_path, "arm_forward");
+    const auto model = ex::load_model(model_path, "arm_forward", osim_options);
     const int n = model->numJoints(), m = model->numMuscles();
     try {
       require_count_if_given(q0_deg, n, "--q0-deg");
       require_count_if_given(qd0_deg_per_s, n, "--qd0-deg-per-s");
       require_count_if_given(a0, m, "--a0");
       require_count_if_given(ls0, m, "--ls0-m");
-      if (ls0.empty() && !equilibrate)
-        throw CLI::ValidationError("--ls0-m", "give initial tendon lengths or --equilibrate-tendons");
+      if (ls0.empty() && !equilibrate && initial_states_path.empty())
+        throw CLI::ValidationError("--ls0-m", "give initial tendon lengths, --equilibrate-tendons or --initial-states");
     } catch (const CLI::Error& e) {
       std::cerr << "arm_forward: " << e.what() << "\n" << app.help();
       return 2;
@@ -83,7 +94,11 @@ int main(int argc, char** argv) {
     model->setJointAngles(s, q0);
     model->setJointSpeeds(s, qd0_deg_per_s.empty() ? Eigen::VectorXd::Zero(n) : ex::from_display(description, ex::to_vector(qd0_deg_per_s)));
     const Eigen::VectorXd a = a0.empty() ? Eigen::VectorXd::Constant(m, 0.05) : ex::to_vector(a0);
-    if (equilibrate) {
+    if (!initial_states_path.empty()) {
+      model->setActivations(s, a);
+      for (const std::string& note : fp::set_initial_states(*model, s, fp::read_sto(initial_states_path), initial_states_path))
+        std::cout << "arm_forward: initial states: " << note << "\n";
+    } else if (equilibrate) {
       fp::equilibrate_tendons(*model, s, a);
     } else {
       model->setActivations(s, a);

@@ -39,6 +39,8 @@ int main(int argc, char** argv) {
   CLI::Option_group* study_group =
       app.add_option_group("Study", "second opinions and tuning of the planner's stages (their defaults are the product's)");
   app.add_option("--model", model_path, "model file (JSON), or an OpenSim model (.osim) imported on the way")->capture_default_str();
+  ex::OpenSimModelOptions osim_options;
+  ex::add_opensim_model_options(app, osim_options);
   ex::add_scenario_options(app, given, "open_loop", true, 3.0, 10.0);
   app.add_option("--pieces", options.torque.pieces,
                  "torque-model pieces K (1 with --degree 0: the paper's box; 0: as many as the flat outputs' spans, "
@@ -128,7 +130,7 @@ int main(int argc, char** argv) {
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
-    const auto model = ex::load_model(model_path, "arm_open_loop");
+    const auto model = ex::load_model(model_path, "arm_open_loop", osim_options);
     const fpl::FlatOutputMap flat(model);
     const int m = model->numMuscles();
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "open_loop", given, 3.0, 10.0);

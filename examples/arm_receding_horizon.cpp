@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
   double accuracy = 0.0;  // 0: the integrator's default below
   fpl::RecedingHorizonControllerOptions options;
   app.add_option("--model", model_path, "model file (JSON), or an OpenSim model (.osim) imported on the way")->capture_default_str();
+  ex::OpenSimModelOptions osim_options;
+  ex::add_opensim_model_options(app, osim_options);
   ex::add_scenario_options(app, given, "receding_horizon", false, 2.0, 1.0);
   app.add_option("--horizon-s", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--grid-points", options.plan.grid_points, "torque-box grid points over the horizon")
@@ -83,7 +85,7 @@ int main(int argc, char** argv) {
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
-    const auto model = ex::load_model(model_path, "arm_receding_horizon");
+    const auto model = ex::load_model(model_path, "arm_receding_horizon", osim_options);
     const fpl::FlatOutputMap flat(model);
     const int n = model->numJoints();
     if (paper && app.count("--observer-gain-per-s") == 0) options.disturbance_observer_gain_per_s = 0.0;

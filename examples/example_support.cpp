@@ -5,9 +5,8 @@
 #include <iostream>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
-
 #include "flatsos/plugin/io/model_file.hpp"
+#include "flatsos/plugin/io/opensim_import.hpp"
 
 namespace flatsos::examples {
 
@@ -308,15 +307,30 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program) {
-  auto model = plugin::MusculoskeletalModel::fromFile(path);
-  if (plugin::is_opensim_model_file(path)) {
-    const auto provenance = nlohmann::json::parse(model->description().provenance_json);
-    std::cout << program << ": imported " << path << ": " << model->numJoints() << " joint(s), " << model->numMuscles()
-              << " muscles\n";
-    for (const auto& note : provenance.value("notes", nlohmann::json::array())) std::cout << "  " << note.get<std::string>() << "\n";
-  }
-  return model;
+std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program,
+                                                               const OpenSimModelOptions& options) {
+  const bool osim = plugin::is_opensim_model_file(path);
+  if (!osim && (options.paths == "geometry" || options.opensim_2_muscles))
+    throw std::invalid_argument(std::string(options.opensim_2_muscles ? "--opensim-2-muscles" : "--paths geometry") +
+                                ": the model must be an OpenSim model (.osim), not '" + path + "'");
+  if (!osim) return plugin::MusculoskeletalModel::fromFile(path);
+  const plugin::OpenSimImport imported =
+      plugin::import_opensim_file(path, options.paths == "geometry", options.opensim_2_muscles);
+  std::cout << program << ": imported " << path << ": " << imported.model.numJoints() << " joint(s), "
+            << imported.model.numMuscles() << " muscles\n";
+  for (const std::string& note : imported.notes) std::cout << "  " << note << "\n";
+  return std::make_shared<const plugin::MusculoskeletalModel>(imported.model);
+}
+
+void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim) {
+  app.add_option("--paths", osim.paths,
+                 "muscle paths in simulation: fitted (the polynomials the plans use) or geometry (an .osim's "
+                 "GeometryPaths with via points and wrapping, as OpenSim simulates them)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"fitted", "geometry"}));
+  app.add_flag("--opensim-2-muscles", osim.opensim_2_muscles,
+               "an .osim's Thelen2003Muscles as OpenSim 2.x modelled them (to reproduce results of that time; "
+               "OpenSim 4's model otherwise)");
 }
 
 }  // namespace flatsos::examples

@@ -78,8 +78,19 @@ void write_json(const std::string& path, const nlohmann::json& j);
 
 double median(std::vector<double> v);
 
+/// How a program reads an OpenSim model: which paths its simulation uses ("fitted", the
+/// polynomials plans use, or "geometry", the GeometryPaths) and whether its Thelen muscles are
+/// OpenSim 2.x's.
+struct OpenSimModelOptions {
+  std::string paths = "fitted";
+  bool opensim_2_muscles = false;
+};
 /// The model a program is given: a model file (JSON), or an OpenSim model (.osim) imported on
-/// the way with its own settings, the import's notes printed as "<program>: import: ...".
-std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program);
+/// the way with its own settings, the import's notes printed. std::invalid_argument when
+/// `osim` asks for what a JSON model cannot give.
+std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program,
+                                                               const OpenSimModelOptions& osim = {});
+/// Adds --paths (fitted | geometry) and --opensim-2-muscles to a program.
+void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim);
 
 }  // namespace flatsos::examples

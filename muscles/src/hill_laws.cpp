@@ -54,7 +54,12 @@ struct ForceBalance {
   CurveJet velocity;           // V(z) and V'(z), per unit k
   double phi_z = 1.0;          // dPhi/dz
   bool fiber_held = false;     // at or below the model's minimum fibre length (u = 0)
-  double shortening_velocity() const { return fiber_held ? 0.0 : scale.value * velocity.value; }
+  bool own_law = false;        // the model's own velocity law gave `own` (MuscleModel::hasOwnVelocityLaw)
+  OwnFiberVelocity own;
+  double shortening_velocity() const {
+    if (own_law) return own.shortening_m_per_s;
+    return fiber_held ? 0.0 : scale.value * velocity.value;
+  }
 };
 
 double solve_damped_force_ratio(const MuscleParameters& p, const ForceBalance& r, double numerator_N) {
@@ -99,6 +104,11 @@ ForceBalance force_balance(const MuscleParameters& p, double tendon_force_N, dou
   if (p.model->scalesMaxVelocityWithActivation()) r.scale = p.model->maxVelocityScale(p, a_eff);
   r.damping = p.fiber_damping * p.max_isometric_force_N / p.max_shortening_velocity_m_per_s();
   const double numerator_N = tendon_force_N / r.cos_pennation - r.passive.value;
+  if (p.model->hasOwnVelocityLaw()) {
+    r.own_law = true;
+    r.own = p.model->ownFiberVelocity(p, activation, r.geometry.length_m, numerator_N);
+    return r;
+  }
   r.z = r.damping == 0.0 ? numerator_N / r.denominator : solve_damped_force_ratio(p, r, numerator_N);
   r.velocity = p.model->fiberVelocityFromForceRatio(p, r.z);
   r.phi_z = r.denominator - r.damping * r.scale.value * r.velocity.slope;
@@ -109,6 +119,18 @@ ForceBalance force_balance(const MuscleParameters& p, double tendon_force_N, dou
     r.fiber_held = length < minimum_m || (length <= minimum_m && r.scale.value * r.velocity.value >= 0.0);
   }
   return r;
+}
+// dL_S/dt = u / cos(x) + dL/dt with u = U(A, a, L_M) the model's own law, A = F(L_S) / cos(x) -
+// Phi_P(L_M(x)), x = L - L_S.
+TendonLengthDerivativePartials own_law_partials(const ForceBalance& r, const CurveJet& tendon) {
+  const double c = r.cos_pennation, u = r.own.shortening_m_per_s;
+  const double dc_dx = r.cos_floored ? 0.0 : r.geometry.cos_pennation_d_along;
+  const double dlength_dx = r.geometry.length_d_along;
+  const double dA_dx = -tendon.value * dc_dx / (c * c) - r.passive.slope * dlength_dx;
+  const double du_dx = r.own.d_fiber_force * dA_dx + r.own.d_fiber_length * dlength_dx;
+  const double dw_dx = du_dx / c - u * dc_dx / (c * c);
+  const double du_dtendon_direct = r.own.d_fiber_force * tendon.slope / c;
+  return {du_dtendon_direct / c - dw_dx, r.own.d_activation / c, dw_dx};
 }
 }  // namespace
 
@@ -140,6 +162,7 @@ TendonLengthDerivativePartials tendon_length_derivative_partials(const MusclePar
   // Phi = den z - b k V(z) - (F / cos - Phi_P) (force_balance): dz = -dPhi / Phi_z.
   const CurveJet tendon = p.model->tendonForce(p, tendon_length_m);
   const ForceBalance r = force_balance(p, tendon.value, activation, musculotendon_length_m - tendon_length_m);
+  if (r.own_law) return own_law_partials(r, tendon);
   if (r.fiber_held) return {};  // dL_S/dt = dL/dt: only the path moves it
   const double c = r.cos_pennation, k = r.scale.value, u = r.shortening_velocity();
   const double dc_dx = r.cos_floored ? 0.0 : r.geometry.cos_pennation_d_along;

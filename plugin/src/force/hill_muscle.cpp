@@ -77,21 +77,32 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   double length(const SimTK::State& s) const {
     double x[fm::LengthPolynomial::kMaxDimension];
     arguments(s, x);
-    return path_.length_m.value(x);
+    return path_.geometry ? path_.geometry->length_m(x) : path_.length_m.value(x);
+  }
+  // Moment arms about every argument (held ones 0): the geometry's, or -dL/dx of the polynomial.
+  void momentArms(const SimTK::State& s, double* arms) const {
+    double x[fm::LengthPolynomial::kMaxDimension];
+    arguments(s, x);
+    if (path_.geometry) path_.geometry->momentArms(x, arms);
+    for (std::size_t k = 0; k < path_.arguments.size(); ++k) {
+      if (path_.arguments[k].mobilizer.isEmptyHandle()) arms[k] = 0.0;
+      else if (!path_.geometry) arms[k] = -gradient_[k].value(x);
+    }
   }
   double momentArm(const SimTK::State& s, int k) const {
-    if (path_.arguments[static_cast<std::size_t>(k)].mobilizer.isEmptyHandle()) return 0.0;
-    double x[fm::LengthPolynomial::kMaxDimension];
-    arguments(s, x);
-    return -gradient_[static_cast<std::size_t>(k)].value(x);
+    double arms[fm::LengthPolynomial::kMaxDimension];
+    momentArms(s, arms);
+    return arms[k];
   }
+  // dL/dt: the length's own rate (the tendon length is L minus the fibre's share along it).
   double lengtheningRate(const SimTK::State& s) const {
-    double x[fm::LengthPolynomial::kMaxDimension];
+    double x[fm::LengthPolynomial::kMaxDimension], gradient[fm::LengthPolynomial::kMaxDimension];
     arguments(s, x);
+    if (path_.geometry) path_.geometry->lengthGradient(x, gradient);
     double ldot = 0.0;
     for (std::size_t k = 0; k < path_.arguments.size(); ++k)
       if (!path_.arguments[k].mobilizer.isEmptyHandle())
-        ldot += gradient_[k].value(x) * path_.arguments[k].mobilizer.getOneU(s, 0);
+        ldot += (path_.geometry ? gradient[k] : gradient_[k].value(x)) * path_.arguments[k].mobilizer.getOneU(s, 0);
     return ldot;
   }
 
@@ -117,11 +128,11 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>&,
                  SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector& mobility_forces) const override {
     const double f = fm::tendon_force(p_, tendonLength(s));
-    double x[fm::LengthPolynomial::kMaxDimension];
-    arguments(s, x);
+    double arms[fm::LengthPolynomial::kMaxDimension];
+    momentArms(s, arms);
     for (std::size_t k = 0; k < path_.arguments.size(); ++k)
       if (!path_.arguments[k].mobilizer.isEmptyHandle())
-        path_.arguments[k].mobilizer.applyOneMobilityForce(s, 0, -gradient_[k].value(x) * f, mobility_forces);
+        path_.arguments[k].mobilizer.applyOneMobilityForce(s, 0, arms[k] * f, mobility_forces);
   }
   // The tendon stores energy, but the muscle-tendon unit is dissipative and its states are
   // first-order: no potential energy is reported to the multibody system.

@@ -3,10 +3,12 @@
 
 #include <filesystem>
 #include <map>
+#include <memory>
 
 #include <nlohmann/json.hpp>
 
 #include "flatsos/plugin/io/opensim_import.hpp"
+#include "flatsos/plugin/paths/opensim_path_geometry.hpp"
 #include "flatsos/plugin/paths/polynomial_path_fit.hpp"
 #include "opensim_range_narrowing.hpp"
 #include "opensim_reduction.hpp"
@@ -74,14 +76,21 @@ void narrow_ranges(const OpenSimModel& osim, const OpenSimGeometryPaths& geometr
 
 }  // namespace
 
-OpenSimImport import_opensim_file(const std::string& osim_file) {
-  const OpenSimModel osim = read_opensim_model(osim_file);
+OpenSimImport import_opensim_file(const std::string& osim_file, bool simulate_geometry, bool opensim_2_muscles) {
+  const auto shared_osim = std::make_shared<const OpenSimModel>(read_opensim_model(osim_file));
+  const OpenSimModel& osim = *shared_osim;
   std::vector<std::string> notes;
   OpenSimImportOptions options = default_options(osim, notes);
   options.osim_source = std::filesystem::path(osim_file).filename().string();
-  const OpenSimGeometryPaths geometry = read_opensim_geometry_paths(osim_file);
+  options.opensim_2_muscles = opensim_2_muscles;
+  const auto shared_geometry = std::make_shared<const OpenSimGeometryPaths>(read_opensim_geometry_paths(osim_file));
+  const OpenSimGeometryPaths& geometry = *shared_geometry;
   narrow_ranges(osim, geometry, options, notes);
   OpenSimImport imported = import_opensim_model(osim, geometry, options);
+  if (simulate_geometry) {
+    attach_geometry_paths(imported.model, shared_osim, shared_geometry, options.hold);
+    notes.push_back("simulation uses the GeometryPaths (via points, wrapping) as OpenSim does; planning the fitted paths");
+  }
   imported.notes.insert(imported.notes.begin(), notes.begin(), notes.end());
   nlohmann::json provenance = nlohmann::json::parse(imported.model.provenance_json);
   provenance["notes"] = imported.notes;

@@ -352,7 +352,7 @@ class Importer {
 
   MuscleDescription muscleOf(const OpenSimMuscle& m, const PolynomialPathDescription& path) {
     MuscleDescription md;
-    md.parameters = opensim_import::muscle_parameters_of(m, out_.notes);
+    md.parameters = opensim_import::muscle_parameters_of(m, out_.notes, options_.opensim_2_muscles);
     md.polynomial_path = path;
     return md;
   }
@@ -418,6 +418,8 @@ class Importer {
             : "muscle lengths: polynomials of the kept coordinates fitted to the GeometryPaths (via points, wrapping) over the "
               "kept ranges with the other coordinates held, as OpenSim's PolynomialPathFitter fits; path_fit gives each "
               "muscle's length and moment-arm errors (m) between the fitting samples"};
+    if (options_.opensim_2_muscles)
+      provenance_["opensim_2_muscles"] = "Thelen2003Muscle as OpenSim 2.x modelled it (muscle model thelen2003_opensim2)";
     provenance_["left_out_muscles"] = left_out_;
     provenance_["moment_arm_ranges_mm"] = moment_arms_;
     provenance_["notes"] = out_.notes;

@@ -6,6 +6,7 @@
 #include "flatsos/muscles/degroote_fregly2016_muscle.hpp"
 #include "flatsos/muscles/muscle_model.hpp"
 #include "flatsos/muscles/thelen2003_muscle.hpp"
+#include "flatsos/muscles/thelen2003_opensim2_muscle.hpp"
 #include "opensim_reduction.hpp"
 
 namespace flatsos::plugin::opensim_import {
@@ -46,6 +47,25 @@ void take_thelen(const OpenSimMuscle& m, muscles::MuscleParameters& p, std::vect
                     " read as OpenSim's default 0.95 (flatsos' Thelen model fixes it)");
 }
 
+// OpenSim 2.x's Thelen reads the same curve properties as OpenSim 4's, "damping" for its fibre
+// damping, and has no minimum activation.
+void take_thelen_opensim2(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
+  take(m, "FmaxTendonStrain", p.tendon_strain_at_max_force);
+  take(m, "FmaxMuscleStrain", p.passive_fiber_strain_at_one_norm_force);
+  double kshape_active = p.force_length_width * p.force_length_width;
+  take(m, "KshapeActive", kshape_active);
+  if (!(kshape_active > 0.0)) fail("muscle '" + m.name + "': KshapeActive = " + fixed(kshape_active, 4) + " must be > 0");
+  p.force_length_width = std::sqrt(kshape_active);
+  take(m, "KshapePassive", p.passive_force_length_shape);
+  take(m, "Af", p.hill_constant);
+  take(m, "Flen", p.max_eccentric_force_ratio);
+  take(m, "damping", p.fiber_damping);
+  take(m, "Vmax", p.max_shortening_velocity_in_optimal_lengths_per_s);
+  if (const auto v0 = m.properties.find("Vmax0");
+      v0 != m.properties.end() && v0->second != muscles::Thelen2003OpenSim2Muscle::kMaxVelocityAtRestInOptimalLengthsPerS)
+    fail("muscle '" + m.name + "': Vmax0 = " + fixed(v0->second, 4) + " (flatsos' OpenSim 2.x Thelen model fixes it at 5)");
+}
+
 void take_degroote(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
   take(m, "tendon_strain_at_one_norm_force", p.tendon_strain_at_max_force);
   take(m, "active_force_width_scale", p.force_length_width);
@@ -71,9 +91,15 @@ void take_other(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
 
 }  // namespace
 
-muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vector<std::string>& notes) {
+muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vector<std::string>& notes,
+                                               bool opensim_2_muscles) {
   muscles::MuscleParameters p;
-  if (m.type == "Thelen2003Muscle") {
+  if (m.type == "Thelen2003Muscle" && opensim_2_muscles) {
+    p.model = muscles::muscle_model_named(muscles::Thelen2003OpenSim2Muscle::kName);
+    p.model->setDefaults(p);
+    take_common(m, p);
+    take_thelen_opensim2(m, p);
+  } else if (m.type == "Thelen2003Muscle") {
     p.model = muscles::muscle_model_named(muscles::Thelen2003Muscle::kName);
     p.model->setDefaults(p);
     take_common(m, p);

@@ -104,6 +104,7 @@ MusculoskeletalModel::MusculoskeletalModel(ModelDescription description, std::ve
     const muscles::MusculotendonPath& mp = paths_.back();
     MusclePath path;
     path.length_m = mp.lengthPolynomial();
+    path.geometry = description_.muscles[static_cast<std::size_t>(j)].path_geometry;
     for (const muscles::PathCoordinate& c : mp.coordinates())
       path.arguments.push_back(c.held() ? PathArgument{SimTK::MobilizedBody(), c.held_value_rad}
                                         : PathArgument{joints_[static_cast<std::size_t>(c.joint)], 0.0});

@@ -53,6 +53,14 @@ struct ExcitationBoundMargins {
   double upper_d_activation = 0.0, upper_d_rate_s = 0.0;
 };
 
+/// A fibre velocity from a model's own law, with its partial derivatives.
+struct OwnFiberVelocity {
+  double shortening_m_per_s = 0.0;
+  double d_fiber_force = 0.0;  ///< per N of A = F / cos - Phi_P, m/s/N
+  double d_activation = 0.0;   ///< m/s
+  double d_fiber_length = 0.0; ///< 1/s
+};
+
 class MuscleModel {
  public:
   virtual ~MuscleModel() = default;
@@ -108,6 +116,15 @@ class MuscleModel {
   virtual CurveJet maxVelocityScale(const MuscleParameters&, double /*activation*/) const { return {1.0, 0.0, 0.0}; }
   /// True when maxVelocityScale is not 1 at every activation.
   virtual bool scalesMaxVelocityWithActivation() const { return false; }
+  /// A model whose fibre velocity follows a law of its own instead of the shared balance
+  /// a Fmax f g(u / k) + D(u) = A (OpenSim 2.x's Thelen, whose damping and velocity floor enter
+  /// every denominator): the shortening velocity from the raw activation, the fibre length and
+  /// A = F / cos - Phi_P. The shared laws above then serve planning only (the simulation is not
+  /// the plan's model exactly).
+  virtual bool hasOwnVelocityLaw() const { return false; }
+  /// Throws std::logic_error unless hasOwnVelocityLaw().
+  virtual OwnFiberVelocity ownFiberVelocity(const MuscleParameters& p, double activation, double fiber_length_m,
+                                            double fiber_force_N) const;
 
   // ---- Activation dynamics.
   virtual ActivationRate activationRate(const MuscleParameters& p, double excitation, double activation) const = 0;

@@ -28,6 +28,7 @@
 #include "flatsos/muscles/length_polynomial.hpp"
 #include "flatsos/muscles/muscle_parameters.hpp"
 #include "flatsos/plugin/force/excitation_signal.hpp"
+#include "flatsos/plugin/model/path_geometry.hpp"
 
 namespace flatsos::plugin {
 
@@ -48,6 +49,9 @@ struct PathArgument {
 struct MusclePath {
   muscles::LengthPolynomial length_m;  ///< dimension = arguments.size()
   std::vector<PathArgument> arguments;
+  /// When set, the length and moment arms come from it instead of the polynomial (same
+  /// arguments; path_geometry.hpp).
+  std::shared_ptr<const PathGeometry> geometry;
   /// L(q) = l0 - sum_i d_i q_i (an order-1 polynomial).
   static MusclePath constantMomentArms(double length_at_zero_angles_m, const std::vector<MomentArm>& moment_arms);
 };

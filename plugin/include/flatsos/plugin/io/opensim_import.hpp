@@ -34,6 +34,9 @@ struct OpenSimImportOptions {
   bool refuse_slack_muscles = false;
   std::string osim_source, paths_source;  ///< file names, for the provenance
   long slack_check_postures = 20000;      ///< postures per muscle for the slack check
+  /// Thelen2003Muscle as OpenSim 2.x modelled it (thelen2003_opensim2), to reproduce results of
+  /// that time; OpenSim 4's model otherwise.
+  bool opensim_2_muscles = false;
   /// Set by the GeometryPath overload: the fit's report as JSON (provenance "path_fit").
   std::string path_fit_json;
 };
@@ -66,6 +69,9 @@ OpenSimImport import_opensim_model(const OpenSimModel& osim, const OpenSimGeomet
 /// OpenSim's range; the others are held at their default values (noted); the muscle paths are
 /// fitted to the GeometryPaths. Throws as the reader and the importer do, and OpenSimModelError
 /// when no coordinate can be kept (naming the joints with several, which need --keep).
-OpenSimImport import_opensim_file(const std::string& osim_file);
+/// With simulate_geometry, each muscle also carries its GeometryPath for simulation
+/// (MuscleDescription::path_geometry; planning keeps the fitted polynomials).
+OpenSimImport import_opensim_file(const std::string& osim_file, bool simulate_geometry = false,
+                                  bool opensim_2_muscles = false);
 
 }  // namespace flatsos::plugin

@@ -57,6 +57,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -67,6 +68,7 @@
 #include "flatsos/muscles/muscle_parameters.hpp"
 #include "flatsos/muscles/musculotendon_path.hpp"
 #include "flatsos/plugin/model/joint_limit.hpp"
+#include "flatsos/plugin/model/path_geometry.hpp"
 
 namespace flatsos::plugin {
 
@@ -146,6 +148,9 @@ struct MuscleDescription {
   Eigen::VectorXd moment_arms_m;         ///< d_i per joint (joint order), N entries
   /// A path that depends on posture (instead of the two fields above, which stay 0 and empty).
   std::optional<PolynomialPathDescription> polynomial_path;
+  /// Simulation only, never in a model file: the path's geometry to simulate with instead of the
+  /// polynomial (path_geometry.hpp; set by an .osim import asked for geometry paths).
+  std::shared_ptr<const PathGeometry> path_geometry;
 };
 
 struct FlatOutputDescription {
