@@ -404,8 +404,7 @@ class Importer {
     provenance_["approximations"] = {
         "each kept coordinate is a pin about the axis it turns fastest at the reference posture (kept coordinates 0), "
         "through the point its bodies best turn about: exact for a joint that is one rotation (pins.*.exact, "
-        "pins.*.joint_point_error_m); a "
-        "CustomJoint's other motions with that coordinate (the walker knee's translations and small rotations) are "
+        "pins.*.joint_point_error_m); a CustomJoint's other motions with that coordinate (the walker knee's translations and small rotations) are "
         "dropped, and pins.*.mass_center_error_m measures the effect",
         "bodies that follow a kept coordinate through a coupler are lumped where they are at the reference posture",
         "muscles: Thelen2003Muscle and DeGrooteFregly2016Muscle as OpenSim models them, with the file's properties; "
@@ -418,8 +417,7 @@ class Importer {
             : "muscle lengths: polynomials of the kept coordinates fitted to the GeometryPaths (via points, wrapping) over the "
               "kept ranges with the other coordinates held, as OpenSim's PolynomialPathFitter fits; path_fit gives each "
               "muscle's length and moment-arm errors (m) between the fitting samples"};
-    if (options_.opensim_2_muscles)
-      provenance_["opensim_2_muscles"] = "Thelen2003Muscle as OpenSim 2.x modelled it (muscle model thelen2003_opensim2)";
+    if (options_.opensim_2_muscles) provenance_["opensim_2_muscles"] = "Thelen2003Muscle as OpenSim 2.x modelled it";
     provenance_["left_out_muscles"] = left_out_;
     provenance_["moment_arm_ranges_mm"] = moment_arms_;
     provenance_["notes"] = out_.notes;
