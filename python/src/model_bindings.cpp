@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "flatsos/plugin/io/model_file.hpp"
+#include "flatsos/plugin/io/opensim_import.hpp"
 
 namespace py = pybind11;
 
@@ -19,9 +20,18 @@ Model with_flat_outputs(std::shared_ptr<const plugin::MusculoskeletalModel> mode
   return out;
 }
 
-Model load(const std::string& path) {
-  py::gil_scoped_release release;  // the flat-output choice may take a second
-  return with_flat_outputs(plugin::MusculoskeletalModel::fromFile(path));
+// A model file, or an OpenSim model imported with its own settings (what the programs' --model,
+// --paths and --opensim-2-muscles do).
+Model load(const std::string& path, const std::string& paths, bool opensim_2_muscles) {
+  if (paths != "fitted" && paths != "geometry") throw py::value_error("paths: 'fitted' or 'geometry', not '" + paths + "'");
+  const bool osim = plugin::is_opensim_model_file(path);
+  if (!osim && (paths == "geometry" || opensim_2_muscles))
+    throw py::value_error(std::string(opensim_2_muscles ? "opensim_2_muscles" : "paths='geometry'") +
+                          ": the model must be an OpenSim model (.osim), not '" + path + "'");
+  py::gil_scoped_release release;  // the import and the flat-output choice may take seconds
+  if (!osim) return with_flat_outputs(plugin::MusculoskeletalModel::fromFile(path));
+  return with_flat_outputs(std::make_shared<const plugin::MusculoskeletalModel>(
+      plugin::import_opensim_file(path, paths == "geometry", opensim_2_muscles).model));
 }
 
 Model from_json(const std::string& text, const std::string& source) {
@@ -69,9 +79,12 @@ py::tuple body_frames(const Model& self, const py::object& q) {
 }  // namespace
 
 void register_model(py::module_& m) {
-  py::class_<Model>(m, "Model", "A flatsos model file (JSON): its joints, muscles and flat-output map.")
-      .def(py::init(&load), py::arg("path"),
-           "Loads the model file; a bad file, or flat outputs that violate Assumption 1, raise ValueError.")
+  py::class_<Model>(m, "Model", "A flatsos model (a JSON model file or an OpenSim .osim): its joints, muscles and flat-output map.")
+      .def(py::init(&load), py::arg("path"), py::kw_only(), py::arg("paths") = "fitted",
+           py::arg("opensim_2_muscles") = false,
+           "Loads the model file, or imports an OpenSim model (.osim) with its own settings: paths='geometry' "
+           "simulates its GeometryPaths (plans use the fitted ones), opensim_2_muscles its Thelen muscles as "
+           "OpenSim 2.x modelled them. A bad file, or flat outputs that violate Assumption 1, raise ValueError.")
       .def_static("from_json", &from_json, py::arg("text"), py::arg("source") = "model",
                   "The model of a model file's JSON text (what to_json gives; `source` names it in messages).")
       .def("to_json", [](const Model& self) { return plugin::model_json_text(self.model->description()); },

@@ -1,0 +1,25 @@
+"""OpenSim models as downloaded: flatsos.Model opens an .osim as it opens a JSON model."""
+import numpy as np
+import pytest
+
+import flatsos
+
+
+def test_an_osim_file_is_a_model_that_plans(models_dir):
+    model = flatsos.Model(str(models_dir / "opensim" / "Tug_of_War_Millard.osim"))
+    assert model.joint_types == ["slider"]
+    assert model.muscles == ["RightMuscle", "LeftMuscle"]
+    assert model.coordinates == ["block_tz"]
+    plan = flatsos.plan_open_loop(model, [0.0], [0.0], None, [0.05], 1.0, 10.0)
+    assert plan.status == "solved", plan.message
+
+
+def test_geometric_paths_and_opensim_2_muscles_are_asked_by_keyword(models_dir):
+    osim = str(models_dir / "opensim" / "Tug_of_War_Millard.osim")
+    assert flatsos.Model(osim, paths="geometry").muscles == ["RightMuscle", "LeftMuscle"]
+    with pytest.raises(ValueError, match="paths"):
+        flatsos.Model(osim, paths="straight")
+    with pytest.raises(ValueError, match=r"\.osim"):
+        flatsos.Model(str(models_dir / "arm_richter_warner.json"), paths="geometry")
+    with pytest.raises(ValueError, match="opensim_2_muscles"):
+        flatsos.Model(str(models_dir / "arm_richter_warner.json"), opensim_2_muscles=True)
