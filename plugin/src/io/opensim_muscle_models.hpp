@@ -11,11 +11,19 @@
 
 namespace flatsos::plugin::opensim_import {
 
-/// Thelen2003Muscle becomes flatsos' thelen2003 model and DeGrooteFregly2016Muscle its
-/// degroote_fregly2016; any other type (Millard2012EquilibriumMuscle, for now) keeps its common
-/// parameters with flatsos' own laws. A property that flatsos models differently is named in
-/// `notes`.
-/// Throws OpenSimModelError naming the muscle and property for a value the model refuses.
-muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vector<std::string>& notes);
+/// Thelen2003Muscle becomes flatsos' thelen2003 model, DeGrooteFregly2016Muscle its
+/// degroote_fregly2016, and Millard2012EquilibriumMuscle a Millard2012Muscle built from the
+/// file's curve properties ("<curve>/<property>" in OpenSimMuscle::properties), fiber_damping and
+/// maximum_pennation_angle (OpenSim's defaults for what it leaves out), unless
+/// millard_with_flatsos_laws: then, as any other type, it keeps its common parameters with
+/// flatsos' own laws. A property that flatsos models differently is named in `notes`
+/// (minimum_activation 0, ignore_activation_dynamics true, compressive curves).
+/// Throws OpenSimModelError naming the muscle and property for a value the model refuses, and for
+/// a Millard muscle with ignore_tendon_compliance true.
+muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vector<std::string>& notes,
+                                               bool millard_with_flatsos_laws = false);
+
+/// The provenance's sentence on how the muscles were modelled.
+std::string muscle_approximation(bool millard_with_flatsos_laws);
 
 }  // namespace flatsos::plugin::opensim_import
