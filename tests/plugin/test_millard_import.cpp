@@ -210,6 +210,25 @@ TEST(MillardImport, WhatFlatsosCannotRepresentIsRefusedOrNotedByName) {
   EXPECT_EQ(noted.model.muscles[0].parameters.activation_floor, 1e-4);
 }
 
+// fiber_damping 0: OpenSim's undamped model, whose curves OpenSim adjusts (fL at least 0.1, each
+// fV slope at vmax at least half its slope near vmax: 0.125 concentric, 0.075 eccentric).
+TEST(MillardImport, AnUndampedMuscleHasOpenSimsUndampedCurves) {
+  const std::string osim = replaced(file_text(kTug), "<deactivation_time_constant>0.040000000000000001</deactivation_time_constant>",
+                                    "<deactivation_time_constant>0.04</deactivation_time_constant><fiber_damping>0</fiber_damping>");
+  const fp::ModelDescription model = import_text(osim).model;
+  const fm::MuscleParameters& p = model.muscles[0].parameters;
+  EXPECT_FALSE(millard(p).damped());
+  EXPECT_EQ(p.fiber_damping, 0.0);
+  const fm::Millard2012Curves& curves = millard(p).curves();
+  EXPECT_NEAR(curves.active_force_length.evaluate(0.3).value, 0.1, 1e-15);
+  EXPECT_NEAR(curves.force_velocity.evaluate(-1.0).first, 0.125, 1e-12);
+  EXPECT_NEAR(curves.force_velocity.evaluate(1.0).first, 0.075, 1e-12);
+  const std::string negative = replaced(file_text(kTug), "<deactivation_time_constant>0.040000000000000001</deactivation_time_constant>",
+                                        "<deactivation_time_constant>0.04</deactivation_time_constant><minimum_activation>-0.1</minimum_activation>");
+  EXPECT_NE(import_error(negative).find("muscle 'RightMuscle': minimum_activation = -0.1000 must be >= 0"), std::string::npos)
+      << import_error(negative);
+}
+
 // ---- model files -------------------------------------------------------------------------
 
 // A slider with two Millard muscles: one with its own curves (damped), one undamped with

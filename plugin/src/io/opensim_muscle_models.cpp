@@ -97,6 +97,8 @@ void take_millard(const OpenSimMuscle& m, muscles::MuscleParameters& p, std::vec
   p.model->setDefaults(p);
   take_common(m, p);
   take(m, "minimum_activation", p.activation_floor);
+  if (p.activation_floor < 0.0)
+    fail("muscle '" + m.name + "': minimum_activation = " + fixed(p.activation_floor, 4) + " must be >= 0 (as OpenSim requires)");
   if (p.activation_floor == 0.0) {
     p.activation_floor = muscles::MuscleParameters().activation_floor;
     notes.push_back("muscle '" + m.name + "': minimum_activation 0 read as " + fixed(p.activation_floor, 4) +
