@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
                "What was held and approximated is written to the model's \"provenance\"."};
   std::string osim, paths_file, out, name, scenarios_file;
   std::vector<std::string> keep, hold, ranges;
-  bool refuse_slack = false;
+  bool refuse_slack = false, millard_with_flatsos_laws = false;
   app.add_option("--osim", osim, "OpenSim model file (.osim)")->required();
   app.add_option("--paths", paths_file,
                  "OpenSim FunctionBasedPathSet file (fitted muscle lengths) to use instead of fitting the model's GeometryPaths");
@@ -70,6 +70,8 @@ int main(int argc, char** argv) {
   app.add_option("--scenarios", scenarios_file,
                  "a JSON object of named scenarios to include (the model file's \"scenarios\": q0_deg, target_deg, ...)");
   app.add_flag("--refuse-slack-muscles", refuse_slack, "fail instead of leaving out a muscle whose tendon would be slack");
+  app.add_flag("--millard-with-flatsos-laws", millard_with_flatsos_laws,
+               "give Millard2012EquilibriumMuscles flatsos' default Hill laws instead of their OpenSim curves");
   app.add_option("--out", out, "the model file to write (JSON)")->required();
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
@@ -79,6 +81,7 @@ int main(int argc, char** argv) {
     options.name = name;
     options.keep = keep;
     options.refuse_slack_muscles = refuse_slack;
+    options.millard_with_flatsos_laws = millard_with_flatsos_laws;
     // File names only: a model must not point into the machine it was made on.
     options.osim_source = std::filesystem::path(osim).filename().string();
     if (!paths_file.empty()) options.paths_source = std::filesystem::path(paths_file).filename().string();

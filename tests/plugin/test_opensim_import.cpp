@@ -389,7 +389,7 @@ TEST(OpenSimImport, PinsKeepOpenSimsAxesAndJointsOfOneRotationAreExact) {
 
 // A Thelen2003Muscle keeps OpenSim's model and every property the file states (arm26's values
 // here); what it leaves out takes OpenSim's Thelen defaults, not another model's. A Millard muscle
-// keeps flatsos' laws for now, with its parameters.
+// becomes flatsos' Millard model (its curves: test_millard_import.cpp).
 TEST(OpenSimImport, AThelenMuscleKeepsOpenSimsModelAndProperties) {
   std::string vas = muscle("vas", 1000.0, 0.1, 0.15, "thigh shank");
   const std::string from = "<Millard2012EquilibriumMuscle name=\"vas\">", to = "</Millard2012EquilibriumMuscle>";
@@ -413,7 +413,7 @@ TEST(OpenSimImport, AThelenMuscleKeepsOpenSimsModelAndProperties) {
   EXPECT_DOUBLE_EQ(p.passive_fiber_strain_at_one_norm_force, 0.6);
   EXPECT_DOUBLE_EQ(p.pennation_angle_at_optimal_rad, 0.05);
   const fm::MuscleParameters& ham = model.muscles[static_cast<std::size_t>(model.muscleIndex("ham"))].parameters;
-  EXPECT_EQ(ham.model->name(), fm::default_muscle_model()->name());
+  EXPECT_EQ(ham.model->name(), "millard2012");
   // A property the model refuses is named with the muscle.
   std::string bad = osim;
   bad.replace(bad.find("<Flen>1.8</Flen>"), 16, "<Flen>0.9</Flen>");
@@ -578,6 +578,7 @@ TEST(OpenSimExampleModel, TheShippedModelsAreWhatTheImporterMakes) {
   for (const auto& [file, options] : {std::pair<std::string, fp::OpenSimImportOptions>{"seated_knee_r", seated_knee_options()},
                                       {"sagittal_leg_r", sagittal_leg_options()}}) {
     fp::OpenSimImportOptions o = options;
+    o.millard_with_flatsos_laws = true;  // as the shipped models were made
     o.osim_source = "subject_walk_scaled.osim";
     o.paths_source = "subject_walk_scaled_FunctionBasedPathSet.xml";
     const fp::ModelDescription made = import_shared(o).model;

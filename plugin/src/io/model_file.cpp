@@ -12,6 +12,7 @@
 #include "flatsos/muscles/muscle_model.hpp"
 #include "flatsos/plugin/io/opensim_import.hpp"
 #include "model_file_fields.hpp"
+#include "model_file_millard.hpp"
 
 namespace flatsos::plugin {
 
@@ -39,6 +40,8 @@ class ObjectReader {
     throw ModelFileError("model file '" + source_ + "': " + where + ": " + what);
   }
   std::string at(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  const std::string& path() const { return path_; }
+  const std::string& source() const { return source_; }
   bool has(const std::string& key) const { return j_.contains(key); }
 
   const json& get(const std::string& key) {
@@ -211,6 +214,11 @@ void read_optional_muscle_fields(ObjectReader& r, muscles::MuscleParameters& p) 
   }
   for (const auto& field : kOptionalMuscleFields)
     if (const json* v = r.find(field.key)) p.*field.member = r.number(*v, r.at(field.key));
+  // A Millard muscle's own curves (model_file_millard.hpp), after its fiber_damping.
+  model_file::apply_millard2012_fields({r.find(model_file::kMillardCurvesKey), r.find(model_file::kMaximumPennationKey),
+                                        r.has("tendon_strain_at_max_force"), r.has("passive_fiber_strain_at_one_norm_force"),
+                                        r.path(), r.source()},
+                                       p);
 }
 
 // {"coordinates": [names], "order": k, "coefficients": [...], "held_coordinates": {name: rad}};

@@ -5,6 +5,7 @@
 
 #include "flatsos/muscles/muscle_model.hpp"
 #include "model_file_fields.hpp"
+#include "model_file_millard.hpp"
 
 namespace flatsos::plugin {
 
@@ -56,10 +57,13 @@ json muscle_json(const MuscleDescription& m, const std::vector<JointDescription>
   muscles::MuscleParameters defaults;
   if (p.model && p.model != defaults.model) {
     out[kMuscleModelKey] = p.model->name();
-    p.model->setDefaults(defaults);
+    // The defaults the reader starts from: the named model's (a Millard muscle's own curves
+    // differ from them, and are written below).
+    muscles::muscle_model_named(p.model->name())->setDefaults(defaults);
   }
   for (const auto& field : kOptionalMuscleFields)
     if (p.*field.member != defaults.*field.member) out[field.key] = p.*field.member;
+  model_file::write_millard2012_fields(p, out);
   if (m.polynomial_path) {
     const PolynomialPathDescription& d = *m.polynomial_path;
     out["path"] = {{"coordinates", d.coordinates}, {"order", d.order}, {"coefficients", d.coefficients}};

@@ -352,7 +352,8 @@ class Importer {
 
   MuscleDescription muscleOf(const OpenSimMuscle& m, const PolynomialPathDescription& path) {
     MuscleDescription md;
-    md.parameters = opensim_import::muscle_parameters_of(m, out_.notes, options_.opensim_2_muscles);
+    md.parameters = opensim_import::muscle_parameters_of(
+        m, out_.notes, {options_.opensim_2_muscles, options_.millard_with_flatsos_laws});
     md.polynomial_path = path;
     return md;
   }
@@ -407,10 +408,7 @@ class Importer {
         "pins.*.joint_point_error_m); a CustomJoint's other motions with that coordinate (the walker knee's translations and small rotations) are "
         "dropped, and pins.*.mass_center_error_m measures the effect",
         "bodies that follow a kept coordinate through a coupler are lumped where they are at the reference posture",
-        "muscles: Thelen2003Muscle and DeGrooteFregly2016Muscle as OpenSim models them, with the file's properties; "
-        "other types (Millard2012EquilibriumMuscle) with OpenSim's maximum isometric force, optimal fibre length, "
-        "tendon slack length, pennation, maximum contraction velocity and curve strains and flatsos' Hill laws in place "
-        "of their curves",
+        opensim_import::muscle_approximation(options_.millard_with_flatsos_laws),
         options_.path_fit_json.empty()
             ? "muscle lengths: OpenSim's fitted polynomials (FunctionBasedPath) with held coordinates inserted, trusted only "
               "inside the ranges where they were fitted"

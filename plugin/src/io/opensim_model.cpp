@@ -269,6 +269,19 @@ Element find_below(Element& e, const std::string& tag) {
   return Element();
 }
 
+// The numbers (booleans as 1 and 0) that e's children without children of their own hold,
+// keyed prefix + tag. An empty element (an optional property left unset) holds none.
+void read_direct_properties(Element& e, const std::string& prefix, std::map<std::string, double>& properties) {
+  for (auto it = e.element_begin(); it != e.element_end(); ++it) {
+    Element child = *it;
+    if (child.element_begin() != child.element_end()) continue;
+    const std::vector<std::string> value = words(child.getValue());
+    if (value.size() != 1) continue;
+    const std::optional<double> number = value[0] == "true" ? 1.0 : value[0] == "false" ? 0.0 : opensim_text::finite_number(value[0]);
+    if (number) properties[prefix + child.getElementTag()] = *number;
+  }
+}
+
 OpenSimMuscle read_muscle(const Reader& r, Element& e) {
   OpenSimMuscle m;
   m.type = e.getElementTag();
@@ -288,14 +301,13 @@ OpenSimMuscle read_muscle(const Reader& r, Element& e) {
     Element c = find_below(e, curve);
     if (c.isValid()) *value = r.optional_number(c, "strain_at_one_norm_force", where + "." + curve, *value);
   }
-  // Every number the muscle states directly (its model's own properties: Af, fiber_damping, ...).
+  // Every number the muscle states directly (its model's own properties: Af, fiber_damping, ...),
+  // and those of its curves (<ActiveForceLengthCurve>...) under "<curve>/<property>".
+  read_direct_properties(e, "", m.properties);
   for (auto it = e.element_begin(); it != e.element_end(); ++it) {
     Element child = *it;
-    if (child.hasElement("objects") || child.element_begin() != child.element_end()) continue;
-    std::istringstream text(child.getValue());
-    double value = 0.0;
-    std::string rest;
-    if (text >> value && !(text >> rest)) m.properties[child.getElementTag()] = value;
+    const std::string tag = child.getElementTag();
+    if (tag.size() > 5 && tag.compare(tag.size() - 5, 5, "Curve") == 0) read_direct_properties(child, tag + "/", m.properties);
   }
   Element path = find_below(e, "GeometryPath");
   if (path.isValid()) read_muscle_path_bodies(path, m.path_bodies);

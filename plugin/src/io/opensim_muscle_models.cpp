@@ -4,9 +4,11 @@
 #include <stdexcept>
 
 #include "flatsos/muscles/degroote_fregly2016_muscle.hpp"
+#include "flatsos/muscles/millard2012_muscle.hpp"
 #include "flatsos/muscles/muscle_model.hpp"
 #include "flatsos/muscles/thelen2003_muscle.hpp"
 #include "flatsos/muscles/thelen2003_opensim2_muscle.hpp"
+#include "millard2012_fields.hpp"
 #include "opensim_reduction.hpp"
 
 namespace flatsos::plugin::opensim_import {
@@ -76,6 +78,57 @@ void take_degroote(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
   take(m, "fiber_damping", p.fiber_damping);
 }
 
+bool stated_true(const OpenSimMuscle& m, const char* property) {
+  const auto found = m.properties.find(property);
+  return found != m.properties.end() && found->second != 0.0;
+}
+
+// The curve properties the file states; OpenSim's defaults for the rest.
+muscles::Millard2012CurveParameters millard_curves(const OpenSimMuscle& m, std::vector<std::string>& notes) {
+  muscles::Millard2012CurveParameters curves;
+  bool compressive_stated = false;
+  millard2012_fields::for_each_property(curves, [&](const char* curve, const char*, const char* property, auto& field) {
+    const auto found = m.properties.find(std::string(curve) + "/" + property);
+    if (found == m.properties.end()) return;
+    if (millard2012_fields::equilibrium_muscle_curve(curve)) field = found->second;
+    else compressive_stated = true;
+  });
+  if (compressive_stated)
+    notes.push_back("muscle '" + m.name + "': its compressive curves are not read (a Millard2012EquilibriumMuscle has none; "
+                    "OpenSim ignores them too)");
+  return curves;
+}
+
+// Millard2012EquilibriumMuscle as OpenSim builds it: its curves from the file's curve properties,
+// adjusted to its damping, with its maximum pennation; OpenSim's defaults where the file is silent.
+void take_millard(const OpenSimMuscle& m, muscles::MuscleParameters& p, std::vector<std::string>& notes) {
+  if (stated_true(m, "ignore_tendon_compliance"))
+    fail("muscle '" + m.name + "': ignore_tendon_compliance = true is not supported (flatsos' Millard muscle has an "
+         "elastic tendon; a rigid one would change every force)");
+  muscles::Millard2012MuscleConfiguration configuration;
+  take(m, "fiber_damping", configuration.fiber_damping);
+  double maximum_pennation_rad = muscles::Millard2012Muscle::defaultMaximumPennationAngle();
+  take(m, "maximum_pennation_angle", maximum_pennation_rad);
+  try {
+    p.model = std::make_shared<const muscles::Millard2012Muscle>(millard_curves(m, notes), configuration, maximum_pennation_rad);
+  } catch (const std::invalid_argument& e) {
+    fail("muscle '" + m.name + "': " + e.what() + " (read from the OpenSim file)");
+  }
+  p.model->setDefaults(p);
+  take_common(m, p);
+  take(m, "minimum_activation", p.activation_floor);
+  if (p.activation_floor < 0.0)
+    fail("muscle '" + m.name + "': minimum_activation = " + fixed(p.activation_floor, 4) + " must be >= 0 (as OpenSim requires)");
+  if (p.activation_floor == 0.0) {
+    p.activation_floor = muscles::MuscleParameters().activation_floor;
+    notes.push_back("muscle '" + m.name + "': minimum_activation 0 read as " + fixed(p.activation_floor, 4) +
+                    " (flatsos' activation floor must be > 0): its activation stays at or above that");
+  }
+  if (stated_true(m, "ignore_activation_dynamics"))
+    notes.push_back("muscle '" + m.name + "': ignore_activation_dynamics = true read as false: flatsos' muscles have "
+                    "activation dynamics; a plan's activation is what OpenSim would take as this muscle's excitation");
+}
+
 // Another type: the common parameters and the strains OpenSim's reader found, with flatsos'
 // default laws (Richter & Warner's).
 void take_other(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
@@ -92,9 +145,9 @@ void take_other(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
 }  // namespace
 
 muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vector<std::string>& notes,
-                                               bool opensim_2_muscles) {
+                                               const MuscleModelChoice& choice) {
   muscles::MuscleParameters p;
-  if (m.type == "Thelen2003Muscle" && opensim_2_muscles) {
+  if (m.type == "Thelen2003Muscle" && choice.opensim_2_muscles) {
     p.model = muscles::muscle_model_named(muscles::Thelen2003OpenSim2Muscle::kName);
     p.model->setDefaults(p);
     take_common(m, p);
@@ -109,6 +162,8 @@ muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vect
     p.model->setDefaults(p);
     take_common(m, p);
     take_degroote(m, p);
+  } else if (m.type == "Millard2012EquilibriumMuscle" && !choice.millard_with_flatsos_laws) {
+    take_millard(m, p, notes);
   } else {
     take_common(m, p);
     take_other(m, p);
@@ -119,6 +174,18 @@ muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vect
     fail(std::string(e.what()) + " (read from the OpenSim file)");
   }
   return p;
+}
+
+std::string muscle_approximation(bool millard_with_flatsos_laws) {
+  if (millard_with_flatsos_laws)
+    return "muscles: Thelen2003Muscle and DeGrooteFregly2016Muscle as OpenSim models them, with the file's properties; "
+           "other types (Millard2012EquilibriumMuscle) with OpenSim's maximum isometric force, optimal fibre length, "
+           "tendon slack length, pennation, maximum contraction velocity and curve strains and flatsos' Hill laws in place "
+           "of their curves";
+  return "muscles: Thelen2003Muscle, DeGrooteFregly2016Muscle and Millard2012EquilibriumMuscle (its curves from the "
+         "file's curve properties, its fiber damping and maximum pennation) as OpenSim models them, with the file's "
+         "properties and OpenSim's defaults for the rest; other types with OpenSim's common properties and flatsos' Hill "
+         "laws";
 }
 
 }  // namespace flatsos::plugin::opensim_import

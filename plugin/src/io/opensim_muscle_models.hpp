@@ -11,14 +11,28 @@
 
 namespace flatsos::plugin::opensim_import {
 
-/// Thelen2003Muscle becomes flatsos' thelen2003 model and DeGrooteFregly2016Muscle its
-/// degroote_fregly2016; any other type (Millard2012EquilibriumMuscle, for now) keeps its common
-/// parameters with flatsos' own laws. A property that flatsos models differently is named in
-/// `notes`.
-/// With opensim_2_muscles, Thelen2003Muscle becomes thelen2003_opensim2 (OpenSim 2.x's laws, its
-/// Vmax0 and damping where the file states none).
-/// Throws OpenSimModelError naming the muscle and property for a value the model refuses.
+/// How the muscle types are read (the importer's options of the same names).
+struct MuscleModelChoice {
+  /// Thelen2003Muscle as OpenSim 2.x modelled it (thelen2003_opensim2, with its Vmax0 and damping
+  /// where the file states none).
+  bool opensim_2_muscles = false;
+  /// Millard2012EquilibriumMuscle with flatsos' own laws, as any other type.
+  bool millard_with_flatsos_laws = false;
+};
+
+/// Thelen2003Muscle becomes flatsos' thelen2003 model, DeGrooteFregly2016Muscle its
+/// degroote_fregly2016, and Millard2012EquilibriumMuscle a Millard2012Muscle built from the
+/// file's curve properties ("<curve>/<property>" in OpenSimMuscle::properties), fiber_damping and
+/// maximum_pennation_angle (OpenSim's defaults for what it leaves out); `choice` changes the first
+/// and the last. Any other type keeps its common parameters with flatsos' own laws. A property
+/// that flatsos models differently is named in `notes` (minimum_activation 0,
+/// ignore_activation_dynamics true, compressive curves).
+/// Throws OpenSimModelError naming the muscle and property for a value the model refuses, and for
+/// a Millard muscle with ignore_tendon_compliance true.
 muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vector<std::string>& notes,
-                                               bool opensim_2_muscles = false);
+                                               const MuscleModelChoice& choice = {});
+
+/// The provenance's sentence on how the muscles were modelled.
+std::string muscle_approximation(bool millard_with_flatsos_laws);
 
 }  // namespace flatsos::plugin::opensim_import

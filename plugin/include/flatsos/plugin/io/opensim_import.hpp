@@ -32,6 +32,10 @@ struct OpenSimImportOptions {
   /// A muscle whose tendon is slack somewhere in the range (the fitted length does not exceed
   /// the tendon slack length) is left out and reported; with refuse_slack_muscles, refused.
   bool refuse_slack_muscles = false;
+  /// Millard2012EquilibriumMuscle with flatsos' default laws (Richter & Warner's) and the file's
+  /// common parameters instead of Millard's curves, as the importer made them before it modelled
+  /// them (the shipped seated_knee_r and sagittal_leg_r models were made so).
+  bool millard_with_flatsos_laws = false;
   std::string osim_source, paths_source;  ///< file names, for the provenance
   long slack_check_postures = 20000;      ///< postures per muscle for the slack check
   /// Thelen2003Muscle as OpenSim 2.x modelled it (thelen2003_opensim2), to reproduce results of

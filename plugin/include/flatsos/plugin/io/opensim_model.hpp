@@ -81,7 +81,11 @@ struct OpenSimMuscle {
   double passive_fiber_strain_at_one_norm_force = 0.7;  ///< Millard's default
   std::vector<std::string> path_bodies;  ///< the bodies its path points are fixed to (file order, unique)
   /// Every number the muscle's element states directly, by OpenSim's property name (its model's
-  /// own properties: "FmaxTendonStrain", "Af", "fiber_damping", ...).
+  /// own properties: "FmaxTendonStrain", "Af", "fiber_damping", ...; booleans as 1 and 0:
+  /// "ignore_tendon_compliance"), and those of its curve elements (tags ending in "Curve") as
+  /// "<curve tag>/<property>": "ActiveForceLengthCurve/min_norm_active_fiber_length",
+  /// "TendonForceLengthCurve/stiffness_at_one_norm_force", ... A property that is absent or
+  /// empty (an optional curve property left unset) is not in the map.
   std::map<std::string, double> properties;
 };
 

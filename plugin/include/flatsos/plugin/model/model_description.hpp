@@ -33,7 +33,18 @@
 //                           "order": k, "coefficients": [...],
 //                           "held_coordinates": {"<name>": value_rad} (optional)},
 //                ...optional overrides of muscle_defaults, among them
-//                "pennation_angle_at_optimal_rad" and "passive_fiber_strain_at_one_norm_force"}],
+//                "pennation_angle_at_optimal_rad" and "passive_fiber_strain_at_one_norm_force",
+//                "muscle_model": "thelen2003" | "degroote_fregly2016" | "millard2012" | ... (the
+//                laws, muscle_model.hpp; its defaults apply before the muscle's own fields),
+//                and for "millard2012" (OpenSim's Millard2012EquilibriumMuscle):
+//                  "fiber_damping" (0.1; below 0.001 the undamped model, then exactly 0),
+//                  "maximum_pennation_angle_rad" (acos(0.1)),
+//                  "millard2012_curves": {"active_force_length", "force_velocity",
+//                    "fiber_force_length", "tendon_force_length", "fiber_compressive_force_length",
+//                    "fiber_compressive_force_cos_pennation": each {OpenSim's property: value},
+//                    e.g. "active_force_length": {"min_norm_active_fiber_length": 0.5}}
+//                  (millard2012_curves.hpp; what is left out: OpenSim's defaults, optional
+//                  properties all or none per curve). The strain fields then follow the curves.
 //   "flat_outputs": [{"name", "weights": {"<muscle>": w, ...}}]   (optional; m - N rows; without
 //                   it the planner chooses E: planner/flat_output_choice.hpp)
 //   "effort_weights": "flat_outputs" | "normalized_tendon_force" | {"<muscle>": w, ...}   (optional;
