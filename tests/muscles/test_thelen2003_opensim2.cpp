@@ -58,8 +58,9 @@ TEST(Thelen2003OpenSim2, TendonAndPassiveCurvesAreOpenSim2sAtAThousandPoints) {
     const double eps = -0.01 + 0.06 * i / 999.0;
     const double tendon_N = p.model->tendonForce(p, p.tendon_slack_length_m * (1.0 + eps)).value;
     EXPECT_NEAR(tendon_N / p.max_isometric_force_N, tendon_2x(eps), 1e-9 * tendon_2x(eps)) << eps;
-    if (tendon_N > 0.0)
+    if (tendon_N > 0.0) {
       EXPECT_NEAR(p.model->tendonLengthFromForce(p, tendon_N), p.tendon_slack_length_m * (1.0 + eps), 1e-12) << eps;
+    }
     const double l = 0.4 + 1.4 * i / 999.0;
     EXPECT_NEAR(p.model->passiveFiberForce(p, l * p.optimal_fiber_length_m).value / p.max_isometric_force_N, passive_2x(l),
                 1e-9 * passive_2x(l)) << l;

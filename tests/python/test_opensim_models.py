@@ -10,7 +10,8 @@ def test_an_osim_file_is_a_model_that_plans(models_dir):
     assert model.joint_types == ["slider"]
     assert model.muscles == ["RightMuscle", "LeftMuscle"]
     assert model.coordinates == ["block_tz"]
-    plan = flatsos.plan_open_loop(model, [0.0], [0.0], None, [0.05], 1.0, 10.0)
+    # 4 cm: with the file's Millard curves no activation holds the block beyond 4.23 cm.
+    plan = flatsos.plan_open_loop(model, [0.0], [0.0], None, [0.04], 1.0, 10.0)
     assert plan.status == "solved", plan.message
 
 
