@@ -32,8 +32,8 @@ void take_common(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
   take(m, "deactivation_time_constant", p.deactivation_time_constant_s);
 }
 
-// Thelen (2003) as OpenSim 4's Thelen2003Muscle names its properties.
-void take_thelen(const OpenSimMuscle& m, muscles::MuscleParameters& p, std::vector<std::string>& notes) {
+// Thelen's (2003) curve properties, named alike by OpenSim 2.x and 4.
+void take_thelen_curves(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
   take(m, "FmaxTendonStrain", p.tendon_strain_at_max_force);
   take(m, "FmaxMuscleStrain", p.passive_fiber_strain_at_one_norm_force);
   double kshape_active = p.force_length_width * p.force_length_width;
@@ -43,6 +43,11 @@ void take_thelen(const OpenSimMuscle& m, muscles::MuscleParameters& p, std::vect
   take(m, "KshapePassive", p.passive_force_length_shape);
   take(m, "Af", p.hill_constant);
   take(m, "Flen", p.max_eccentric_force_ratio);
+}
+
+// Thelen (2003) as OpenSim 4's Thelen2003Muscle names its properties.
+void take_thelen(const OpenSimMuscle& m, muscles::MuscleParameters& p, std::vector<std::string>& notes) {
+  take_thelen_curves(m, p);
   take(m, "minimum_activation", p.activation_floor);
   if (const auto t = m.properties.find("fv_linear_extrap_threshold"); t != m.properties.end() && t->second != 0.95)
     notes.push_back("muscle '" + m.name + "': fv_linear_extrap_threshold " + fixed(t->second, 3) +
@@ -52,15 +57,7 @@ void take_thelen(const OpenSimMuscle& m, muscles::MuscleParameters& p, std::vect
 // OpenSim 2.x's Thelen reads the same curve properties as OpenSim 4's, "damping" for its fibre
 // damping, and has no minimum activation.
 void take_thelen_opensim2(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
-  take(m, "FmaxTendonStrain", p.tendon_strain_at_max_force);
-  take(m, "FmaxMuscleStrain", p.passive_fiber_strain_at_one_norm_force);
-  double kshape_active = p.force_length_width * p.force_length_width;
-  take(m, "KshapeActive", kshape_active);
-  if (!(kshape_active > 0.0)) fail("muscle '" + m.name + "': KshapeActive = " + fixed(kshape_active, 4) + " must be > 0");
-  p.force_length_width = std::sqrt(kshape_active);
-  take(m, "KshapePassive", p.passive_force_length_shape);
-  take(m, "Af", p.hill_constant);
-  take(m, "Flen", p.max_eccentric_force_ratio);
+  take_thelen_curves(m, p);
   take(m, "damping", p.fiber_damping);
   take(m, "Vmax", p.max_shortening_velocity_in_optimal_lengths_per_s);
   if (const auto v0 = m.properties.find("Vmax0");
