@@ -329,8 +329,8 @@ void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim) {
       ->capture_default_str()
       ->check(CLI::IsMember({"fitted", "geometry"}));
   app.add_flag("--opensim-2-muscles", osim.opensim_2_muscles,
-               "an .osim's Thelen2003Muscles as OpenSim 2.x modelled them (to reproduce results of that time; "
-               "OpenSim 4's model otherwise)");
+               "an .osim's Thelen2003Muscles, and its cylinder wrapping, as OpenSim 2.x modelled them (to "
+               "reproduce results of that time; OpenSim 4's otherwise)");
 }
 
 }  // namespace flatsos::examples

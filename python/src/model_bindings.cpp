@@ -83,8 +83,8 @@ void register_model(py::module_& m) {
       .def(py::init(&load), py::arg("path"), py::kw_only(), py::arg("paths") = "fitted",
            py::arg("opensim_2_muscles") = false,
            "Loads the model file, or imports an OpenSim model (.osim) with its own settings: paths='geometry' "
-           "simulates its GeometryPaths (plans use the fitted ones), opensim_2_muscles its Thelen muscles as "
-           "OpenSim 2.x modelled them. A bad file, or flat outputs that violate Assumption 1, raise ValueError.")
+           "simulates its GeometryPaths (plans use the fitted ones), opensim_2_muscles its Thelen muscles and "
+           "cylinder wrapping as OpenSim 2.x modelled them. A bad file, or flat outputs that violate Assumption 1, raise ValueError.")
       .def_static("from_json", &from_json, py::arg("text"), py::arg("source") = "model",
                   "The model of a model file's JSON text (what to_json gives; `source` names it in messages).")
       .def("to_json", [](const Model& self) { return plugin::model_json_text(self.model->description()); },

@@ -59,7 +59,8 @@ TEST(Arm26OpenSim2, GeometricLengthsMatchTheLengthsOpenSimsStatesImply) {
   options.opensim_2_muscles = true;
   const std::string osim_file = kArm26 + "arm26.osim";
   const OpenSimModel osim = read_opensim_model(osim_file);
-  const OpenSimGeometryPaths geometry = read_opensim_geometry_paths(osim_file);
+  OpenSimGeometryPaths geometry = read_opensim_geometry_paths(osim_file);
+  geometry.opensim_2_wrapping = true;
   const ModelDescription model = import_opensim_model(osim, geometry, options).model;
   const StoTable states = read_sto(kArm26 + "forward_dynamics/arm26_states.sto");
   const auto time = states.column("time");
@@ -91,6 +92,11 @@ TEST(Arm26OpenSim2, GeometricLengthsMatchTheLengthsOpenSimsStatesImply) {
     std::printf("%-9s worst |geometric - implied| length %.4f mm at t = %.3f s (%d rows at a jump left out)\n",
                 p.name.c_str(), 1e3 * worst_m, worst_t, jump_rows);
     EXPECT_LT(worst_m, 0.05e-3) << p.name << " at t = " << worst_t;  // the task's 0.05 mm
+    // BRA's single cylinder wrap, with its tangent points adjusted as OpenSim 2.x did: 0.006 mm
+    // (OpenSim 4's wrapping, which skips the adjustment on a path with one wrap: 0.024 mm).
+    if (p.name == "BRA") {
+      EXPECT_LT(worst_m, 0.01e-3);
+    }
   }
 }
 
@@ -147,11 +153,11 @@ Agreement simulate_tutorial(bool geometry, bool opensim_2_muscles) {
   return agreement_with_opensim(*model, result.states, opensim);
 }
 
-// OpenSim 2.x's muscles on the geometric paths follow OpenSim's run: activations to 7e-6, the
-// coordinates to 0.23 deg (the task asks 0.05: the difference builds up in the first 0.2 s, when
-// BRA's geometric length at elbow angles below 30 deg is 0.02 mm off the length OpenSim's states
-// imply, a few newtons of tendon force on a light forearm). Today's Thelen muscles on the fitted
-// paths, reported beside it, end far from OpenSim's run.
+// OpenSim 2.x's muscles on the geometric paths, wrapped as OpenSim 2.x wrapped them, follow
+// OpenSim's run: coordinates to 0.022 deg, activations to 6e-5. (With OpenSim 4's wrapping BRA
+// is 0.02 mm longer below 30 deg of elbow flexion, a few newtons of tendon force on a light
+// forearm, and the coordinates drift 0.23 deg.) Today's Thelen muscles on the fitted paths,
+// reported beside it, end far from OpenSim's run.
 TEST(Arm26OpenSim2, TheTutorialsForwardSimulationIsReproducedWithOpenSim2MusclesAndGeometricPaths) {
   const Agreement opensim2 = simulate_tutorial(true, true);
   std::printf("OpenSim 2.x muscles, geometric paths: coordinates within %.4f deg (worst at %.3f s), activations %.2g\n",
@@ -162,7 +168,7 @@ TEST(Arm26OpenSim2, TheTutorialsForwardSimulationIsReproducedWithOpenSim2Muscles
   RecordProperty("opensim2_geometry_coordinates_deg", std::to_string(opensim2.coordinates_deg));
   RecordProperty("opensim4_fitted_coordinates_deg", std::to_string(today.coordinates_deg));
   EXPECT_LT(opensim2.activations, 5e-4);  // the task's bound
-  EXPECT_LT(opensim2.coordinates_deg, 0.25);
+  EXPECT_LT(opensim2.coordinates_deg, 0.05);  // the task's bound
   EXPECT_GT(today.coordinates_deg, 10 * opensim2.coordinates_deg);  // the model, not the integration, decides
 }
 

@@ -83,7 +83,9 @@ OpenSimImport import_opensim_file(const std::string& osim_file, bool simulate_ge
   OpenSimImportOptions options = default_options(osim, notes);
   options.osim_source = std::filesystem::path(osim_file).filename().string();
   options.opensim_2_muscles = opensim_2_muscles;
-  const auto shared_geometry = std::make_shared<const OpenSimGeometryPaths>(read_opensim_geometry_paths(osim_file));
+  auto read_geometry = std::make_shared<OpenSimGeometryPaths>(read_opensim_geometry_paths(osim_file));
+  read_geometry->opensim_2_wrapping = opensim_2_muscles;  // results of OpenSim 2.x: its wrapping too
+  const std::shared_ptr<const OpenSimGeometryPaths> shared_geometry = read_geometry;
   const OpenSimGeometryPaths& geometry = *shared_geometry;
   narrow_ranges(osim, geometry, options, notes);
   OpenSimImport imported = import_opensim_model(osim, geometry, options);

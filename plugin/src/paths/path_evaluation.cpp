@@ -51,6 +51,7 @@ GeometryPathEvaluator::GeometryPathEvaluator(const OpenSimModel& model, const Op
   const OpenSimGeometryPath* path = paths.path(muscle);
   if (!path) throw OpenSimModelError("'" + muscle + "': no force of this name has a GeometryPath");
   path_ = *path;
+  opensim_2_wrapping_ = paths.opensim_2_wrapping;
   for (const OpenSimPathPoint& p : path_.points) {
     const std::string where = muscle + ": point '" + p.name + "'";
     point_body_.push_back(body_index(p.body, where));
@@ -195,7 +196,7 @@ bool GeometryPathEvaluator::apply_one_wrap(int k, Workspace& w, bool surfaces, W
   if (start < 0 || end < 0) return false;
 
   const Eigen::Isometry3d ground_to_body = w.poses[info.body].inverse();
-  const bool single_wrap = path_.wraps.size() == 1;
+  const bool skip_tangent_adjustment = path_.wraps.size() == 1 && !opensim_2_wrapping_;
   std::vector<Eigen::Vector3d>* drawn = surfaces ? &w.scratch : nullptr;
   WrapLineResult best;
   int insert_at = -1;
@@ -204,7 +205,7 @@ bool GeometryPathEvaluator::apply_one_wrap(int k, Workspace& w, bool surfaces, W
     const Node& p1 = w.path[a];
     const Node& p2 = w.path[a + 1];
     if (p1.object >= 0 && p1.object == p2.object) continue;
-    const WrapLineResult r = wrap_segment(*info.object, ground_to_body * p1.ground, ground_to_body * p2.ground, wrap.method, single_wrap, drawn);
+    const WrapLineResult r = wrap_segment(*info.object, ground_to_body * p1.ground, ground_to_body * p2.ground, wrap.method, skip_tangent_adjustment, drawn);
     last_result = r.action;
     if (r.action == WrapAction::MandatoryWrap) {
       best = r, insert_at = a + 1;

@@ -149,9 +149,9 @@ bool adjust_tangent_point(const Vec3& p, const Vec3& next, Vec3& r) {
   return true;
 }
 
-// The helix from r1 to r2 and its length, with the tangency fix-up when several wraps share
-// the path (OpenSim skips it for a single wrap, and for helices shorter than 2 steps).
-double helix_length(const Vec3& p1, const Vec3& p2, double radius, bool long_wrap, bool single_wrap, Vec3& r1, Vec3& r2,
+// The helix from r1 to r2 and its length, with the tangency fix-up unless skipped (OpenSim 4
+// skips it on a path with one wrap, OpenSim 2.x never did) and for helices shorter than 2 steps.
+double helix_length(const Vec3& p1, const Vec3& p2, double radius, bool long_wrap, bool skip_tangent_adjustment, Vec3& r1, Vec3& r2,
                     std::vector<Vec3>* surface_points) {
   const double sense = long_wrap ? -1.0 : 1.0;
   for (int iterations = 0;;) {
@@ -168,7 +168,7 @@ double helix_length(const Vec3& p1, const Vec3& p2, double radius, bool long_wra
                   r1.z() + t * axial);
     };
     const int segments = std::max(1, static_cast<int>(length / kHelixStep_m));
-    if (!single_wrap && segments >= 2 && iterations < kMaxTangencyIterations) {
+    if (!skip_tangent_adjustment && segments >= 2 && iterations < kMaxTangencyIterations) {
       const double t = 1.0 / segments;
       const bool moved1 = adjust_tangent_point(p1, point_at(t), r1);
       const bool moved2 = adjust_tangent_point(p2, point_at(1.0 - t), r2);
@@ -194,7 +194,7 @@ bool segment_crosses(const LineIntersection& x, double radius) {
 }  // namespace
 
 WrapLineResult wrap_cylinder_line(const Vec3& p1, const Vec3& p2, double radius_m, double length_m, WrapQuadrant quadrant,
-                                  bool single_wrap, std::vector<Vec3>* surface_points) {
+                                  bool skip_tangent_adjustment, std::vector<Vec3>* surface_points) {
   WrapLineResult out;
   const double r2 = radius_m * radius_m;
   if (distance_squared_to_line(p1, kAxisPoint, kAxis) < r2 || distance_squared_to_line(p2, kAxisPoint, kAxis) < r2) {
@@ -220,7 +220,7 @@ WrapLineResult wrap_cylinder_line(const Vec3& p1, const Vec3& p2, double radius_
   const double half_length = 0.5 * length_m;
   const auto beyond_ends = [half_length](const Vec3& r) { return r.z() < -half_length || r.z() > half_length; };
   if (beyond_ends(choice.r1) && beyond_ends(choice.r2)) return out;
-  out.surface_length_m = helix_length(p1, p2, radius_m, choice.long_wrap, single_wrap, choice.r1, choice.r2, surface_points);
+  out.surface_length_m = helix_length(p1, p2, radius_m, choice.long_wrap, skip_tangent_adjustment, choice.r1, choice.r2, surface_points);
   out.r1 = choice.r1;
   out.r2 = choice.r2;
   out.action = action;

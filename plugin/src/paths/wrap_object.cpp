@@ -7,13 +7,13 @@
 namespace flatsos::plugin {
 
 WrapLineResult wrap_segment(const OpenSimWrapObject& object, const Eigen::Vector3d& p1_in_body, const Eigen::Vector3d& p2_in_body,
-                            WrapMethod method, bool single_wrap, std::vector<Eigen::Vector3d>* surface_points) {
+                            WrapMethod method, bool skip_tangent_adjustment, std::vector<Eigen::Vector3d>* surface_points) {
   const Eigen::Isometry3d body_to_object = object.pose_in_body.inverse();
   const Eigen::Vector3d p1 = body_to_object * p1_in_body, p2 = body_to_object * p2_in_body;
   WrapLineResult out;
   switch (object.surface) {
     case OpenSimWrapSurface::Cylinder:
-      out = wrap_cylinder_line(p1, p2, object.radius_m, object.length_m, object.quadrant, single_wrap, surface_points);
+      out = wrap_cylinder_line(p1, p2, object.radius_m, object.length_m, object.quadrant, skip_tangent_adjustment, surface_points);
       break;
     case OpenSimWrapSurface::Sphere: out = wrap_sphere_line(p1, p2, object.radius_m, object.quadrant, surface_points); break;
     case OpenSimWrapSurface::Ellipsoid:

@@ -74,7 +74,9 @@ OpenSimImport import_opensim_model(const OpenSimModel& osim, const OpenSimGeomet
 /// fitted to the GeometryPaths. Throws as the reader and the importer do, and OpenSimModelError
 /// when no coordinate can be kept (naming the joints with several, which need --keep).
 /// With simulate_geometry, each muscle also carries its GeometryPath for simulation
-/// (MuscleDescription::path_geometry; planning keeps the fitted polynomials).
+/// (MuscleDescription::path_geometry; planning keeps the fitted polynomials). With
+/// opensim_2_muscles, Thelen muscles and cylinder wrapping are OpenSim 2.x's
+/// (OpenSimGeometryPaths::opensim_2_wrapping).
 OpenSimImport import_opensim_file(const std::string& osim_file, bool simulate_geometry = false,
                                   bool opensim_2_muscles = false);
 

@@ -80,6 +80,10 @@ struct OpenSimGeometryPath {
 struct OpenSimGeometryPaths {
   std::vector<OpenSimWrapObject> wrap_objects;
   std::vector<OpenSimGeometryPath> paths;  ///< ForceSet order
+  /// Wrap as OpenSim 2.x did: the tangent points on a cylinder adjusted also on a path with one
+  /// wrap (OpenSim 4 adjusts them only when the path has several; on arm26's BRA the lengths
+  /// differ by up to 0.02 mm). Not in the file: the importer sets it with opensim_2_muscles.
+  bool opensim_2_wrapping = false;
 
   const OpenSimGeometryPath* path(const std::string& muscle) const;
   const OpenSimWrapObject* wrapObject(const std::string& name) const;

@@ -65,7 +65,7 @@ class GeometryPathEvaluator {
   /// The length at q of the path as built at q_path: its points, tangent points included, held
   /// in their bodies (moving points moving with their coordinate), the surface lengths kept.
   /// For a path whose tangent points OpenSim sees where they are (see path_workspace.hpp; all
-  /// paths with one PathWrap), momentArm(q_path, c) is minus its derivative in c at q_path.
+  /// paths with one PathWrap, unless opensim_2_wrapping), momentArm(q_path, c) is minus its derivative in c at q_path.
   double lengthWithPathHeld(const OpenSimCoordinateValues& q_path, const OpenSimCoordinateValues& q) const;
 
  private:
@@ -77,6 +77,7 @@ class GeometryPathEvaluator {
   };
   const OpenSimModel& model_;
   OpenSimGeometryPath path_;
+  bool opensim_2_wrapping_ = false;  // OpenSimGeometryPaths::opensim_2_wrapping
   std::vector<std::string> bodies_;               // the path's bodies, wrap bodies and their ancestors
   std::vector<std::vector<const OpenSimJoint*>> chains_;  // per body: joints from it up to ground
   std::vector<int> point_body_;

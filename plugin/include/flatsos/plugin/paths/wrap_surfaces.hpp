@@ -29,11 +29,11 @@ struct WrapLineResult {
 
 /// A cylinder of `radius_m` around the z axis, `length_m` long (centred on z = 0). OpenSim's
 /// closed form: the 2D tangents slid along z onto the plane through p1, p2 and the apex line,
-/// a helix between them; with more than one wrap on the path (single_wrap false) and a helix of
-/// 4 mm or more, the tangent points are then moved until the entering and leaving lines meet
+/// a helix between them; unless skip_tangent_adjustment (OpenSim 4 skips it on a path with one
+/// wrap) and for a helix of 4 mm or more, the tangent points are then moved until the entering and leaving lines meet
 /// the helix within 0.1 deg. No wrap when both tangent points lie beyond the cylinder's ends.
 WrapLineResult wrap_cylinder_line(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double radius_m, double length_m,
-                                  WrapQuadrant quadrant, bool single_wrap, std::vector<Eigen::Vector3d>* surface_points = nullptr);
+                                  WrapQuadrant quadrant, bool skip_tangent_adjustment, std::vector<Eigen::Vector3d>* surface_points = nullptr);
 
 /// A sphere of `radius_m` at the origin: the shortest great-circle arc, `Wrapped` (never
 /// mandatory) when unconstrained. OpenSim's far-side length is negative, -R (2 pi - angle);
@@ -56,6 +56,6 @@ WrapLineResult wrap_ellipsoid_line(const Eigen::Vector3d& p1, const Eigen::Vecto
 /// object's frame, wrapped, and r1, r2 (and surface points) mapped back into the body frame.
 /// Throws OpenSimModelError naming the object for a WrapTorus or an unsupported wrap type.
 WrapLineResult wrap_segment(const OpenSimWrapObject& object, const Eigen::Vector3d& p1_in_body, const Eigen::Vector3d& p2_in_body,
-                            WrapMethod method, bool single_wrap, std::vector<Eigen::Vector3d>* surface_points = nullptr);
+                            WrapMethod method, bool skip_tangent_adjustment, std::vector<Eigen::Vector3d>* surface_points = nullptr);
 
 }  // namespace flatsos::plugin
