@@ -131,9 +131,9 @@ int main(int argc, char** argv) {
 
   try {
     const auto model = ex::load_model(model_path, "arm_open_loop", osim_options);
-    const fpl::FlatOutputMap flat(model);
     const int m = model->numMuscles();
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "open_loop", given, 3.0, 10.0);
+    const fpl::FlatOutputMap flat = ex::task_flat_outputs(model, in, "arm_open_loop");
     if (paper) {  // the preset's basis, except where the command line names one
       const fpl::OpenLoopOptions preset = fpl::open_loop_options(fpl::Preset::Paper);
       if (app.count("--pieces") == 0) options.torque.pieces = preset.torque.pieces;

@@ -86,7 +86,6 @@ int main(int argc, char** argv) {
 
   try {
     const auto model = ex::load_model(model_path, "arm_receding_horizon", osim_options);
-    const fpl::FlatOutputMap flat(model);
     const int n = model->numJoints();
     if (paper && app.count("--observer-gain-per-s") == 0) options.disturbance_observer_gain_per_s = 0.0;
     // The plant: another model file and/or other strengths; null when it is the model itself.
@@ -97,6 +96,7 @@ int main(int argc, char** argv) {
       plant = std::make_shared<const fp::MusculoskeletalModel>(std::move(d));
     }
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "receding_horizon", given, 2.0, 1.0);
+    const fpl::FlatOutputMap flat = ex::task_flat_outputs(model, in, "arm_receding_horizon");
     const double duration = in.duration_s;
     options.plan.target_q_rad = in.target_q_rad;
     options.plan.reserves_N = in.reserves_N;

@@ -158,8 +158,20 @@ nlohmann::json problem_summary(const planner::FlatOutputMap& flat) {
                             {field.transition, joint.limit.transition_rad},
                             {field.damping, joint.limit.damping_N_m_s_per_rad}};
     }
+  nlohmann::json region = "joint ranges";
+  if (!y.region.empty()) {
+    region = nlohmann::json::object();
+    for (int i = 0; i < flat.numJoints(); ++i) {
+      const auto& joint = d.joints[static_cast<std::size_t>(i)];
+      region[joint.name] = {y.region[static_cast<std::size_t>(i)][0] * joint.displayPerSI(),
+                            y.region[static_cast<std::size_t>(i)][1] * joint.displayPerSI()};  // deg, a slider's m
+    }
+  }
   return {{"flat_outputs",
-           {{"chosen_by", y.automatic ? "library" : "model"}, {"rows", rows}, {"assumption1_margin", margin}}},
+           {{"chosen_by", y.automatic ? "library" : "model"},
+            {"rows", rows},
+            {"assumption1_margin", margin},
+            {"region", region}}},
           {"effort_weights", {{"kind", kind}, {"per_muscle", effort}}},
           {"joint_limits", limits}};
 }

@@ -1,6 +1,7 @@
 #include "scenario_inputs.hpp"
 
 #include "flatsos/planner/rest_state.hpp"
+#include "flatsos/planner/task_region.hpp"
 
 namespace flatsos::examples {
 
@@ -122,6 +123,16 @@ ScenarioInputs resolve_scenario(const plugin::MusculoskeletalModel& model, const
                                        : Eigen::Map<const Eigen::VectorXd>(reserves.data(), m).eval();
   in.sources["reserves"] = reserve_source;
   return in;
+}
+
+planner::FlatOutputMap task_flat_outputs(std::shared_ptr<const plugin::MusculoskeletalModel> model,
+                                         const ScenarioInputs& inputs, const std::string& program) {
+  planner::FlatOutputMap flat = planner::flat_outputs_for_task(model, {inputs.q0_rad, inputs.target_q_rad});
+  const plugin::JointRanges& region = flat.flatOutputs().region;
+  if (!region.empty())
+    std::cout << program << ": no flat outputs satisfy Assumption 1 over the joint ranges; chosen over the run's region "
+              << plugin::describe_region(model->description(), region) << "\n";
+  return flat;
 }
 
 SimTK::State initial_state(const planner::FlatOutputMap& flat, const ScenarioInputs& in) {

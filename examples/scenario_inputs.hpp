@@ -4,6 +4,8 @@
 // sized from the model (start at 0 deg at the minimum-effort rest, target 30 deg further; a
 // slider's coordinates in m, its fallback target 0.05 m further).
 
+#include <iostream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,6 +43,11 @@ void add_scenario_options(CLI::App& app, ScenarioOptions& options, const std::st
 /// Throws CLI::ValidationError naming the option for a wrong count or an activation outside (0, 1].
 ScenarioInputs resolve_scenario(const plugin::MusculoskeletalModel& model, const std::string& scenario,
                                 const ScenarioOptions& given, double fallback_duration_s, double fallback_reserve_N);
+
+/// The flat outputs for the run: over the joint ranges when they serve them, else over the
+/// region the run visits (q0 and the target, planner/task_region.hpp), said on stdout.
+planner::FlatOutputMap task_flat_outputs(std::shared_ptr<const plugin::MusculoskeletalModel> model,
+                                         const ScenarioInputs& inputs, const std::string& program);
 
 /// The start: q0, qd0 and, with activations, tendons in static equilibrium (held excitations
 /// equal to the activations); without, the minimum-effort rest state at q0 with the reserves.

@@ -24,8 +24,14 @@ namespace flatsos::python {
 /// in the file, the library's choice takes about a second).
 struct Model {
   std::shared_ptr<const plugin::MusculoskeletalModel> model;
+  /// Null when the model gives no flat outputs and none serves its joint ranges (OpenSim's
+  /// ranges often): each task then gets flat outputs over its own region (flat_for_task).
   std::shared_ptr<const planner::FlatOutputMap> flat;
 };
+
+/// The model's flat-output map, or, when it has none for its whole ranges, one chosen over the
+/// region a task visiting `postures` needs (planner/task_region.hpp). Call with the GIL released.
+std::shared_ptr<const planner::FlatOutputMap> flat_for_task(const Model& m, const std::vector<Eigen::VectorXd>& postures);
 
 /// An open-loop plan, the model it was made for, and the state it starts from (what simulating
 /// it needs).

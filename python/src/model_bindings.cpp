@@ -5,6 +5,7 @@
 #include <utility>
 #include <vector>
 
+#include "flatsos/planner/task_region.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/io/opensim_import.hpp"
 
@@ -12,11 +13,20 @@ namespace py = pybind11;
 
 namespace flatsos::python {
 
+std::shared_ptr<const planner::FlatOutputMap> flat_for_task(const Model& m, const std::vector<Eigen::VectorXd>& postures) {
+  if (m.flat) return m.flat;
+  return std::make_shared<const planner::FlatOutputMap>(planner::flat_outputs_for_task(m.model, postures));
+}
+
 namespace {
 Model with_flat_outputs(std::shared_ptr<const plugin::MusculoskeletalModel> model) {
   Model out;
   out.model = std::move(model);
-  out.flat = std::make_shared<const planner::FlatOutputMap>(out.model);
+  try {
+    out.flat = std::make_shared<const planner::FlatOutputMap>(out.model);
+  } catch (const planner::FlatnessError&) {
+    if (!out.model->description().flat_outputs.empty()) throw;  // the file's own E is wrong: say so now
+  }
   return out;
 }
 
@@ -49,7 +59,7 @@ Model with_strength(const Model& self, const py::object& factors) {
   Model out;
   py::gil_scoped_release release;
   out.model = std::make_shared<const plugin::MusculoskeletalModel>(std::move(description));
-  out.flat = std::make_shared<const planner::FlatOutputMap>(self.flat->withModel(out.model));
+  if (self.flat) out.flat = std::make_shared<const planner::FlatOutputMap>(self.flat->withModel(out.model));
   return out;
 }
 
@@ -116,7 +126,8 @@ void register_model(py::module_& m) {
           },
           "muscle names, in model order")
       .def_property_readonly(
-          "flat_outputs", [](const Model& self) { return self.flat->numFlatOutputs(); }, "number of flat outputs")
+          "flat_outputs", [](const Model& self) { return self.model->numMuscles() - self.model->numJoints(); },
+          "number of flat outputs (muscles minus joints)")
       .def_property_readonly(
           "max_isometric_forces",
           [](const Model& self) {

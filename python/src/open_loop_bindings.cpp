@@ -84,10 +84,11 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
   } catch (const std::invalid_argument& e) {
     throw py::value_error(std::string("method: ") + e.what());
   }
-  Plan out{m.model, m.flat, {}, {}};
+  Plan out{m.model, nullptr, {}, {}};
   py::gil_scoped_release release;
-  const SimTK::State s = planner::start_state(*m.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
-  out.plan = planner::plan_open_loop(*m.flat, planner::muscle_state_of(*m.model, s), in.options, in.study);
+  out.flat = flat_for_task(m, {in.q0_rad, in.options.target_q_rad});
+  const SimTK::State s = planner::start_state(*out.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
+  out.plan = planner::plan_open_loop(*out.flat, planner::muscle_state_of(*m.model, s), in.options, in.study);
   out.initial = s;
   return out;
 }
@@ -107,13 +108,14 @@ py::dict shortest_transfer(const Model& m, const py::object& q0, const py::objec
   so.upper_s = longest;
   so.scan_ratio = ratio;
   so.tolerance_s = tolerance;
-  Plan plan{m.model, m.flat, {}, {}};
+  Plan plan{m.model, nullptr, {}, {}};
   planner::ShortestTransfer r;
   {
     py::gil_scoped_release release;  // pybind11 raises std::invalid_argument as ValueError
-    const SimTK::State s = planner::start_state(*m.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
-    plugin::ModelWorkspace workspace = m.flat->makeWorkspace();
-    r = planner::shortest_transfer(*m.flat, workspace, planner::muscle_state_of(*m.model, s), in.options, so, in.study);
+    plan.flat = flat_for_task(m, {in.q0_rad, in.options.target_q_rad});
+    const SimTK::State s = planner::start_state(*plan.flat, in.q0_rad, in.qd0_rad_per_s, in.activations, in.options.reserves_N);
+    plugin::ModelWorkspace workspace = plan.flat->makeWorkspace();
+    r = planner::shortest_transfer(*plan.flat, workspace, planner::muscle_state_of(*m.model, s), in.options, so, in.study);
     plan.initial = s;
   }
   py::list tried;

@@ -72,8 +72,10 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
   {
     py::gil_scoped_release release;
     // Bad options: std::invalid_argument naming the field (a ValueError).
-    planner::RecedingHorizonController controller(*m.flat, options, plant_model);
-    const SimTK::State initial = planner::start_state(*simulated_model.flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
+    const auto flat = flat_for_task(m, {q0_rad, target_rad});
+    planner::RecedingHorizonController controller(*flat, options, plant_model);
+    const auto plant_flat = plant_model ? flat_for_task(simulated_model, {q0_rad, target_rad}) : flat;
+    const SimTK::State initial = planner::start_state(*plant_flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
     run = planner::run_receding_horizon(controller, initial, loop, settle_tolerance);
     warnings = controller.warnings();
     plan_failures = controller.planFailures();

@@ -24,7 +24,7 @@ struct PostureSet {
   std::vector<Eigen::MatrixXd> R_unit;  // N x m
 };
 
-PostureSet posture_set(const plugin::MusculoskeletalModel& model, long budget) {
+PostureSet posture_set(const plugin::MusculoskeletalModel& model, long budget, const plugin::JointRanges& region) {
   PostureSet set;
   const plugin::ModelDescription& d = model.description();
   auto add = [&](const Eigen::VectorXd& q) {
@@ -37,7 +37,7 @@ PostureSet posture_set(const plugin::MusculoskeletalModel& model, long budget) {
   if (model.hasConstantMomentArms())
     add(Eigen::VectorXd::Zero(model.numJoints()));
   else
-    plugin::for_each_posture(d, plugin::posture_dependent_joints(d), budget, add);
+    plugin::for_each_posture(d, plugin::posture_dependent_joints(d), budget, add, region);
   return set;
 }
 
@@ -267,16 +267,17 @@ std::string unopposed_joint(const plugin::MusculoskeletalModel& model, const Pos
 
 }  // namespace
 
-FlatOutputMargin flat_output_margin(const plugin::MusculoskeletalModel& model, const Eigen::MatrixXd& E, long postures) {
+FlatOutputMargin flat_output_margin(const plugin::MusculoskeletalModel& model, const Eigen::MatrixXd& E, long postures,
+                                    const plugin::JointRanges& region) {
   if (E.rows() != model.numMuscles() - model.numJoints() || E.cols() != model.numMuscles())
     throw std::invalid_argument("flat-output margin: E must be (m - N) x m");
-  const PostureSet set = posture_set(model, postures);
+  const PostureSet set = posture_set(model, postures, region);
   std::vector<std::size_t> order = in_grid_order(set);
   return score_over(set, E, order);
 }
 
 FlatOutputCandidates flat_output_candidates(const plugin::MusculoskeletalModel& model, long postures) {
-  return candidates_over(model, posture_set(model, postures));
+  return candidates_over(model, posture_set(model, postures, {}));
 }
 
 FlatOutputChoice choose_flat_outputs(const plugin::MusculoskeletalModel& model, const FlatOutputSearchOptions& options) {
@@ -285,7 +286,7 @@ FlatOutputChoice choose_flat_outputs(const plugin::MusculoskeletalModel& model, 
   if (p < 1)
     throw FlatnessError("model '" + name + "' has " + std::to_string(m) + " muscles for " + std::to_string(n) +
                         " joints: flat outputs need more muscles than joints");
-  const PostureSet set = posture_set(model, options.search_postures);
+  const PostureSet set = posture_set(model, options.search_postures, options.region);
   const FlatOutputCandidates candidates = candidates_over(model, set);
   Search search(set, candidates, p, options.max_exchange_scores);
   const int count = static_cast<int>(candidates.rows.rows());
@@ -304,7 +305,8 @@ FlatOutputChoice choose_flat_outputs(const plugin::MusculoskeletalModel& model, 
   if (search.best_pick.empty() || !search.best.holds()) {
     std::ostringstream why;
     why << "model '" << name << "' gives no flat_outputs and none of the " << search.scored
-        << " E the library tried satisfies Assumption 1 over the joint ranges";
+        << " E the library tried satisfies Assumption 1 over the "
+        << (options.region.empty() ? "joint ranges" : "region " + plugin::describe_region(model.description(), options.region));
     const std::string joint = unopposed_joint(model, set);
     if (!joint.empty()) {
       why << ": " << joint;
@@ -322,7 +324,8 @@ FlatOutputChoice choose_flat_outputs(const plugin::MusculoskeletalModel& model, 
   for (int c : search.best_pick) choice.names.push_back(candidates.names[static_cast<std::size_t>(c)]);
   choice.automatic = true;
   choice.candidates_scored = search.scored;
-  choice.margin = flat_output_margin(model, choice.E, options.final_postures);
+  choice.region = options.region;
+  choice.margin = flat_output_margin(model, choice.E, options.final_postures, options.region);
   return choice;
 }
 

@@ -175,13 +175,28 @@ const plugin::MusculoskeletalModel& require_model(const std::shared_ptr<const pl
 
 namespace {
 // The model's own flat outputs, or the library's choice when it gives none.
-FlatOutputChoice flat_outputs_of(const plugin::MusculoskeletalModel& model) {
+FlatOutputChoice flat_outputs_of(const plugin::MusculoskeletalModel& model, const plugin::JointRanges& region = {}) {
   const plugin::ModelDescription& d = model.description();
-  if (d.flat_outputs.empty()) return choose_flat_outputs(model);
+  if (d.flat_outputs.empty()) {
+    FlatOutputSearchOptions search;
+    search.region = region;
+    return choose_flat_outputs(model, search);
+  }
   FlatOutputChoice given;
   given.E = d.flatOutputMatrix();
   for (const auto& y : d.flat_outputs) given.names.push_back(y.name);
+  given.region = region;
   return given;
+}
+
+void require_region_inside_ranges(const plugin::ModelDescription& d, const plugin::JointRanges& region) {
+  if (region.size() != d.joints.size())
+    throw std::invalid_argument("flat outputs' region: " + std::to_string(region.size()) + " ranges for " +
+                                std::to_string(d.joints.size()) + " joints");
+  for (std::size_t i = 0; i < region.size(); ++i)
+    if (!(region[i][0] <= region[i][1]) || region[i][0] < d.joints[i].range_rad[0] || region[i][1] > d.joints[i].range_rad[1])
+      throw std::invalid_argument("flat outputs' region of joint '" + d.joints[i].name + "' (" +
+                                  plugin::describe_region(d, region) + ") is not an interval inside its range");
 }
 
 FlatOutputChoice given_flat_outputs(Eigen::MatrixXd E) {
@@ -201,6 +216,13 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
 
 FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E)
     : FlatOutputMap(std::move(model), given_flat_outputs(std::move(E))) {}
+
+FlatOutputMap FlatOutputMap::overRegion(std::shared_ptr<const plugin::MusculoskeletalModel> model,
+                                        plugin::JointRanges region) {
+  const plugin::MusculoskeletalModel& m = require_model(model);
+  require_region_inside_ranges(m.description(), region);
+  return FlatOutputMap(model, flat_outputs_of(m, region));
+}
 
 FlatOutputMap FlatOutputMap::withModel(std::shared_ptr<const plugin::MusculoskeletalModel> model) const {
   const plugin::MusculoskeletalModel& m = require_model(model);
@@ -235,7 +257,7 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
   }
   if (!constant_) {
     // One pass for the margin; a second one only to name the first failing posture.
-    if (!flat_outputs_.automatic) flat_outputs_.margin = flat_output_margin(m, E_, kCheckedPostures);
+    if (!flat_outputs_.automatic) flat_outputs_.margin = flat_output_margin(m, E_, kCheckedPostures, flat_outputs_.region);
     const FlatOutputMargin& margin = flat_outputs_.margin;
     if (!margin.holds() || !assumption1_failures(m.momentArmMatrix(margin.posture_rad), E_).empty()) {
       checkAssumption1OverRanges();
@@ -258,12 +280,17 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
 void FlatOutputMap::checkAssumption1OverRanges() const {
   const plugin::ModelDescription& d = model_->description();
   const std::vector<int> joints = plugin::posture_dependent_joints(d);
-  plugin::for_each_posture(d, joints, kCheckedPostures, [&](const Eigen::VectorXd& q) {
-    const std::vector<std::string> failures = assumption1_failures(model_->momentArmMatrix(q), E_);
-    if (!failures.empty())
-      throw FlatnessError("model '" + d.name + "', C(q) = [R(q); E] at " + plugin::describe_posture(d, joints, q) +
-                          " (a posture in the joint ranges): " + join_failures(failures));
-  });
+  const plugin::JointRanges& region = flat_outputs_.region;
+  const std::string where = region.empty() ? "the joint ranges" : "the flat outputs' region " + plugin::describe_region(d, region);
+  plugin::for_each_posture(
+      d, joints, kCheckedPostures,
+      [&](const Eigen::VectorXd& q) {
+        const std::vector<std::string> failures = assumption1_failures(model_->momentArmMatrix(q), E_);
+        if (!failures.empty())
+          throw FlatnessError("model '" + d.name + "', C(q) = [R(q); E] at " + plugin::describe_posture(d, joints, q) +
+                              " (a posture in " + where + "): " + join_failures(failures));
+      },
+      region);
 }
 
 std::string FlatOutputMap::assumption1FailureAt(const Eigen::VectorXd& q) const {

@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "flatsos/plugin/model/posture_grid.hpp"
 
 namespace flatsos::planner {
 
@@ -60,8 +61,11 @@ struct FlatOutputChoice {
   Eigen::MatrixXd E;                ///< p x m, rows summing to 1
   std::vector<std::string> names;   ///< one per row
   bool automatic = false;           ///< chosen by choose_flat_outputs (the model gave none)
-  FlatOutputMargin margin;          ///< over the joint ranges (the grid of posture_grid.hpp)
+  FlatOutputMargin margin;          ///< over `region` (the grid of posture_grid.hpp)
   long candidates_scored = 0;       ///< automatic only: how many E the search scored
+  /// Where E was chosen and Assumption 1 checked: a box of postures inside the joint ranges
+  /// (task_region.hpp), or empty: the joint ranges themselves.
+  plugin::JointRanges region;
 };
 
 struct FlatOutputSearchOptions {
@@ -74,16 +78,18 @@ struct FlatOutputSearchOptions {
   /// Postures of the final score (as many as the load-time Assumption 1 check visits).
   long final_postures = 20000;
   bool force_exchange_search = false;  ///< skip the exhaustive search (to compare the two)
+  /// The postures E must serve (one range per joint); empty: the joint ranges.
+  plugin::JointRanges region;
   /// The exchange search stops after this many scores with the best E so far (each score
   /// factors an m x m matrix per posture: dozens of muscles make many candidates).
   long max_exchange_scores = 200000;
 };
 
-/// The margin of E (p x m) over about `postures` postures of a grid over the joint ranges of
-/// the joints whose moment arms vary (one posture, all zeros, for constant moment arms). Rows of
-/// E not summing to 1 are not checked here (see FlatOutputMap::checkAssumption1).
+/// The margin of E (p x m) over about `postures` postures of a grid over the joint ranges (or
+/// `region`'s) of the joints whose moment arms vary (one posture, all zeros, for constant moment
+/// arms). Rows of E not summing to 1 are not checked here (see FlatOutputMap::checkAssumption1).
 FlatOutputMargin flat_output_margin(const plugin::MusculoskeletalModel& model, const Eigen::MatrixXd& E,
-                                    long postures);
+                                    long postures, const plugin::JointRanges& region = {});
 
 /// The rows the search combines, with their names: "<a>_<b>_cocontraction" (weights 1/2, 1/2)
 /// for every pair of muscles whose moment arms about some joint have opposite signs at some
@@ -95,7 +101,7 @@ struct FlatOutputCandidates {
 FlatOutputCandidates flat_output_candidates(const plugin::MusculoskeletalModel& model, long postures);
 
 /// The E with the largest margin the search finds (ties: the smaller condition number), scored
-/// over the full grid. Throws FlatnessError when the model has no redundant muscle (m = N), or
+/// over the full grid (of options.region, else of the joint ranges). Throws FlatnessError when the model has no redundant muscle (m = N), or
 /// when no candidate satisfies Assumption 1 everywhere (naming the best one's failing posture
 /// and muscle, and a joint no muscle pair opposes, if there is one).
 FlatOutputChoice choose_flat_outputs(const plugin::MusculoskeletalModel& model,

@@ -149,6 +149,11 @@ class FlatOutputMap {
   explicit FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model);
   /// The given E (the model's flat_outputs ignored), checked as above.
   FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, Eigen::MatrixXd E);
+  /// As the first constructor, but E serves (is chosen and checked over) the postures of
+  /// `region` only, one range per joint inside the joint ranges (task_region.hpp): for tasks
+  /// that stay there when no E serves the whole ranges. Throws as above and
+  /// std::invalid_argument for a region of the wrong size or outside the ranges.
+  static FlatOutputMap overRegion(std::shared_ptr<const plugin::MusculoskeletalModel> model, plugin::JointRanges region);
   /// These flat outputs (E, names, whether the library chose them: hence the same kind of
   /// effort) on another model of as many joints and muscles, e.g. other muscle strengths,
   /// checked as above; the choice's margin is the one scored for this map's model.
