@@ -19,6 +19,7 @@
 #include "scenario_inputs.hpp"
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatsos/planner/receding_horizon_study.hpp"
+#include "flatsos/plugin/io/disturbance_file.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -70,6 +71,11 @@ int main(int argc, char** argv) {
                  "every maximum isometric force of the plant times this factor (a plant weaker or stronger than the "
                  "model)")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  std::string disturbance_path;
+  app.add_option("--disturbance", disturbance_path,
+                 "storage file (.sto) of external forces on the plant's joints: a time column and one column per "
+                 "joint or coordinate (N m on a pin, N along a slider), each row held until the next")
+      ->check(CLI::ExistingFile);
   // Defaults measured on this scenario against CPodes BDF at 1e-10 (README, Benchmarks): the
   // Rosenbrock method at 1e-5 stays within 8e-4 deg of it (RTF ~70); BDF and RKM at 1e-8.
   app.add_option("--accuracy", accuracy,
@@ -90,10 +96,12 @@ int main(int argc, char** argv) {
     if (paper && app.count("--observer-gain-per-s") == 0) options.disturbance_observer_gain_per_s = 0.0;
     // The plant: another model file and/or other strengths; null when it is the model itself.
     std::shared_ptr<const fp::MusculoskeletalModel> plant;
-    if (!plant_path.empty() || plant_strength != 1.0) {
+    if (!plant_path.empty() || plant_strength != 1.0 || !disturbance_path.empty()) {
       fp::ModelDescription d = plant_path.empty() ? model->description() : fp::load_model_file(plant_path);
       for (auto& muscle : d.muscles) muscle.parameters.max_isometric_force_N *= plant_strength;
-      plant = std::make_shared<const fp::MusculoskeletalModel>(std::move(d));
+      auto disturbance = disturbance_path.empty() ? std::vector<fp::ExternalJointTorque>{}
+                                                  : fp::read_disturbance_file(d, disturbance_path);
+      plant = std::make_shared<const fp::MusculoskeletalModel>(std::move(d), std::move(disturbance));
     }
     const ex::ScenarioInputs in = ex::resolve_scenario(*model, "receding_horizon", given, 2.0, 1.0);
     const fpl::FlatOutputMap flat = ex::task_flat_outputs(model, in, "arm_receding_horizon");
@@ -164,7 +172,9 @@ int main(int argc, char** argv) {
     summary["integrator_attempts"] = run.integrator_attempts;
     summary["slp_solver"] = solver;
     summary["observer_gain_per_s"] = options.disturbance_observer_gain_per_s;
-    summary["plant"] = {{"model_file", plant_path.empty() ? model_path : plant_path}, {"strength", plant_strength}};
+    summary["plant"] = {{"model_file", plant_path.empty() ? model_path : plant_path},
+                        {"strength", plant_strength},
+                        {"disturbance_file", disturbance_path}};
     summary["horizon_s"] = options.plan.horizon_s;
     summary["control_period_s"] = options.control_period_s;
 
@@ -184,7 +194,9 @@ int main(int argc, char** argv) {
     }
     summary["prediction_files"] = rh_run.predictions.size();
     ex::write_json(out_dir + "/summary.json", summary);
-    std::cout << "arm_receding_horizon: " << steps << " steps, final q = [" << q_final.transpose() << "] deg, settling "
+    std::cout << "arm_receding_horizon: " << steps << " steps, final q = [" << q_final.transpose()
+              << (std::any_of(model->description().joints.begin(), model->description().joints.end(),
+                             [](const fp::JointDescription& j) { return j.isSlider(); }) ? "] (deg, a slider's m), settling " : "] deg, settling ")
               << (settling >= 0 ? ex::format(settling) + " s" : std::string("never")) << ", plan failures "
               << controller.planFailures() << ", clamped samples " << controller.clampedSamples() << ", bounded steps "
               << controller.boundedSteps() << "\n  median step "

@@ -1,6 +1,8 @@
 // flatsos.run_receding_horizon: the closed loop (the controller on a Simbody plant).
 #include "bindings.hpp"
 
+#include "flatsos/plugin/io/disturbance_file.hpp"
+
 #include <cmath>
 #include <string>
 
@@ -21,11 +23,30 @@ planner::SlpSolver slp_solver_from_name(const std::string& name) {
   throw py::value_error("solver: unknown SLP solver '" + name + "' (exact, simplex or ipopt)");
 }
 
+// The model with `rows` of (time_s, forces per joint: N m, N along a slider) acting on its
+// joints, each held until the next row.
+std::shared_ptr<const plugin::MusculoskeletalModel> with_disturbance(const plugin::MusculoskeletalModel& model,
+                                                                     const py::object& rows) {
+  std::vector<double> times_s;
+  std::vector<Eigen::VectorXd> forces;
+  for (const py::handle row : rows) {
+    const py::tuple pair = py::cast<py::tuple>(row);
+    if (pair.size() != 2) throw py::value_error("disturbance: each row is a pair (time_s, forces per joint)");
+    times_s.push_back(py::cast<double>(pair[0]));
+    forces.push_back(vector_argument(pair[1], model.numJoints(), "disturbance forces"));
+  }
+  Eigen::MatrixXd table(static_cast<Eigen::Index>(forces.size()), model.numJoints());
+  for (std::size_t k = 0; k < forces.size(); ++k) table.row(static_cast<Eigen::Index>(k)) = forces[k].transpose();
+  plugin::ModelDescription d = model.description();
+  auto torques = plugin::disturbance_torques(d, times_s, table);  // std::invalid_argument: ValueError
+  return std::make_shared<const plugin::MusculoskeletalModel>(std::move(d), std::move(torques));
+}
+
 py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::object& target, double duration,
                               const py::object& qd0, const py::object& a0, const py::object& reserves, double horizon,
                               int grid_points, double period, const std::string& solver, bool bounds,
                               double observer_gain, const std::string& integrator, const py::object& accuracy,
-                              const py::object& plant, double settle_tolerance) {
+                              const py::object& plant, double settle_tolerance, const py::object& disturbance) {
   const plugin::MusculoskeletalModel& model = *m.model;
   const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
   const Eigen::VectorXd q0_rad = vector_argument(q0, joints, "q0"), target_rad = vector_argument(target, joints, "target");
@@ -62,8 +83,12 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
   if (!(loop.accuracy > 0.0 && loop.accuracy <= 1e-3)) throw py::value_error("accuracy: must lie in (0, 1e-3]");
   // The plant starts from its own state (its muscles' rest, or their equilibrium at a0).
   if (!plant.is_none() && !py::isinstance<Model>(plant)) throw py::value_error("plant: expected a flatsos.Model");
-  const Model& simulated_model = plant.is_none() ? m : plant.cast<const Model&>();
-  const std::shared_ptr<const plugin::MusculoskeletalModel> plant_model = plant.is_none() ? nullptr : simulated_model.model;
+  const Model& given_plant = plant.is_none() ? m : plant.cast<const Model&>();
+  const std::shared_ptr<const plugin::MusculoskeletalModel> pushed =
+      disturbance.is_none() ? nullptr : with_disturbance(*given_plant.model, disturbance);
+  const plugin::MusculoskeletalModel& simulated = pushed ? *pushed : *given_plant.model;
+  const std::shared_ptr<const plugin::MusculoskeletalModel> plant_model =
+      pushed ? pushed : plant.is_none() ? nullptr : given_plant.model;
 
   py::dict out;
   planner::RecedingHorizonRun run;
@@ -74,7 +99,8 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
     // Bad options: std::invalid_argument naming the field (a ValueError).
     const auto flat = flat_for_task(m, {q0_rad, target_rad});
     planner::RecedingHorizonController controller(*flat, options, plant_model);
-    const auto plant_flat = plant_model ? flat_for_task(simulated_model, {q0_rad, target_rad}) : flat;
+    auto plant_flat = plant.is_none() ? flat : flat_for_task(given_plant, {q0_rad, target_rad});
+    if (pushed) plant_flat = std::make_shared<const planner::FlatOutputMap>(plant_flat->withModel(pushed));
     const SimTK::State initial = planner::start_state(*plant_flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
     run = planner::run_receding_horizon(controller, initial, loop, settle_tolerance);
     warnings = controller.warnings();
@@ -83,7 +109,6 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
     clamped = controller.clampedSamples();
     bounded = controller.boundedSteps();
   }
-  const plugin::MusculoskeletalModel& simulated = *simulated_model.model;
   std::string message;
   for (const auto& f : run.failures) message += (message.empty() ? "" : "; ") + f;
   out["time"] = column_vector(run.loop.states, "time");
@@ -113,7 +138,7 @@ void register_receding_horizon(py::module_& m) {
         py::arg("reserves") = 1.0, py::arg("horizon") = 0.5, py::arg("grid_points") = 11, py::arg("period") = 0.05,
         py::arg("solver") = "exact", py::arg("bounds") = true, py::arg("observer_gain") = 20.0,
         py::arg("integrator") = "rosenbrock", py::arg("accuracy") = py::none(), py::arg("plant") = py::none(),
-        py::arg("settle_tolerance") = M_PI / 180.0,
+        py::arg("settle_tolerance") = M_PI / 180.0, py::arg("disturbance") = py::none(),
         "The receding-horizon controller moving the model from rest at q0 (rad) to `target` (rad) on a Simbody "
         "plant for `duration` s: every `period` s a plan over `horizon` s (a cubic to the target, the torque box "
         "on `grid_points` postures, the SLP by `solver`: 'exact', 'simplex' or 'ipopt'), its excitations kept "
@@ -122,7 +147,8 @@ void register_receding_horizon(py::module_& m) {
         "minimum-effort rest state for `reserves` (minimum tendon force, N, one number or one per muscle). "
         "observer_gain: the disturbance observer, 1/s (default 20: removes the offset of a "
         "model mismatch; 0: the paper's controller). plant: another flatsos.Model with the same joints and muscles to simulate instead of "
-        "`model` (model mismatch). integrator: 'rosenbrock' (default accuracy 1e-5), 'bdf' or 'rkm' (1e-8).\n"
+        "`model` (model mismatch). disturbance: rows (time_s, forces per joint: N m, N along a slider) pushing "
+        "the plant's joints, each held until the next row's time. integrator: 'rosenbrock' (default accuracy 1e-5), 'bdf' or 'rkm' (1e-8).\n"
         "Returns a dict: 'time' (s), 'q' (rad, one row per report), 'activation' and 'excitation' (one column "
         "per muscle; the excitation in effect), 'settling_time' (s from which every joint stays within "
         "settle_tolerance rad of the target; None: never), 'real_time_factor', 'success' (settled, finite, every "

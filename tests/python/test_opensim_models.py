@@ -36,3 +36,18 @@ def test_arm26_as_downloaded_is_controlled_to_90_deg(models_dir):
     assert run["success"], run["message"]
     assert np.degrees(np.abs(run["q"][-1] - target)).max() < 1.0
     assert run["plan_failures"] == 0
+
+
+def test_the_tug_of_wars_block_is_held_against_a_20_N_push(models_dir):
+    model = flatsos.Model(str(models_dir / "opensim" / "Tug_of_War_Millard.osim"))
+    target = [0.02]  # m
+    push = [(0.0, [0.0]), (1.0, [20.0])]  # N along the slider from 1 s on
+    quiet = flatsos.run_receding_horizon(model, [0.0], target, 3.0)
+    pushed = flatsos.run_receding_horizon(model, [0.0], target, 3.0, disturbance=push)
+    assert quiet["success"] and pushed["success"], pushed["message"]
+    after = pushed["time"] >= 1.0
+    moved_m = np.abs(pushed["q"][after, 0] - quiet["q"][after, 0]).max()
+    assert 1e-3 < moved_m < 5e-3  # the push moves the block, the controller takes it back
+    assert abs(pushed["q"][-1, 0] - target[0]) < 1e-3
+    with pytest.raises(ValueError, match="disturbance"):
+        flatsos.run_receding_horizon(model, [0.0], target, 1.0, disturbance=[(0.0, [1.0, 2.0])])

@@ -33,20 +33,24 @@ void ExcitationPolynomial::validate() const {
     throw std::invalid_argument("excitation polynomial: duration must be a finite time > 0 s");
 }
 
+namespace {
+// Times finite and strictly increasing, values finite, as many of each, at least one.
+void check_samples(const std::vector<double>& times_s, const std::vector<double>& values) {
+  if (times_s.empty() || times_s.size() != values.size())
+    throw std::invalid_argument("excitation signal: need as many values as times, at least one (got " +
+                                std::to_string(times_s.size()) + " times, " + std::to_string(values.size()) + " values)");
+  for (std::size_t i = 0; i < times_s.size(); ++i) {
+    if (!std::isfinite(times_s[i]) || !std::isfinite(values[i]))
+      throw std::invalid_argument("excitation signal: sample " + std::to_string(i) + " is not finite");
+    if (i > 0 && !(times_s[i] > times_s[i - 1]))
+      throw std::invalid_argument("excitation signal: times must increase strictly (sample " + std::to_string(i) + ")");
+  }
+}
+}  // namespace
+
 PiecewiseLinearSignal::PiecewiseLinearSignal(std::vector<double> times_s, std::vector<double> values)
     : times_s_(std::move(times_s)), values_(std::move(values)) {
-  if (times_s_.empty() || times_s_.size() != values_.size())
-    throw std::invalid_argument("excitation signal: need as many values as times, at least one (got " +
-                                std::to_string(times_s_.size()) + " times, " +
-                                std::to_string(values_.size()) + " values)");
-  for (std::size_t i = 0; i < times_s_.size(); ++i) {
-    if (!std::isfinite(times_s_[i]) || !std::isfinite(values_[i]))
-      throw std::invalid_argument("excitation signal: sample " + std::to_string(i) +
-                                  " is not finite");
-    if (i > 0 && !(times_s_[i] > times_s_[i - 1]))
-      throw std::invalid_argument("excitation signal: times must increase strictly (sample " +
-                                  std::to_string(i) + ")");
-  }
+  check_samples(times_s_, values_);
 }
 
 double PiecewiseLinearSignal::value(double time_s) const {
@@ -57,6 +61,16 @@ double PiecewiseLinearSignal::value(double time_s) const {
   const std::size_t lo = hi - 1;
   const double w = (time_s - times_s_[lo]) / (times_s_[hi] - times_s_[lo]);
   return (1.0 - w) * values_[lo] + w * values_[hi];
+}
+
+PiecewiseConstantSignal::PiecewiseConstantSignal(std::vector<double> times_s, std::vector<double> values)
+    : times_s_(std::move(times_s)), values_(std::move(values)) {
+  check_samples(times_s_, values_);
+}
+
+double PiecewiseConstantSignal::value(double time_s) const {
+  const auto after = std::upper_bound(times_s_.begin(), times_s_.end(), time_s) - times_s_.begin();
+  return after == 0 ? 0.0 : values_[static_cast<std::size_t>(after - 1)];
 }
 
 }  // namespace flatsos::plugin

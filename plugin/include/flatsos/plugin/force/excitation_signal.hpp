@@ -49,4 +49,16 @@ class PiecewiseLinearSignal final : public ExcitationSignal {
   std::vector<double> values_;
 };
 
+/// Each value held from its time until the next one's; 0 before the first (a disturbance given
+/// as a table of steps). Throws as PiecewiseLinearSignal does.
+class PiecewiseConstantSignal final : public ExcitationSignal {
+ public:
+  PiecewiseConstantSignal(std::vector<double> times_s, std::vector<double> values);
+  double value(double time_s) const override;
+
+ private:
+  std::vector<double> times_s_;
+  std::vector<double> values_;
+};
+
 }  // namespace flatsos::plugin
