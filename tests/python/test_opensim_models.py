@@ -13,6 +13,8 @@ def test_an_osim_file_is_a_model_that_plans(models_dir):
     # 4 cm: with the file's Millard curves no activation holds the block beyond 4.23 cm.
     plan = flatsos.plan_open_loop(model, [0.0], [0.0], None, [0.04], 1.0, 10.0)
     assert plan.status == "solved", plan.message
+    back = flatsos.plan_open_loop(model, [0.04], [0.0], None, [0.0], 1.0, 10.0)
+    assert back.status == "solved", back.message
 
 
 def test_geometric_paths_and_opensim_2_muscles_are_asked_by_keyword(models_dir):
