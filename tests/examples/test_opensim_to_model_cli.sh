@@ -43,6 +43,10 @@ expect 0 "plan solved" -- "$ol" --model "$tmp/m.json" --q0-deg -80 --target-deg 
 arm26="$(dirname "${BASH_SOURCE[0]}")/../../models/opensim/arm26/arm26.osim"
 expect 0 "path of BRA fitted (order" -- "$convert" --osim "$arm26" --keep r_elbow_flex --hold r_shoulder_elev=0 --range r_elbow_flex=10:120 --out "$tmp/arm26.json"
 grep -q '"path_fit"' "$tmp/arm26.json" || { echo "FAILED: the provenance lacks the path fit"; fail=1; }
+# Both coordinates: TRIlat and TRImed cross the elbow along the same points with the same
+# strength (tied muscles, every split of their load costs the same); the plan must still solve.
+expect 0 "path of BRA fitted (order" -- "$convert" --osim "$arm26" --keep r_shoulder_elev r_elbow_flex --range r_shoulder_elev=-10:10 r_elbow_flex=5:100 --out "$tmp/arm26_both.json"
+expect 0 "plan solved" -- "$ol" --model "$tmp/arm26_both.json" --q0-deg 0 15 --target-deg 0 90 --duration-s 1 --out "$tmp/arm26_ol"
 # An .osim where a model is expected is imported on the way, with the import's report.
 tug="$(dirname "${BASH_SOURCE[0]}")/../../models/opensim/Tug_of_War_Millard.osim"
 # 4 cm: with Millard's curves (fL 0 below 0.4441 optimal lengths) the shortened muscle at full

@@ -10,6 +10,7 @@
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
 #include "flatsos/plugin/model/posture_grid.hpp"
+#include "flatness/tied_muscles.hpp"
 
 namespace flatsos::planner {
 
@@ -255,6 +256,7 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
       break;
     case plugin::EffortWeights::Kind::PerMuscle: effort_weights_ = weights.per_muscle; break;
   }
+  setPricingWeights();
   if (!constant_) {
     // One pass for the margin; a second one only to name the first failing posture.
     if (!flat_outputs_.automatic) flat_outputs_.margin = flat_output_margin(m, E_, kCheckedPostures, flat_outputs_.region);
@@ -275,6 +277,11 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
   const Eigen::MatrixXd Cinv = C_.fullPivLu().inverse();
   Ctau_ = Cinv.leftCols(numJoints());
   CY_ = Cinv.rightCols(numFlatOutputs());
+}
+
+void FlatOutputMap::setPricingWeights() {
+  // The paper's E^T 1 prices flat outputs, not forces: the LPs use their sum as it is.
+  pricing_weights_ = effortIsFlatOutputSum() ? effort_weights_ : detail::tie_broken_effort_weights(*model_, effort_weights_);
 }
 
 void FlatOutputMap::checkAssumption1OverRanges() const {
@@ -403,6 +410,7 @@ FlatOutputMap FlatOutputMap::withEffort(std::shared_ptr<const Effort> effort) co
   FlatOutputMap out = *this;
   out.effort_weights_ = *weights;
   out.effort_kind_ = plugin::EffortWeights::Kind::PerMuscle;
+  out.setPricingWeights();
   return out;
 }
 

@@ -125,12 +125,12 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
     step.reserve_rows.middleRows(i * m, m) = map.CY;
     step.bound_N.segment(i * m, m) = o.reserves_N - map.Ctau * tau;
     // The effort's flat-output part, C_Y(q)^T w, averaged over the horizon's grid.
-    if (!flat_output_sum) step.buffers.slp.cost.noalias() += map.CY.transpose() * flat.effortWeights() / o.grid_points;
+    if (!flat_output_sum) step.buffers.slp.cost.noalias() += map.CY.transpose() * flat.effortPricingWeights() / o.grid_points;
   }
   if (!varying) {
     step.reserve_rows = flat.CY();  // no allocation once sized
     slp_bound_vector(flat.Ctau(), step.tau_min, step.tau_max, o.reserves_N, step.bound_N);
-    if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortWeights();
+    if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortPricingWeights();
   }
   step.grid_seconds = wall.seconds();
   if (study.slp_by_ipopt) solve_slp_by_ipopt(step.reserve_rows, step.bound_N, study.warm_start, step.buffers.slp, step.slp);

@@ -13,7 +13,7 @@ namespace flatsos::planner {
 
 namespace {
 void finish(const detail::SosSetup& setup, const Eigen::VectorXd& theta, SosProgramResult& result) {
-  result.cost_N_s = setup.cost_constant + setup.lp.cost.dot(theta);
+  result.cost_N_s = setup.effort_cost_constant + setup.effort_cost.dot(theta);
   result.Y = detail::flat_outputs_of(setup, theta);
   result.status = SolveStatus::Solved;
 }

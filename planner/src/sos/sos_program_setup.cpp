@@ -106,13 +106,21 @@ class SetupBuilder {
     // the constraints Y >= 0 are implied and left out; the coupling's bound needs them imposed.
     const bool y_implied = !varying_ && flat_.E().minCoeff() >= 0.0;
     setup_.lp.cost = Eigen::VectorXd::Zero(n_theta_);
-    if (!varying_ && !flat_.effortIsFlatOutputSum()) constant_split_ = flat_.effortSplit(Eigen::VectorXd::Zero(n_));
+    setup_.effort_cost = Eigen::VectorXd::Zero(n_theta_);
+    const Eigen::VectorXd& effort_weights = flat_.effortWeights();
+    // The LP prices tied muscles apart (FlatOutputMap::effortPricingWeights); the effort
+    // reported is the model's.
+    const Eigen::VectorXd& lp_weights = flat_.effortPricingWeights();
+    const CostWeights lp_cost{lp_weights, splitOf(lp_weights), setup_.lp.cost, setup_.cost_constant};
+    const CostWeights effort_cost{effort_weights, splitOf(effort_weights), setup_.effort_cost,
+                                  setup_.effort_cost_constant};
     const std::vector<double> breaks = segment_breaks(torque_, setup_.basis);
     for (std::size_t seg = 0; seg + 1 < breaks.size(); ++seg) {
       const Segment s = segment(breaks[seg], breaks[seg + 1], seg == 0);
       for (int j = 0; j < m_; ++j) add(s, tendonForceConstraint(s, j));
       for (int l = 0; l < p_ && !y_implied; ++l) add(s, flatOutputConstraint(s, l));
-      addCost(s);
+      addCost(s, lp_cost);
+      addCost(s, effort_cost);
     }
     setup_.lp.x_lower = Eigen::VectorXd::Constant(n_theta_, -o_.exchange.coefficient_bound_N);
     setup_.lp.x_upper = Eigen::VectorXd::Constant(n_theta_, o_.exchange.coefficient_bound_N);
@@ -257,39 +265,50 @@ class SetupBuilder {
     return c;
   }
 
+  // One pricing of the forces: weights w, their split at q = 0 (constant moment arms), and the
+  // cost vector and constant it adds to.
+  struct CostWeights {
+    const Eigen::VectorXd weights_w;
+    const EffortSplit constant_split;
+    Eigen::VectorXd& cost;
+    double& constant;
+  };
+
+  EffortSplit splitOf(const Eigen::VectorXd& weights_w) const {
+    if (varying_ || flat_.effortIsFlatOutputSum()) return {};
+    return {flat_.CY().transpose() * weights_w, flat_.Ctau().transpose() * weights_w};
+  }
+
   // The integral of w^T F = w^T C_tau tau + sum_l (C_Y^T w)_l Y_l over the segment. The paper's
   // weights (E^T 1) give exactly sum_l Y_l. Others: constants with constant moment arms; with
   // posture-dependent ones this piece's modelled base force and coupling polynomials (each within
   // its remainder bound of the exact C(q(t))^-1).
-  void addCost(const Segment& s) {
+  void addCost(const Segment& s, const CostWeights& w) {
     const bool flat_output_sum = flat_.effortIsFlatOutputSum();
     for (int l = 0; l < p_; ++l) {
-      const Eigen::RowVectorXd weights = (s.t1 - s.t0) * flatOutputCostRow(s, l) * s.P;
+      const Eigen::RowVectorXd weights = (s.t1 - s.t0) * flatOutputCostRow(s, l, w) * s.P;
       const auto& out = setup_.outputs[static_cast<std::size_t>(l)];
-      setup_.cost_constant += weights.dot(out.particular);
-      if (out.nullspace.cols())
-        setup_.lp.cost.segment(out.offset, out.nullspace.cols()) += (weights * out.nullspace).transpose();
+      w.constant += weights.dot(out.particular);
+      if (out.nullspace.cols()) w.cost.segment(out.offset, out.nullspace.cols()) += (weights * out.nullspace).transpose();
     }
     if (flat_output_sum) return;
-    const Eigen::VectorXd& weights_w = flat_.effortWeights();
     const double piece_length = s.piece->t1_s - s.piece->t0_s;
     for (int i = 0; i < (varying_ ? m_ : n_); ++i) {
-      const double weight = varying_ ? weights_w[i] : constant_split_.torques[i];
+      const double weight = varying_ ? w.weights_w[i] : w.constant_split.torques[i];
       const Polynomial& signal =
           varying_ ? s.piece->base_force[static_cast<std::size_t>(i)] : s.piece->torque[static_cast<std::size_t>(i)];
-      setup_.cost_constant += weight * piece_length * signal.integral(s.a, s.a + s.b);
+      w.constant += weight * piece_length * signal.integral(s.a, s.a + s.b);
     }
   }
 
   // Flat output l's cost weight over the segment as a row on powers of s (integrals over [0, 1]).
-  Eigen::RowVectorXd flatOutputCostRow(const Segment& s, int l) const {
+  Eigen::RowVectorXd flatOutputCostRow(const Segment& s, int l, const CostWeights& w) const {
     if (flat_.effortIsFlatOutputSum()) return mean_weights_.transpose();
-    if (!varying_) return constant_split_.flat_outputs[l] * mean_weights_.transpose();
-    const Eigen::VectorXd& weights_w = flat_.effortWeights();
+    if (!varying_) return w.constant_split.flat_outputs[l] * mean_weights_.transpose();
     Eigen::VectorXd c_l = Eigen::VectorXd::Zero(1);
     for (int j = 0; j < m_; ++j) {
       const Eigen::VectorXd cj =
-          weights_w[j] * s.piece->coupling[static_cast<std::size_t>(j * p_ + l)].composeAffine(s.a, s.b).coefficients();
+          w.weights_w[j] * s.piece->coupling[static_cast<std::size_t>(j * p_ + l)].composeAffine(s.a, s.b).coefficients();
       if (cj.size() > c_l.size()) c_l.conservativeResizeLike(Eigen::VectorXd::Zero(cj.size()));
       c_l.head(cj.size()) += cj;
     }
@@ -309,7 +328,6 @@ class SetupBuilder {
   SosSetup setup_;
   int n_theta_ = 0, D_ = 0;
   Eigen::VectorXd mean_weights_;
-  EffortSplit constant_split_;
 };
 
 }  // namespace

@@ -82,6 +82,10 @@ struct SosSetup {
   const TorqueModel* torque = nullptr;
   LinearProgram lp;           ///< cost and bounds on theta; rows built by the exchange
   double cost_constant = 0.0; ///< cost = cost_constant + lp.cost . theta
+  /// The model's effort effort_cost_constant + effort_cost . theta: lp.cost's but for the
+  /// tie-break between tied muscles (tied_muscles.hpp), identical without ties.
+  Eigen::VectorXd effort_cost;
+  double effort_cost_constant = 0.0;
 };
 
 /// [1, s, s^2, ...] (size entries).

@@ -181,6 +181,11 @@ class FlatOutputMap {
   /// By default E^T 1, the sum of the flat outputs (whose torque part is 0 since E C_tau = 0),
   /// when E was given; 1 / Fmax, the sum of normalized tendon forces, when the library chose E.
   const Eigen::VectorXd& effortWeights() const { return effort_weights_; }
+  /// The weights the planners' linear programs price tendon forces with: effortWeights(), but
+  /// where muscles are tied (the same moment arms in every posture and the same weight, so every
+  /// split of their load costs the same) each earlier muscle of the group 1e-3 dearer than the
+  /// next: a unique optimum instead of a face whose vertices the LPs jump between.
+  const Eigen::VectorXd& effortPricingWeights() const { return pricing_weights_; }
   /// How the weights were set: never EffortWeights::Kind::Default (resolved as above).
   plugin::EffortWeights::Kind effortKind() const { return effort_kind_; }
   /// True for the paper's weights E^T 1: then w^T F is exactly the sum of the flat outputs.
@@ -263,6 +268,7 @@ class FlatOutputMap {
   FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel> model, FlatOutputChoice flat_outputs);
   const Eigen::MatrixXd& requireConstant(const Eigen::MatrixXd& matrix, const char* name) const;
   void checkAssumption1OverRanges() const;
+  void setPricingWeights();  // from effort_weights_ and the model's tied muscles
 
   std::shared_ptr<const plugin::MusculoskeletalModel> model_;
   bool constant_ = true;
@@ -271,6 +277,7 @@ class FlatOutputMap {
   Eigen::MatrixXd A_, E_, C_, Ctau_, CY_;  // A_ .. CY_: constant moment arms only
   plugin::EffortWeights::Kind effort_kind_ = plugin::EffortWeights::Kind::FlatOutputs;
   Eigen::VectorXd effort_weights_;
+  Eigen::VectorXd pricing_weights_;
 };
 
 namespace detail {
