@@ -28,6 +28,18 @@ def test_geometric_paths_and_opensim_2_muscles_are_asked_by_keyword(models_dir):
         flatsos.Model(str(models_dir / "arm_richter_warner.json"), opensim_2_muscles=True)
 
 
+def test_arm26_as_downloaded_plans_15_to_90_deg_and_simbody_replays_it(models_dir):
+    # The shoulder is held at 0 by the biceps against the triceps (arm26 has no deltoid); TRIlat
+    # and TRImed share moment arms and strength, a tie the planner breaks.
+    model = flatsos.Model(str(models_dir / "opensim" / "arm26" / "arm26.osim"))
+    plan = flatsos.plan_open_loop(model, np.radians([0.0, 15.0]), [0.0, 0.0], None, np.radians([0.0, 90.0]), 1.0, 10.0)
+    assert plan.status == "solved", plan.message
+    sim = flatsos.simulate_plan(plan)
+    planned = plan.sample(sim["time"])
+    assert np.degrees(np.abs(planned["q"] - sim["q"]).max()) < 1e-4  # measured 2.5e-8 deg
+    assert planned["excitation"].min() >= -1e-6 and planned["excitation"].max() <= 1 + 1e-6
+
+
 def test_arm26_as_downloaded_is_controlled_to_90_deg(models_dir):
     # No flat outputs serve OpenSim's shoulder range (every E turns C(q) singular or a tendon
     # force negative somewhere); the controller gets flat outputs over the region its task visits.

@@ -10,7 +10,6 @@
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
 #include "flatsos/plugin/model/posture_grid.hpp"
-#include "flatness/tied_muscles.hpp"
 
 namespace flatsos::planner {
 
@@ -279,11 +278,6 @@ FlatOutputMap::FlatOutputMap(std::shared_ptr<const plugin::MusculoskeletalModel>
   CY_ = Cinv.rightCols(numFlatOutputs());
 }
 
-void FlatOutputMap::setPricingWeights() {
-  // The paper's E^T 1 prices flat outputs, not forces: the LPs use their sum as it is.
-  pricing_weights_ = effortIsFlatOutputSum() ? effort_weights_ : detail::tie_broken_effort_weights(*model_, effort_weights_);
-}
-
 void FlatOutputMap::checkAssumption1OverRanges() const {
   const plugin::ModelDescription& d = model_->description();
   const std::vector<int> joints = plugin::posture_dependent_joints(d);
@@ -393,39 +387,6 @@ Eigen::MatrixXd FlatOutputMap::forceJet(const Jet& q_jet, const Eigen::MatrixXd&
   else rhs.tail(m - n).setZero();
   F.col(2) = lu.solve(rhs);
   return F;
-}
-
-std::shared_ptr<const Effort> FlatOutputMap::effort() const {
-  return std::make_shared<TendonForceEffort>(effort_weights_);
-}
-
-FlatOutputMap FlatOutputMap::withEffort(std::shared_ptr<const Effort> effort) const {
-  if (!effort) throw std::invalid_argument("flat outputs: no effort given");
-  effort->validate(muscles_);
-  const std::optional<Eigen::VectorXd> weights = effort->tendonForceWeights();
-  if (!weights)
-    throw std::invalid_argument("effort '" + effort->name() +
-                                "' is not linear in the tendon forces: the flatness planners minimize linear efforts "
-                                "(w^T F); the collocation reference (collocation.hpp) minimizes any");
-  FlatOutputMap out = *this;
-  out.effort_weights_ = *weights;
-  out.effort_kind_ = plugin::EffortWeights::Kind::PerMuscle;
-  out.setPricingWeights();
-  return out;
-}
-
-std::string FlatOutputMap::effortUnit() const {
-  return effort_kind_ == plugin::EffortWeights::Kind::NormalizedTendonForce ? "s" : "N s";
-}
-
-bool FlatOutputMap::effortIsFlatOutputSum() const {
-  return effort_kind_ == plugin::EffortWeights::Kind::FlatOutputs;
-}
-
-EffortSplit FlatOutputMap::effortSplit(const Eigen::VectorXd& q_rad) const {
-  if (constant_) return {CY_.transpose() * effort_weights_, Ctau_.transpose() * effort_weights_};
-  const ForceJetMap map = forceJetMap(q_rad);
-  return {map.CY.transpose() * effort_weights_, map.Ctau.transpose() * effort_weights_};
 }
 
 Eigen::VectorXd FlatOutputMap::torque(plugin::ModelWorkspace& ws, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
