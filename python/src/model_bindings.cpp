@@ -94,7 +94,9 @@ void register_model(py::module_& m) {
            py::arg("opensim_2_muscles") = false,
            "Loads the model file, or imports an OpenSim model (.osim) with its own settings: paths='geometry' "
            "simulates its GeometryPaths (plans use the fitted ones), opensim_2_muscles its Thelen muscles and "
-           "cylinder wrapping as OpenSim 2.x modelled them. A bad file, or flat outputs that violate Assumption 1, raise ValueError.")
+           "cylinder wrapping as OpenSim 2.x modelled them. A bad file, or flat outputs the file gives that violate "
+           "Assumption 1, raise ValueError; when none the library chooses serves the joint ranges (OpenSim's often), "
+           "each plan or run chooses them over the region its task visits.")
       .def_static("from_json", &from_json, py::arg("text"), py::arg("source") = "model",
                   "The model of a model file's JSON text (what to_json gives; `source` names it in messages).")
       .def("to_json", [](const Model& self) { return plugin::model_json_text(self.model->description()); },
