@@ -29,10 +29,16 @@ std::shared_ptr<const plugin::MusculoskeletalModel> with_disturbance(const plugi
                                                                      const py::object& rows) {
   std::vector<double> times_s;
   std::vector<Eigen::VectorXd> forces;
+  const char* shape = "disturbance: a sequence of rows (time_s, forces per joint)";
+  if (!py::isinstance<py::sequence>(rows)) throw py::value_error(shape);
   for (const py::handle row : rows) {
-    const py::tuple pair = py::cast<py::tuple>(row);
-    if (pair.size() != 2) throw py::value_error("disturbance: each row is a pair (time_s, forces per joint)");
-    times_s.push_back(py::cast<double>(pair[0]));
+    if (!py::isinstance<py::sequence>(row) || py::len(row) != 2) throw py::value_error(shape);
+    const auto pair = py::reinterpret_borrow<py::sequence>(row);
+    try {
+      times_s.push_back(py::cast<double>(pair[0]));
+    } catch (const py::cast_error&) {
+      throw py::value_error("disturbance: a row's time is not a number");
+    }
     forces.push_back(vector_argument(pair[1], model.numJoints(), "disturbance forces"));
   }
   Eigen::MatrixXd table(static_cast<Eigen::Index>(forces.size()), model.numJoints());

@@ -63,5 +63,6 @@ def test_the_tug_of_wars_block_is_held_against_a_20_N_push(models_dir):
     moved_m = np.abs(pushed["q"][after, 0] - quiet["q"][after, 0]).max()
     assert 1e-3 < moved_m < 5e-3  # the push moves the block, the controller takes it back
     assert abs(pushed["q"][-1, 0] - target[0]) < 1e-3
-    with pytest.raises(ValueError, match="disturbance"):
-        flatsos.run_receding_horizon(model, [0.0], target, 1.0, disturbance=[(0.0, [1.0, 2.0])])
+    for bad in ([(0.0, [1.0, 2.0])], [(0.0,)], [("soon", [1.0])], [], 3.0, [(1.0, [1.0]), (0.5, [2.0])]):
+        with pytest.raises(ValueError, match="disturbance"):
+            flatsos.run_receding_horizon(model, [0.0], target, 1.0, disturbance=bad)
