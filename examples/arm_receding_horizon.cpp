@@ -194,9 +194,10 @@ int main(int argc, char** argv) {
     }
     summary["prediction_files"] = rh_run.predictions.size();
     ex::write_json(out_dir + "/summary.json", summary);
+    const auto& joints = model->description().joints;
+    const bool any_slider = std::any_of(joints.begin(), joints.end(), [](const fp::JointDescription& j) { return j.isSlider(); });
     std::cout << "arm_receding_horizon: " << steps << " steps, final q = [" << q_final.transpose()
-              << (std::any_of(model->description().joints.begin(), model->description().joints.end(),
-                             [](const fp::JointDescription& j) { return j.isSlider(); }) ? "] (deg, a slider's m), settling " : "] deg, settling ")
+              << (any_slider ? "] (deg, a slider's m), settling " : "] deg, settling ")
               << (settling >= 0 ? ex::format(settling) + " s" : std::string("never")) << ", plan failures "
               << controller.planFailures() << ", clamped samples " << controller.clampedSamples() << ", bounded steps "
               << controller.boundedSteps() << "\n  median step "
