@@ -228,8 +228,11 @@ class BoundedExchange {
       return false;
     }
     result_.status = SolveStatus::Failed;
-    result_.message = "the bounded exchange did not converge in " + std::to_string(result_.bound_rounds) +
-                      " rounds (worst bound excess " + std::to_string(excess_.worst) + ": " + excess_.worst_text + ")";
+    result_.message = "the bounded exchange did not converge in " + std::to_string(result_.bound_rounds) + " rounds (" +
+                      (excess_.worst_text.empty() ? std::string("the bounds held; each round still added reserve points")
+                                                  : "worst bound excess " + std::to_string(excess_.worst) + ": " +
+                                                        excess_.worst_text) +
+                      ")";
     return false;
   }
 
