@@ -9,6 +9,7 @@
 #include "flatsos/muscles/degroote_fregly2016_muscle.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_model.hpp"
+#include "example_muscles.hpp"
 #include "flatsos/muscles/muscle_model_check.hpp"
 #include "flatsos/muscles/richter_warner_muscle.hpp"
 #include "flatsos/muscles/thelen2003_muscle.hpp"
@@ -17,16 +18,7 @@ namespace fm = flatsos::muscles;
 
 namespace {
 
-fm::MuscleParameters muscle(const std::string& model) {
-  fm::MuscleParameters p;
-  p.name = "m";
-  p.max_isometric_force_N = 600.0;
-  p.optimal_fiber_length_m = 0.11;
-  p.tendon_slack_length_m = 0.20;
-  p.model = fm::muscle_model_named(model);
-  p.model->setDefaults(p);
-  return p;
-}
+fm::MuscleParameters muscle(const std::string& model) { return flatsos::test::muscle_with_defaults(model); }
 
 // Richter & Warner's laws with a tendon slope 0.1 % too steep.
 class WrongSlope final : public fm::MuscleModel {

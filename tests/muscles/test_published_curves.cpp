@@ -17,21 +17,13 @@
 
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_model.hpp"
+#include "example_muscles.hpp"
 
 namespace fm = flatsos::muscles;
 
 namespace {
 
-fm::MuscleParameters muscle(const std::string& model) {
-  fm::MuscleParameters p;
-  p.name = "m";
-  p.max_isometric_force_N = 600.0;
-  p.optimal_fiber_length_m = 0.11;
-  p.tendon_slack_length_m = 0.20;
-  p.model = fm::muscle_model_named(model);
-  p.model->setDefaults(p);
-  return p;
-}
+fm::MuscleParameters muscle(const std::string& model) { return flatsos::test::muscle_with_defaults(model); }
 
 // The largest |ours - published| / max(|published|, floor) over 1000 points of [lo, hi].
 double worst_relative(double lo, double hi, const std::function<double(double)>& ours,

@@ -111,6 +111,7 @@ class SetupBuilder {
     // The LP prices tied muscles apart (FlatOutputMap::effortPricingWeights); the effort
     // reported is the model's.
     const Eigen::VectorXd& lp_weights = flat_.effortPricingWeights();
+    const bool priced_apart = lp_weights != effort_weights;  // else one cost serves both
     const CostWeights lp_cost{lp_weights, splitOf(lp_weights), setup_.lp.cost, setup_.cost_constant};
     const CostWeights effort_cost{effort_weights, splitOf(effort_weights), setup_.effort_cost,
                                   setup_.effort_cost_constant};
@@ -120,7 +121,11 @@ class SetupBuilder {
       for (int j = 0; j < m_; ++j) add(s, tendonForceConstraint(s, j));
       for (int l = 0; l < p_ && !y_implied; ++l) add(s, flatOutputConstraint(s, l));
       addCost(s, lp_cost);
-      addCost(s, effort_cost);
+      if (priced_apart) addCost(s, effort_cost);
+    }
+    if (!priced_apart) {
+      setup_.effort_cost = setup_.lp.cost;
+      setup_.effort_cost_constant = setup_.cost_constant;
     }
     setup_.lp.x_lower = Eigen::VectorXd::Constant(n_theta_, -o_.exchange.coefficient_bound_N);
     setup_.lp.x_upper = Eigen::VectorXd::Constant(n_theta_, o_.exchange.coefficient_bound_N);
