@@ -56,9 +56,10 @@ int main(int argc, char** argv) {
                "plan without the excitation bounds on each control period (the paper's step: excitations outside "
                "[0, 1] are clamped by the muscle and counted)");
   app.add_option("--observer-gain-per-s", options.disturbance_observer_gain_per_s,
-                 "disturbance observer gain in [0, 40] 1/s: integrates the plan's prediction error so that a model "
-                 "mismatch leaves no offset (0: the paper's controller, --paper)")
-      ->capture_default_str()->check(CLI::Range(0.0, 40.0));
+                 "disturbance observer gain in [0, 1000] 1/s: the rate at which its estimate of the joint torque the "
+                 "model's muscles miss (model mismatch, pushes) follows the measurement, so that neither leaves an "
+                 "offset (0: the paper's controller, --paper)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1000.0));
   bool paper = false;
   app.add_flag("--paper", paper,
                "Richter & Warner's controller: no disturbance observer (unless --observer-gain-per-s is given)");

@@ -142,7 +142,7 @@ void register_receding_horizon(py::module_& m) {
   m.def("run_receding_horizon", &run_receding_horizon, py::arg("model"), py::arg("q0"), py::arg("target"),
         py::arg("duration"), py::kw_only(), py::arg("qd0") = py::none(), py::arg("a0") = py::none(),
         py::arg("reserves") = 1.0, py::arg("horizon") = 0.5, py::arg("grid_points") = 11, py::arg("period") = 0.05,
-        py::arg("solver") = "exact", py::arg("bounds") = true, py::arg("observer_gain") = 20.0,
+        py::arg("solver") = "exact", py::arg("bounds") = true, py::arg("observer_gain") = 40.0,
         py::arg("integrator") = "rosenbrock", py::arg("accuracy") = py::none(), py::arg("plant") = py::none(),
         py::arg("settle_tolerance") = M_PI / 180.0, py::arg("disturbance") = py::none(),
         "The receding-horizon controller moving the model from rest at q0 (rad) to `target` (rad) on a Simbody "
@@ -151,8 +151,8 @@ void register_receding_horizon(py::module_& m) {
         "in [0, 1] when `bounds`.\n"
         "Start: qd0 (rad/s, default 0) with activations a0 and tendons in static equilibrium, or (a0=None) the "
         "minimum-effort rest state for `reserves` (minimum tendon force, N, one number or one per muscle). "
-        "observer_gain: the disturbance observer, 1/s (default 20: removes the offset of a "
-        "model mismatch; 0: the paper's controller). plant: another flatsos.Model with the same joints and muscles to simulate instead of "
+        "observer_gain: the disturbance observer, 1/s (default 40: removes the offset of a "
+        "model mismatch or a push; 0: the paper's controller). plant: another flatsos.Model with the same joints and muscles to simulate instead of "
         "`model` (model mismatch). disturbance: rows (time_s, forces per joint: N m, N along a slider) pushing "
         "the plant's joints, each held until the next row's time. integrator: 'rosenbrock' (default accuracy 1e-5), 'bdf' or 'rkm' (1e-8).\n"
         "Returns a dict: 'time' (s), 'q' (rad, one row per report), 'activation' and 'excitation' (one column "

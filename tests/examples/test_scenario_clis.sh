@@ -63,7 +63,7 @@ expect 2 "--period-s" -- "$rh" --period-s 1.0 --horizon-s 0.5 --out "$tmp/o"
 expect 2 "--slp-solver" -- "$rh" --slp-solver glpk --out "$tmp/o"
 expect 2 "--q0-deg" -- "$rh" --q0-deg 1,2,3 --out "$tmp/o"
 expect 2 "--integrator" -- "$rh" --integrator euler --out "$tmp/o"
-expect 2 "--observer-gain-per-s" -- "$rh" --observer-gain-per-s 50 --out "$tmp/o"
+expect 2 "--observer-gain-per-s" -- "$rh" --observer-gain-per-s 2000 --out "$tmp/o"
 expect 0 "settling" -- "$rh" --duration-s 1.5 --out "$tmp/rh"
 grep -q '"integrator_accuracy": 1e-05' "$tmp/rh/summary.json" || { echo "FAILED: rosenbrock default accuracy not 1e-5"; fail=1; }
 grep -q '"success": true' "$tmp/rh/summary.json" || { echo "FAILED: a settled run is not a success"; fail=1; }
@@ -75,7 +75,7 @@ expect 0 "settling" -- "$rh" --plant-strength 0.8 --out "$tmp/rh_weak"
 python3 - "$tmp/rh_weak/summary.json" <<'PY' || { echo "FAILED: the weaker plant did not end within 1 deg, or the summary lacks it"; fail=1; }
 import json, sys
 s = json.load(open(sys.argv[1]))
-assert s["plant"]["strength"] == 0.8 and s["observer_gain_per_s"] == 20.0, s["plant"]
+assert s["plant"]["strength"] == 0.8 and s["observer_gain_per_s"] == 40.0, s["plant"]
 assert max(abs(a - b) for a, b in zip(s["final_q_deg"], s["target_q_deg"])) < 1.0, s["final_q_deg"]
 PY
 expect 1 "never settled" -- "$rh" --paper --plant-strength 0.8 --out "$tmp/rh_weak_paper"

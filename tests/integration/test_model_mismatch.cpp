@@ -1,11 +1,11 @@
 // Model mismatch and disturbances: the RH controller plans on the nominal arm while the
 // simulated arm differs (each muscle's Fmax +-20 %, segment masses +-10 %, moment arms +-10 %)
-// or is pushed by a torque pulse mid-motion. The disturbance observer integrates the plan's
-// prediction error (joint torque the plant did not deliver), which makes the loop offset free.
-// Measured (3 s runs, CPodes BDF at 1e-8, printed by the tests), gain 20 1/s: every corner ends
-// within 6.8e-5 to 8.5e-4 deg of the target and settles within 2 deg by 0.65-0.94 s; without the
-// observer the corners end 3.5-32 deg off. A torque pulse is rejected to 2.2e-4 deg. The
-// assertions below are these numbers with a margin of about 2.
+// or is pushed by a torque pulse mid-motion. The disturbance observer follows the joint torque
+// the model's muscles (driven by the applied excitations) do not explain, which makes the loop
+// offset free. Measured (3 s runs, CPodes BDF at 1e-8, printed by the tests), gain 40 1/s: every
+// corner ends within 1.5e-5 to 4.8e-3 deg of the target and settles within 2 deg by 0.74-1.15 s;
+// without the observer the corners end 3.5-32 deg off. A torque pulse is rejected to 1.4e-4 deg.
+// The assertions below are these numbers with a margin of about 2.
 #include <gtest/gtest.h>
 
 #include <iomanip>
@@ -47,7 +47,7 @@ class TorquePulse : public fp::ExcitationSignal {
   double start_, width_, torque_;
 };
 
-constexpr double kGainPerSecond = 20.0;  // 1 per 0.05 s period
+constexpr double kGainPerSecond = 40.0;  // the default
 
 // 3 s of the RH scenario on `plant` with the given observer gain, settling within 2 deg.
 flatsos::test::RecedingHorizonScenario::Outcome run(std::shared_ptr<const fp::MusculoskeletalModel> plant, double gain_per_s) {
@@ -73,9 +73,12 @@ TEST(ModelMismatch, EndsWithinAThousandthOfADegreeInEveryCornerWithTheObserver) 
         std::cout << "Fmax x" << fmax << " mass x" << mass << " moment arms x" << arm << ": final error "
                   << with.final_error_deg << " deg with the observer (settled within 2 deg: " << with.run.settling_time_s
                   << " s), " << without.final_error_deg << " deg without\n";
-        EXPECT_LT(with.final_error_deg, 2e-3);  // measured <= 8.5e-4
+        // Measured <= 4.8e-3 deg and 0.74-1.15 s. (The observer of session 43 and before, which
+        // integrated each plan's own prediction error, reached 8.5e-4 deg by 0.94 s here, but
+        // mistook the plans' restarts for a disturbance and drove stiff-tendon models away.)
+        EXPECT_LT(with.final_error_deg, 1e-2);
         ASSERT_GE(with.run.settling_time_s, 0.0) << "never settled within 2 deg";
-        EXPECT_LT(with.run.settling_time_s, 1.2);  // measured 0.65-0.94 s
+        EXPECT_LT(with.run.settling_time_s, 1.3);
         slowest = std::max(slowest, with.run.settling_time_s);
         if (with.final_error_deg >= worst_with) {
           worst_with = with.final_error_deg;
@@ -89,26 +92,29 @@ TEST(ModelMismatch, EndsWithinAThousandthOfADegreeInEveryCornerWithTheObserver) 
   EXPECT_GT(worst_without, 3.0);
 }
 
-TEST(ModelMismatch, ObserverDoesNotDegradeTheNominalScenario) {
-  // With an exact model the prediction error is not zero: each new plan assumes its own muscle
-  // state at the start, and clamped excitations are not executed. The observer reacts to that
-  // too; it must not make the nominal run worse (measured: within 2 deg at 0.77 s instead of
-  // 0.73 s; final error 9e-5 vs 1.6e-4 deg).
+TEST(ModelMismatch, OnTheExactModelTheObserverSeesNoDisturbanceAndChangesNothing) {
+  // The observer compares the measured motion with the model's own muscles under the applied
+  // excitations, so a plan that starts from other muscle states than the plant's (each plan
+  // does) is no disturbance: on the exact model d stays near 0 and the run is the paper's.
   const auto nominal = flatsos::test::load_arm();
   const auto with = run(nominal, kGainPerSecond);
   const auto without = run(nominal, 0.0);
-  std::cout << "exact model: final error " << with.final_error_deg << " deg with the observer (settled within 2 deg: "
-            << with.run.settling_time_s << " s), " << without.final_error_deg << " deg without ("
-            << without.run.settling_time_s << " s)\n";
+  double largest_offset = 0.0;
+  for (const auto& record : with.controller->history())
+    largest_offset = std::max(largest_offset, record.observer_offset_N_m.cwiseAbs().maxCoeff());
+  std::cout << "exact model: largest observer estimate " << largest_offset << " N m; final error " << with.final_error_deg
+            << " deg with the observer (settled within 2 deg: " << with.run.settling_time_s << " s), "
+            << without.final_error_deg << " deg without (" << without.run.settling_time_s << " s)\n";
+  EXPECT_LT(largest_offset, 0.05);
   EXPECT_LT(with.final_error_deg, without.final_error_deg + 1e-4);
   ASSERT_GE(with.run.settling_time_s, 0.0);
-  EXPECT_LE(with.run.settling_time_s, without.run.settling_time_s + 0.05);
+  EXPECT_LE(with.run.settling_time_s, without.run.settling_time_s + 0.01);
 }
 
 TEST(ModelMismatch, ObserverRejectsATorquePulseFasterAndCloserThanThePapersController) {
   // The paper's controller re-plans from the measured state, so it recovers from a pulse too;
-  // the observer must do better than that same run without it (measured: 2.2e-4 deg and
-  // settled within 2 deg at 0.94 s with it; 1.4e-3 deg and 1.38 s without).
+  // the observer must do better than that same run without it (measured: 1.4e-4 deg and
+  // settled within 2 deg at 1.21 s with it; 1.4e-3 deg and 1.37 s without).
   const auto plant = std::make_shared<const fp::MusculoskeletalModel>(
       fp::load_model_file(flatsos::test::arm_model_path()),
       std::vector<fp::ExternalJointTorque>{{0, std::make_shared<TorquePulse>(0.5, 0.1, -5.0)},  // against the shoulder
@@ -119,7 +125,7 @@ TEST(ModelMismatch, ObserverRejectsATorquePulseFasterAndCloserThanThePapersContr
             << " s), " << without.final_error_deg << " deg without (settled " << without.run.settling_time_s << " s)\n";
   ASSERT_GE(with.run.settling_time_s, 0.0);
   ASSERT_GE(without.run.settling_time_s, 0.0);
-  EXPECT_LT(with.run.settling_time_s, without.run.settling_time_s - 0.2);
+  EXPECT_LT(with.run.settling_time_s, without.run.settling_time_s - 0.1);
   EXPECT_LT(with.final_error_deg, without.final_error_deg / 3);
   EXPECT_LT(with.final_error_deg, 5e-4);
 }

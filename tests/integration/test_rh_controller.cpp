@@ -1,5 +1,7 @@
 // The receding-horizon controller's parts: a failed step runs the previous plan with the torque
 // offset that plan was made for, not the observer's newer estimate.
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "flatsos/plugin/io/model_file.hpp"
@@ -43,7 +45,7 @@ Eigen::VectorXd excitation_at(const fpl::FlatOutputMap& flat, const fpl::PlanInU
 TEST(RecedingHorizonController, AFailedStepRunsThePreviousPlanWithTheOffsetItWasPlannedFor) {
   flatsos::test::RecedingHorizonScenario rh;
   rh.options.disturbance_observer_gain_per_s = 20.0;
-  constexpr int kFailing = 6;
+  constexpr int kFailing = 2;  // while the observer still moves
   int calls = 0;
   rh.options.planner = [&](const fpl::FlatOutputMap& f, fp::ModelWorkspace& ws, const Eigen::VectorXd& q,
                            const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& o, fpl::RecedingHorizonStep& out) {
@@ -89,18 +91,22 @@ TEST(RecedingHorizonController, AFailedStepRunsThePreviousPlanWithTheOffsetItWas
   EXPECT_EQ(h[kFailing + 1].status, fpl::SolveStatus::Solved);
 }
 
-TEST(RecedingHorizonController, TheObserverIntegratesInSecondsNotSteps) {
-  // The same error over the same time moves the estimate by the same amount, whatever the steps.
-  fpl::DisturbanceObserver coarse(2, 20.0), fine(2, 20.0);
-  const Eigen::Vector2d error(0.3, -0.2);
-  coarse.update(error, 0.05);
-  for (int k = 0; k < 5; ++k) fine.update(error, 0.01);
+TEST(RecedingHorizonController, TheObserverFollowsInSecondsNotSteps) {
+  // The same disturbance over the same time moves the estimate by the same amount, whatever the
+  // steps: d = (1 - exp(-g t)) w from 0, and it never passes w, even at a gain beyond 1 / period.
+  fpl::DisturbanceObserver coarse(2, 20.0), fine(2, 20.0), fast(2, 400.0);
+  const Eigen::Vector2d w(0.3, -0.2);
+  coarse.follow(w, 0.05);
+  for (int k = 0; k < 5; ++k) fine.follow(w, 0.01);
   EXPECT_LT((coarse.torqueOffset_N_m() - fine.torqueOffset_N_m()).norm(), 1e-15);
-  EXPECT_LT((coarse.torqueOffset_N_m() - 20.0 * 0.05 * error).norm(), 1e-15);
-  fine.update(Eigen::Vector2d(std::nan(""), 0.0), 0.05);  // a bad measurement leaves it alone
+  EXPECT_LT((coarse.torqueOffset_N_m() - (1.0 - std::exp(-1.0)) * w).norm(), 1e-15);
+  fast.follow(w, 0.05);
+  EXPECT_LT((fast.torqueOffset_N_m() - w).norm(), 1e-8);
+  EXPECT_LE(fast.torqueOffset_N_m().cwiseAbs().maxCoeff(), w.cwiseAbs().maxCoeff());
+  fine.follow(Eigen::Vector2d(std::nan(""), 0.0), 0.05);  // a bad measurement leaves it alone
   EXPECT_TRUE(fine.torqueOffset_N_m().allFinite());
-  EXPECT_THROW(fine.update(error, -0.01), std::invalid_argument);
-  EXPECT_THROW(fine.update(Eigen::Vector3d::Zero(), 0.01), std::invalid_argument);
+  EXPECT_THROW(fine.follow(w, -0.01), std::invalid_argument);
+  EXPECT_THROW(fine.follow(Eigen::Vector3d::Zero(), 0.01), std::invalid_argument);
   EXPECT_THROW(fpl::DisturbanceObserver(2, -1.0), std::invalid_argument);
 }
 

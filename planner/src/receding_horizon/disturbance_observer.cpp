@@ -13,13 +13,13 @@ DisturbanceObserver::DisturbanceObserver(int joints, double gain_per_s) : gain_p
   offset_N_m_ = Eigen::VectorXd::Zero(joints);
 }
 
-void DisturbanceObserver::update(const Eigen::VectorXd& error, double elapsed_s) {
-  if (error.size() != offset_N_m_.size())
-    throw std::invalid_argument("disturbance observer: the torque error has " + std::to_string(error.size()) +
+void DisturbanceObserver::follow(const Eigen::VectorXd& disturbance, double elapsed_s) {
+  if (disturbance.size() != offset_N_m_.size())
+    throw std::invalid_argument("disturbance observer: the measured disturbance has " + std::to_string(disturbance.size()) +
                                 " entries, the model " + std::to_string(offset_N_m_.size()) + " joints");
   if (!(elapsed_s >= 0.0)) throw std::invalid_argument("disturbance observer: elapsed time must be >= 0 s");
-  if (!error.allFinite()) return;
-  offset_N_m_ += (gain_per_s_ * elapsed_s) * error;
+  if (!disturbance.allFinite()) return;
+  offset_N_m_ += -std::expm1(-gain_per_s_ * elapsed_s) * (disturbance - offset_N_m_);
 }
 
 }  // namespace flatsos::planner

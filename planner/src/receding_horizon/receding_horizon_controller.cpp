@@ -1,6 +1,7 @@
 #include "flatsos/planner/receding_horizon_controller.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -56,29 +57,38 @@ RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, Recedin
       options_(validated(o, flat_)),
       workspace_(flat_.makeWorkspace()),
       observer_(flat_.numJoints(), options_.disturbance_observer_gain_per_s),
+      estimator_(flat_.sharedModel()),
       fitter_(options_.excitation_samples_per_period, options_.control_period_s),
       plan_options_(controller_plan_options(options_)) {
   const int n = flat_.numJoints(), m = flat_.numMuscles();
-  for (auto* v : {&q_, &qd_, &qdd_, &measured_torque_, &predicted_torque_}) v->setZero(n);
-  predicted_jet_.setZero(n, 3);
+  for (auto* v : {&q_, &qd_, &qdd_, &measured_torque_, &muscle_torque_, &previous_q_, &previous_qd_, &previous_qdd_}) v->setZero(n);
   excitations_.setZero(fitter_.samples(), m);
   if (observer_.enabled()) plan_options_.torque_offset_N_m.setZero(n);
 }
 
 void RecedingHorizonController::observe(const SimTK::State& state, double t) {
-  if (!observer_.enabled() || in_use_.empty() || steps_ == 0) return;
-  // Prediction error of the plan in use: the joint torque the measured motion needs minus the
-  // one the plan predicted for now (what its muscles were asked for).
+  if (!observer_.enabled()) return;
   plant_->system().realize(state, SimTK::Stage::Acceleration);
   for (int i = 0; i < plant_->numJoints(); ++i) qdd_[i] = plant_->joint(i).getOneUDot(state, 0);
+  if (!estimator_.started()) return;
+  // The model's muscles under the excitations applied since the previous step, along the
+  // measured motion; what the measured motion needs beyond their torque is the disturbance.
   if (!(q_.allFinite() && qd_.allFinite() && qdd_.allFinite())) return;  // the planner reports the state
-  rest_held_jet(in_use_.path, t - in_use_.start_time_s, predicted_jet_);  // q, qd, qdd
-  const plugin::MusculoskeletalModel& model = flat_.model();
-  model.inverseDynamics(workspace_, q_, qd_, qdd_, measured_torque_);
-  model.inverseDynamics(workspace_, predicted_jet_.col(0), predicted_jet_.col(1), predicted_jet_.col(2),
-                        predicted_torque_);
-  measured_torque_ -= predicted_torque_;
-  observer_.update(measured_torque_, t - record_.time_s);
+  if (!estimator_.advance({previous_q_, previous_qd_, previous_qdd_}, {q_, qd_, qdd_}, t)) return;
+  flat_.model().inverseDynamics(workspace_, q_, qd_, qdd_, measured_torque_);
+  estimator_.muscleTorques(q_, muscle_torque_);
+  measured_torque_ -= muscle_torque_;
+  observer_.follow(measured_torque_, t - record_.time_s);
+}
+
+void RecedingHorizonController::applyExcitations(SimTK::State& state, double t) {
+  if (observer_.enabled() && !estimator_.started())  // the run's known initial muscle states
+    estimator_.start(plant_->tendonLengths(state), plant_->activations(state), t);
+  for (int j = 0; j < plant_->numMuscles(); ++j) {
+    const plugin::ExcitationPolynomial piece = fitter_.fit(excitations_.col(j), t);
+    plant_->muscle(j).setExcitationPolynomial(state, piece);
+    if (observer_.enabled()) estimator_.setExcitation(j, piece);
+  }
 }
 
 bool RecedingHorizonController::sampleExcitations(const PlanInUse& plan, double t) {
@@ -153,8 +163,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   }
   if (have_excitations) {
     rec.clamped_samples = static_cast<int>(((excitations_.array() < 0.0) || (excitations_.array() > 1.0)).count());
-    for (int j = 0; j < plant_->numMuscles(); ++j)
-      plant_->muscle(j).setExcitationPolynomial(state, fitter_.fit(excitations_.col(j), t));
+    applyExcitations(state, t);
     rec.plan = in_use_;  // same sizes every period: copies into the record's storage
   } else {
     rec.plan.alpha.resize(0);  // no plan in use: the muscles keep their current inputs
@@ -163,6 +172,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   clamped_samples_ += rec.clamped_samples;
   if (rec.bounds_imposed) ++bounded_steps_;
   ++steps_;
+  previous_q_ = q_, previous_qd_ = qd_, previous_qdd_ = qdd_;
   rec.wall_seconds = wall.seconds();
   if (options_.keep_history) history_.push_back(rec);
   return rec;

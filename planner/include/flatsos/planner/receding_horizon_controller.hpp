@@ -28,6 +28,7 @@
 
 #include "flatsos/planner/disturbance_observer.hpp"
 #include "flatsos/planner/excitation_fitter.hpp"
+#include "flatsos/planner/muscle_state_estimator.hpp"
 #include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/planner/receding_horizon_step.hpp"
 #include "flatsos/plugin/integration/closed_loop.hpp"
@@ -53,9 +54,10 @@ struct RecedingHorizonControllerOptions {
   double control_period_s = 0.05;          ///< delta
   int excitation_samples_per_period = 11;  ///< inverse-map samples per period (fitted by a polynomial)
   /// Disturbance observer gain, 1/s (see disturbance_observer.hpp); 0: the paper's controller.
-  /// The default ends within 0.01 deg of the target on the paper's arm with a plant of 0.7-1.3
-  /// times the model's strength or 0.8-1.2 times its masses (docs/method/receding_horizon.md).
-  double disturbance_observer_gain_per_s = 20.0;
+  /// The default ends within 0.1 deg of the target on the paper's arm with a plant of 0.7-1.3
+  /// times the model's strength (docs/method/receding_horizon.md), and leaves a plant equal to
+  /// the model as the paper's controller runs it.
+  double disturbance_observer_gain_per_s = 40.0;
   /// Keep every period's record in history() (for analysis and prediction_table). Each record
   /// copies its plan: a few heap allocations per period; off, only last() is kept and the loop
   /// allocates nothing.
@@ -112,10 +114,14 @@ class RecedingHorizonController final : public plugin::Controller {
   const FlatOutputMap& flat() const { return flat_; }
   const plugin::MusculoskeletalModel& plant() const { return *plant_; }
   const DisturbanceObserver& observer() const { return observer_; }
+  /// The planner's model's muscles under the applied excitations (the observer's prediction).
+  const MuscleStateEstimator& muscleEstimator() const { return estimator_; }
 
  private:
   // Updates the observer from the measured motion (q_, qd_ and the plant's qdd) at time t.
   void observe(const SimTK::State& state, double t);
+  // Gives the muscles (and the observer's estimate of them) the excitations of this period.
+  void applyExcitations(SimTK::State& state, double t);
   // Inverse-map excitations of `plan` over the period from t into excitations_ (samples x
   // muscles); false when they are not finite (the plan left the valid domain).
   bool sampleExcitations(const PlanInUse& plan, double t);
@@ -125,6 +131,7 @@ class RecedingHorizonController final : public plugin::Controller {
   RecedingHorizonControllerOptions options_;
   plugin::ModelWorkspace workspace_;  ///< the planner model's inverse dynamics
   DisturbanceObserver observer_;
+  MuscleStateEstimator estimator_;
   ExcitationFitter fitter_;
   PlanInUse in_use_, candidate_;
   RecedingHorizonRecord record_;
@@ -134,8 +141,8 @@ class RecedingHorizonController final : public plugin::Controller {
   // Storage reused every period (sized in the constructor or on the first period).
   RecedingHorizonOptions plan_options_;  ///< options_.plan with this controller's bounds and the observer's current offset
   RecedingHorizonStep step_;
-  Eigen::VectorXd q_, qd_, qdd_, measured_torque_, predicted_torque_;
-  Jet predicted_jet_;  ///< N x 3
+  Eigen::VectorXd q_, qd_, qdd_, measured_torque_, muscle_torque_;
+  Eigen::VectorXd previous_q_, previous_qd_, previous_qdd_;  ///< measured at the previous step
   PlanExcitationScratch excitation_scratch_;
   Eigen::MatrixXd excitations_;  ///< samples x muscles of the period being planned
 };
