@@ -10,11 +10,14 @@ library's message; the C++ core releases the GIL while it plans.
                                   target=np.radians([90, 0]), duration=3.0, reserves=10.0)
     plan.status, plan.cost, plan.sample(np.linspace(0, 3, 301))["excitation"]
 
-Also: shortest_transfer (the least duration with a plan), simulate_plan (Simbody, open loop), run_receding_horizon (the closed loop); the
+Also: shortest_transfer (the least duration with a plan), simulate_plan (Simbody, open loop), run_receding_horizon (the closed loop),
+static_optimization (OpenSim's, along a measured motion); the
 submodules flatsos.study (batch studies on Dask), flatsos.animation (GIF and MP4 of planar
 models) and flatsos.sto (OpenSim tables and motion files), each runnable with python3 -m.
 """
 
-from ._flatsos import Model, OpenLoopPlan, plan_open_loop, run_receding_horizon, shortest_transfer, simulate_plan
+from ._flatsos import (Model, OpenLoopPlan, plan_open_loop, run_receding_horizon, shortest_transfer, simulate_plan,
+                       static_optimization)
 
-__all__ = ["Model", "OpenLoopPlan", "plan_open_loop", "run_receding_horizon", "shortest_transfer", "simulate_plan"]
+__all__ = ["Model", "OpenLoopPlan", "plan_open_loop", "run_receding_horizon", "shortest_transfer", "simulate_plan",
+           "static_optimization"]

@@ -6,4 +6,5 @@ PYBIND11_MODULE(_flatsos, m) {
   flatsos::python::register_open_loop(m);
   flatsos::python::register_simulation(m);
   flatsos::python::register_receding_horizon(m);
+  flatsos::python::register_static_optimization(m);
 }

@@ -162,3 +162,37 @@ TEST(StaticOptimization, AMotionTheMusclesCannotMakeFailsNamingTheJointUnlessRes
   o.activation_exponent = 1.0;
   EXPECT_THROW(fpl::static_optimization(*model, fast, o), std::invalid_argument);
 }
+
+TEST(StaticOptimization, TakesTheEffortsOfTheSeamThatFitIt) {
+  const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/arm_richter_warner.json");
+  const auto motion = fp::process_coordinates_like_opensim(arm_motion(1.0), 6.0, std::vector<std::string>{"shoulder", "elbow"});
+  // activation_cubed through the seam is OpenSim's activation_exponent 3.
+  fpl::StaticOptimizationOptions cubed;
+  cubed.activation_exponent = 3.0;
+  fpl::StaticOptimizationOptions seam;
+  seam.effort = fpl::effort_named("activation_cubed");
+  const auto a = fpl::static_optimization(*model, motion, cubed), b = fpl::static_optimization(*model, motion, seam);
+  ASSERT_TRUE(a.success() && b.success());
+  EXPECT_LT((a.activation - b.activation).cwiseAbs().maxCoeff(), 1e-12);
+  // stress_squared minimizes sum (F / Fmax)^2: its reported effort is that of its forces, and no
+  // other balance of the same torques does better (a squared-activation optimum is one).
+  fpl::StaticOptimizationOptions stress;
+  stress.effort = fpl::effort_named("stress_squared");
+  const auto s = fpl::static_optimization(*model, motion, stress);
+  const auto squared = fpl::static_optimization(*model, motion);
+  ASSERT_TRUE(s.success() && squared.success());
+  Eigen::VectorXd Fmax(model->numMuscles());
+  for (int j = 0; j < model->numMuscles(); ++j) Fmax[j] = model->description().muscles[static_cast<std::size_t>(j)].parameters.max_isometric_force_N;
+  bool differs = false;
+  for (Eigen::Index f = 0; f < s.effort.size(); ++f) {
+    const double own = (s.tendon_force_N.row(f).transpose().cwiseQuotient(Fmax)).squaredNorm();
+    const double other = (squared.tendon_force_N.row(f).transpose().cwiseQuotient(Fmax)).squaredNorm();
+    EXPECT_NEAR(s.effort[f], own, 1e-9 * std::max(1.0, own));
+    EXPECT_LE(own, other * (1 + 1e-9) + 1e-15) << "frame " << f;
+    differs = differs || (s.activation.row(f) - squared.activation.row(f)).cwiseAbs().maxCoeff() > 1e-3;
+  }
+  EXPECT_TRUE(differs) << "the test needs efforts with different optima";
+  fpl::StaticOptimizationOptions excitation;
+  excitation.effort = fpl::effort_named("excitation_squared");
+  EXPECT_THROW(fpl::static_optimization(*model, motion, excitation), std::invalid_argument);
+}

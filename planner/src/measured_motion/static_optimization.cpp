@@ -89,6 +89,38 @@ std::vector<const plugin::NaturalQuinticSpline*> joint_splines(const plugin::Mus
   return out;
 }
 
+// The effort as exponent and per-muscle weights of a^p (stress: of (a G / Fmax)^p, so the
+// weights are scaled per frame by (G / Fmax)^p); `stress` says which.
+struct PowerTerms {
+  double exponent = 2.0;
+  Eigen::VectorXd weights;
+  bool stress = false;
+};
+PowerTerms power_terms(const plugin::MusculoskeletalModel& model, const StaticOptimizationOptions& o) {
+  const int m = model.numMuscles();
+  PowerTerms out;
+  if (!o.effort) {
+    out.exponent = o.activation_exponent;
+    out.weights = o.weights.size() == m ? o.weights : Eigen::VectorXd::Ones(m);
+    return out;
+  }
+  o.effort->validate(m);
+  const auto* power = dynamic_cast<const PowerEffort*>(o.effort.get());
+  if (!power || power->quantity() == PowerEffort::Quantity::Excitation || !(power->exponent() > 1.0))
+    throw std::invalid_argument("static optimization: effort '" + o.effort->name() +
+                                "' does not fit: it takes a power > 1 of the activations or of the tendon stress "
+                                "(excitations need the activation dynamics of the inverse problem)");
+  out.exponent = power->exponent();
+  out.stress = power->quantity() == PowerEffort::Quantity::TendonStress;
+  out.weights.resize(m);
+  for (int j = 0; j < m; ++j) {  // the term at a unit quantity is the weight
+    const fm::MuscleParameters& p = model.description().muscles[static_cast<std::size_t>(j)].parameters;
+    out.weights[j] = power->muscleTerm(j, p, p.max_isometric_force_N, 1.0, 1.0).value;
+  }
+  if (!(out.weights.array() > 0.0).all()) throw std::invalid_argument("static optimization: the effort's weights must be > 0");
+  return out;
+}
+
 void validate(const plugin::MusculoskeletalModel& model, const StaticOptimizationOptions& o) {
   if (!(o.activation_exponent > 1.0) || !std::isfinite(o.activation_exponent))
     throw std::invalid_argument("static optimization: activation_exponent must be a finite number > 1");
@@ -140,11 +172,11 @@ StaticOptimizationResult static_optimization(const plugin::MusculoskeletalModel&
   out.reserve_torque_N_m.setZero(frames, n);
   out.effort.setZero(frames);
 
+  const PowerTerms effort = power_terms(model, o);
   SeparablePowerProgram program;
   const int variables = m + (reserves ? n : 0);
-  program.exponent = o.activation_exponent;
+  program.exponent = effort.exponent;
   program.weights = Eigen::VectorXd::Ones(variables);
-  if (o.weights.size() == m) program.weights.head(m) = o.weights;
   program.lower = Eigen::VectorXd::Zero(variables);
   program.upper = Eigen::VectorXd::Ones(variables);
   if (reserves) {
@@ -165,6 +197,11 @@ StaticOptimizationResult static_optimization(const plugin::MusculoskeletalModel&
     model.inverseDynamics(workspace, q, qd, qdd, tau);
     const Eigen::VectorXd G = muscle_strength_N(model, out.strength_rule, q, qd, moment_arms);
     program.B.leftCols(m) = moment_arms * G.asDiagonal();
+    for (int j = 0; j < m; ++j) {
+      const double Fmax = model.description().muscles[static_cast<std::size_t>(j)].parameters.max_isometric_force_N;
+      program.weights[j] = effort.weights[j] * (effort.stress ? std::pow(std::abs(G[j]) / Fmax, effort.exponent) : 1.0);
+      if (!(program.weights[j] > 0.0)) program.weights[j] = 1e-300;  // a muscle without strength here: free, and useless
+    }
     program.b = tau;
     const SeparablePowerSolution s = solve_separable_power_program(program);
     if (!s.solved) {
@@ -191,7 +228,6 @@ plugin::StoTable result_table(const plugin::MusculoskeletalModel& model, const S
                               const std::string& name, const Eigen::MatrixXd& muscles, double reserve_scale) {
   plugin::StoTable t;
   t.name = name;
-  t.metadata = {{"inDegrees", "no"}};
   t.columns = {"time"};
   for (const auto& muscle : model.description().muscles) t.columns.push_back(muscle.parameters.name);
   const bool reserves = r.reserve_torque_N_m.size() > 0 && r.reserve_torque_N_m.cwiseAbs().maxCoeff() > 0.0;

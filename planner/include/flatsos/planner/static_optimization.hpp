@@ -28,6 +28,7 @@
 
 #include <Eigen/Core>
 
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/plugin/io/motion_processing.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 
@@ -38,6 +39,11 @@ enum class MuscleStrengthRule { OpenSim2, RigidTendon };
 struct StaticOptimizationOptions {
   double activation_exponent = 2.0;  ///< p > 1 (OpenSim's activation_exponent)
   Eigen::VectorXd weights;           ///< per muscle, > 0; empty: 1 each
+  /// Instead of the two above, an effort of the seam (effort.hpp): a PowerEffort of the
+  /// activations or of the tendon stress F / Fmax (= a G / Fmax here), p > 1. Excitation efforts
+  /// need the activation dynamics static optimization leaves out, and a linear effort has no
+  /// unique optimum: both are refused (std::invalid_argument).
+  std::shared_ptr<const Effort> effort;
   /// Empty: OpenSim2 when every muscle is OpenSim 2.x's Thelen model ("thelen2003_opensim2"),
   /// RigidTendon otherwise.
   std::optional<MuscleStrengthRule> strength_rule;
