@@ -34,7 +34,10 @@ sanitize() {
     CollocationReference.RichFlatnessPlansComeWithinOnePercentAndNeverBelow
     FreePath.AStartPlanInACoarserNestedBasisLeadsToTheSamePlan
     CollocationReference.TheFlatnessFreePathComesWithinTwoPercentWithAnExecutablePlan
+    StaticOptimization.Arm26AgreesWithOpenSimsStaticOptimization
   )
+  # The command-line tests skip their longest runs too (the left leg's controller).
+  export FLATSOS_SANITIZER_RUN=1
   local skip
   skip="^($(IFS='|'; echo "${long_runs[*]}"))\$"
   (cd "$root/build-sanitize" && ctest --output-on-failure --timeout 1200 -j "$(nproc)" -E "$skip") || status=1
