@@ -28,6 +28,7 @@
 #include "flatsos/plugin/stopwatch.hpp"
 #include "ipopt_linear_solvers.hpp"
 #include "scaling.hpp"
+#include "static_optimization_bench.hpp"
 #include "scenario_inputs.hpp"
 #include "timing.hpp"
 
@@ -80,6 +81,10 @@ int main(int argc, char** argv) try {
   app.add_flag("--ipopt-linear-solvers-only", linear_solvers_only,
                "time only Ipopt's linear solvers side by side (flatsos's dense LDL^T and MUMPS, per iteration over "
                "KKT dimensions; the Ipopt-bound stages under MUMPS alone and under the automatic choice)");
+  bool static_optimization_only = false;
+  app.add_flag("--static-optimization-only", static_optimization_only,
+               "time only static optimization: arm26 as downloaded along OpenSim's tutorial motion, with its "
+               "geometry paths and with its fitted ones");
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
   auto scaling = [&] {
     json rows = json::array();
@@ -92,6 +97,11 @@ int main(int argc, char** argv) try {
     if (!out_path.empty()) fp::write_file_atomically(out_path, text + "\n");
   };
 
+  if (static_optimization_only) {
+    emit({{"machine", {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}}},
+          {"static_optimization", flatsos::bench::static_optimization_timing(std::max(3, reps / 3))}});
+    return 0;
+  }
   if (scaling_only) {
     emit({{"machine", {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}}}, {"scaling", scaling()}});
     return 0;
@@ -523,6 +533,7 @@ int main(int argc, char** argv) try {
                   {"closed_loop_real_time_factor",
                    {{"median", rtf}, {"target", 50.0}, {"met", rtf >= 50.0}, {"integrator", "rosenbrock at 1e-5"}}}};
   j["ipopt_linear_solvers"] = linear_solver_study();
+  j["static_optimization"] = flatsos::bench::static_optimization_timing(std::max(3, reps / 3));
   j["scaling"] = scaling();
   emit(j);
   return 0;
