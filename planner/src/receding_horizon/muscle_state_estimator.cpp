@@ -142,12 +142,15 @@ bool MuscleStateEstimator::advanceMuscle(int j, double t_end) {
     const double step = last ? t_end - t : h;
     double ls_new = ls, a_new = a, error_norm = 0.0;
     const bool ok = tryStep(j, t, step, ls_new, a_new, error_norm);
-    if (ok && error_norm <= 1.0) {
+    const bool accepted = ok && error_norm <= 1.0;
+    if (accepted) {
       t = last ? t_end : t + step;
       ls = ls_new, a = a_new;
     }
     const double factor = ok ? kSafety / std::sqrt(std::max(error_norm, 1e-10)) : kMaxShrink;
-    h = step * std::clamp(factor, kMaxShrink, ok && error_norm <= 1.0 ? kMaxGrowth : 1.0);
+    const double proposed = step * std::clamp(factor, kMaxShrink, accepted ? kMaxGrowth : 1.0);
+    // A last step cut short by the advance's end says little about the step size: keep h then.
+    h = accepted && last ? std::max(h, proposed) : proposed;
     if (h < kMinStep_s) return false;
   }
   tendon_length_m_[j] = ls;

@@ -1,7 +1,6 @@
 #include "flatsos/planner/receding_horizon_controller.hpp"
 
 #include <algorithm>
-#include <cstdlib>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -74,7 +73,11 @@ void RecedingHorizonController::observe(const SimTK::State& state, double t) {
   // The model's muscles under the excitations applied since the previous step, along the
   // measured motion; what the measured motion needs beyond their torque is the disturbance.
   if (!(q_.allFinite() && qd_.allFinite() && qdd_.allFinite())) return;  // the planner reports the state
-  if (!estimator_.advance({previous_q_, previous_qd_, previous_qdd_}, {q_, qd_, qdd_}, t)) return;
+  if (!estimator_.advance({previous_q_, previous_qd_, previous_qdd_}, {q_, qd_, qdd_}, t)) {
+    // Its states held (a muscle's integration failed): go on from here, d unchanged this period.
+    estimator_.start(estimator_.tendonLengths_m(), estimator_.activations(), t);
+    return;
+  }
   flat_.model().inverseDynamics(workspace_, q_, qd_, qdd_, measured_torque_);
   estimator_.muscleTorques(q_, muscle_torque_);
   measured_torque_ -= muscle_torque_;

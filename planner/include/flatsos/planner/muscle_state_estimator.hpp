@@ -37,7 +37,8 @@ class MuscleStateEstimator {
   explicit MuscleStateEstimator(std::shared_ptr<const plugin::MusculoskeletalModel> model, double accuracy = 1e-5);
 
   bool started() const { return started_; }
-  /// Starts from these states at `time_s` (the muscles' excitations held at 0 until set).
+  /// Starts (or restarts) from these states at `time_s`; the excitations keep what was set (0
+  /// before any).
   /// Throws std::invalid_argument for wrong sizes or values that are not finite.
   void start(const Eigen::VectorXd& tendon_lengths_m, const Eigen::VectorXd& activations, double time_s);
   /// The excitation muscle j receives from now on (clamped to [0, 1] as the Simbody muscle
