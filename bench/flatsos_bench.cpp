@@ -436,7 +436,8 @@ int main(int argc, char** argv) try {
     double accuracy, observer_gain_per_s;
   };
   for (const Variant& v : {Variant{"rosenbrock_1e-5", fp::IntegratorKind::MuscleRosenbrock, 1e-5, 0.0},
-                           Variant{"rosenbrock_1e-5_observer", fp::IntegratorKind::MuscleRosenbrock, 1e-5, 20.0},
+                           Variant{"rosenbrock_1e-5_observer", fp::IntegratorKind::MuscleRosenbrock, 1e-5,
+                                   fpl::RecedingHorizonControllerOptions{}.disturbance_observer_gain_per_s},
                            Variant{"rosenbrock_1e-6", fp::IntegratorKind::MuscleRosenbrock, 1e-6, 0.0},
                            Variant{"rosenbrock_1e-7", fp::IntegratorKind::MuscleRosenbrock, 1e-7, 0.0},
                            Variant{"bdf_1e-8", fp::IntegratorKind::CPodesBdf, 1e-8, 0.0},
