@@ -73,9 +73,9 @@ TEST(ModelMismatch, EndsWithinAThousandthOfADegreeInEveryCornerWithTheObserver) 
         std::cout << "Fmax x" << fmax << " mass x" << mass << " moment arms x" << arm << ": final error "
                   << with.final_error_deg << " deg with the observer (settled within 2 deg: " << with.run.settling_time_s
                   << " s), " << without.final_error_deg << " deg without\n";
-        // Measured <= 4.8e-3 deg and 0.74-1.15 s. (The observer of session 43 and before, which
-        // integrated each plan's own prediction error, reached 8.5e-4 deg by 0.94 s here, but
-        // mistook the plans' restarts for a disturbance and drove stiff-tendon models away.)
+        // Measured <= 4.8e-3 deg and 0.74-1.15 s. (An observer integrating each plan's own
+        // prediction error reached 8.5e-4 deg by 0.94 s here, but mistook the plans' restarts
+        // for a disturbance and drove stiff-tendon models away: docs/method/receding_horizon.md.)
         EXPECT_LT(with.final_error_deg, 1e-2);
         ASSERT_GE(with.run.settling_time_s, 0.0) << "never settled within 2 deg";
         EXPECT_LT(with.run.settling_time_s, 1.3);
