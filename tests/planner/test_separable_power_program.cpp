@@ -141,7 +141,15 @@ TEST(SeparablePowerProgram, SaysWhichRowCannotBeMetAndRefusesBadPrograms) {
   P.b[1] = 1e6;
   const fpl::SeparablePowerSolution s = fpl::solve_separable_power_program(P);
   EXPECT_FALSE(s.solved);
-  EXPECT_NE(s.message.find("row 1"), std::string::npos) << s.message;
+  EXPECT_TRUE(s.infeasible);
+  EXPECT_EQ(s.worst_row, 1);
+  EXPECT_NE(s.message.find("no solution within the bounds: row 1"), std::string::npos) << s.message;
+  // Out of iterations is said as such, not as infeasibility.
+  const fpl::SeparablePowerSolution early = fpl::solve_separable_power_program(random_program(rng, 2, 5, 3.0), 1e-14, 1);
+  if (!early.solved) {
+    EXPECT_FALSE(early.infeasible);
+    EXPECT_NE(early.message.find("stopped before it converged"), std::string::npos) << early.message;
+  }
   fpl::SeparablePowerProgram bad = random_program(rng, 2, 5, 2.0);
   bad.exponent = 1.0;
   EXPECT_THROW(fpl::solve_separable_power_program(bad), std::invalid_argument);
@@ -150,6 +158,10 @@ TEST(SeparablePowerProgram, SaysWhichRowCannotBeMetAndRefusesBadPrograms) {
   EXPECT_THROW(fpl::solve_separable_power_program(bad), std::invalid_argument);
   bad = random_program(rng, 2, 5, 2.0);
   bad.lower[1] = 2.0;
+  EXPECT_THROW(fpl::solve_separable_power_program(bad), std::invalid_argument);
+  bad = random_program(rng, 2, 5, 2.0);
+  bad.B.resize(0, 5);
+  bad.b.resize(0);
   EXPECT_THROW(fpl::solve_separable_power_program(bad), std::invalid_argument);
   bad = random_program(rng, 2, 5, 2.0);
   bad.b.resize(3);

@@ -39,8 +39,24 @@ void minimize_lagrangian(const SeparablePowerProgram& P, const Eigen::VectorXd& 
   out.value = effort - lambda.dot(P.B * out.x - P.b);
 }
 
+// A Farkas certificate that no x in the box meets B x = b: y^T b beyond the largest y^T B x over
+// the box (sum_j max(s_j lower_j, s_j upper_j), s = B^T y; infinite where a bound is).
+bool certifies_infeasible(const SeparablePowerProgram& P, const Eigen::VectorXd& y) {
+  if (!y.allFinite() || y.isZero()) return false;
+  const Eigen::VectorXd s = P.B.transpose() * y;
+  double reach = 0.0;
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    if (s[j] == 0.0) continue;
+    const double bound = s[j] > 0.0 ? P.upper[j] : P.lower[j];
+    if (!std::isfinite(bound)) return false;
+    reach += s[j] * bound;
+  }
+  return y.dot(P.b) > reach + 1e-9 * (std::abs(reach) + y.cwiseAbs().dot(P.b.cwiseAbs()));
+}
+
 void validate(const SeparablePowerProgram& P) {
   const Eigen::Index n = P.B.cols();
+  if (P.B.rows() < 1 || n < 1) throw std::invalid_argument("separable power program: B needs at least one row and one column");
   if (P.b.size() != P.B.rows() || P.weights.size() != n || P.lower.size() != n || P.upper.size() != n)
     throw std::invalid_argument("separable power program: B, b, weights and bounds have inconsistent sizes");
   if (!(P.exponent > 1.0) || !std::isfinite(P.exponent))
@@ -73,8 +89,9 @@ SeparablePowerSolution solve_separable_power_program(const SeparablePowerProgram
     if (gradient.cwiseAbs().maxCoeff() <= tolerance * scale) break;
     // Newton on the concave dual: (B D B^T) step = b - B x, regularized where D vanishes.
     Eigen::MatrixXd H = P.B * point.slope.asDiagonal() * P.B.transpose();
-    const double trace = std::max(H.trace(), 1e-300);
-    H.diagonal().array() += 1e-12 * trace + 1e-300;
+    const double trace = H.trace();
+    if (!(trace > 0.0)) break;  // every variable at a bound, and a row still missed
+    H.diagonal().array() += 1e-12 * trace;
     const Eigen::VectorXd step = H.llt().solve(gradient);
     // Backtracking (Armijo) on the dual function.
     double t = 1.0;
@@ -88,7 +105,7 @@ SeparablePowerSolution solve_separable_power_program(const SeparablePowerProgram
     if (!accepted) break;
     std::swap(point, trial);
     gradient = P.b - P.B * point.x;
-    if (!lambda.allFinite() || lambda.cwiseAbs().maxCoeff() > 1e15 * scale) break;  // unbounded dual: infeasible
+    if (!lambda.allFinite() || lambda.cwiseAbs().maxCoeff() > 1e15 * scale) break;  // the dual grows without bound
   }
   out.x = point.x;
   out.multipliers = lambda;
@@ -96,10 +113,15 @@ SeparablePowerSolution solve_separable_power_program(const SeparablePowerProgram
   out.objective = (P.weights.array() * out.x.array().abs().pow(P.exponent)).sum();
   out.solved = out.residual <= tolerance * scale && out.x.allFinite();
   if (!out.solved) {
+    // Infeasible only with a certificate: the dual's direction of growth, or its gradient.
+    out.infeasible = certifies_infeasible(P, lambda) || certifies_infeasible(P, gradient);
     Eigen::Index row = 0;
     gradient.cwiseAbs().maxCoeff(&row);
-    out.message = "B x = b has no solution within the bounds: row " + std::to_string(row) + " is missed by " +
-                  std::to_string(gradient[row]) + " after " + std::to_string(out.iterations) + " iterations";
+    out.worst_row = static_cast<int>(row);
+    out.message = (out.infeasible ? "B x = b has no solution within the bounds: row "
+                                  : "the dual Newton method stopped before it converged: row ") +
+                  std::to_string(row) + " is missed by " + std::to_string(gradient[row]) + " after " +
+                  std::to_string(out.iterations) + " iterations";
   }
   return out;
 }

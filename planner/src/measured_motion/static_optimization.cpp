@@ -205,14 +205,14 @@ StaticOptimizationResult static_optimization(const plugin::MusculoskeletalModel&
     program.b = tau;
     const SeparablePowerSolution s = solve_separable_power_program(program);
     if (!s.solved) {
-      std::string joint = "?";
-      if (const std::size_t at = s.message.find("row "); at != std::string::npos) {
-        const int row = std::stoi(s.message.substr(at + 4));
-        if (row >= 0 && row < n) joint = model.description().joints[static_cast<std::size_t>(row)].coordinateName();
-      }
-      out.failures.push_back("t = " + std::to_string(t) + " s: the muscles cannot produce the torque about '" + joint +
-                             "' the motion needs (" + s.message + ")" +
-                             (reserves ? "" : "; add reserve actuators (reserve_optimal_torque_N_m) to see by how much"));
+      const std::string joint = s.worst_row >= 0 && s.worst_row < n
+                                    ? model.description().joints[static_cast<std::size_t>(s.worst_row)].coordinateName()
+                                    : std::string("?");
+      out.failures.push_back(
+          "t = " + std::to_string(t) + " s: " +
+          (s.infeasible ? "the muscles cannot produce the torque about '" + joint + "' the motion needs (" + s.message + ")" +
+                              (reserves ? "" : "; add reserve actuators (reserve_optimal_torque_N_m) to see by how much")
+                        : "the optimization did not converge at '" + joint + "' (" + s.message + ")"));
     }
     out.activation.row(f) = s.x.head(m).transpose();
     out.tendon_force_N.row(f) = (s.x.head(m).array() * G.array()).transpose();
@@ -230,7 +230,7 @@ plugin::StoTable result_table(const plugin::MusculoskeletalModel& model, const S
   t.name = name;
   t.columns = {"time"};
   for (const auto& muscle : model.description().muscles) t.columns.push_back(muscle.parameters.name);
-  const bool reserves = r.reserve_torque_N_m.size() > 0 && r.reserve_torque_N_m.cwiseAbs().maxCoeff() > 0.0;
+  const bool reserves = r.reserve_optimal_torque_N_m > 0.0;  // the same columns whether used or not
   if (reserves)
     for (const auto& joint : model.description().joints) t.columns.push_back(joint.coordinateName() + "_reserve");
   for (std::size_t f = 0; f < r.time_s.size(); ++f) {

@@ -15,6 +15,7 @@ namespace {
 constexpr double kGamma = 1.0 + 0.70710678118654752440;  // ROS2's gamma = 1 + 1/sqrt(2)
 constexpr double kSafety = 0.9, kMaxGrowth = 5.0, kMaxShrink = 0.2;
 constexpr double kMinStep_s = 1e-10;
+constexpr double kFirstStep_s = 1e-3;  // each muscle's first trial step
 // A pivot of W = I - gamma h J below this is a step far beyond an unstable time scale of the
 // muscle (J > 0 on the descending limb): rejected, as the plant's Rosenbrock integrator does.
 constexpr double kMinPivot = 0.5;
@@ -44,7 +45,7 @@ MuscleStateEstimator::MuscleStateEstimator(std::shared_ptr<const plugin::Musculo
   tendon_length_m_.setZero(m);
   activation_.setZero(m);
   excitation_.assign(static_cast<std::size_t>(m), plugin::ExcitationPolynomial::constant(0.0));
-  step_s_.assign(static_cast<std::size_t>(m), 1e-3);
+  step_s_.assign(static_cast<std::size_t>(m), kFirstStep_s);
   saved_tendon_m_.setZero(m);
   saved_activation_.setZero(m);
   arms_m_.setZero(n);
@@ -63,10 +64,12 @@ void MuscleStateEstimator::start(const Eigen::VectorXd& tendon_lengths_m, const 
   tendon_length_m_ = tendon_lengths_m;
   activation_ = activations;
   time_s_ = time_s;
+  std::fill(step_s_.begin(), step_s_.end(), kFirstStep_s);
   started_ = true;
 }
 
 void MuscleStateEstimator::setExcitation(int muscle, const plugin::ExcitationPolynomial& piece) {
+  piece.validate();  // its coefficient count and duration are read unchecked while integrating
   excitation_.at(static_cast<std::size_t>(muscle)) = piece;
 }
 
@@ -185,6 +188,7 @@ bool MuscleStateEstimator::advance(const JointMeasurement& from, const JointMeas
     if (advanceMuscle(j, time_s)) continue;
     tendon_length_m_ = saved_tendon_m_;
     activation_ = saved_activation_;
+    std::fill(step_s_.begin(), step_s_.end(), kFirstStep_s);  // a failed muscle left its step at nothing
     return false;
   }
   time_s_ = time_s;

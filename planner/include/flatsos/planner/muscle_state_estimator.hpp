@@ -42,7 +42,7 @@ class MuscleStateEstimator {
   /// Throws std::invalid_argument for wrong sizes or values that are not finite.
   void start(const Eigen::VectorXd& tendon_lengths_m, const Eigen::VectorXd& activations, double time_s);
   /// The excitation muscle j receives from now on (clamped to [0, 1] as the Simbody muscle
-  /// clamps it).
+  /// clamps it). Throws std::invalid_argument for a piece that fails ExcitationPolynomial::validate.
   void setExcitation(int muscle, const plugin::ExcitationPolynomial& piece);
   /// The joints' measured state at one time: angles, speeds, accelerations.
   struct JointMeasurement {
@@ -86,7 +86,7 @@ class MuscleStateEstimator {
   double advance_start_s_ = 0.0, advance_duration_s_ = 1.0;
   Eigen::MatrixXd quintic_;
   Eigen::VectorXd jet_, saved_tendon_m_, saved_activation_;
-  mutable Eigen::VectorXd arms_m_;
+  mutable Eigen::VectorXd arms_m_;  ///< muscleTorques' scratch: one estimator per thread
 };
 
 }  // namespace flatsos::planner

@@ -35,11 +35,16 @@ struct SeparablePowerSolution {
   Eigen::VectorXd x, multipliers;
   double objective = 0.0;
   double residual = 0.0;     ///< max |B x - b|
+  int worst_row = -1;        ///< the row of the largest |B x - b| when not solved
+  /// Not solved, and proved so: a Farkas certificate y (the dual's direction of growth or its
+  /// gradient) with y^T b beyond the most y^T B x reaches over the box. False when not solved:
+  /// the iterations ran out without such a proof.
+  bool infeasible = false;
   int iterations = 0;
 };
 
-/// Throws std::invalid_argument for inconsistent sizes, weights <= 0, a lower bound not below
-/// its upper one, or p <= 1 or not finite. Not solved (with the message) when B x = b has no
+/// Throws std::invalid_argument for no rows, inconsistent sizes, weights <= 0, a lower bound not
+/// below its upper one, or p <= 1 or not finite. Not solved (with the message) when B x = b has no
 /// solution inside the bounds (the dual then grows without bound) or the iterations run out.
 /// `tolerance`: on max |B x - b|, relative to max(1, max |b|).
 SeparablePowerSolution solve_separable_power_program(const SeparablePowerProgram& program, double tolerance = 1e-10,
