@@ -9,7 +9,6 @@
 
 #include "example_support.hpp"
 #include "flatsos/planner/static_optimization.hpp"
-#include "flatsos/plugin/io/motion_processing.hpp"
 #include "flatsos/plugin/io/sto_file.hpp"
 
 namespace fp = flatsos::plugin;
@@ -56,12 +55,7 @@ int main(int argc, char** argv) {
     const auto model = ex::load_model(model_path, "static_optimization", osim);
     if (!rule_name.empty())
       options.strength_rule = rule_name == "opensim2" ? fpl::MuscleStrengthRule::OpenSim2 : fpl::MuscleStrengthRule::RigidTendon;
-    const fp::StoTable table = fp::read_sto(motion_path);
-    const fp::ProcessedCoordinates motion = fp::process_coordinates_like_opensim(table, cutoff_hz, [&](const std::string& column) {
-      for (const auto& joint : model->description().joints)
-        if (joint.coordinateName() == column) return !joint.isSlider();
-      return true;  // columns the model does not use: read as angles, unused
-    });
+    const fp::ProcessedCoordinates motion = fpl::read_motion_for(*model, motion_path, cutoff_hz);
     const fpl::StaticOptimizationResult r = fpl::static_optimization(*model, motion, options);
     std::filesystem::create_directories(out_dir);
     const std::string stem = out_dir + "/" + model->description().name + "_StaticOptimization_";

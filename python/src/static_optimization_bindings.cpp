@@ -4,8 +4,6 @@
 #include <string>
 
 #include "flatsos/planner/static_optimization.hpp"
-#include "flatsos/plugin/io/motion_processing.hpp"
-#include "flatsos/plugin/io/sto_file.hpp"
 
 namespace py = pybind11;
 
@@ -31,12 +29,7 @@ py::dict static_optimization(const Model& m, const std::string& motion_file, con
   planner::StaticOptimizationResult r;
   {
     py::gil_scoped_release release;
-    const plugin::StoTable table = plugin::read_sto(motion_file);
-    const auto motion = plugin::process_coordinates_like_opensim(table, cutoff_hz, [&](const std::string& column) {
-      for (const auto& joint : model.description().joints)
-        if (joint.coordinateName() == column) return !joint.isSlider();
-      return true;
-    });
+    const plugin::ProcessedCoordinates motion = planner::read_motion_for(model, motion_file, cutoff_hz);
     r = planner::static_optimization(model, motion, o);
   }
   py::dict out;

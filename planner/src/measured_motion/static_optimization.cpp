@@ -8,6 +8,7 @@
 #include "flatsos/muscles/static_equilibrium.hpp"
 #include "flatsos/muscles/thelen2003_opensim2_muscle.hpp"
 #include "flatsos/planner/separable_power_program.hpp"
+#include "flatsos/plugin/io/sto_file.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::planner {
@@ -153,6 +154,15 @@ Eigen::VectorXd muscle_strength_N(const plugin::MusculoskeletalModel& model, Mus
                                                 : rigid_tendon_strength_N(p, path.length_m, path.lengthening_m_per_s);
   }
   return G;
+}
+
+plugin::ProcessedCoordinates read_motion_for(const plugin::MusculoskeletalModel& model, const std::string& motion_file,
+                                             double cutoff_hz) {
+  return plugin::process_coordinates_like_opensim(plugin::read_sto(motion_file), cutoff_hz, [&](const std::string& column) {
+    for (const auto& joint : model.description().joints)
+      if (joint.coordinateName() == column) return !joint.isSlider();
+    return true;  // a column the model does not use: read as an angle, never used
+  });
 }
 
 StaticOptimizationResult static_optimization(const plugin::MusculoskeletalModel& model,

@@ -75,6 +75,12 @@ Eigen::VectorXd muscle_strength_N(const plugin::MusculoskeletalModel& model, Mus
                                   const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                                   Eigen::MatrixXd& moment_arms_m);
 
+/// A measured motion file (an OpenSim coordinates table) processed as OpenSim's tools do
+/// (plugin::process_coordinates_like_opensim at `cutoff_hz`), the model's sliders read as
+/// translations and every other column as an angle. Throws as reading and processing do.
+plugin::ProcessedCoordinates read_motion_for(const plugin::MusculoskeletalModel& model, const std::string& motion_file,
+                                             double cutoff_hz = 6.0);
+
 /// Static optimization at every report time of `motion`, whose columns must include each
 /// joint's coordinate (OpenSim's name). Throws std::invalid_argument naming a missing
 /// coordinate or a bad option; a frame that fails is recorded in `failures` (its row holds the
