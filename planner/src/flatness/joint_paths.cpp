@@ -1,5 +1,7 @@
 #include "flatsos/planner/joint_paths.hpp"
 
+#include "flatsos/planner/joint_reference.hpp"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -30,9 +32,12 @@ void JointPath::jetInto(double t, Eigen::Ref<Jet> out) const {
     spline->continuedJetInto(t, out);
     return;
   }
+  if (reference) reference->jetInto(reference_start_s + t, out);
+  else out.setZero();
+  if (reference && t > correction_end_s) return;  // the correction is over: on the reference
   for (std::size_t i = 0; i < q.size(); ++i)
     for (Eigen::Index k = 0; k < out.cols(); ++k)
-      out(static_cast<Eigen::Index>(i), k) = q[i].derivativeAt(t, static_cast<int>(k));
+      out(static_cast<Eigen::Index>(i), k) += q[i].derivativeAt(t, static_cast<int>(k));
 }
 
 std::vector<TorqueJet> torque_jets_on_grid(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
@@ -47,6 +52,70 @@ std::vector<TorqueJet> torque_jets_on_grid(const FlatOutputMap& flat, plugin::Mo
     jets.push_back(flat.torqueJet(workspace, q_jet));
   }
   return jets;
+}
+
+namespace {
+// The correction that removes a joint's offset from the reference: c^(k)(0) = start[k] for the
+// given derivatives (value, speed and, when known, acceleration and jerk), and c, c', c'' = 0 at
+// T, so that the path joins the reference there with its torque continuous. Coefficients in
+// ascending powers: the start's c_k = start[k] / k!, the last three from the end's 3 x 3 system.
+void correction_polynomial(const double* start, int known, double T, Polynomial& out) {
+  const int degree = known + 2;
+  Eigen::Matrix<double, 7, 1> c = Eigen::Matrix<double, 7, 1>::Zero();
+  double factorial = 1.0;
+  for (int k = 0; k < known; ++k) factorial *= (k > 0 ? k : 1), c[k] = start[k] / factorial;
+  // Row r: the r-th derivative at T of sum_k c_k t^k, split into the known part and the unknowns.
+  Eigen::Matrix3d M;
+  Eigen::Vector3d rhs;
+  for (int r = 0; r < 3; ++r) {
+    double known_part = 0.0;
+    for (int k = r; k <= degree; ++k) {
+      double falling = 1.0;  // k! / (k - r)!
+      for (int i = 0; i < r; ++i) falling *= static_cast<double>(k - i);
+      const double term = falling * std::pow(T, k - r);
+      if (k < known) known_part += term * c[k];
+      else M(r, k - known) = term;
+    }
+    for (int k = known; k < known + 3; ++k)
+      if (k < r) M(r, k - known) = 0.0;
+    rhs[r] = -known_part;
+  }
+  c.segment<3>(known) = M.partialPivLu().solve(rhs);
+  out.setCoefficients(c.head(degree + 1));
+}
+}  // namespace
+
+void fit_tracking_path(double T, double correction_s, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                       const Eigen::VectorXd& qdd, const Eigen::VectorXd& qddd,
+                       std::shared_ptr<const JointReference> reference, double t_s, JointPath& out) {
+  if (!reference) throw std::invalid_argument("tracking path: no reference");
+  if (q.size() != reference->numJoints())
+    throw std::invalid_argument("tracking path: the reference has " + std::to_string(reference->numJoints()) +
+                                " joints, the state " + std::to_string(q.size()));
+  if (!std::isfinite(t_s)) throw std::invalid_argument("tracking path: the time is not finite");
+  if (!(T > 0.0) || !std::isfinite(T)) throw std::invalid_argument("tracking path: horizon T must be > 0 s");
+  if (!(correction_s > 0.0) || !(correction_s <= T))
+    throw std::invalid_argument("tracking path: the correction time must be in (0, horizon]");
+  if (qd.size() != q.size()) throw std::invalid_argument("tracking path: q and qd need one entry per joint");
+  if (!q.allFinite() || !qd.allFinite()) throw std::invalid_argument("tracking path: the state must be finite");
+  const bool start_motion = qdd.size() > 0;
+  if (start_motion && (qdd.size() != q.size() || qddd.size() != q.size() || !qdd.allFinite() || !qddd.allFinite()))
+    throw std::invalid_argument("tracking path: the starting acceleration and jerk need one finite entry per joint");
+  out.duration_s = T;
+  out.spline.reset();
+  out.q.resize(static_cast<std::size_t>(q.size()));
+  for (Eigen::Index i = 0; i < q.size(); ++i) {
+    const int joint = static_cast<int>(i);
+    double start[4] = {q[i] - reference->derivative(joint, t_s, 0), qd[i] - reference->derivative(joint, t_s, 1), 0.0, 0.0};
+    if (start_motion) {
+      start[2] = qdd[i] - reference->derivative(joint, t_s, 2);
+      start[3] = qddd[i] - reference->derivative(joint, t_s, 3);
+    }
+    correction_polynomial(start, start_motion ? 4 : 2, correction_s, out.q[static_cast<std::size_t>(i)]);
+  }
+  out.correction_end_s = correction_s;
+  out.reference = std::move(reference);
+  out.reference_start_s = t_s;
 }
 
 JointPath fit_joint_path(double T, const Eigen::MatrixXd& initial, const Eigen::MatrixXd& terminal) {
@@ -68,6 +137,7 @@ void fit_rest_cubic(double T, const Eigen::VectorXd& q, const Eigen::VectorXd& q
   if (!q.allFinite() || !qd.allFinite() || !q_target.allFinite())
     throw std::invalid_argument("joint path: boundary derivatives must be finite");
   out.duration_s = T;
+  out.reference.reset();
   out.q.resize(static_cast<std::size_t>(q.size()));
   for (Eigen::Index i = 0; i < q.size(); ++i) {
     // q(t) = q0 + v0 t + c2 t^2 + c3 t^3 with q(T) = target, qd(T) = 0.

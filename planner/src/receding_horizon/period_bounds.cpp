@@ -33,7 +33,7 @@ bool sample_period(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                    RecedingHorizonStep& step) {
   auto& buf = step.buffers;
   return sample_plan_excitations(flat, workspace, step.path, step.alpha(), step.torque_offset_N_m, 0.0, sample_spacing_s(b),
-                                 b.samples, buf.period, buf.excitations, &buf.activations);
+                                 b.samples, buf.period, buf.excitations, &buf.activations, &step.flat_start);
 }
 
 // The largest excess of a sample's a or n over its bounds (0 inside), and where.
@@ -89,6 +89,16 @@ std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExc
     bp.base = map.Ctau * tau.tau;
     for (int c = 0; c < p; ++c) bp.columns.push_back(c);
     bp.slope = {map.CY, Eigen::MatrixXd::Zero(m, p), Eigen::MatrixXd::Zero(m, p)};
+    if (!step.flat_start.empty()) {
+      // Y^(k) = (1 - phi0)^(k) alpha + (phi0 Y0 + phi1 Y0')^(k): the start's part joins the base.
+      double phi0[3], phi1[3];
+      step.flat_start.blend(bp.t_s, 0, phi0);
+      step.flat_start.blend(bp.t_s, 1, phi1);
+      for (int k = 0; k < 3; ++k) {
+        bp.slope[static_cast<std::size_t>(k)] = ((k == 0 ? 1.0 : 0.0) - phi0[k]) * map.CY;
+        bp.base.col(k) += map.CY * (phi0[k] * step.flat_start.value + phi1[k] * step.flat_start.rate);
+      }
+    }
     if (map.varies()) {
       Eigen::MatrixXd b0 = bp.base.col(0), b1 = bp.base.col(1), b2 = bp.base.col(2);
       map.mix(b0, b1, b2);

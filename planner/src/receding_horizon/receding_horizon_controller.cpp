@@ -23,6 +23,20 @@ RecedingHorizonOptions controller_plan_options(const RecedingHorizonControllerOp
   return plan;
 }
 
+// The integral of sum_j u_j^2 over a period from its uniform samples (rows, spacing h) of the
+// excitations as the muscles take them (clamped to [0, 1]): composite Simpson where the intervals
+// pair up, the trapezoid otherwise.
+double squared_excitation_integral(const Eigen::MatrixXd& samples, double h) {
+  const Eigen::Index intervals = samples.rows() - 1;
+  const bool simpson = intervals % 2 == 0;
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i <= intervals; ++i) {
+    const double w = (i == 0 || i == intervals) ? 1.0 : simpson ? (i % 2 == 1 ? 4.0 : 2.0) : 2.0;
+    sum += w * samples.row(i).cwiseMax(0.0).cwiseMin(1.0).squaredNorm();
+  }
+  return sum * h / (simpson ? 3.0 : 2.0);
+}
+
 const RecedingHorizonControllerOptions& validated(const RecedingHorizonControllerOptions& o, const FlatOutputMap& flat) {
   if (!(o.control_period_s > 0.0) || !std::isfinite(o.control_period_s))
     throw std::invalid_argument("RH controller: control period must be > 0 s");
@@ -46,6 +60,7 @@ std::shared_ptr<const plugin::MusculoskeletalModel> checked_plant(std::shared_pt
 }  // namespace
 
 std::vector<std::string> RecedingHorizonController::warnings() const {
+  if (options_.plan.reference) return {};  // no set point
   return plugin::joint_angle_warnings(flat_.model().description(), options_.plan.target_q_rad, "target joint angles");
 }
 
@@ -62,7 +77,20 @@ RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, Recedin
   const int n = flat_.numJoints(), m = flat_.numMuscles();
   for (auto* v : {&q_, &qd_, &qdd_, &measured_torque_, &muscle_torque_, &previous_q_, &previous_qd_, &previous_qdd_}) v->setZero(n);
   excitations_.setZero(fitter_.samples(), m);
+  start_joint_jet_.setZero(n, 4);
+  start_flat_jet_.setZero(flat_.numFlatOutputs(), 3);
   if (observer_.enabled()) plan_options_.torque_offset_N_m.setZero(n);
+}
+
+void RecedingHorizonController::startFromPlanInUse(double t) {
+  if (in_use_.empty()) return;  // the first plan starts free, as the paper's
+  const double tau = t - in_use_.start_time_s;
+  rest_held_jet(in_use_.path, tau, start_joint_jet_);
+  plan_options_.start_qdd = start_joint_jet_.col(2);  // same sizes every period: no allocation
+  plan_options_.start_qddd = start_joint_jet_.col(3);
+  in_use_.flat_start.jetInto(in_use_.alpha, tau, start_flat_jet_);
+  plan_options_.flat_start.value = start_flat_jet_.col(0);
+  plan_options_.flat_start.rate = start_flat_jet_.col(1);
 }
 
 void RecedingHorizonController::observe(const SimTK::State& state, double t) {
@@ -87,6 +115,7 @@ void RecedingHorizonController::observe(const SimTK::State& state, double t) {
 void RecedingHorizonController::applyExcitations(SimTK::State& state, double t) {
   if (observer_.enabled() && !estimator_.started())  // the run's known initial muscle states
     estimator_.start(plant_->tendonLengths(state), plant_->activations(state), t);
+  excitation_squared_integral_ += squared_excitation_integral(excitations_, fitter_.spacing_s());
   for (int j = 0; j < plant_->numMuscles(); ++j) {
     const plugin::ExcitationPolynomial piece = fitter_.fit(excitations_.col(j), t);
     plant_->muscle(j).setExcitationPolynomial(state, piece);
@@ -96,7 +125,8 @@ void RecedingHorizonController::applyExcitations(SimTK::State& state, double t) 
 
 bool RecedingHorizonController::sampleExcitations(const PlanInUse& plan, double t) {
   return sample_plan_excitations(flat_, workspace_, plan.path, plan.alpha, plan.torque_offset_N_m, t - plan.start_time_s,
-                                 fitter_.spacing_s(), fitter_.samples(), excitation_scratch_, excitations_);
+                                 fitter_.spacing_s(), fitter_.samples(), excitation_scratch_, excitations_, nullptr,
+                                 &plan.flat_start);
 }
 
 const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {
@@ -114,6 +144,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   rec.bounds_imposed = false;
   rec.clamped_samples = 0;
   rec.plan_seconds = 0.0;
+  plan_options_.reference_time_s = t;  // a tracked reference's time (unused for a set point)
   if (observer_.enabled()) {
     plan_options_.torque_offset_N_m = observer_.torqueOffset_N_m();
     rec.observer_offset_N_m = plan_options_.torque_offset_N_m;
@@ -122,9 +153,16 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   }
 
   bool have_candidate = false;
+  if (plan_options_.reference) startFromPlanInUse(t);
   try {
     const Stopwatch plan_time;
     options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+    if (step_.status != SolveStatus::Solved && !plan_options_.flat_start.empty()) {
+      // No plan carries the muscles on from where they are: a free start, as the paper's.
+      plan_options_.flat_start.value.resize(0);
+      plan_options_.start_qdd.resize(0);
+      options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+    }
     rec.plan_seconds = plan_time.seconds();
     rec.status = step_.status;
     rec.message = step_.message;
@@ -134,6 +172,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
       candidate_.path = step_.path;
       candidate_.start_time_s = t;
       candidate_.torque_offset_N_m = plan_options_.torque_offset_N_m;
+      candidate_.flat_start = step_.flat_start;
       have_candidate = true;
     }
   } catch (const std::exception& e) {

@@ -21,7 +21,8 @@ Eigen::MatrixXd RecedingHorizonStep::excitations(const FlatOutputMap& flat, plug
   if (count < 1 || !(h_s > 0.0) || !(tau0_s >= 0.0)) throw std::invalid_argument("RH step excitations: need count >= 1, h > 0 s, tau0 >= 0 s");
   PlanExcitationScratch scratch;
   Eigen::MatrixXd out;
-  if (!sample_plan_excitations(flat, workspace, path, alpha(), torque_offset_N_m, tau0_s, h_s, count, scratch, out))
+  if (!sample_plan_excitations(flat, workspace, path, alpha(), torque_offset_N_m, tau0_s, h_s, count, scratch, out,
+                               nullptr, &flat_start))
     throw std::runtime_error("RH step excitations: not finite (the plan leaves the model's valid domain)");
   return out;
 }
@@ -30,8 +31,24 @@ void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
   const int n = flat.numJoints();
   if (!(o.horizon_s > 0.0) || !std::isfinite(o.horizon_s)) throw std::invalid_argument("RH step: horizon must be > 0 s");
   if (o.grid_points < 2) throw std::invalid_argument("RH step: need at least 2 grid points");
-  require(o.target_q_rad, n, "target joint angles");
-  require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
+  if (o.reference) {
+    if (o.reference->numJoints() != n)
+      throw std::invalid_argument("RH step: the reference has " + std::to_string(o.reference->numJoints()) +
+                                  " joints, the model " + std::to_string(n));
+    if (!std::isfinite(o.reference_time_s)) throw std::invalid_argument("RH step: the reference time is not finite");
+    if (!(o.tracking_correction_s > 0.0)) throw std::invalid_argument("RH step: the tracking correction time must be > 0 s");
+    if (o.start_qdd.size() > 0) {
+      require(o.start_qdd, n, "starting joint accelerations");
+      require(o.start_qddd, n, "starting joint jerks");
+    }
+    if (!o.flat_start.empty()) {
+      require(o.flat_start.value, flat.numFlatOutputs(), "starting flat outputs");
+      require(o.flat_start.rate, flat.numFlatOutputs(), "starting flat output rates");
+    }
+  } else {
+    require(o.target_q_rad, n, "target joint angles");
+    require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
+  }
   require_reserves(o.reserves_N, flat.numMuscles());
   if (o.torque_offset_N_m.size() > 0) require(o.torque_offset_N_m, n, "torque offset");
   const PeriodExcitationBounds& b = o.excitation_bounds;
@@ -85,14 +102,21 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.message.clear();
   step.first_period_sampled = false;
   step.grid_seconds = step.bounds_seconds = 0.0;
-  fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
+  if (o.reference) fit_tracking_path(o.horizon_s, std::min(o.tracking_correction_s, o.horizon_s), q, qd, o.start_qdd, o.start_qddd, o.reference, o.reference_time_s, step.path);
+  else fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
   step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation
+  step.flat_start = o.flat_start;
+  if (!o.reference) step.flat_start.value.resize(0);  // a set point's plan: constant alpha
+  const bool blended = !step.flat_start.empty();
+  if (blended) step.flat_start.blend_s = std::min(o.tracking_correction_s, o.horizon_s);
   const bool offset = o.torque_offset_N_m.size() > 0;
   step.buffers.joint_jet.resize(n, 3);
   step.buffers.torque_N_m.resize(n);
   step.tau_min.setConstant(n, 1e300);
   step.tau_max.setConstant(n, -1e300);
-  const bool varying = !flat.hasConstantMomentArms();
+  // A blended start weights alpha differently at each grid time: rows per grid time, as for
+  // posture-dependent moment arms.
+  const bool varying = !flat.hasConstantMomentArms() || blended;
   const int m = flat.numMuscles();
   // The paper's cost (sum of the flat outputs) is the SLP's default; other effort weights give
   // the cost c = C_Y^T w of the constant flat outputs.
@@ -100,8 +124,9 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   if (flat_output_sum) step.buffers.slp.cost.resize(0);
   else step.buffers.slp.cost.setZero(flat.numFlatOutputs());
   if (varying) {
-    step.reserve_rows.resize(o.grid_points * m, flat.numFlatOutputs());
-    step.bound_N.resize(o.grid_points * m);
+    // A blended start has no rows at t = 0: the forces there are the muscles' own.
+    step.reserve_rows.resize((o.grid_points - (blended ? 1 : 0)) * m, flat.numFlatOutputs());
+    step.bound_N.resize(step.reserve_rows.rows());
   }
   for (int i = 0; i < o.grid_points; ++i) {
     Jet& j = step.buffers.joint_jet;
@@ -122,10 +147,18 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
       return;
     }
     const ForceJetMap map = flat.forceJetMap(j.leftCols(1));
-    step.reserve_rows.middleRows(i * m, m) = map.CY;
-    step.bound_N.segment(i * m, m) = o.reserves_N - map.Ctau * tau;
+    // Y(t) = (1 - phi0) alpha + phi0 Y0 + phi1 Y0' (constant alpha without a start): the
+    // forces at the start are the muscles' own, not the plan's to choose.
+    double phi0[3] = {0.0, 0.0, 0.0}, phi1[3] = {0.0, 0.0, 0.0};
+    if (blended) step.flat_start.blend(t, 0, phi0), step.flat_start.blend(t, 1, phi1);
+    if (blended && i == 0) continue;
+    const int row = (blended ? i - 1 : i) * m;
+    step.reserve_rows.middleRows(row, m) = (1.0 - phi0[0]) * map.CY;
+    step.bound_N.segment(row, m) = o.reserves_N - map.Ctau * tau;
+    if (blended) step.bound_N.segment(row, m).noalias() -= map.CY * (phi0[0] * step.flat_start.value + phi1[0] * step.flat_start.rate);
     // The effort's flat-output part, C_Y(q)^T w, averaged over the horizon's grid.
-    if (!flat_output_sum) step.buffers.slp.cost.noalias() += map.CY.transpose() * flat.effortPricingWeights() / o.grid_points;
+    if (!flat_output_sum)
+      step.buffers.slp.cost.noalias() += (1.0 - phi0[0]) * map.CY.transpose() * flat.effortPricingWeights() / o.grid_points;
   }
   if (!varying) {
     step.reserve_rows = flat.CY();  // no allocation once sized

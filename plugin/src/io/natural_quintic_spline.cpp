@@ -107,13 +107,20 @@ NaturalQuinticSpline::NaturalQuinticSpline(std::vector<double> x, const std::vec
 }
 
 double NaturalQuinticSpline::derivative(double x, int order) const {
-  if (order < 0 || order > 5)
-    throw std::invalid_argument("NaturalQuinticSpline: derivative order must be 0..5, got " + std::to_string(order));
   if (!(x >= x_.front() && x <= x_.back()))
     throw std::invalid_argument("NaturalQuinticSpline: x = " + std::to_string(x) + " lies outside the knots [" +
                                 std::to_string(x_.front()) + ", " + std::to_string(x_.back()) + "]");
+  return continuedDerivative(x, order);
+}
+
+double NaturalQuinticSpline::continuedDerivative(double x, int order) const {
+  if (order < 0 || order > 5)
+    throw std::invalid_argument("NaturalQuinticSpline: derivative order must be 0..5, got " + std::to_string(order));
+  if (!std::isfinite(x)) throw std::invalid_argument("NaturalQuinticSpline: x is not finite");
+  // The interval holding x; before the first knot the first, after the last knot the last.
   const auto after = std::upper_bound(x_.begin(), x_.end(), x);
-  const std::size_t j = std::min<std::size_t>(static_cast<std::size_t>(after - x_.begin()) - 1, x_.size() - 2);
+  const std::size_t index = after == x_.begin() ? 0 : static_cast<std::size_t>(after - x_.begin()) - 1;
+  const std::size_t j = std::min<std::size_t>(index, x_.size() - 2);
   const double h = x_[j + 1] - x_[j];
   const double s = (x - x_[j]) / h;
   const std::vector<double>& c = coefficients_[j];

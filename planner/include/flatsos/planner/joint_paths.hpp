@@ -7,11 +7,11 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
-
-#include <optional>
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/numerics/polynomial.hpp"
@@ -19,10 +19,17 @@
 
 namespace flatsos::planner {
 
+class JointReference;
+
 struct JointPath {
   double duration_s = 0.0;
   std::vector<Polynomial> q;  ///< per joint, ascending powers of t (s), radians (empty with a spline)
   std::optional<SplineTrajectory> spline;  ///< a free path: one row per joint (radians); then q is empty
+  /// Tracking: the path is the reference at reference_start_s + t plus the polynomials q (the
+  /// correction from the measured state; see fit_tracking_path).
+  std::shared_ptr<const JointReference> reference;
+  double reference_start_s = 0.0;
+  double correction_end_s = 0.0;  ///< with a reference: q applies on [0, correction_end_s] only
   /// A path given by a spline (one row per joint) over its basis' duration.
   static JointPath fromSpline(SplineTrajectory spline);
   int numJoints() const { return spline ? spline->signals() : static_cast<int>(q.size()); }
@@ -32,6 +39,17 @@ struct JointPath {
   /// The same into `out` (N x orders, orders = its column count; allocates nothing).
   void jetInto(double t, Eigen::Ref<Jet> out) const;
 };
+
+/// The receding-horizon path that follows a reference from time t_s on: the reference over the
+/// horizon T plus, per joint, a polynomial correction from the measured state's offset from the
+/// reference at t_s (value and speed, and acceleration and jerk when qdd is not empty) to zero
+/// value, speed and acceleration at correction_s, after which the path is the reference. Written
+/// into `out` (no allocation when it already holds N polynomials of that degree). Throws
+/// std::invalid_argument for T <= 0, a correction time outside (0, T], mismatched sizes or a
+/// state that is not finite.
+void fit_tracking_path(double duration_s, double correction_s, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                       const Eigen::VectorXd& qdd, const Eigen::VectorXd& qddd,
+                       std::shared_ptr<const JointReference> reference, double t_s, JointPath& out);
 
 /// Torque jets along the path at the `count` times i h: for a polynomial path by the map's
 /// differences in time (FlatOutputMap::torqueJetsOnGrid: about one inverse dynamics per time),

@@ -71,6 +71,7 @@ struct PlanInUse {
   JointPath path;                    ///< predicted joint motion (the cubic)
   double start_time_s = 0.0;         ///< simulation time of the plan's t = 0
   Eigen::VectorXd torque_offset_N_m; ///< what the muscles were relieved of when it was planned
+  FlatOutputStart flat_start;        ///< where its flat outputs started (empty: constant alpha)
   bool empty() const { return alpha.size() == 0; }
 };
 
@@ -108,6 +109,9 @@ class RecedingHorizonController final : public plugin::Controller {
   int clampedSamples() const { return clamped_samples_; }
   /// Steps whose SLP optimum left the excitation bounds on the first period (alpha moved inside).
   int boundedSteps() const { return bounded_steps_; }
+  /// The integral of sum_j u_j^2 dt over every period applied so far (the excitations as the
+  /// muscles take them, clamped to [0, 1]; Simpson on the period's samples).
+  double excitationSquaredIntegral() const { return excitation_squared_integral_; }
   const RecedingHorizonControllerOptions& options() const { return options_; }
   /// Implausible options that were accepted (a target beyond one turn: degrees as radians?).
   std::vector<std::string> warnings() const;
@@ -118,6 +122,11 @@ class RecedingHorizonController final : public plugin::Controller {
   const MuscleStateEstimator& muscleEstimator() const { return estimator_; }
 
  private:
+  // A tracking step starts where the plan in use is at t: its joint acceleration and jerk and its
+  // flat outputs' value and rate, so that the muscles' forces and their rates carry on (a plan
+  // that starts from its own muscle states makes the muscles jump to them every period; the
+  // errors it leaves are what tracking cannot afford).
+  void startFromPlanInUse(double t);
   // Updates the observer from the measured motion (q_, qd_ and the plant's qdd) at time t.
   void observe(const SimTK::State& state, double t);
   // Gives the muscles (and the observer's estimate of them) the excitations of this period.
@@ -137,6 +146,7 @@ class RecedingHorizonController final : public plugin::Controller {
   RecedingHorizonRecord record_;
   std::vector<RecedingHorizonRecord> history_;
   int steps_ = 0, plan_failures_ = 0, clamped_samples_ = 0, bounded_steps_ = 0;
+  double excitation_squared_integral_ = 0.0;
 
   // Storage reused every period (sized in the constructor or on the first period).
   RecedingHorizonOptions plan_options_;  ///< options_.plan with this controller's bounds and the observer's current offset
@@ -145,6 +155,7 @@ class RecedingHorizonController final : public plugin::Controller {
   Eigen::VectorXd previous_q_, previous_qd_, previous_qdd_;  ///< measured at the previous step
   PlanExcitationScratch excitation_scratch_;
   Eigen::MatrixXd excitations_;  ///< samples x muscles of the period being planned
+  Jet start_joint_jet_, start_flat_jet_;  ///< the plan in use at the step's time: N x 4, p x 3
 };
 
 /// A closed-loop run of the controller on its plant (plugin::simulate_closed_loop, control

@@ -7,12 +7,14 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <memory>
 #include <string>
 
 #include <Eigen/Core>
 
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
+#include "flatsos/planner/joint_reference.hpp"
 #include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/planner/slp.hpp"
 
@@ -31,7 +33,20 @@ struct PeriodExcitationBounds {
 struct RecedingHorizonOptions {
   double horizon_s = 0.5;
   int grid_points = 11;               ///< torque box sampled here (the paper's grid)
-  Eigen::VectorXd target_q_rad;
+  Eigen::VectorXd target_q_rad;       ///< the set point (unused when tracking a reference)
+  /// Tracking: follow this joint motion instead of coming to rest at the target. The step's path
+  /// is the reference from reference_time_s on plus a cubic correction from the measured state
+  /// (fit_tracking_path); the RH controller sets reference_time_s to its own time.
+  std::shared_ptr<const JointReference> reference;
+  double reference_time_s = 0.0;
+  /// The time over which a tracking step's path joins the reference (and its flat outputs reach
+  /// alpha from their start); capped at the horizon.
+  double tracking_correction_s = 0.1;
+  /// A tracking step that starts where the muscles are: the path's acceleration and jerk at 0
+  /// (empty: free, the cubic correction) and the flat outputs' value and rate (empty: constant
+  /// alpha). The RH controller sets them from the plan in use.
+  Eigen::VectorXd start_qdd, start_qddd;
+  FlatOutputStart flat_start;
   Eigen::VectorXd reserves_N;
   SlpSolver solver = SlpSolver::VertexEnumeration;
   /// Joint torque the muscles need not produce (N m per joint; empty: none): the planned
@@ -43,7 +58,7 @@ struct RecedingHorizonOptions {
 struct RecedingHorizonStep {
   SolveStatus status = SolveStatus::Failed;
   std::string message;
-  JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon
+  JointPath path;                     ///< cubic from (q, qd) to (target, 0) over the horizon, or the tracking path
   Eigen::VectorXd tau_min, tau_max;   ///< torque box over the horizon grid
   /// The SLP's rows G alpha >= B. Constant moment arms: G = C_Y and B = slp_bound_vector of the
   /// box and reserves (m rows). Posture-dependent ones: at each grid posture q_i,
@@ -52,6 +67,7 @@ struct RecedingHorizonStep {
   Eigen::VectorXd bound_N;
   SlpResult slp;                      ///< alpha and its cost (moved inside the bounds when they were imposed)
   Eigen::VectorXd torque_offset_N_m;  ///< the options' offset the step was planned with (may be empty)
+  FlatOutputStart flat_start;         ///< where its flat outputs start (empty: constant alpha)
   /// The SLP's optimum left the excitation bounds on the first period and the bounds' sequential
   /// LP moved alpha inside (cost raised); its LP steps.
   bool bounds_imposed = false;
@@ -90,8 +106,9 @@ struct RecedingHorizonStep {
   } buffers;
 };
 
-/// Checks RH options against the model: horizon > 0 s, >= 2 grid points, target and reserves
-/// (>= 0 N) of the model's sizes and finite, a torque offset (if any) of one entry per joint,
+/// Checks RH options against the model: horizon > 0 s, >= 2 grid points, target (unless a
+/// reference of the model's joints is tracked, at a finite time) and reserves (>= 0 N) of the
+/// model's sizes and finite, a torque offset (if any) of one entry per joint,
 /// enforced excitation bounds on a period in (0, horizon] with >= 2 samples. Throws
 /// std::invalid_argument naming the field.
 void validate(const RecedingHorizonOptions& options, const FlatOutputMap& flat);

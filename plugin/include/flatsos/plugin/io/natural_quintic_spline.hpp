@@ -25,6 +25,9 @@ class NaturalQuinticSpline {
   /// The spline's derivative of the given order (0 = value, up to 5) at x, for x in
   /// [x_front, x_back]; throws std::invalid_argument outside or for another order.
   double derivative(double x, int order) const;
+  /// The same anywhere: beyond the knots, the first or last interval's quintic continued (a
+  /// tracked motion's horizon may reach past its last sample). Throws for a non-finite x.
+  double continuedDerivative(double x, int order) const;
   double value(double x) const { return derivative(x, 0); }
   double firstDerivative(double x) const { return derivative(x, 1); }
   double secondDerivative(double x) const { return derivative(x, 2); }

@@ -1,0 +1,74 @@
+#include "flatsos/planner/tracking.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace flatsos::planner {
+
+namespace {
+
+// Position errors (reference - plant) at every row of a state table, and their RMS and maximum.
+void measure_errors(const plugin::MusculoskeletalModel& model, const JointReference& reference, TrackingRun& run) {
+  const int n = model.numJoints();
+  plugin::StoTable& table = run.position_errors;
+  table.name = "pErr";
+  table.columns = {"time"};
+  for (const auto& joint : model.description().joints) table.columns.push_back(joint.coordinateName());
+  run.rms_error.setZero(n);
+  run.max_abs_error.setZero(n);
+  for (const auto& row : run.loop.states.rows) {
+    std::vector<double> errors = {row[0]};
+    for (int j = 0; j < n; ++j) {  // state columns: time, then value and speed per joint
+      const double e = reference.derivative(j, row[0], 0) - row[static_cast<std::size_t>(1 + 2 * j)];
+      errors.push_back(e);
+      run.rms_error[j] += e * e;
+      run.max_abs_error[j] = std::max(run.max_abs_error[j], std::abs(e));
+    }
+    table.rows.push_back(std::move(errors));
+  }
+  if (!table.rows.empty()) run.rms_error = (run.rms_error / static_cast<double>(table.rows.size())).cwiseSqrt();
+}
+
+}  // namespace
+
+TrackingRun run_tracking(RecedingHorizonController& controller, const SimTK::State& initial,
+                         const plugin::ClosedLoopOptions& options, double tolerance_rad, double tolerance_m) {
+  const std::shared_ptr<const JointReference>& reference = controller.options().plan.reference;
+  if (!reference) throw std::invalid_argument("tracking: the controller has no reference to track");
+  plugin::ClosedLoopOptions o = options;
+  o.control_period_s = controller.options().control_period_s;
+  o.duration_s = reference->endTime_s() - initial.getTime();
+  if (!(o.duration_s > 0.0))
+    throw std::invalid_argument("tracking: the run starts at or after the reference's end time");
+  TrackingRun run;
+  run.loop = plugin::simulate_closed_loop(controller.plant(), controller, initial, o);
+  run.excitation_squared_integral = controller.excitationSquaredIntegral();
+  measure_errors(controller.plant(), *reference, run);
+
+  if (!run.loop.finite) run.failures.push_back("the simulation became non-finite");
+  if (controller.planFailures() > 0) {
+    std::ostringstream why;
+    why << controller.planFailures() << " of " << controller.steps() << " plans failed (the previous plan's tail ran instead)";
+    const auto& history = controller.history();
+    const auto first = std::find_if(history.begin(), history.end(),
+                                    [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
+    if (first != history.end()) why << ", the first at t = " << first->time_s << " s: " << first->message;
+    run.failures.push_back(why.str());
+  }
+  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+  const auto& joints = controller.plant().description().joints;
+  for (int j = 0; j < run.max_abs_error.size(); ++j) {
+    const bool slider = joints[static_cast<std::size_t>(j)].isSlider();
+    if (run.max_abs_error[j] <= (slider ? tolerance_m : tolerance_rad)) continue;
+    std::ostringstream why;
+    why << "'" << joints[static_cast<std::size_t>(j)].coordinateName() << "' left the reference by "
+        << (slider ? run.max_abs_error[j] : run.max_abs_error[j] * kDegPerRad) << (slider ? " m" : " deg")
+        << " (tolerance " << (slider ? tolerance_m : tolerance_rad * kDegPerRad) << (slider ? " m)" : " deg)");
+    run.failures.push_back(why.str());
+  }
+  return run;
+}
+
+}  // namespace flatsos::planner
