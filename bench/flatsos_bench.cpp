@@ -29,6 +29,7 @@
 #include "ipopt_linear_solvers.hpp"
 #include "scaling.hpp"
 #include "static_optimization_bench.hpp"
+#include "tracking_bench.hpp"
 #include "scenario_inputs.hpp"
 #include "timing.hpp"
 
@@ -85,6 +86,10 @@ int main(int argc, char** argv) try {
   app.add_flag("--static-optimization-only", static_optimization_only,
                "time only static optimization: arm26 as downloaded along OpenSim's tutorial motion, with its "
                "geometry paths and with its fitted ones");
+  bool tracking_only = false;
+  app.add_flag("--tracking-only", tracking_only,
+               "time only tracking: arm26 as downloaded following OpenSim's CMC tutorial motion (the controller's "
+               "step and the closed loop)");
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
   auto scaling = [&] {
     json rows = json::array();
@@ -100,6 +105,11 @@ int main(int argc, char** argv) try {
   if (static_optimization_only) {
     emit({{"machine", {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}}},
           {"static_optimization", flatsos::bench::static_optimization_timing(std::max(3, reps / 3))}});
+    return 0;
+  }
+  if (tracking_only) {
+    emit({{"machine", {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}}},
+          {"tracking", flatsos::bench::tracking_timing(std::max(3, reps / 3))}});
     return 0;
   }
   if (scaling_only) {
@@ -535,6 +545,7 @@ int main(int argc, char** argv) try {
                    {{"median", rtf}, {"target", 50.0}, {"met", rtf >= 50.0}, {"integrator", "rosenbrock at 1e-5"}}}};
   j["ipopt_linear_solvers"] = linear_solver_study();
   j["static_optimization"] = flatsos::bench::static_optimization_timing(std::max(3, reps / 3));
+  j["tracking"] = flatsos::bench::tracking_timing(std::max(3, reps / 3));
   j["scaling"] = scaling();
   emit(j);
   return 0;

@@ -65,5 +65,6 @@ void register_open_loop(pybind11::module_& m);
 void register_simulation(pybind11::module_& m);
 void register_receding_horizon(pybind11::module_& m);
 void register_static_optimization(pybind11::module_& m);
+void register_tracking(pybind11::module_& m);
 
 }  // namespace flatsos::python

@@ -7,4 +7,5 @@ PYBIND11_MODULE(_flatsos, m) {
   flatsos::python::register_simulation(m);
   flatsos::python::register_receding_horizon(m);
   flatsos::python::register_static_optimization(m);
+  flatsos::python::register_tracking(m);
 }

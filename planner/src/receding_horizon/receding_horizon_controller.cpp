@@ -82,8 +82,24 @@ RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, Recedin
   if (observer_.enabled()) plan_options_.torque_offset_N_m.setZero(n);
 }
 
-void RecedingHorizonController::startFromPlanInUse(double t) {
-  if (in_use_.empty()) return;  // the first plan starts free, as the paper's
+void RecedingHorizonController::startFromPlanInUse(const SimTK::State& state, double t) {
+  if (in_use_.empty()) {
+    // The first plan: from the run's known initial muscle states (as the estimator starts), their
+    // forces and force rates through the forward map.
+    MuscleState muscles;
+    muscles.q_rad = q_;
+    muscles.qd_rad_per_s = qd_;
+    muscles.tendon_length_m = plant_->tendonLengths(state);
+    muscles.activation = plant_->activations(state);
+    const FlatState start = flat_.forward(workspace_, muscles);
+    plan_options_.start_qdd = start.q.col(2);
+    if (plan_options_.torque_offset_N_m.size() > 0)
+      plan_options_.start_qdd += flat_.model().massMatrix(workspace_, q_).ldlt().solve(plan_options_.torque_offset_N_m);
+    plan_options_.start_qddd = start.q.col(3);
+    plan_options_.flat_start.value = start.Y.col(0);
+    plan_options_.flat_start.rate = start.Y.col(1);
+    return;
+  }
   const double tau = t - in_use_.start_time_s;
   rest_held_jet(in_use_.path, tau, start_joint_jet_);
   plan_options_.start_qdd = start_joint_jet_.col(2);  // same sizes every period: no allocation
@@ -144,6 +160,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   rec.bounds_imposed = false;
   rec.clamped_samples = 0;
   rec.plan_seconds = 0.0;
+  rec.free_start_message.clear();
   plan_options_.reference_time_s = t;  // a tracked reference's time (unused for a set point)
   if (observer_.enabled()) {
     plan_options_.torque_offset_N_m = observer_.torqueOffset_N_m();
@@ -153,12 +170,13 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   }
 
   bool have_candidate = false;
-  if (plan_options_.reference) startFromPlanInUse(t);
+  if (plan_options_.reference) startFromPlanInUse(state, t);
   try {
     const Stopwatch plan_time;
     options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
     if (step_.status != SolveStatus::Solved && !plan_options_.flat_start.empty()) {
       // No plan carries the muscles on from where they are: a free start, as the paper's.
+      rec.free_start_message = step_.message;
       plan_options_.flat_start.value.resize(0);
       plan_options_.start_qdd.resize(0);
       options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);

@@ -81,6 +81,9 @@ struct RecedingHorizonRecord {
   std::string message;
   bool used_previous_plan = false;   ///< this step failed and ran on the previous plan's tail
   bool bounds_imposed = false;       ///< the step's SLP optimum left the excitation bounds: alpha was moved
+  /// Tracking: why no plan could start from the muscles' states this period (it started free);
+  /// empty when one did.
+  std::string free_start_message;
   PlanInUse plan;                    ///< the plan in use for this period (empty: none yet)
   Eigen::VectorXd observer_offset_N_m;  ///< the observer's estimate at this step (what a new plan was asked for)
   int clamped_samples = 0;           ///< excitation samples outside [0, 1] this period
@@ -122,11 +125,12 @@ class RecedingHorizonController final : public plugin::Controller {
   const MuscleStateEstimator& muscleEstimator() const { return estimator_; }
 
  private:
-  // A tracking step starts where the plan in use is at t: its joint acceleration and jerk and its
-  // flat outputs' value and rate, so that the muscles' forces and their rates carry on (a plan
-  // that starts from its own muscle states makes the muscles jump to them every period; the
-  // errors it leaves are what tracking cannot afford).
-  void startFromPlanInUse(double t);
+  // A tracking step starts where the plan in use is at t (the first one: where the plant's
+  // muscles start): its joint acceleration and jerk and its flat outputs' value and rate, so
+  // that the muscles' forces and their rates carry on (a plan that starts from its own muscle
+  // states makes the muscles jump to them every period; the errors it leaves are what tracking
+  // cannot afford).
+  void startFromPlanInUse(const SimTK::State& state, double t);
   // Updates the observer from the measured motion (q_, qd_ and the plant's qdd) at time t.
   void observe(const SimTK::State& state, double t);
   // Gives the muscles (and the observer's estimate of them) the excitations of this period.

@@ -1,0 +1,56 @@
+#include "tracking_bench.hpp"
+
+#include <memory>
+#include <string>
+
+#include "flatsos/planner/rest_state.hpp"
+#include "flatsos/planner/static_optimization.hpp"
+#include "flatsos/planner/task_region.hpp"
+#include "flatsos/planner/tracking.hpp"
+#include "flatsos/plugin/io/opensim_import.hpp"
+#include "default_model.hpp"
+#include "timing.hpp"
+
+namespace flatsos::bench {
+
+nlohmann::json tracking_timing(int repetitions) {
+  const std::string arm26 = examples::default_model_path("opensim/arm26/");
+  const auto model = std::make_shared<const plugin::MusculoskeletalModel>(
+      plugin::import_opensim_file(arm26 + "arm26.osim", false, true).model);
+  const auto motion = planner::read_motion_for(*model, arm26 + "inverse_kinematics/arm26_InverseKinematics.mot");
+  auto reference = std::make_shared<const planner::JointReference>(planner::JointReference::fromMotion(*model, motion));
+  std::vector<Eigen::VectorXd> postures;
+  for (double t : motion.report_times_s) postures.push_back(reference->jet(t, 1).col(0));
+  const planner::FlatOutputMap flat = planner::flat_outputs_for_task(model, postures);
+  planner::RecedingHorizonControllerOptions options;
+  options.plan.reference = reference;
+  options.plan.reserves_N = Eigen::VectorXd::Constant(model->numMuscles(), 1.0);
+  const double t0 = reference->startTime_s(), seconds_of_motion = reference->endTime_s() - t0;
+  const planner::Jet start = reference->jet(t0, 2);
+  SimTK::State initial = planner::start_state(flat, start.col(0), start.col(1), std::nullopt, options.plan.reserves_N);
+  initial.setTime(t0);
+  plugin::ClosedLoopOptions loop;
+  loop.integrator = plugin::IntegratorKind::MuscleRosenbrock;
+  loop.accuracy = 1e-5;
+
+  std::vector<double> step_s;
+  planner::TrackingRun run;
+  const std::vector<double> whole = repeat(repetitions, [&] {
+    planner::RecedingHorizonController controller(flat, options);
+    run = planner::run_tracking(controller, initial, loop);
+    for (const auto& rec : controller.history()) step_s.push_back(rec.wall_seconds);
+  });
+  const double step_median_s = examples::median(step_s);
+  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+  return {{"model", "arm26.osim, OpenSim 2.x's muscles, fitted paths (planner and plant)"},
+          {"seconds_of_motion", seconds_of_motion},
+          {"control_period_s", options.control_period_s},
+          {"controller_step", stats(step_s, 1e3, "ms")},
+          {"controller_real_time_factor", options.control_period_s / step_median_s},
+          {"closed_loop", stats(whole, 1e3, "ms")},
+          {"closed_loop_real_time_factor", seconds_of_motion / examples::median(whole)},
+          {"rms_error_deg", {run.rms_error[0] * kDegPerRad, run.rms_error[1] * kDegPerRad}},
+          {"success", run.success()}};
+}
+
+}  // namespace flatsos::bench
