@@ -170,9 +170,9 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   }
 
   bool have_candidate = false;
-  if (plan_options_.reference) startFromPlanInUse(state, t);
   try {
     const Stopwatch plan_time;
+    if (plan_options_.reference) startFromPlanInUse(state, t);  // throws for a state not finite
     options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
     if (step_.status != SolveStatus::Solved && !plan_options_.flat_start.empty()) {
       // No plan carries the muscles on from where they are: a free start, as the paper's.
