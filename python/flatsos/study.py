@@ -1,5 +1,5 @@
-"""Batch studies on Dask: one open-loop plan per random sample of a model's muscle strengths
-and targets, on a local cluster or on an existing one, written as one table.
+"""Batch studies on Dask: one open-loop plan (or one tracking run) per random sample of a model's
+muscle strengths and targets, on a local cluster or on an existing one, written as one table.
 
     import flatsos.study
     result = flatsos.study.run("models/arm_richter_warner.json",
@@ -20,6 +20,13 @@ The study description (a dict, or a JSON file on the command line):
                 drawn uniformly from [l, h], independently (absent: the model's forces).
     "target_deg": {"low": [...], "high": [...]}: the target drawn uniformly in this box, one
                 bound per joint (absent: the plan's target).
+    "track":    instead of plans, the receding-horizon controller following a measured motion
+                (flatsos.track) on a plant whose muscles are the sample's strengths and the
+                controller's the model's: {"coordinates": motion file (.mot or .sto),
+                "options": track's keywords (horizon, period, correction, observer_gain,
+                reserves, cutoff_hz, tolerance)}. The table then has each joint's RMS and largest
+                tracking error (deg; a slider's m) and the integral of the summed squared
+                excitations; "plan" and "target_deg" do not apply.
 Samples are drawn on the client from numpy's generator with the given seed, so a study gives
 the same table on any cluster, and the same as the serial loop (workers=0).
 """
@@ -37,10 +44,12 @@ import time
 
 import numpy as np
 
-from ._flatsos import Model, plan_open_loop
+from ._flatsos import Model, plan_open_loop, track
 
-# Columns that measure the machine rather than the plan: they differ between runs.
-TIMING_COLUMNS = ("setup_s", "solve_s", "certify_s", "check_s", "plan_s", "worker")
+# Columns that measure the machine rather than the plan (or tracking run): they differ between runs.
+_PLAN_TIMING_COLUMNS = ("setup_s", "solve_s", "certify_s", "check_s", "plan_s", "worker")
+TIMING_COLUMNS = _PLAN_TIMING_COLUMNS + ("track_s",)
+_TRACK_KEYWORDS = {"horizon", "period", "correction", "observer_gain", "reserves", "cutoff_hz", "tolerance"}
 _SAMPLES_FOR_PEAKS = 301
 
 
@@ -79,9 +88,12 @@ class Study:
     def __init__(self, model_text, description, source="model"):
         if not isinstance(description, dict):
             raise StudyError("study: expected a JSON object")
-        unknown = set(description) - {"plan", "strength", "target_deg"}
+        unknown = set(description) - {"plan", "strength", "target_deg", "track"}
         if unknown:
-            raise StudyError(f"study: unknown field(s) {sorted(unknown)} (plan, strength, target_deg)")
+            raise StudyError(f"study: unknown field(s) {sorted(unknown)} (plan, strength, target_deg, track)")
+        self.track = _track_description(description["track"]) if "track" in description else None
+        if self.track and ({"plan", "target_deg"} & set(description)):
+            raise StudyError("track: a tracking study has no plan or target_deg (the motion is the task)")
         model = json.loads(model_text)
         joints = [j["name"] for j in model["joints"]]
         muscles = [m["name"] for m in model["muscles"]]
@@ -135,10 +147,32 @@ class Study:
         return strength, target
 
     def columns(self):
+        if self.track:
+            return (["sample"] + [f"strength_{name}" for name in self.muscles] + ["status"] +
+                    [f"rms_error_{name}_deg" for name in self.joints] +
+                    [f"max_error_{name}_deg" for name in self.joints] +
+                    ["excitation_squared_integral", "message", "track_s", "worker"])
         return (["sample"] + [f"strength_{name}" for name in self.muscles] +
                 [f"target_{name}_deg" for name in self.joints] +
                 ["status", "cost_Ns", "peak_excitation", "peak_activation", "min_activation", "message"] +
-                list(TIMING_COLUMNS))
+                list(_PLAN_TIMING_COLUMNS))
+
+
+def _track_description(track_spec):
+    if not isinstance(track_spec, dict):
+        raise StudyError("track: expected a JSON object")
+    if set(track_spec) - {"coordinates", "options"}:
+        raise StudyError(f"track: unknown field(s) {sorted(set(track_spec) - {'coordinates', 'options'})} "
+                         "(coordinates, options)")
+    if "coordinates" not in track_spec:
+        raise StudyError("track.coordinates: the motion file to follow is missing")
+    coordinates = str(pathlib.Path(track_spec["coordinates"]).resolve())
+    if not pathlib.Path(coordinates).is_file():
+        raise StudyError(f"track.coordinates: no file '{track_spec['coordinates']}'")
+    options = track_spec.get("options", {})
+    if not isinstance(options, dict) or set(options) - _TRACK_KEYWORDS:
+        raise StudyError(f"track.options: expected an object of {', '.join(sorted(_TRACK_KEYWORDS))}")
+    return {"coordinates": coordinates, "options": dict(options)}
 
 
 # The models a process has loaded, by their text's digest: a worker loads each model once
@@ -190,10 +224,34 @@ def _plan_one(model, study, index, strength, target_deg):
     return row
 
 
+def _track_one(model, study, index, strength):
+    row = {"sample": index}
+    row.update({f"strength_{name}": f for name, f in zip(study.muscles, strength)})
+    start = time.perf_counter()
+    nan = [math.nan] * len(study.joints)
+    rms, largest, effort = nan, nan, math.nan
+    try:
+        plant = model.with_strength(strength) if study.strength else None
+        r = track(model, study.track["coordinates"], plant=plant, **study.track["options"])
+        shown = lambda x: np.where(study.sliders, x, np.degrees(x))  # noqa: E731 (the table's units)
+        rms, largest, effort = shown(r["rms_error"]), shown(r["max_abs_error"]), r["excitation_squared_integral"]
+        status, message = ("tracked" if r["success"] else "failed"), r["message"]
+    except ValueError as e:  # the library refused this sample's inputs: a row that says why
+        status, message = "failed", f"error: {e}"
+    row["status"] = status
+    row.update({f"rms_error_{name}_deg": float(v) for name, v in zip(study.joints, rms)})
+    row.update({f"max_error_{name}_deg": float(v) for name, v in zip(study.joints, largest)})
+    row.update(excitation_squared_integral=effort, message=message, track_s=time.perf_counter() - start,
+               worker=_worker_name())
+    return row
+
+
 def _plan_block(study, indices, strength, target_deg):
-    """A task: the plans of a block of samples (one Dask task each block, to keep the
-    scheduler's per-task cost small against plans of milliseconds)."""
+    """A task: the plans (or tracking runs) of a block of samples (one Dask task each block, to
+    keep the scheduler's per-task cost small against plans of milliseconds)."""
     model = _model(study.model_text, study.source)
+    if study.track:
+        return [_track_one(model, study, i, s) for i, s in zip(indices, strength)]
     return [_plan_one(model, study, i, s, t) for i, s, t in zip(indices, strength, target_deg)]
 
 
@@ -239,7 +297,7 @@ class StudyResult:
 
 def _summarize(study, rows, samples, seed, where, wall_s):
     statuses = collections.Counter(row["status"] for row in rows)
-    solved = [row for row in rows if row["status"] == "solved"]
+    solved = [row for row in rows if row["status"] in ("solved", "tracked")]
 
     def spread(column):
         values = np.array([row[column] for row in solved])
@@ -248,6 +306,16 @@ def _summarize(study, rows, samples, seed, where, wall_s):
         q = np.percentile(values, [0, 5, 50, 95, 100])
         return {"min": q[0], "p5": q[1], "median": q[2], "p95": q[3], "max": q[4]}
 
+    if study.track:
+        return {
+            "model": study.source, "samples": samples, "seed": seed, "study": study.description, "ran_on": where,
+            "statuses": dict(statuses), "tracked_fraction": statuses["tracked"] / samples,
+            "rms_error_deg": {name: spread(f"rms_error_{name}_deg") for name in study.joints},
+            "max_error_deg": {name: spread(f"max_error_{name}_deg") for name in study.joints},
+            "excitation_squared_integral": spread("excitation_squared_integral"),
+            "track_seconds_median": float(np.median([row["track_s"] for row in rows])),
+            "wall_seconds": wall_s, "runs_per_second": samples / wall_s,
+        }
     return {
         "model": study.source, "samples": samples, "seed": seed, "study": study.description, "ran_on": where,
         "statuses": dict(statuses), "feasible_fraction": statuses["solved"] / samples,
@@ -335,10 +403,11 @@ def run(model, study, samples, *, seed=0, scheduler=None, workers=2, block=25, p
 def main(argv=None):
     parser = argparse.ArgumentParser(
         prog="python3 -m flatsos.study",
-        description="A batch study on Dask: one open-loop plan per random sample of a model's muscle strengths "
-                    "and targets. Writes OUT/table.csv (one row per plan: its inputs, status, cost, peak "
-                    "excitation and activation, timings) and OUT/summary.json. The study file's fields are "
-                    "described in the module flatsos.study.")
+        description="A batch study on Dask: one open-loop plan (or, with a \"track\" field, one run of the "
+                    "controller following a measured motion) per random sample of a model's muscle strengths "
+                    "and targets. Writes OUT/table.csv (one row per sample: its inputs, status, cost or tracking "
+                    "errors, timings) and OUT/summary.json. The study file's fields are described in the module "
+                    "flatsos.study.")
     parser.add_argument("--model", required=True, help="model file (JSON)")
     parser.add_argument("--study", required=True, help="study description (JSON file)")
     parser.add_argument("--samples", type=int, default=1000, help="number of plans (default 1000)")
@@ -363,8 +432,9 @@ def main(argv=None):
         return 2
     result.write(args.out)
     s = result.summary
-    print(f"flatsos.study: {args.samples} plans on {s['ran_on']} in {s['wall_seconds']:.2f} s "
-          f"({s['plans_per_second']:.0f} plans/s); statuses {s['statuses']}; wrote {args.out}/table.csv, summary.json")
+    what, rate = ("tracking runs", s["runs_per_second"]) if "runs_per_second" in s else ("plans", s["plans_per_second"])
+    print(f"flatsos.study: {args.samples} {what} on {s['ran_on']} in {s['wall_seconds']:.2f} s "
+          f"({rate:.1f}/s); statuses {s['statuses']}; wrote {args.out}/table.csv, summary.json")
     return 0
 
 

@@ -38,6 +38,7 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
 
   planner::TrackingRun run;
   int steps = 0, plan_failures = 0, clamped = 0;
+  std::vector<std::pair<double, std::string>> free_starts;  // periods whose plan could not start from the muscles
   {
     py::gil_scoped_release release;
     const plugin::ProcessedCoordinates motion = planner::read_motion_for(model, motion_file, cutoff_hz);
@@ -61,6 +62,8 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
     steps = controller.steps();
     plan_failures = controller.planFailures();
     clamped = controller.clampedSamples();
+    for (const auto& rec : controller.history())
+      if (!rec.free_start_message.empty()) free_starts.emplace_back(rec.time_s, rec.free_start_message);
   }
   const plugin::MusculoskeletalModel& simulated = *given_plant.model;
   std::string message;
@@ -82,6 +85,7 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
   out["steps"] = steps;
   out["plan_failures"] = plan_failures;
   out["clamped_samples"] = clamped;
+  out["free_starts"] = free_starts;
   return out;
 }
 
@@ -102,7 +106,8 @@ void register_tracking(py::module_& m) {
         "step's program is linear. Returns a dict: 'time' (s), 'q' (rad), 'activation', 'excitation' (one row per "
         "report time), 'position_error' (reference - plant, rad), 'rms_error' and 'max_abs_error' per joint (rad), "
         "'excitation_squared_integral', 'real_time_factor', 'wall_seconds', 'success' (every plan solved, every "
-        "coordinate within `tolerance` rad), 'message', 'steps', 'plan_failures', 'clamped_samples'. Releases the GIL.");
+        "coordinate within `tolerance` rad), 'message', 'steps', 'plan_failures', 'clamped_samples', 'free_starts' ((time, why) of each period whose plan "
+        "could not start from the muscles' states and started free). Releases the GIL.");
 }
 
 }  // namespace flatsos::python

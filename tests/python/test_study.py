@@ -157,3 +157,51 @@ def test_a_study_of_a_model_whose_flat_outputs_the_library_chooses(knee, models_
     # The library's effort here is tendon force over maximum force: each weight grows by 1/f >=
     # 1/0.9 (the start, each subject's own rest, moves too, so the cost need not grow as much).
     assert (weaker["cost_Ns"] > 1.03 * t["cost_Ns"][0]).all()
+
+
+def _swing(path):
+    """The paper's arm through a smooth 40 deg swing of both joints in 1 s (a coordinates table)."""
+    t = np.linspace(0.0, 1.0, 101)
+    s = t * t * (3.0 - 2.0 * t)
+    rows = "\n".join(f"{a:.2f}\t{30 + 40 * b:.6f}\t{40 + 40 * b:.6f}" for a, b in zip(t, s))
+    path.write_text("swing\nversion=1\ninDegrees=yes\nendheader\ntime\tshoulder\telbow\n" + rows + "\n")
+    return str(path)
+
+
+def test_a_tracking_study_runs_the_controller_on_each_samples_plant(arm, arm_file, tmp_path):
+    arm, _ = arm
+    motion = _swing(tmp_path / "swing.mot")
+    description = {"track": {"coordinates": motion, "options": {"tolerance": np.radians(2.0)}},
+                   "strength": {"low": 0.9, "high": 1.1}}
+    serial = study.run(arm_file, description, 4, seed=3, workers=0)
+    assert [row["status"] for row in serial.rows] == ["tracked"] * 4, [row["message"] for row in serial.rows]
+    assert serial.summary["tracked_fraction"] == 1.0
+    # Sample 0 is flatsos.track on a plant of that sample's strengths.
+    factors = [serial.rows[0][f"strength_{name}"] for name in arm.muscles]
+    direct = flatsos.track(arm, motion, plant=arm.with_strength(factors), tolerance=np.radians(2.0))
+    assert np.allclose([serial.rows[0][f"rms_error_{j}_deg"] for j in ("shoulder", "elbow")],
+                       np.degrees(direct["rms_error"]), rtol=1e-9)
+    assert serial.rows[0]["excitation_squared_integral"] == pytest.approx(direct["excitation_squared_integral"], rel=1e-9)
+    # Different plants track differently, all within a degree.
+    rms = np.array([[row[f"rms_error_{j}_deg"] for j in ("shoulder", "elbow")] for row in serial.rows])
+    assert np.all(rms < 1.0) and len(np.unique(rms[:, 1])) == 4
+    # The same table from a Dask cluster.
+    clustered = study.run(arm_file, description, 4, seed=3, workers=2, block=2)
+    for column in serial.study.columns():
+        if column not in study.TIMING_COLUMNS:
+            assert [row[column] for row in clustered.rows] == [row[column] for row in serial.rows], column
+    serial.write(tmp_path / "out")
+    with open(tmp_path / "out" / "table.csv") as f:
+        assert len(list(csv.DictReader(f))) == 4
+
+
+def test_a_bad_tracking_description_names_the_field(arm_file, tmp_path):
+    motion = _swing(tmp_path / "swing.mot")
+    for description, match in [
+            ({"track": {"coordinates": motion}, "plan": {}}, "track: a tracking study has no plan or target_deg"),
+            ({"track": {}}, "track.coordinates: the motion file to follow is missing"),
+            ({"track": {"coordinates": str(tmp_path / "none.mot")}}, "track.coordinates: no file"),
+            ({"track": {"coordinates": motion, "options": {"horizon_s": 1}}}, "track.options: expected an object of"),
+            ({"track": {"coordinates": motion, "speed": 1}}, r"track: unknown field\(s\) \['speed'\]")]:
+        with pytest.raises(ValueError, match=match):
+            study.run(arm_file, description, 2, workers=0)

@@ -123,42 +123,54 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   const bool flat_output_sum = flat.effortIsFlatOutputSum();
   if (flat_output_sum) step.buffers.slp.cost.resize(0);
   else step.buffers.slp.cost.setZero(flat.numFlatOutputs());
+  // A blended start has no rows at t = 0 (the forces there are the muscles' own); its forces
+  // move most over the first period, where the grid has no point: rows at the excitation
+  // bounds' samples there too, so that no tendon goes slack between the grid's points.
+  const PeriodExcitationBounds& first = o.excitation_bounds;
+  const int period_rows = blended && first.enforce ? first.samples - 1 : 0;
   if (varying) {
-    // A blended start has no rows at t = 0: the forces there are the muscles' own.
-    step.reserve_rows.resize((o.grid_points - (blended ? 1 : 0)) * m, flat.numFlatOutputs());
+    step.reserve_rows.resize((o.grid_points - (blended ? 1 : 0) + period_rows) * m, flat.numFlatOutputs());
     step.bound_N.resize(step.reserve_rows.rows());
   }
-  for (int i = 0; i < o.grid_points; ++i) {
+  int row = 0;
+  // Rows C(t) alpha >= B(t) at time t of the path, and the effort's flat-output part (C_Y(q)^T w,
+  // averaged over the horizon's grid) when `priced`. False when the posture leaves the flat
+  // outputs' valid region (the step's message says where).
+  auto add_rows = [&](double t, bool priced) {
     Jet& j = step.buffers.joint_jet;
     Eigen::VectorXd& tau = step.buffers.torque_N_m;
-    const double t = o.horizon_s * i / (o.grid_points - 1);
     step.path.jetInto(t, j);
     flat.model().inverseDynamics(workspace, j.col(0), j.col(1), j.col(2), tau);
     if (offset) tau -= o.torque_offset_N_m;
     step.tau_min = step.tau_min.cwiseMin(tau);
     step.tau_max = step.tau_max.cwiseMax(tau);
-    if (!varying) continue;
-    // C(q) along the cubic: Assumption 1 at each grid posture, then the rows exact there.
+    if (!varying) return true;
+    // C(q) along the path: Assumption 1 at each posture, then the rows exact there.
     const std::string failure = flat.assumption1FailureAt(j.col(0));
     if (!failure.empty()) {
       step.message = "the horizon's joint path leaves the postures where the flat outputs are valid, at t = " +
                      std::to_string(t) + " s " + failure;
-      step.wall_seconds = wall.seconds();
-      return;
+      return false;
     }
     const ForceJetMap map = flat.forceJetMap(j.leftCols(1));
-    // Y(t) = (1 - phi0) alpha + phi0 Y0 + phi1 Y0' (constant alpha without a start): the
-    // forces at the start are the muscles' own, not the plan's to choose.
+    // Y(t) = (1 - phi0) alpha + phi0 Y0 + phi1 Y0' (constant alpha without a start).
     double phi0[3] = {0.0, 0.0, 0.0}, phi1[3] = {0.0, 0.0, 0.0};
     if (blended) step.flat_start.blend(t, 0, phi0), step.flat_start.blend(t, 1, phi1);
-    if (blended && i == 0) continue;
-    const int row = (blended ? i - 1 : i) * m;
+    if (blended && t <= 0.0) return true;
     step.reserve_rows.middleRows(row, m) = (1.0 - phi0[0]) * map.CY;
     step.bound_N.segment(row, m) = o.reserves_N - map.Ctau * tau;
     if (blended) step.bound_N.segment(row, m).noalias() -= map.CY * (phi0[0] * step.flat_start.value + phi1[0] * step.flat_start.rate);
-    // The effort's flat-output part, C_Y(q)^T w, averaged over the horizon's grid.
-    if (!flat_output_sum)
+    row += m;
+    if (priced && !flat_output_sum)
       step.buffers.slp.cost.noalias() += (1.0 - phi0[0]) * map.CY.transpose() * flat.effortPricingWeights() / o.grid_points;
+    return true;
+  };
+  bool valid = true;
+  for (int i = 0; i < o.grid_points && valid; ++i) valid = add_rows(o.horizon_s * i / (o.grid_points - 1), true);
+  for (int k = 1; k <= period_rows && valid; ++k) valid = add_rows(first.period_s * k / (first.samples - 1), false);
+  if (!valid) {
+    step.wall_seconds = wall.seconds();
+    return;
   }
   if (!varying) {
     step.reserve_rows = flat.CY();  // no allocation once sized
