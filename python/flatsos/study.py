@@ -23,8 +23,8 @@ The study description (a dict, or a JSON file on the command line):
     "track":    instead of plans, the receding-horizon controller following a measured motion
                 (flatsos.track) on a plant whose muscles are the sample's strengths and the
                 controller's the model's: {"coordinates": motion file (.mot or .sto),
-                "options": track's keywords (horizon, period, correction, observer_gain,
-                reserves, cutoff_hz, tolerance)}. The table then has each joint's RMS and largest
+                "options": track's keywords in its units (horizon, period, correction in s,
+                observer_gain in 1/s, reserves in N, cutoff_hz, tolerance in rad)}. The table then has each joint's RMS and largest
                 tracking error (deg; a slider's m) and the integral of the summed squared
                 excitations; "plan" and "target_deg" do not apply.
 Samples are drawn on the client from numpy's generator with the given seed, so a study gives
@@ -172,6 +172,11 @@ def _track_description(track_spec):
     options = track_spec.get("options", {})
     if not isinstance(options, dict) or set(options) - _TRACK_KEYWORDS:
         raise StudyError(f"track.options: expected an object of {', '.join(sorted(_TRACK_KEYWORDS))}")
+    for key, value in options.items():  # numbers (reserves: one or one per muscle), refused here
+        values = value if key == "reserves" and isinstance(value, list) else [value]
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
+            raise StudyError(f"track.options.{key}: expected a finite number" +
+                             (" or one per muscle" if key == "reserves" else ""))
     return {"coordinates": coordinates, "options": dict(options)}
 
 
@@ -236,7 +241,7 @@ def _track_one(model, study, index, strength):
         shown = lambda x: np.where(study.sliders, x, np.degrees(x))  # noqa: E731 (the table's units)
         rms, largest, effort = shown(r["rms_error"]), shown(r["max_abs_error"]), r["excitation_squared_integral"]
         status, message = ("tracked" if r["success"] else "failed"), r["message"]
-    except ValueError as e:  # the library refused this sample's inputs: a row that says why
+    except (ValueError, TypeError) as e:  # the library refused this sample's inputs: a row that says why
         status, message = "failed", f"error: {e}"
     row["status"] = status
     row.update({f"rms_error_{name}_deg": float(v) for name, v in zip(study.joints, rms)})

@@ -94,7 +94,7 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
 void register_tracking(py::module_& m) {
   m.def("track", &track, py::arg("model"), py::arg("motion_file"), py::kw_only(), py::arg("effort") = py::none(),
         py::arg("weights") = py::none(), py::arg("plant") = py::none(), py::arg("horizon") = 0.5,
-        py::arg("period") = 0.05, py::arg("correction") = 0.1, py::arg("observer_gain") = 40.0,
+        py::arg("period") = 0.05, py::arg("correction") = 0.075, py::arg("observer_gain") = 40.0,
         py::arg("reserves") = 1.0, py::arg("cutoff_hz") = 6.0, py::arg("tolerance") = M_PI / 180.0,
         "The receding-horizon controller following a measured motion on a Simbody plant (what OpenSim's CMC does). "
         "The motion (an OpenSim coordinates table, .mot or .sto, degrees or radians as its header says) is filtered "

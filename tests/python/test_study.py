@@ -202,6 +202,8 @@ def test_a_bad_tracking_description_names_the_field(arm_file, tmp_path):
             ({"track": {}}, "track.coordinates: the motion file to follow is missing"),
             ({"track": {"coordinates": str(tmp_path / "none.mot")}}, "track.coordinates: no file"),
             ({"track": {"coordinates": motion, "options": {"horizon_s": 1}}}, "track.options: expected an object of"),
-            ({"track": {"coordinates": motion, "speed": 1}}, r"track: unknown field\(s\) \['speed'\]")]:
+            ({"track": {"coordinates": motion, "speed": 1}}, r"track: unknown field\(s\) \['speed'\]"),
+            ({"track": {"coordinates": motion, "options": {"tolerance": "2"}}}, "track.options.tolerance: expected a finite"),
+            ({"track": {"coordinates": motion, "options": {"reserves": [1, None]}}}, "track.options.reserves")]:
         with pytest.raises(ValueError, match=match):
             study.run(arm_file, description, 2, workers=0)

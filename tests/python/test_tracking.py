@@ -14,7 +14,7 @@ def test_arm26_follows_the_cmc_tutorial_motion(models_dir):
     assert r["plan_failures"] == 0 and r["clamped_samples"] == 0
     rows = len(r["time"])
     assert r["q"].shape == (rows, 2) and r["excitation"].shape == (rows, 6) and r["position_error"].shape == (rows, 2)
-    assert np.all(np.degrees(r["rms_error"]) < [0.05, 0.16])
+    assert np.all(np.degrees(r["rms_error"]) < [0.025, 0.08])
     assert np.all((r["excitation"] >= 0) & (r["excitation"] <= 1))
     # The position errors are the reference's coordinates minus the plant's, at the same times.
     assert np.allclose(np.sqrt(np.mean(r["position_error"] ** 2, axis=0)), r["rms_error"])

@@ -56,18 +56,21 @@ std::vector<TorqueJet> torque_jets_on_grid(const FlatOutputMap& flat, plugin::Mo
 
 namespace {
 // The correction that removes a joint's offset from the reference: c^(k)(0) = start[k] for the
-// given derivatives (value, speed and, when known, acceleration and jerk), and c, c', c'' = 0 at
-// T, so that the path joins the reference there with its torque continuous. Coefficients in
-// ascending powers: the start's c_k = start[k] / k!, the last three from the end's 3 x 3 system.
+// given derivatives (value, speed and, when known, acceleration and jerk), and the value and
+// first three derivatives 0 at T, so that the path joins the reference there with its torque and
+// the torque's rate continuous (the tendon forces' rates, and so the activations, follow them).
+// Coefficients in ascending powers: the start's c_k = start[k] / k!, the last four from the
+// end's 4 x 4 system.
 void correction_polynomial(const double* start, int known, double T, Polynomial& out) {
-  const int degree = known + 2;
-  Eigen::Matrix<double, 7, 1> c = Eigen::Matrix<double, 7, 1>::Zero();
+  constexpr int kEnd = 4;  // end conditions
+  const int degree = known + kEnd - 1;
+  Eigen::Matrix<double, 8, 1> c = Eigen::Matrix<double, 8, 1>::Zero();
   double factorial = 1.0;
   for (int k = 0; k < known; ++k) factorial *= (k > 0 ? k : 1), c[k] = start[k] / factorial;
   // Row r: the r-th derivative at T of sum_k c_k t^k, split into the known part and the unknowns.
-  Eigen::Matrix3d M;
-  Eigen::Vector3d rhs;
-  for (int r = 0; r < 3; ++r) {
+  Eigen::Matrix4d M = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d rhs;
+  for (int r = 0; r < kEnd; ++r) {
     double known_part = 0.0;
     for (int k = r; k <= degree; ++k) {
       double falling = 1.0;  // k! / (k - r)!
@@ -76,11 +79,9 @@ void correction_polynomial(const double* start, int known, double T, Polynomial&
       if (k < known) known_part += term * c[k];
       else M(r, k - known) = term;
     }
-    for (int k = known; k < known + 3; ++k)
-      if (k < r) M(r, k - known) = 0.0;
     rhs[r] = -known_part;
   }
-  c.segment<3>(known) = M.partialPivLu().solve(rhs);
+  c.segment<kEnd>(known) = M.partialPivLu().solve(rhs);
   out.setCoefficients(c.head(degree + 1));
 }
 }  // namespace

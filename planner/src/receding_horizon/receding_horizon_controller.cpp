@@ -102,7 +102,13 @@ void RecedingHorizonController::startFromPlanInUse(const SimTK::State& state, do
   }
   const double tau = t - in_use_.start_time_s;
   rest_held_jet(in_use_.path, tau, start_joint_jet_);
-  plan_options_.start_qdd = start_joint_jet_.col(2);  // same sizes every period: no allocation
+  plan_options_.start_qdd = start_joint_jet_.col(2);
+  // The plan in use's muscles gave its torque less its offset; the new plan's muscles give the
+  // same torque only if its acceleration also carries the change of offset.
+  const Eigen::VectorXd& now = plan_options_.torque_offset_N_m;
+  const Eigen::VectorXd& then = in_use_.torque_offset_N_m;
+  if (now.size() > 0 && then.size() == now.size())
+    plan_options_.start_qdd += flat_.model().massMatrix(workspace_, q_).ldlt().solve(now - then);
   plan_options_.start_qddd = start_joint_jet_.col(3);
   in_use_.flat_start.jetInto(in_use_.alpha, tau, start_flat_jet_);
   plan_options_.flat_start.value = start_flat_jet_.col(0);
@@ -172,7 +178,15 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   bool have_candidate = false;
   try {
     const Stopwatch plan_time;
-    if (plan_options_.reference) startFromPlanInUse(state, t);  // throws for a state not finite
+    if (plan_options_.reference) {
+      try {
+        startFromPlanInUse(state, t);
+      } catch (const std::exception& e) {  // the muscles' state refused (not finite): a free start
+        rec.free_start_message = e.what();
+        plan_options_.flat_start.value.resize(0);
+        plan_options_.start_qdd.resize(0);
+      }
+    }
     options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
     if (step_.status != SolveStatus::Solved && !plan_options_.flat_start.empty()) {
       // No plan carries the muscles on from where they are: a free start, as the paper's.

@@ -43,10 +43,10 @@ double JointReference::derivative(int joint, double t, int order) const {
   if (order < 0 || order > 5) throw std::invalid_argument("joint reference: derivative order must be 0..5");
   if (!std::isfinite(t)) throw std::invalid_argument("joint reference: the time is not finite");
   if (!path_) return splines_[static_cast<std::size_t>(joint)].continuedDerivative(t, order);
-  // Before its start a plan is at its start; after its end it rests at its end posture (the
-  // open-loop plans end with their first four derivatives zero).
+  // Before its start a plan rests at its start posture; after its end at its end posture (the
+  // open-loop plans start and end with their first four derivatives zero).
   const double tau = std::min(std::max(0.0, t - start_s_), path_->duration_s);
-  if (order > 0 && t - start_s_ > path_->duration_s) return 0.0;
+  if (order > 0 && (t < start_s_ || t - start_s_ > path_->duration_s)) return 0.0;
   if (path_->spline) return path_->spline->derivativeAt(joint, tau, order);
   return path_->q[static_cast<std::size_t>(joint)].derivativeAt(tau, order);
 }

@@ -37,6 +37,8 @@ TrackingRun run_tracking(RecedingHorizonController& controller, const SimTK::Sta
                          const plugin::ClosedLoopOptions& options, double tolerance_rad, double tolerance_m) {
   const std::shared_ptr<const JointReference>& reference = controller.options().plan.reference;
   if (!reference) throw std::invalid_argument("tracking: the controller has no reference to track");
+  if (!(tolerance_rad > 0.0) || !(tolerance_m > 0.0))
+    throw std::invalid_argument("tracking: the tolerances (rad, m) must be positive numbers");
   plugin::ClosedLoopOptions o = options;
   o.control_period_s = controller.options().control_period_s;
   o.duration_s = reference->endTime_s() - initial.getTime();

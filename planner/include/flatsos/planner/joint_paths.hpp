@@ -43,7 +43,7 @@ struct JointPath {
 /// The receding-horizon path that follows a reference from time t_s on: the reference over the
 /// horizon T plus, per joint, a polynomial correction from the measured state's offset from the
 /// reference at t_s (value and speed, and acceleration and jerk when qdd is not empty) to zero
-/// value, speed and acceleration at correction_s, after which the path is the reference. Written
+/// value, speed, acceleration and jerk at correction_s, after which the path is the reference. Written
 /// into `out` (no allocation when it already holds N polynomials of that degree). Throws
 /// std::invalid_argument for T <= 0, a correction time outside (0, T], mismatched sizes or a
 /// state that is not finite.

@@ -24,7 +24,8 @@ class JointReference {
   /// filtered motion, else their end intervals continued. Throws std::invalid_argument naming a
   /// coordinate the motion lacks.
   static JointReference fromMotion(const plugin::MusculoskeletalModel& model, const plugin::ProcessedCoordinates& motion);
-  /// A plan's joint path whose t = 0 is at start_time_s; after its end, its end posture at rest.
+  /// A plan's joint path whose t = 0 is at start_time_s; before it, its start posture at rest;
+  /// after its end, its end posture at rest.
   /// Throws std::invalid_argument for a path without joints or duration, or one that is itself
   /// a tracking path.
   static JointReference fromPath(JointPath path, double start_time_s);

@@ -15,7 +15,8 @@
 // fit's solution operator); per period only the feedback work remains, in storage the controller
 // owns: with the exact SLP solver (SlpSolver::VertexEnumeration) a control period allocates no
 // heap memory after the first one, unless keep_history records it (tested by counting
-// allocations, tests/realtime).
+// allocations, tests/realtime). That holds for a set point; a tracking step allocates (its rows
+// are too many for the vertex enumeration, and Clp's dual simplex builds its program each time).
 
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 

@@ -35,15 +35,15 @@ struct RecedingHorizonOptions {
   int grid_points = 11;               ///< torque box sampled here (the paper's grid)
   Eigen::VectorXd target_q_rad;       ///< the set point (unused when tracking a reference)
   /// Tracking: follow this joint motion instead of coming to rest at the target. The step's path
-  /// is the reference from reference_time_s on plus a cubic correction from the measured state
+  /// is the reference from reference_time_s on plus a polynomial correction from the measured state
   /// (fit_tracking_path); the RH controller sets reference_time_s to its own time.
   std::shared_ptr<const JointReference> reference;
   double reference_time_s = 0.0;
   /// The time over which a tracking step's path joins the reference (and its flat outputs reach
   /// alpha from their start); capped at the horizon.
-  double tracking_correction_s = 0.1;
+  double tracking_correction_s = 0.075;
   /// A tracking step that starts where the muscles are: the path's acceleration and jerk at 0
-  /// (empty: free, the cubic correction) and the flat outputs' value and rate (empty: constant
+  /// (empty: free) and the flat outputs' value and rate (empty: constant
   /// alpha). The RH controller sets them from the plan in use.
   Eigen::VectorXd start_qdd, start_qddd;
   FlatOutputStart flat_start;
@@ -63,6 +63,9 @@ struct RecedingHorizonStep {
   /// The SLP's rows G alpha >= B. Constant moment arms: G = C_Y and B = slp_bound_vector of the
   /// box and reserves (m rows). Posture-dependent ones: at each grid posture q_i,
   /// C_Y(q_i) alpha >= reserves - C_tau(q_i) tau_i (grid_points x m rows, exact at the grid).
+  /// A tracking step with a start (flat_start): the rows scaled by 1 - phi0 and the start's part
+  /// moved to B, at the grid times after 0 and at the first period's excitation samples after 0
+  /// ((grid_points - 1 + samples - 1) x m rows).
   Eigen::MatrixXd reserve_rows;
   Eigen::VectorXd bound_N;
   SlpResult slp;                      ///< alpha and its cost (moved inside the bounds when they were imposed)
