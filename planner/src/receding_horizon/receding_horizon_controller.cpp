@@ -181,6 +181,10 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     if (plan_options_.reference) {
       try {
         startFromPlanInUse(state, t);
+        const RecedingHorizonOptions& o = plan_options_;
+        if (!(o.start_qdd.allFinite() && o.start_qddd.allFinite() && o.flat_start.value.allFinite() &&
+              o.flat_start.rate.allFinite()))
+          throw std::runtime_error("the muscles' state gives no finite start");
       } catch (const std::exception& e) {  // the muscles' state refused (not finite): a free start
         rec.free_start_message = e.what();
         plan_options_.flat_start.value.resize(0);
