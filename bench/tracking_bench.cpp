@@ -33,12 +33,15 @@ nlohmann::json tracking_timing(int repetitions) {
   loop.integrator = plugin::IntegratorKind::MuscleRosenbrock;
   loop.accuracy = 1e-5;
 
-  std::vector<double> step_s;
+  std::vector<double> step_s, plan_s, grid_s, slp_s, bounds_s;
   planner::TrackingRun run;
   const std::vector<double> whole = repeat(repetitions, [&] {
     planner::RecedingHorizonController controller(flat, options);
     run = planner::run_tracking(controller, initial, loop);
-    for (const auto& rec : controller.history()) step_s.push_back(rec.wall_seconds);
+    for (const auto& rec : controller.history()) {
+      step_s.push_back(rec.wall_seconds), plan_s.push_back(rec.plan_seconds);
+      grid_s.push_back(rec.grid_seconds), slp_s.push_back(rec.slp_seconds), bounds_s.push_back(rec.bounds_seconds);
+    }
   });
   const double step_median_s = examples::median(step_s);
   constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
@@ -46,6 +49,12 @@ nlohmann::json tracking_timing(int repetitions) {
           {"seconds_of_motion", seconds_of_motion},
           {"control_period_s", options.control_period_s},
           {"controller_step", stats(step_s, 1e3, "ms")},
+          {"step_parts_median_ms",  // where a step's time goes
+           {{"plan", 1e3 * examples::median(plan_s)},
+            {"of_which_grid_and_rows", 1e3 * examples::median(grid_s)},
+            {"of_which_slp", 1e3 * examples::median(slp_s)},
+            {"of_which_first_period_bounds", 1e3 * examples::median(bounds_s)},
+            {"observer_and_excitations", 1e3 * (step_median_s - examples::median(plan_s))}}},
           {"controller_real_time_factor", options.control_period_s / step_median_s},
           {"closed_loop", stats(whole, 1e3, "ms")},
           {"closed_loop_real_time_factor", seconds_of_motion / examples::median(whole)},

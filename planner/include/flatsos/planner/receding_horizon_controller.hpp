@@ -89,6 +89,9 @@ struct RecedingHorizonRecord {
   Eigen::VectorXd observer_offset_N_m;  ///< the observer's estimate at this step (what a new plan was asked for)
   int clamped_samples = 0;           ///< excitation samples outside [0, 1] this period
   double plan_seconds = 0.0;         ///< the planning step
+  /// Its parts (the last step planned this period): the horizon's grid and rows, the SLP, the
+  /// first period's excitation bounds (RecedingHorizonStep's timings).
+  double grid_seconds = 0.0, slp_seconds = 0.0, bounds_seconds = 0.0;
   double wall_seconds = 0.0;         ///< the whole control step (observer, plan, excitations)
 };
 
