@@ -151,6 +151,30 @@ bool RecedingHorizonController::sampleExcitations(const PlanInUse& plan, double 
                                  &plan.flat_start);
 }
 
+void RecedingHorizonController::planStep(const SimTK::State& state, double t, RecedingHorizonRecord& rec) {
+  if (plan_options_.reference) {
+    try {
+      startFromPlanInUse(state, t);
+      const RecedingHorizonOptions& o = plan_options_;
+      if (!(o.start_qdd.allFinite() && o.start_qddd.allFinite() && o.flat_start.value.allFinite() &&
+            o.flat_start.rate.allFinite()))
+        throw std::runtime_error("the muscles' state gives no finite start");
+    } catch (const std::exception& e) {  // the muscles' state refused (not finite): a free start
+      rec.free_start_message = e.what();
+      plan_options_.flat_start.value.resize(0);
+      plan_options_.start_qdd.resize(0);
+    }
+  }
+  options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+  if (step_.status != SolveStatus::Solved && !plan_options_.flat_start.empty()) {
+    // No plan carries the muscles on from where they are: a free start, as the paper's.
+    rec.free_start_message = step_.message;
+    plan_options_.flat_start.value.resize(0);
+    plan_options_.start_qdd.resize(0);
+    options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+  }
+}
+
 const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {
   const Stopwatch wall;
   const double t = state.getTime();
@@ -178,27 +202,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   bool have_candidate = false;
   try {
     const Stopwatch plan_time;
-    if (plan_options_.reference) {
-      try {
-        startFromPlanInUse(state, t);
-        const RecedingHorizonOptions& o = plan_options_;
-        if (!(o.start_qdd.allFinite() && o.start_qddd.allFinite() && o.flat_start.value.allFinite() &&
-              o.flat_start.rate.allFinite()))
-          throw std::runtime_error("the muscles' state gives no finite start");
-      } catch (const std::exception& e) {  // the muscles' state refused (not finite): a free start
-        rec.free_start_message = e.what();
-        plan_options_.flat_start.value.resize(0);
-        plan_options_.start_qdd.resize(0);
-      }
-    }
-    options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
-    if (step_.status != SolveStatus::Solved && !plan_options_.flat_start.empty()) {
-      // No plan carries the muscles on from where they are: a free start, as the paper's.
-      rec.free_start_message = step_.message;
-      plan_options_.flat_start.value.resize(0);
-      plan_options_.start_qdd.resize(0);
-      options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
-    }
+    planStep(state, t, rec);
     rec.plan_seconds = plan_time.seconds();
     rec.grid_seconds = step_.grid_seconds;
     rec.slp_seconds = step_.slp.wall_seconds;

@@ -135,6 +135,9 @@ class RecedingHorizonController final : public plugin::Controller {
   // states makes the muscles jump to them every period; the errors it leaves are what tracking
   // cannot afford).
   void startFromPlanInUse(const SimTK::State& state, double t);
+  // Plans this period's step into step_: a tracking step from the muscles' state, and when that
+  // start is refused or its plan fails, again with a free start (said in rec).
+  void planStep(const SimTK::State& state, double t, RecedingHorizonRecord& rec);
   // Updates the observer from the measured motion (q_, qd_ and the plant's qdd) at time t.
   void observe(const SimTK::State& state, double t);
   // Gives the muscles (and the observer's estimate of them) the excitations of this period.
