@@ -290,6 +290,16 @@ std::vector<plugin::StoTable> prediction_tables(const RecedingHorizonController&
   return out;
 }
 
+std::string plan_failures_sentence(const RecedingHorizonController& controller) {
+  std::ostringstream why;
+  why << controller.planFailures() << " of " << controller.steps() << " plans failed (the previous plan's tail ran instead)";
+  const auto& history = controller.history();
+  const auto first = std::find_if(history.begin(), history.end(),
+                                  [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
+  if (first != history.end()) why << ", the first at t = " << first->time_s << " s: " << first->message;
+  return why.str();
+}
+
 RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, const SimTK::State& initial,
                                         const plugin::ClosedLoopOptions& options, double settle_tolerance_rad) {
   plugin::ClosedLoopOptions o = options;
@@ -316,15 +326,7 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
     why << ")";
     run.failures.push_back(why.str());
   }
-  if (controller.planFailures() > 0) {
-    std::ostringstream why;
-    why << controller.planFailures() << " of " << controller.steps() << " plans failed (the previous plan's tail ran instead)";
-    const auto& history = controller.history();
-    const auto first = std::find_if(history.begin(), history.end(),
-                                    [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
-    if (first != history.end()) why << ", the first at t = " << first->time_s << " s: " << first->message;
-    run.failures.push_back(why.str());
-  }
+  if (controller.planFailures() > 0) run.failures.push_back(plan_failures_sentence(controller));
   return run;
 }
 

@@ -50,15 +50,7 @@ TrackingRun run_tracking(RecedingHorizonController& controller, const SimTK::Sta
   measure_errors(controller.plant(), *reference, run);
 
   if (!run.loop.finite) run.failures.push_back("the simulation became non-finite");
-  if (controller.planFailures() > 0) {
-    std::ostringstream why;
-    why << controller.planFailures() << " of " << controller.steps() << " plans failed (the previous plan's tail ran instead)";
-    const auto& history = controller.history();
-    const auto first = std::find_if(history.begin(), history.end(),
-                                    [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
-    if (first != history.end()) why << ", the first at t = " << first->time_s << " s: " << first->message;
-    run.failures.push_back(why.str());
-  }
+  if (controller.planFailures() > 0) run.failures.push_back(plan_failures_sentence(controller));
   constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
   const auto& joints = controller.plant().description().joints;
   for (int j = 0; j < run.max_abs_error.size(); ++j) {

@@ -188,6 +188,10 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
                                         const plugin::ClosedLoopOptions& options,
                                         double settle_tolerance_rad = 3.14159265358979323846 / 180.0);
 
+/// "N of M plans failed ...", with the first failure's time and message when the controller
+/// keeps its history: a run's failure sentence (run_receding_horizon, run_tracking).
+std::string plan_failures_sentence(const RecedingHorizonController& controller);
+
 /// The predicted joint paths of the controller's history (see RecedingHorizonRun::predictions).
 std::vector<plugin::StoTable> prediction_tables(const RecedingHorizonController& controller);
 
