@@ -1,0 +1,165 @@
+#include "numerics/dense_qp.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace flatsos::planner::detail {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// A rotation [c s; -s c] that maps (a, b) to (hypot(a, b), 0); applied to columns i, k of J
+// (J G with G = [c -s; s c]) it applies G^T to the rows i, k of J^T n for any n.
+struct Givens {
+  double c = 1.0, s = 0.0;
+};
+
+Givens givens(double a, double b) {
+  const double h = std::hypot(a, b);
+  return h > 0.0 ? Givens{a / h, b / h} : Givens{};
+}
+
+void rotate_columns(Eigen::MatrixXd& J, int i, int k, const Givens& g) {
+  for (Eigen::Index row = 0; row < J.rows(); ++row) {
+    const double a = J(row, i), b = J(row, k);
+    J(row, i) = g.c * a + g.s * b;
+    J(row, k) = -g.s * a + g.c * b;
+  }
+}
+
+// Appends the row whose J^T a is in w.d to the active set: rotations zero d below position q,
+// and R's new column is d's head.
+void add_row(DenseQpWorkspace& w, int q, int row) {
+  const int n = static_cast<int>(w.J.rows());
+  for (int j = n - 1; j > q; --j) {
+    const Givens g = givens(w.d[j - 1], w.d[j]);
+    w.d[j - 1] = g.c * w.d[j - 1] + g.s * w.d[j];
+    w.d[j] = 0.0;
+    rotate_columns(w.J, j - 1, j, g);
+  }
+  w.R.col(q).head(q + 1) = w.d.head(q + 1);
+  w.active[static_cast<std::size_t>(q)] = row;
+  w.is_active[static_cast<std::size_t>(row)] = 1;
+}
+
+// Removes the active row at position l of q: R loses its column and is brought back to upper
+// triangular form by rotations of the rows below, which J's columns follow.
+void drop_row(DenseQpWorkspace& w, int q, int l) {
+  w.is_active[static_cast<std::size_t>(w.active[static_cast<std::size_t>(l)])] = 0;
+  for (int k = l; k < q - 1; ++k) {
+    w.R.col(k).head(q) = w.R.col(k + 1).head(q);
+    w.u[k] = w.u[k + 1];
+    w.active[static_cast<std::size_t>(k)] = w.active[static_cast<std::size_t>(k + 1)];
+  }
+  for (int k = l; k < q - 1; ++k) {
+    const Givens g = givens(w.R(k, k), w.R(k + 1, k));
+    for (int c = k; c < q - 1; ++c) {
+      const double a = w.R(k, c), b = w.R(k + 1, c);
+      w.R(k, c) = g.c * a + g.s * b;
+      w.R(k + 1, c) = -g.s * a + g.c * b;
+    }
+    rotate_columns(w.J, k, k + 1, g);
+  }
+}
+
+void check_sizes(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
+  const Eigen::Index n = g.size();
+  if (n == 0 || H.rows() != n || H.cols() != n) throw std::invalid_argument("dense QP: H must be n x n with n = size of g > 0");
+  if (A.cols() != n || A.rows() != b.size()) throw std::invalid_argument("dense QP: A must be m x n with m = size of b");
+  if (!H.allFinite() || !g.allFinite() || !A.allFinite() || !b.allFinite())
+    throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
+}
+
+// The row most violated at x (distance to its plane, A_i x - b_i over |A_i|), or -1 when every
+// row holds to the tolerance.
+int most_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
+                  double tolerance) {
+  w.slack.noalias() = A * x;
+  w.slack -= b;
+  int worst = -1;
+  double worst_distance = 0.0;
+  for (Eigen::Index i = 0; i < A.rows(); ++i) {
+    if (w.is_active[static_cast<std::size_t>(i)] || w.slack[i] >= -tolerance * (1.0 + std::abs(b[i]))) continue;
+    const double norm = A.row(i).norm();
+    const double distance = norm > 0.0 ? w.slack[i] / norm : -kInfinity;
+    if (distance < worst_distance) worst_distance = distance, worst = static_cast<int>(i);
+  }
+  return worst;
+}
+
+}  // namespace
+
+DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A,
+                             const Eigen::VectorXd& b, DenseQpWorkspace& w, Eigen::VectorXd& x,
+                             Eigen::VectorXd* multipliers, double feasibility_tolerance) {
+  check_sizes(H, g, A, b);
+  const int n = static_cast<int>(g.size()), m = static_cast<int>(A.rows());
+  w.cholesky.compute(H);
+  if (w.cholesky.info() != Eigen::Success) throw std::invalid_argument("dense QP: H is not positive definite");
+  DenseQpResult result;
+  x = w.cholesky.solve(-g);
+  // J = L^-T: J^T H J = I.
+  w.J.setIdentity(n, n);
+  w.cholesky.matrixL().transpose().solveInPlace(w.J);
+  w.R.setZero(n, n);
+  w.d.resize(n);
+  w.z.resize(n);
+  w.r.resize(n);
+  w.u.setZero(n + 1);
+  w.active.assign(static_cast<std::size_t>(n), -1);
+  w.is_active.assign(static_cast<std::size_t>(m), 0);
+  int q = 0;
+  const int max_iterations = 10 * (n + m) + 10;
+  while (true) {
+    const int p = most_violated(A, b, x, w, feasibility_tolerance);
+    if (p < 0) break;
+    double u_new = 0.0;  // the multiplier of row p while it joins
+    while (true) {
+      if (++result.iterations > max_iterations) {
+        result.failure = "no convergence in " + std::to_string(max_iterations) + " active-set changes";
+        return result;
+      }
+      w.d.noalias() = w.J.transpose() * A.row(p).transpose();
+      w.z.noalias() = w.J.rightCols(n - q) * w.d.tail(n - q);
+      if (q > 0) w.r.head(q) = w.R.topLeftCorner(q, q).triangularView<Eigen::Upper>().solve(w.d.head(q));
+      // Partial step: the first active multiplier to reach zero.
+      double t_partial = kInfinity;
+      int l = -1;
+      for (int k = 0; k < q; ++k)
+        if (w.r[k] > 0.0 && w.u[k] / w.r[k] < t_partial) t_partial = w.u[k] / w.r[k], l = k;
+      // Full step: onto row p's plane (z^T a_p = |J2^T a_p|^2 >= 0).
+      const double za = w.z.dot(A.row(p));
+      const double scale = A.row(p).squaredNorm();
+      const double s_p = A.row(p).dot(x) - b[p];
+      const double t_full = za > 1e-14 * scale * w.J.squaredNorm() / n ? -s_p / za : kInfinity;
+      const double t = std::min(t_partial, t_full);
+      if (t == kInfinity) {
+        result.failure = "infeasible: row " + std::to_string(p) + " cannot be met with the active rows";
+        return result;
+      }
+      if (q > 0) w.u.head(q) -= t * w.r.head(q);
+      u_new += t;
+      if (t_full < kInfinity) x += t * w.z;
+      if (t_full <= t_partial) {
+        add_row(w, q, p);
+        w.u[q] = u_new;
+        ++q;
+        break;
+      }
+      drop_row(w, q, l);
+      --q;
+    }
+  }
+  result.solved = true;
+  result.objective = 0.5 * x.dot(H * x) + g.dot(x);
+  if (multipliers) {
+    multipliers->setZero(m);
+    for (int k = 0; k < q; ++k) (*multipliers)[w.active[static_cast<std::size_t>(k)]] = std::max(w.u[k], 0.0);
+  }
+  return result;
+}
+
+}  // namespace flatsos::planner::detail

@@ -1,0 +1,116 @@
+// The dense dual active-set QP (numerics/dense_qp.hpp) checked by the optimality conditions of a
+// convex QP, which certify the optimum independently of how it was found: A x >= b, multipliers
+// >= 0 and zero off the active rows, H x + g = A^T lambda. Random problems with more rows than
+// unknowns, degenerate ones (repeated rows, more active rows than unknowns), infeasible ones.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include <Eigen/Dense>
+
+#include "numerics/dense_qp.hpp"
+
+namespace fd = flatsos::planner::detail;
+
+namespace {
+
+struct Qp {
+  Eigen::MatrixXd H, A;
+  Eigen::VectorXd g, b;
+};
+
+Qp random_qp(std::mt19937& rng, int n, int m, double condition) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Qp qp;
+  const Eigen::MatrixXd Q = Eigen::MatrixXd::NullaryExpr(n, n, [&] { return normal(rng); }).householderQr().householderQ();
+  Eigen::VectorXd eig(n);
+  for (int i = 0; i < n; ++i) eig[i] = std::pow(condition, -static_cast<double>(i) / std::max(n - 1, 1));
+  qp.H = Q * eig.asDiagonal() * Q.transpose();
+  qp.H = 0.5 * (qp.H + qp.H.transpose()).eval();
+  qp.g = Eigen::VectorXd::NullaryExpr(n, [&] { return 3.0 * normal(rng); });
+  qp.A = Eigen::MatrixXd::NullaryExpr(m, n, [&] { return normal(rng); });
+  // Feasible by construction: every row holds at a random point x0 with slack >= 0.
+  const Eigen::VectorXd x0 = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+  qp.b = qp.A * x0 - Eigen::VectorXd::NullaryExpr(m, [&] { return std::abs(normal(rng)); });
+  return qp;
+}
+
+// The largest violation of the optimality conditions, relative to the data's size.
+double kkt_residual(const Qp& qp, const Eigen::VectorXd& x, const Eigen::VectorXd& lambda) {
+  const Eigen::VectorXd stationarity = qp.H * x + qp.g - qp.A.transpose() * lambda;
+  double worst = stationarity.cwiseAbs().maxCoeff() / (1.0 + qp.g.cwiseAbs().maxCoeff());
+  if (qp.b.size() == 0) return worst;
+  const Eigen::VectorXd slack = qp.A * x - qp.b;
+  worst = std::max(worst, -slack.minCoeff());
+  worst = std::max(worst, -lambda.minCoeff());
+  return std::max(worst, (lambda.array() * slack.array()).abs().maxCoeff());
+}
+
+}  // namespace
+
+TEST(DenseQp, RandomProblemsMeetTheOptimalityConditions) {
+  std::mt19937 rng(7);
+  fd::DenseQpWorkspace w;  // reused across sizes, as the sequential QP does
+  int with_active_rows = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = 1 + trial % 12, m = (trial % 5) * n * 3;
+    const Qp qp = random_qp(rng, n, m, trial % 3 == 0 ? 1e6 : 10.0);
+    Eigen::VectorXd x, lambda;
+    const fd::DenseQpResult r = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x, &lambda);
+    ASSERT_TRUE(r.solved) << "trial " << trial << ": " << r.failure;
+    EXPECT_LT(kkt_residual(qp, x, lambda), 1e-8) << "trial " << trial << " n " << n << " m " << m;
+    EXPECT_NEAR(r.objective, 0.5 * x.dot(qp.H * x) + qp.g.dot(x), 1e-12 * (1.0 + std::abs(r.objective)));
+    if (lambda.size() > 0 && lambda.maxCoeff() > 0.0) ++with_active_rows;
+  }
+  EXPECT_GT(with_active_rows, 150);  // the test exercises the active set, not only x = -H^-1 g
+}
+
+TEST(DenseQp, RepeatedRowsAndMoreActiveRowsThanUnknowns) {
+  // minimize |x - (2, 2)|^2 with x1 <= 1 three times over, x2 <= 1, x1 + x2 <= 2: the optimum
+  // (1, 1) has five active rows in two unknowns.
+  Eigen::MatrixXd H = 2.0 * Eigen::MatrixXd::Identity(2, 2);
+  Eigen::VectorXd g(2);
+  g << -4.0, -4.0;
+  Eigen::MatrixXd A(5, 2);
+  A << -1, 0, -1, 0, -1, 0, 0, -1, -1, -1;
+  Eigen::VectorXd b(5);
+  b << -1, -1, -1, -1, -2;
+  fd::DenseQpWorkspace w;
+  Eigen::VectorXd x, lambda;
+  const fd::DenseQpResult r = fd::solve_dense_qp(H, g, A, b, w, x, &lambda);
+  ASSERT_TRUE(r.solved) << r.failure;
+  EXPECT_NEAR(x[0], 1.0, 1e-12);
+  EXPECT_NEAR(x[1], 1.0, 1e-12);
+  const Qp qp{H, A, g, b};
+  EXPECT_LT(kkt_residual(qp, x, lambda), 1e-12);
+}
+
+TEST(DenseQp, AnInfeasibleProblemIsReportedNotSolved) {
+  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(2, 2);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(2);
+  Eigen::MatrixXd A(2, 2);
+  A << 1, 1, -1, -1;  // x1 + x2 >= 1 and x1 + x2 <= -1
+  Eigen::VectorXd b(2);
+  b << 1, 1;
+  fd::DenseQpWorkspace w;
+  Eigen::VectorXd x;
+  const fd::DenseQpResult r = fd::solve_dense_qp(H, g, A, b, w, x);
+  EXPECT_FALSE(r.solved);
+  EXPECT_NE(r.failure.find("infeasible"), std::string::npos) << r.failure;
+}
+
+TEST(DenseQp, BadInputThrowsNamingTheProblem) {
+  fd::DenseQpWorkspace w;
+  Eigen::VectorXd x;
+  Eigen::MatrixXd H(2, 2);
+  H << 1, 0, 0, -1;
+  try {
+    fd::solve_dense_qp(H, Eigen::VectorXd::Zero(2), Eigen::MatrixXd::Zero(0, 2), Eigen::VectorXd::Zero(0), w, x);
+    FAIL() << "an indefinite H was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("positive definite"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(fd::solve_dense_qp(Eigen::MatrixXd::Identity(2, 2), Eigen::VectorXd::Zero(3), Eigen::MatrixXd::Zero(0, 2),
+                                  Eigen::VectorXd::Zero(0), w, x),
+               std::invalid_argument);
+}
