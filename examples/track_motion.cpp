@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
                "Writes OUT/<model>_states.sto, OUT/<model>_controls.sto, OUT/<model>_pErr.sto (reference - plant, "
                "rad or m) and OUT/summary.json; exits 1 when a plan fails or a coordinate leaves the motion by more "
                "than the tolerance (the files are complete and the summary says why)."};
-  std::string model_path, motion_path, out_dir = "results/track_motion";
+  std::string model_path, motion_path, out_dir = "results/track_motion", effort_name = "tendon_force";
   double cutoff_hz = 6.0, tolerance_deg = 1.0, plant_strength = 1.0, reserve_N = 1.0;
   fpl::RecedingHorizonControllerOptions options;
   ex::OpenSimModelOptions osim;
@@ -76,6 +76,10 @@ int main(int argc, char** argv) {
   app.add_option("--tolerance-deg", tolerance_deg,
                  "the task fails where a coordinate leaves the motion by more than this, deg (a slider: mm)")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--effort", effort_name,
+                 "what each plan minimizes over its horizon: tendon_force (the model's effort_weights, the paper's), or "
+                 "the integral of the squared or cubed excitations, activations or stresses")
+      ->capture_default_str()->check(CLI::IsMember(fpl::effort_names()));
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
   try {
@@ -87,6 +91,7 @@ int main(int argc, char** argv) {
     auto reference = std::make_shared<const fpl::JointReference>(fpl::JointReference::fromMotion(*model, motion));
     const fpl::FlatOutputMap flat = motion_flat_outputs(model, motion, *reference);
     options.plan.reference = reference;
+    if (effort_name != "tendon_force") options.plan.effort = fpl::effort_named(effort_name);
     options.plan.reserves_N = Eigen::VectorXd::Constant(model->numMuscles(), reserve_N);
     std::shared_ptr<const fp::MusculoskeletalModel> plant;
     if (plant_strength != 1.0) {
@@ -146,6 +151,7 @@ int main(int argc, char** argv) {
         {"correction_s", options.plan.tracking_correction_s},
         {"observer_gain_per_s", options.disturbance_observer_gain_per_s},
         {"reserve_N", reserve_N},
+        {"effort", effort_name},
         {"plant_strength", plant_strength},
         {"duration_s", duration}};
     ex::write_json(out_dir + "/summary.json", summary);

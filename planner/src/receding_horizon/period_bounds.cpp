@@ -11,12 +11,6 @@
 
 namespace flatsos::planner::detail {
 
-namespace {
-
-// How far inside its bounds every sample's a and n are put: the controller hands each muscle a
-// polynomial fitted to the samples, which reproduces them to about 1e-6; the margin keeps the
-// samples themselves strictly inside. Reserve rows C_Y alpha >= B hold to half of the other.
-constexpr double kSampleMargin = 1e-5;
 constexpr double kReserveMargin_N = 1e-6;
 // The bounds' sequential LP stops once an LP step would lower the effort by less than this
 // fraction: near the bounded optimum its trust region halves step after step (linear
@@ -25,22 +19,16 @@ constexpr double kReserveMargin_N = 1e-6;
 // 4e-4 deg of the exact one's.
 constexpr double kRelativeDecrease = 1e-5;
 
+namespace {
 double sample_spacing_s(const PeriodExcitationBounds& b) { return b.period_s / (b.samples - 1); }
+}  // namespace
 
-// The first period's excitations and activations of the step's current alpha into its buffers;
-// false where they are not finite.
 bool sample_period(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
                    RecedingHorizonStep& step) {
   auto& buf = step.buffers;
   return sample_plan_excitations(flat, workspace, step.path, step.alpha(), step.torque_offset_N_m, 0.0, sample_spacing_s(b),
                                  b.samples, buf.period, buf.excitations, &buf.activations, &step.flat_start);
 }
-
-// The largest excess of a sample's a or n over its bounds (0 inside), and where.
-struct SampleExcess {
-  double value = 0.0;
-  int sample = 0, muscle = 0;
-};
 
 SampleExcess worst_excess(const FlatOutputMap& flat, const RecedingHorizonStep& step) {
   SampleExcess worst;
@@ -55,6 +43,7 @@ SampleExcess worst_excess(const FlatOutputMap& flat, const RecedingHorizonStep& 
   return worst;
 }
 
+namespace {
 std::string describe(const FlatOutputMap& flat, const PeriodExcitationBounds& b, const RecedingHorizonStep& step,
                      const SampleExcess& e) {
   std::ostringstream why;
@@ -72,18 +61,17 @@ std::string domain_violation(const FlatOutputMap& flat, const RecedingHorizonSte
   return "an excitation is not finite";
 }
 
-// The bound rows' data at every sample: v_k = C_tau tau^(k) (the offset already taken off by
-// the sampling) + C_Y alpha for k = 0 only, mixed by the coupling's rates where the moment arms
-// depend on posture (ForceJetMap).
-std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExcitationBounds& b,
-                                      const RecedingHorizonStep& step) {
+}  // namespace
+
+std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHorizonStep& step, const TorqueJetGrid& grid,
+                                    double h_s, int count) {
   const int m = flat.numMuscles(), p = flat.numFlatOutputs();
-  std::vector<BoundPoint> points(static_cast<std::size_t>(b.samples));
+  std::vector<BoundPoint> points(static_cast<std::size_t>(count));
   Jet q_jet(flat.numJoints(), 3);
-  for (int i = 0; i < b.samples; ++i) {
+  for (int i = 0; i < count; ++i) {
     BoundPoint& bp = points[static_cast<std::size_t>(i)];
-    bp.t_s = sample_spacing_s(b) * i;
-    const TorqueJet& tau = step.buffers.period.torque_grid.jets[static_cast<std::size_t>(i)];
+    bp.t_s = h_s * i;
+    const TorqueJet& tau = grid.jets[static_cast<std::size_t>(i)];
     rest_held_jet(step.path, bp.t_s, q_jet);
     const ForceJetMap map = flat.forceJetMap(q_jet);
     bp.base = map.Ctau * tau.tau;
@@ -110,7 +98,10 @@ std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExc
   return points;
 }
 
-}  // namespace
+std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExcitationBounds& b,
+                                      const RecedingHorizonStep& step) {
+  return step_points(flat, step, step.buffers.period.torque_grid, sample_spacing_s(b), b.samples);
+}
 
 void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
                           int max_iterations,

@@ -8,6 +8,7 @@
 #include "flatness/input_checks.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "receding_horizon/period_bounds.hpp"
+#include "receding_horizon/step_effort.hpp"
 
 namespace flatsos::planner {
 
@@ -50,6 +51,13 @@ void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
     require_taut_tendons_possible(flat.model(), o.target_q_rad, "target joint angles");
   }
   require_reserves(o.reserves_N, flat.numMuscles());
+  if (o.effort) {
+    o.effort->validate(flat.numMuscles());
+    if (o.effort->tendonForceWeights())
+      throw std::invalid_argument("RH step: effort '" + o.effort->name() +
+                                  "' is linear in the tendon forces: give it to the flat output map "
+                                  "(FlatOutputMap::withEffort), which prices the SLP with it");
+  }
   if (o.torque_offset_N_m.size() > 0) require(o.torque_offset_N_m, n, "torque offset");
   const PeriodExcitationBounds& b = o.excitation_bounds;
   if (b.enforce) {
@@ -184,6 +192,7 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.message = step.slp.message;
   const double before_bounds = wall.seconds();
   detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
+  detail::minimize_step_effort(flat, workspace, o, step);
   step.wall_seconds = wall.seconds();
   step.bounds_seconds = step.wall_seconds - before_bounds;
 }

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
 #include "flatsos/planner/joint_reference.hpp"
@@ -53,6 +54,11 @@ struct RecedingHorizonOptions {
   /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
   Eigen::VectorXd torque_offset_N_m;
   PeriodExcitationBounds excitation_bounds;
+  /// What each step minimizes over its horizon: null (or an effort linear in the tendon forces,
+  /// which must then be the map's own: FlatOutputMap::withEffort) the map's linear effort by the
+  /// SLP; a nonlinear one (PowerEffort: squared excitations, activations, stresses) by a
+  /// sequential QP from the SLP's alpha (receding_horizon/step_effort.hpp).
+  std::shared_ptr<const Effort> effort;
 };
 
 struct RecedingHorizonStep {
@@ -88,6 +94,10 @@ struct RecedingHorizonStep {
   /// for count < 1, h <= 0 or tau0 < 0.
   Eigen::MatrixXd excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, double tau0_s, double h_s,
                               int count) const;
+  /// A nonlinear effort's value over the horizon's grid at alpha (options.effort's unit) and its
+  /// sequential QP's iterations (0 for the linear effort).
+  double effort_value = 0.0;
+  int effort_iterations = 0;
   double wall_seconds = 0.0;
   /// Where the step's time went: the horizon's grid (joint path, inverse dynamics, the SLP's
   /// rows), the SLP (slp.wall_seconds) and the excitation bounds (sampling the first period
@@ -106,6 +116,9 @@ struct RecedingHorizonStep {
     /// ... and its sequential LP's last basis, where the next one restarts (the rows keep their
     /// identity from period to period: sample, muscle, bound).
     SequentialLpBasis bounds_basis;
+    /// A nonlinear effort's grid over the horizon and the last step's optimum (its start).
+    TorqueJetGrid effort_grid;
+    Eigen::VectorXd effort_alpha;
   } buffers;
 };
 

@@ -1,0 +1,179 @@
+#include "receding_horizon/step_effort.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "bounds/sequential_lp.hpp"
+#include "flatsos/muscles/muscle_inverse.hpp"
+#include "flatsos/plugin/stopwatch.hpp"
+#include "numerics/dense_qp.hpp"
+#include "receding_horizon/period_bounds.hpp"
+
+namespace flatsos::planner::detail {
+
+namespace {
+
+namespace fm = flatsos::muscles;
+
+constexpr int kMaxIterations = 30;
+constexpr int kMaxHalvings = 10;
+// Stops once the QP predicts a decrease below this fraction of the effort.
+constexpr double kRelativeDecrease = 1e-8;
+// A trial alpha counts as inside the bounds while every row keeps half its margin (the samples
+// then stay strictly inside; bound_rows.hpp).
+constexpr double kRowTolerance = 0.5 * kSampleMargin;
+
+// The effort over the horizon's grid (trapezoid weights) with its gradient and Gauss-Newton
+// Hessian in alpha (each muscle's term's second derivatives times the outer products of the
+// gradients of F, a and n).
+struct EffortModel {
+  double value = 0.0;
+  Eigen::VectorXd gradient;
+  Eigen::MatrixXd hessian;
+};
+
+fm::SecondOrderJet force_jet(const BoundPoint& bp, int j, const Eigen::VectorXd& alpha) {
+  return {bp.base(j, 0) + bp.slope[0].row(j).dot(alpha), bp.base(j, 1) + bp.slope[1].row(j).dot(alpha),
+          bp.base(j, 2) + bp.slope[2].row(j).dot(alpha)};
+}
+
+// False where a muscle leaves its domain (no activation or excitation gives the forces).
+bool evaluate(const FlatOutputMap& flat, const Effort& effort, const std::vector<BoundPoint>& points,
+              const std::vector<double>& weights_s, const Eigen::VectorXd& alpha, bool derivatives, EffortModel& out) {
+  const int m = flat.numMuscles(), p = static_cast<int>(alpha.size());
+  out.value = 0.0;
+  if (derivatives) out.gradient.setZero(p), out.hessian.setZero(p, p);
+  Eigen::VectorXd g_force(p), g_activation(p), g_excitation(p);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const BoundPoint& bp = points[i];
+    for (int j = 0; j < m; ++j) {
+      const fm::MuscleParameters& params = flat.model().muscle(j).getParameters();
+      const fm::MuscleInverse inv = fm::invert_muscle(params, force_jet(bp, j, alpha), bp.path[static_cast<std::size_t>(j)], derivatives);
+      if (inv.stage != fm::MuscleInverse::Stage::Complete || !inv.excitation_real) return false;
+      const MuscleEffortJet term = effort.muscleTerm(j, params, bp.base(j, 0) + bp.slope[0].row(j).dot(alpha), inv.activation, inv.excitation);
+      if (!std::isfinite(term.value)) return false;
+      out.value += weights_s[i] * term.value;
+      if (!derivatives) continue;
+      for (int c = 0; c < p; ++c) {
+        g_force[c] = bp.slope[0](j, c);
+        g_activation[c] = column_derivative(bp, inv.activation_gradient, j, static_cast<std::size_t>(c));
+        g_excitation[c] = column_derivative(bp, inv.excitation_gradient, j, static_cast<std::size_t>(c));
+      }
+      const double w = weights_s[i];
+      out.gradient += w * (term.d_force * g_force + term.d_activation * g_activation + term.d_excitation * g_excitation);
+      out.hessian.noalias() += (w * term.d_force2) * g_force * g_force.transpose();
+      out.hessian.noalias() += (w * term.d_activation2) * g_activation * g_activation.transpose();
+      out.hessian.noalias() += (w * term.d_excitation2) * g_excitation * g_excitation.transpose();
+    }
+  }
+  return std::isfinite(out.value);
+}
+
+// The horizon's grid for the effort: `grid_points` times i T / grid_points, each weighing T /
+// grid_points (the horizon's end, where the plan's torques jump to the rest that follows it, is
+// left out).
+std::vector<BoundPoint> effort_points(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                      const RecedingHorizonOptions& o, RecedingHorizonStep& step, std::vector<double>& weights_s) {
+  const int count = o.grid_points;
+  const double h = o.horizon_s / count;
+  TorqueJetGrid& grid = step.buffers.effort_grid;
+  flat.torqueJetsOnGrid(
+      workspace, [&](double t, Jet& jet) { rest_held_jet(step.path, t, jet); }, 0.0, h, count, grid);
+  if (o.torque_offset_N_m.size())
+    for (TorqueJet& tj : grid.jets) tj.tau.col(0) -= o.torque_offset_N_m;
+  weights_s.assign(static_cast<std::size_t>(count), h);
+  return step_points(flat, step, grid, h, count);
+}
+
+// Inside every reserve row (to their tolerance) and every bound row.
+bool inside(const RecedingHorizonStep& step, const NonlinearRows* rows, const Eigen::VectorXd& alpha) {
+  if (alpha.minCoeff() < 0.0) return false;
+  const double scale = 1.0 + step.bound_N.cwiseAbs().maxCoeff();
+  if ((step.reserve_rows * alpha - step.bound_N).minCoeff() < -1e-9 * scale) return false;
+  if (!rows) return true;
+  const BoundRowsAt at = (*rows)(alpha, false);
+  return at.value.empty() || *std::min_element(at.value.begin(), at.value.end()) >= -kRowTolerance;
+}
+
+// The QP's rows J d >= lower: the bound rows linearized at alpha, the reserve rows, alpha + d >= 0.
+// Reserve rows and alpha >= 0 hold at alpha (inside), so d = 0 meets every row.
+void qp_rows(const RecedingHorizonStep& step, const NonlinearRows* rows, const Eigen::VectorXd& alpha, Eigen::MatrixXd& J,
+             Eigen::VectorXd& lower) {
+  const Eigen::Index p = alpha.size(), reserves = step.reserve_rows.rows();
+  BoundRowsAt at;
+  if (rows) at = (*rows)(alpha, true);
+  const auto bound_rows = static_cast<Eigen::Index>(at.value.size());
+  J.setZero(bound_rows + reserves + p, p);
+  lower.resize(J.rows());
+  // A row alpha left slightly violated (within kRowTolerance; rows at t = 0 of a plan that starts
+  // from the muscles' state do not depend on alpha at all) must only not get worse.
+  for (Eigen::Index r = 0; r < bound_rows; ++r) lower[r] = std::min(-at.value[static_cast<std::size_t>(r)], 0.0);
+  for (const Eigen::Triplet<double>& e : at.jacobian) J(e.row(), e.col()) += e.value();
+  J.middleRows(bound_rows, reserves) = step.reserve_rows;
+  lower.segment(bound_rows, reserves) = (step.bound_N - step.reserve_rows * alpha).cwiseMin(0.0);
+  J.bottomRows(p).setIdentity();
+  lower.tail(p) = -alpha;
+}
+
+}  // namespace
+
+void minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+                          RecedingHorizonStep& step) {
+  step.effort_iterations = 0;
+  step.effort_value = 0.0;
+  if (step.status != SolveStatus::Solved || !o.effort) return;
+  const Effort& effort = *o.effort;
+  std::vector<double> weights_s;
+  const std::vector<BoundPoint> points = effort_points(flat, workspace, o, step, weights_s);
+  const PeriodExcitationBounds& b = o.excitation_bounds;
+  std::vector<BoundPoint> period;
+  if (b.enforce) period = period_points(flat, b, step);  // the period's torque grid: impose_period_bounds sampled it
+  const NonlinearRows bound_rows = bound_rows_of(flat, period, activation_minima(flat, 0.0), kSampleMargin);
+  const NonlinearRows* rows = b.enforce ? &bound_rows : nullptr;
+
+  // Start from the SLP's alpha or from the previous step's optimum, usually close to this one's,
+  // whichever costs less (where the effort can be evaluated at all).
+  Eigen::VectorXd alpha = step.slp.alpha;
+  EffortModel model, trial;
+  bool valid = evaluate(flat, effort, points, weights_s, alpha, false, model);
+  const Eigen::VectorXd& previous = step.buffers.effort_alpha;
+  if (previous.size() == alpha.size() && inside(step, rows, previous) &&
+      evaluate(flat, effort, points, weights_s, previous, false, trial) && (!valid || trial.value < model.value)) {
+    alpha = previous;
+    valid = true;
+  }
+  if (!valid) return;  // the SLP's plan stands
+  evaluate(flat, effort, points, weights_s, alpha, true, model);
+  DenseQpWorkspace qp;
+  Eigen::MatrixXd J;
+  Eigen::VectorXd lower, d, trial_alpha;
+  for (int it = 0; it < kMaxIterations; ++it) {
+    step.effort_iterations = it + 1;
+    qp_rows(step, rows, alpha, J, lower);
+    // Levenberg's shift keeps the model strictly convex where the effort is flat in a direction.
+    Eigen::MatrixXd H = model.hessian;
+    H.diagonal().array() += 1e-9 * std::max(H.diagonal().maxCoeff(), 1e-12);
+    const DenseQpResult r = solve_dense_qp(H, model.gradient, J, lower, qp, d);
+    if (!r.solved) break;
+    const double predicted = model.gradient.dot(d) + 0.5 * d.dot(model.hessian * d);
+    if (!(predicted < -kRelativeDecrease * (1e-12 + std::abs(model.value)))) break;
+    double s = 1.0;
+    bool accepted = false;
+    for (int k = 0; k < kMaxHalvings && !accepted; ++k, s *= 0.5) {
+      trial_alpha = alpha + s * d;
+      accepted = inside(step, rows, trial_alpha) && evaluate(flat, effort, points, weights_s, trial_alpha, false, trial) &&
+                 trial.value <= model.value + 1e-4 * s * predicted;
+    }
+    if (!accepted) break;
+    alpha = trial_alpha;
+    evaluate(flat, effort, points, weights_s, alpha, true, model);
+  }
+  step.slp.alpha = alpha;
+  step.effort_value = model.value;
+  step.buffers.effort_alpha = alpha;
+  step.first_period_sampled = false;
+  if (b.enforce) step.first_period_sampled = sample_period(flat, workspace, b, step) && worst_excess(flat, step).value <= 0.0;
+}
+
+}  // namespace flatsos::planner::detail

@@ -1,0 +1,24 @@
+#pragma once
+// A receding-horizon step that minimizes a nonlinear effort (squared or cubed excitations,
+// activations or stresses: effort.hpp) instead of the paper's linear one. The step's constant
+// flat outputs alpha move the tendon forces affinely, and excitations and activations through
+// each muscle's inverse (muscles::invert_muscle, with exact gradients), so the effort over the
+// horizon is a smooth function of the p entries of alpha. A sequential QP minimizes it: the
+// effort's Gauss-Newton model on a grid of the horizon, the reserve rows as they are, the first
+// period's excitation bounds linearized (bounds/bound_rows.hpp); each QP by the dual active-set
+// method (numerics/dense_qp.hpp); a step is accepted when it stays inside the bounds and lowers
+// the effort, else halved.
+
+#include "flatsos/planner/receding_horizon_step.hpp"
+
+namespace flatsos::planner::detail {
+
+/// From a solved step whose alpha meets its reserve rows and first-period bounds (the SLP's
+/// optimum moved inside them), moves alpha to the minimum of options.effort over the horizon's
+/// grid: step.slp.alpha, effort_value, effort_iterations and the first period's samples updated.
+/// Starts from the previous step's effort optimum instead when that meets this step's rows and
+/// costs less. Leaves the step as it was where the effort cannot be evaluated at its alpha.
+void minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
+                          RecedingHorizonStep& step);
+
+}  // namespace flatsos::planner::detail
