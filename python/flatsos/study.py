@@ -49,7 +49,9 @@ from ._flatsos import Model, plan_open_loop, track
 # Columns that measure the machine rather than the plan (or tracking run): they differ between runs.
 _PLAN_TIMING_COLUMNS = ("setup_s", "solve_s", "certify_s", "check_s", "plan_s", "worker")
 TIMING_COLUMNS = _PLAN_TIMING_COLUMNS + ("track_s",)
-_TRACK_KEYWORDS = {"horizon", "period", "correction", "observer_gain", "reserves", "cutoff_hz", "tolerance"}
+_TRACK_KEYWORDS = {"horizon", "period", "correction", "observer_gain", "reserves", "cutoff_hz", "tolerance", "effort"}
+_TRACK_EFFORTS = {"tendon_force", "excitation_squared", "excitation_cubed", "activation_squared", "activation_cubed",
+                  "stress_squared", "stress_cubed"}
 _SAMPLES_FOR_PEAKS = 301
 
 
@@ -173,6 +175,10 @@ def _track_description(track_spec):
     if not isinstance(options, dict) or set(options) - _TRACK_KEYWORDS:
         raise StudyError(f"track.options: expected an object of {', '.join(sorted(_TRACK_KEYWORDS))}")
     for key, value in options.items():  # numbers (reserves: one or one per muscle), refused here
+        if key == "effort":
+            if value not in _TRACK_EFFORTS:
+                raise StudyError(f"track.options.effort: expected one of {', '.join(sorted(_TRACK_EFFORTS))}")
+            continue
         values = value if key == "reserves" and isinstance(value, list) else [value]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
             raise StudyError(f"track.options.{key}: expected a finite number" +

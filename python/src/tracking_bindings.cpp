@@ -46,8 +46,10 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
     std::vector<Eigen::VectorXd> postures;
     for (double t : motion.report_times_s) postures.push_back(reference->jet(t, 1).col(0));
     auto flat = flat_for_task(m, postures);
-    // Linear efforts only: the step's program is an LP (a ValueError says so for another).
-    const planner::FlatOutputMap planning = chosen ? flat->withEffort(chosen) : *flat;
+    // A linear effort prices the steps' LP (the map's); a nonlinear one is each step's sequential QP.
+    const bool linear = chosen && chosen->tendonForceWeights();
+    const planner::FlatOutputMap planning = linear ? flat->withEffort(chosen) : *flat;
+    if (chosen && !linear) options.plan.effort = chosen;
     options.plan.reference = reference;
     planner::RecedingHorizonController controller(planning, options, plant.is_none() ? nullptr : given_plant.model);
     auto plant_flat = plant.is_none() ? flat : flat_for_task(given_plant, postures);
@@ -102,8 +104,10 @@ void register_tracking(py::module_& m) {
         "and muscles, or the model itself) starts on it at its first time with its muscles at the minimum-effort "
         "rest; every `period` s the controller plans the motion's next `horizon` s from the measured state "
         "(removing the offset within `correction` s, starting from where the muscles are) and applies the first "
-        "period's excitations. effort: None (the model's) or a linear one ('tendon_force' with `weights`); the "
-        "step's program is linear. Returns a dict: 'time' (s), 'q' (rad), 'activation', 'excitation' (one row per "
+        "period's excitations. effort: what each plan minimizes over its horizon: None (the model's effort_weights, "
+        "the paper's linear effort), 'tendon_force' (with `weights`), or 'excitation_squared', 'excitation_cubed', "
+        "'activation_squared', 'activation_cubed', 'stress_squared', 'stress_cubed' (weights per muscle optional). "
+        "Returns a dict: 'time' (s), 'q' (rad), 'activation', 'excitation' (one row per "
         "report time), 'position_error' (reference - plant, rad), 'rms_error' and 'max_abs_error' per joint (rad), "
         "'excitation_squared_integral', 'real_time_factor', 'wall_seconds', 'success' (every plan solved, every "
         "coordinate within `tolerance` rad), 'message', 'steps', 'plan_failures', 'clamped_samples', 'free_starts' ((time, why) of each period whose plan "

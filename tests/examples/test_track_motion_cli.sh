@@ -2,7 +2,7 @@
 # track_motion: --help, bad arguments exit 2 naming the option, a motion without the model's
 # coordinates exits 1 naming one, a task that leaves its tolerance exits 1 with complete files
 # and the reason in the summary, and arm26 as downloaded follows OpenSim's CMC tutorial motion
-# writing CMC's three tables.
+# (squared excitations) writing CMC's three tables.
 # Usage: TRACK_MOTION
 set -u
 tm=$1
@@ -13,6 +13,7 @@ paper="$models/arm_richter_warner.json"
 expect 0 "--coordinates" -- "$tm" --help
 expect 2 "--coordinates" -- "$tm" --model "$paper" --out "$tmp/o"
 expect 2 "--correction-s" -- "$tm" --model "$paper" --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --correction-s 0.6 --out "$tmp/o"
+expect 2 "--effort" -- "$tm" --model "$paper" --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --effort squared --out "$tmp/o"
 expect 1 "no column for the coordinate 'shoulder'" -- "$tm" --model "$paper" --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/o"
 # The paper's arm through a smooth 40 deg swing of both joints in 1 s.
 { printf 'swing\nversion=1\ninDegrees=yes\nendheader\ntime\tshoulder\telbow\n'
@@ -23,8 +24,10 @@ grep -q '"success": true' "$tmp/paper/summary.json" || { echo "FAILED: the paper
 expect 1 "left the reference by" -- "$tm" --model "$paper" --coordinates "$tmp/swing.mot" --tolerance-deg 1e-6 --out "$tmp/strict"
 grep -q '"success": false' "$tmp/strict/summary.json" || { echo "FAILED: a failed task reported success"; fail=1; }
 [ -s "$tmp/strict/arm_richter_warner_pErr.sto" ] || { echo "FAILED: the failed task left no position errors"; fail=1; }
-# arm26 as downloaded with OpenSim 2.x's muscles (those of the tutorial's CMC run).
-expect 0 "plan failures 0" -- "$tm" --model "$arm26/arm26.osim" --opensim-2-muscles --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/arm26"
+# arm26 as downloaded with OpenSim 2.x's muscles (those of the tutorial's CMC run), each plan
+# minimizing its squared excitations.
+expect 0 "plan failures 0" -- "$tm" --model "$arm26/arm26.osim" --opensim-2-muscles --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --effort excitation_squared --out "$tmp/arm26"
+grep -q '"effort": "excitation_squared"' "$tmp/arm26/summary.json" || { echo "FAILED: the summary does not name the effort"; fail=1; }
 for f in states controls pErr; do [ -s "$tmp/arm26/arm26_$f.sto" ] || { echo "FAILED: arm26_$f.sto missing"; fail=1; }; done
 head -8 "$tmp/arm26/arm26_pErr.sto" | grep -q "^time	r_shoulder_elev	r_elbow_flex$" || { echo "FAILED: the position errors lack CMC's columns"; fail=1; }
 exit $fail

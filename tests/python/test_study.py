@@ -195,6 +195,18 @@ def test_a_tracking_study_runs_the_controller_on_each_samples_plant(arm, arm_fil
         assert len(list(csv.DictReader(f))) == 4
 
 
+def test_a_tracking_study_varies_the_effort(arm, arm_file, tmp_path):
+    arm, _ = arm
+    motion = _swing(tmp_path / "swing.mot")
+    options = {"tolerance": np.radians(2.0), "effort": "excitation_squared"}
+    result = study.run(arm_file, {"track": {"coordinates": motion, "options": options}}, 1, seed=1, workers=0)
+    assert result.rows[0]["status"] == "tracked", result.rows[0]["message"]
+    direct = flatsos.track(arm, motion, effort="excitation_squared", tolerance=np.radians(2.0))
+    assert result.rows[0]["excitation_squared_integral"] == pytest.approx(direct["excitation_squared_integral"], rel=1e-9)
+    linear = flatsos.track(arm, motion, tolerance=np.radians(2.0))
+    assert direct["excitation_squared_integral"] < linear["excitation_squared_integral"]
+
+
 def test_a_bad_tracking_description_names_the_field(arm_file, tmp_path):
     motion = _swing(tmp_path / "swing.mot")
     for description, match in [
@@ -204,6 +216,7 @@ def test_a_bad_tracking_description_names_the_field(arm_file, tmp_path):
             ({"track": {"coordinates": motion, "options": {"horizon_s": 1}}}, "track.options: expected an object of"),
             ({"track": {"coordinates": motion, "speed": 1}}, r"track: unknown field\(s\) \['speed'\]"),
             ({"track": {"coordinates": motion, "options": {"tolerance": "2"}}}, "track.options.tolerance: expected a finite"),
-            ({"track": {"coordinates": motion, "options": {"reserves": [1, None]}}}, "track.options.reserves")]:
+            ({"track": {"coordinates": motion, "options": {"reserves": [1, None]}}}, "track.options.reserves"),
+            ({"track": {"coordinates": motion, "options": {"effort": "squared"}}}, "track.options.effort: expected one of")]:
         with pytest.raises(ValueError, match=match):
             study.run(arm_file, description, 2, workers=0)
