@@ -51,9 +51,10 @@ int main(int argc, char** argv) {
                "Writes OUT/<model>_states.sto, OUT/<model>_controls.sto, OUT/<model>_pErr.sto (reference - plant, "
                "rad or m) and OUT/summary.json; exits 1 when a plan fails or a coordinate leaves the motion by more "
                "than the tolerance (the files are complete and the summary says why)."};
-  std::string model_path, motion_path, out_dir = "results/track_motion", effort_name = "tendon_force";
+  std::string model_path, motion_path, out_dir = "results/track_motion", effort_name = "excitation_squared";
   double cutoff_hz = 6.0, tolerance_deg = 1.0, plant_strength = 1.0, reserve_N = 1.0;
   fpl::RecedingHorizonControllerOptions options;
+  options.plan.tracking_correction_s = 0.06;  // with the default squared effort (receding_horizon_step.hpp)
   ex::OpenSimModelOptions osim;
   app.add_option("--model", model_path, "model file (JSON), or an OpenSim model (.osim) imported on the way")->required();
   app.add_option("--coordinates", motion_path, "measured motion: coordinates table (.mot or .sto)")->required()->check(CLI::ExistingFile);
@@ -77,8 +78,8 @@ int main(int argc, char** argv) {
                  "the task fails where a coordinate leaves the motion by more than this, deg (a slider: mm)")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--effort", effort_name,
-                 "what each plan minimizes over its horizon: tendon_force (the model's effort_weights, the paper's), or "
-                 "the integral of the squared or cubed excitations, activations or stresses")
+                 "what each plan minimizes over its horizon: the integral of the squared or cubed excitations (as CMC and "
+                 "Moco), activations or stresses, or tendon_force (the model's effort_weights: the paper's linear effort)")
       ->capture_default_str()->check(CLI::IsMember(fpl::effort_names()));
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;

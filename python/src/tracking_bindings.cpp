@@ -94,9 +94,9 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
 }  // namespace
 
 void register_tracking(py::module_& m) {
-  m.def("track", &track, py::arg("model"), py::arg("motion_file"), py::kw_only(), py::arg("effort") = py::none(),
+  m.def("track", &track, py::arg("model"), py::arg("motion_file"), py::kw_only(), py::arg("effort") = "excitation_squared",
         py::arg("weights") = py::none(), py::arg("plant") = py::none(), py::arg("horizon") = 0.5,
-        py::arg("period") = 0.05, py::arg("correction") = 0.075, py::arg("observer_gain") = 40.0,
+        py::arg("period") = 0.05, py::arg("correction") = 0.06, py::arg("observer_gain") = 40.0,
         py::arg("reserves") = 1.0, py::arg("cutoff_hz") = 6.0, py::arg("tolerance") = M_PI / 180.0,
         "The receding-horizon controller following a measured motion on a Simbody plant (what OpenSim's CMC does). "
         "The motion (an OpenSim coordinates table, .mot or .sto, degrees or radians as its header says) is filtered "
@@ -104,9 +104,10 @@ void register_tracking(py::module_& m) {
         "and muscles, or the model itself) starts on it at its first time with its muscles at the minimum-effort "
         "rest; every `period` s the controller plans the motion's next `horizon` s from the measured state "
         "(removing the offset within `correction` s, starting from where the muscles are) and applies the first "
-        "period's excitations. effort: what each plan minimizes over its horizon: None (the model's effort_weights, "
-        "the paper's linear effort), 'tendon_force' (with `weights`), or 'excitation_squared', 'excitation_cubed', "
-        "'activation_squared', 'activation_cubed', 'stress_squared', 'stress_cubed' (weights per muscle optional). "
+        "period's excitations. effort: what each plan minimizes over its horizon: 'excitation_squared' (the "
+        "default, as CMC and Moco), 'excitation_cubed', 'activation_squared', 'activation_cubed', "
+        "'stress_squared', 'stress_cubed' (weights per muscle optional), 'tendon_force' (with `weights`), or None "
+        "(the model's effort_weights: the paper's linear effort). "
         "Returns a dict: 'time' (s), 'q' (rad), 'activation', 'excitation' (one row per "
         "report time), 'position_error' (reference - plant, rad), 'rms_error' and 'max_abs_error' per joint (rad), "
         "'excitation_squared_integral', 'real_time_factor', 'wall_seconds', 'success' (every plan solved, every "

@@ -42,7 +42,8 @@ struct Tracked {
   int clamps = 0, plan_failures = 0, steps = 0, free_starts = 0;
 };
 
-// The tutorial's motion tracked from its first state (muscles at the minimum-effort rest there).
+// The tutorial's motion tracked from its first state (muscles at the minimum-effort rest there),
+// with the programs' correction time (track_motion, flatsos.track).
 Tracked track_arm26(double plant_strength, std::shared_ptr<const fpl::Effort> effort = nullptr) {
   auto model = arm26_opensim2();
   auto reference = std::make_shared<const fpl::JointReference>(fpl::JointReference::fromMotion(*model, tutorial_motion()));
@@ -53,6 +54,7 @@ Tracked track_arm26(double plant_strength, std::shared_ptr<const fpl::Effort> ef
   o.plan.reference = reference;
   o.plan.reserves_N = Eigen::VectorXd::Constant(model->numMuscles(), 1.0);
   o.plan.effort = effort;
+  o.plan.tracking_correction_s = 0.06;
   std::shared_ptr<const fp::MusculoskeletalModel> plant;
   if (plant_strength != 1.0) {
     fp::ModelDescription d = model->description();
@@ -80,6 +82,12 @@ Tracked track_arm26(double plant_strength, std::shared_ptr<const fpl::Effort> ef
               out.run.max_abs_error[1] / kDeg, out.run.excitation_squared_integral, out.steps, out.clamps, out.plan_failures);
   for (const auto& f : out.run.failures) std::printf("  %s\n", f.c_str());
   return out;
+}
+
+// The front ends' default: each plan minimizing its squared excitations (run once, shared).
+const Tracked& arm26_squared() {
+  static const Tracked t = track_arm26(1.0, fpl::effort_named("excitation_squared"));
+  return t;
 }
 
 }  // namespace
@@ -179,44 +187,43 @@ TEST(FlatOutputStart, BlendsFromTheStartToAlphaWithExactDerivatives) {
 }
 
 TEST(Tracking, Arm26FollowsTheCmcTutorialsMotion) {
-  const Tracked t = track_arm26(1.0);
+  const Tracked& t = arm26_squared();
   EXPECT_TRUE(t.run.success());
   EXPECT_EQ(t.plan_failures, 0);
   EXPECT_EQ(t.clamps, 0);  // excitations within [0, 1] by the step's bounds
   EXPECT_EQ(t.steps, 20);
   EXPECT_EQ(t.free_starts, 0);  // every plan started from the muscles' states
-  // Measured 0.018 and 0.063 deg. Plans that start from their own muscle states instead:
-  // 0.77 and 0.68 deg with a 0.2 s correction, and most plans fail with 0.1 s. What is left is
-  // mostly the plant's own velocity law (OpenSim 2.x's damped one), which the plans invert
-  // undamped.
+  // Measured 0.013 and 0.046 deg (the issue asks for 0.05). Plans that start from their own
+  // muscle states instead: 0.77 and 0.68 deg with a 0.2 s correction, and most plans fail with
+  // 0.1 s. What is left is mostly the plant's own velocity law (OpenSim 2.x's damped one), which
+  // the plans invert undamped.
   EXPECT_LE(t.run.rms_error[0], 0.025 * kDeg);
-  EXPECT_LE(t.run.rms_error[1], 0.08 * kDeg);
+  EXPECT_LE(t.run.rms_error[1], 0.05 * kDeg);
   ASSERT_EQ(t.run.position_errors.rows.size(), t.run.loop.states.rows.size());
   EXPECT_EQ(t.run.position_errors.columns, (std::vector<std::string>{"time", "r_shoulder_elev", "r_elbow_flex"}));
 }
 
 TEST(Tracking, Arm26WithAPlantOneFifthWeaker) {
-  const Tracked t = track_arm26(0.8);
+  const Tracked t = track_arm26(0.8, fpl::effort_named("excitation_squared"));
   EXPECT_TRUE(t.run.success());
   EXPECT_EQ(t.plan_failures, 0);
-  EXPECT_LE(t.run.max_abs_error.maxCoeff(), 0.5 * kDeg);  // measured 0.20 deg
+  EXPECT_LE(t.run.max_abs_error.maxCoeff(), 0.5 * kDeg);  // measured 0.17 deg
 }
 
 TEST(Tracking, Arm26WithSquaredExcitationsSharesTheLoadAndCostsLess) {
-  // The paper's linear effort: 0.334 (measured). Each step minimizing the integral of the squared
-  // excitations over its horizon instead: 0.236. The per-frame minimum of sum a^2 along the motion
+  // The paper's linear effort: 0.345 (measured). Each step minimizing the integral of the squared
+  // excitations over its horizon instead: 0.247. The per-frame minimum of sum a^2 along the motion
   // with the muscles' passive forces counted (a rigid-tendon static optimization) is 0.162: the
   // plans' flat outputs are constant over a horizon, and a muscle that would go slack later in
   // it holds its synergists up now.
   const Tracked linear = track_arm26(1.0);
-  const Tracked squared = track_arm26(1.0, fpl::effort_named("excitation_squared"));
+  const Tracked& squared = arm26_squared();
   EXPECT_TRUE(squared.run.success());
   EXPECT_EQ(squared.plan_failures, 0);
   EXPECT_EQ(squared.clamps, 0);
   EXPECT_EQ(squared.free_starts, 0);
   EXPECT_LE(squared.run.excitation_squared_integral, 0.75 * linear.run.excitation_squared_integral);
-  EXPECT_LE(squared.run.excitation_squared_integral, 0.25);
-  EXPECT_LE(squared.run.rms_error.maxCoeff(), 0.08 * kDeg);  // measured 0.017 and 0.060 deg
+  EXPECT_LE(squared.run.excitation_squared_integral, 0.26);
 }
 
 TEST(Tracking, RefusesAControllerWithoutAReference) {

@@ -14,7 +14,7 @@ def test_arm26_follows_the_cmc_tutorial_motion(models_dir):
     assert r["plan_failures"] == 0 and r["clamped_samples"] == 0
     rows = len(r["time"])
     assert r["q"].shape == (rows, 2) and r["excitation"].shape == (rows, 6) and r["position_error"].shape == (rows, 2)
-    assert np.all(np.degrees(r["rms_error"]) < [0.025, 0.08])
+    assert np.all(np.degrees(r["rms_error"]) < [0.025, 0.05])
     assert np.all((r["excitation"] >= 0) & (r["excitation"] <= 1))
     # The position errors are the reference's coordinates minus the plant's, at the same times.
     assert np.allclose(np.sqrt(np.mean(r["position_error"] ** 2, axis=0)), r["rms_error"])
@@ -24,14 +24,13 @@ def test_arm26_follows_the_cmc_tutorial_motion(models_dir):
 
 
 def test_squared_excitations_share_the_load_at_less_effort(models_dir):
-    # Each plan minimizes the integral of the squared excitations over its horizon: less of it is
-    # spent than with the paper's linear effort (0.236 against 0.334, measured), the motion followed
-    # as closely.
+    # Each plan minimizes the integral of the squared excitations over its horizon (the default):
+    # less of it is spent than with the paper's linear effort, the motion followed as closely.
     arm26 = models_dir / "opensim" / "arm26"
     model = flatsos.Model(str(arm26 / "arm26.osim"), opensim_2_muscles=True)
     motion = str(arm26 / "inverse_kinematics" / "arm26_InverseKinematics.mot")
-    linear = flatsos.track(model, motion)
-    squared = flatsos.track(model, motion, effort="excitation_squared")
+    linear = flatsos.track(model, motion, effort=None)
+    squared = flatsos.track(model, motion)  # the default effort
     assert squared["success"], squared["message"]
     assert squared["plan_failures"] == 0 and squared["clamped_samples"] == 0
     assert squared["excitation_squared_integral"] < 0.75 * linear["excitation_squared_integral"]

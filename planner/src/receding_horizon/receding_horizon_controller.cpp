@@ -189,7 +189,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   rec.used_previous_plan = false;
   rec.bounds_imposed = false;
   rec.clamped_samples = 0;
-  rec.plan_seconds = rec.grid_seconds = rec.slp_seconds = rec.bounds_seconds = 0.0;
+  rec.plan_seconds = rec.grid_seconds = rec.slp_seconds = rec.bounds_seconds = rec.effort_seconds = 0.0;
   rec.free_start_message.clear();
   plan_options_.reference_time_s = t;  // a tracked reference's time (unused for a set point)
   if (observer_.enabled()) {
@@ -207,6 +207,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     rec.grid_seconds = step_.grid_seconds;
     rec.slp_seconds = step_.slp.wall_seconds;
     rec.bounds_seconds = step_.bounds_seconds;
+    rec.effort_seconds = step_.effort_seconds;
     rec.status = step_.status;
     rec.message = step_.message;
     rec.bounds_imposed = step_.bounds_imposed;

@@ -109,7 +109,7 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.status = SolveStatus::Failed;
   step.message.clear();
   step.first_period_sampled = false;
-  step.grid_seconds = step.bounds_seconds = 0.0;
+  step.grid_seconds = step.bounds_seconds = step.effort_seconds = 0.0;
   if (o.reference) fit_tracking_path(o.horizon_s, std::min(o.tracking_correction_s, o.horizon_s), q, qd, o.start_qdd, o.start_qddd, o.reference, o.reference_time_s, step.path);
   else fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
   step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation
@@ -192,9 +192,11 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.message = step.slp.message;
   const double before_bounds = wall.seconds();
   detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
+  const double before_effort = wall.seconds();
   detail::minimize_step_effort(flat, workspace, o, step);
   step.wall_seconds = wall.seconds();
-  step.bounds_seconds = step.wall_seconds - before_bounds;
+  step.bounds_seconds = before_effort - before_bounds;
+  step.effort_seconds = step.wall_seconds - before_effort;
 }
 
 }  // namespace flatsos::planner

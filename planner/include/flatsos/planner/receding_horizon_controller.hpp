@@ -91,7 +91,7 @@ struct RecedingHorizonRecord {
   double plan_seconds = 0.0;         ///< the planning step
   /// Its parts (the last step planned this period): the horizon's grid and rows, the SLP, the
   /// first period's excitation bounds (RecedingHorizonStep's timings).
-  double grid_seconds = 0.0, slp_seconds = 0.0, bounds_seconds = 0.0;
+  double grid_seconds = 0.0, slp_seconds = 0.0, bounds_seconds = 0.0, effort_seconds = 0.0;
   double wall_seconds = 0.0;         ///< the whole control step (observer, plan, excitations)
 };
 
