@@ -67,6 +67,24 @@ void validate(const RecedingHorizonOptions& o, const FlatOutputMap& flat) {
   }
 }
 
+namespace {
+// Takes the last step's effort optimum as this step's alpha when it meets the reserve rows.
+bool start_from_last_optimum(RecedingHorizonStep& step) {
+  const Eigen::VectorXd& last = step.buffers.effort_alpha;
+  if (last.size() != step.reserve_rows.cols() || !last.allFinite() || last.minCoeff() < 0.0) return false;
+  const double scale = 1.0 + step.bound_N.cwiseAbs().maxCoeff();
+  if ((step.reserve_rows * last - step.bound_N).minCoeff() < -1e-9 * scale) return false;
+  step.slp.alpha = last;
+  step.slp.status = SolveStatus::Solved;
+  step.slp.message.clear();
+  step.slp.used_fallback = false;
+  step.slp.iterations = 0;
+  step.slp.cost_N = step.buffers.slp.costOf(last);
+  step.slp.wall_seconds = 0.0;
+  return true;
+}
+}  // namespace
+
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
                                                const Eigen::VectorXd& qd, const RecedingHorizonOptions& o) {
   return plan_receding_horizon_step(flat, q, qd, o, RecedingHorizonStudyOptions{});
@@ -186,8 +204,14 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
     if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortPricingWeights();
   }
   step.grid_seconds = wall.seconds();
-  if (study.slp_by_ipopt) solve_slp_by_ipopt(step.reserve_rows, step.bound_N, study.warm_start, step.buffers.slp, step.slp);
-  else solve_slp(step.reserve_rows, step.bound_N, o.solver, step.buffers.slp, step.slp);
+  if (o.effort && !study.slp_by_ipopt && start_from_last_optimum(step)) {
+    // A nonlinear effort's last optimum meets this step's reserve rows: its sequential QP starts
+    // there (the first period's bounds are checked as always), and the SLP's vertex is not needed.
+  } else if (study.slp_by_ipopt) {
+    solve_slp_by_ipopt(step.reserve_rows, step.bound_N, study.warm_start, step.buffers.slp, step.slp);
+  } else {
+    solve_slp(step.reserve_rows, step.bound_N, o.solver, step.buffers.slp, step.slp);
+  }
   step.status = step.slp.status;
   step.message = step.slp.message;
   const double before_bounds = wall.seconds();
