@@ -24,13 +24,9 @@ nlohmann::json timing_with(const planner::FlatOutputMap& flat, std::shared_ptr<c
   options.plan.reserves_N = Eigen::VectorXd::Constant(flat.numMuscles(), 1.0);
   options.plan.effort = effort;
   options.plan.tracking_correction_s = 0.06;  // track_motion's and flatsos.track's
-  const double t0 = reference->startTime_s(), seconds_of_motion = reference->endTime_s() - t0;
-  const planner::Jet start = reference->jet(t0, 2);
-  SimTK::State initial = planner::start_state(flat, start.col(0), start.col(1), std::nullopt, options.plan.reserves_N);
-  initial.setTime(t0);
-  plugin::ClosedLoopOptions loop;
-  loop.integrator = plugin::IntegratorKind::MuscleRosenbrock;
-  loop.accuracy = 1e-5;
+  const double seconds_of_motion = reference->endTime_s() - reference->startTime_s();
+  const SimTK::State initial = planner::tracking_start_state(flat, *reference, options.plan.reserves_N);
+  const plugin::ClosedLoopOptions loop = planner::tracking_loop_options();
 
   std::vector<double> step_s, plan_s, grid_s, slp_s, bounds_s, effort_s;
   planner::TrackingRun run;
@@ -69,9 +65,8 @@ nlohmann::json tracking_timing(int repetitions) {
       plugin::import_opensim_file(arm26 + "arm26.osim", false, true).model);
   const auto motion = planner::read_motion_for(*model, arm26 + "inverse_kinematics/arm26_InverseKinematics.mot");
   auto reference = std::make_shared<const planner::JointReference>(planner::JointReference::fromMotion(*model, motion));
-  std::vector<Eigen::VectorXd> postures;
-  for (double t : motion.report_times_s) postures.push_back(reference->jet(t, 1).col(0));
-  const planner::FlatOutputMap flat = planner::flat_outputs_for_task(model, postures);
+  const planner::FlatOutputMap flat =
+      planner::flat_outputs_for_task(model, planner::reference_postures(*reference, motion.report_times_s));
   return {{"model", "arm26.osim, OpenSim 2.x's muscles, fitted paths (planner and plant)"},
           {"seconds_of_motion", reference->endTime_s() - reference->startTime_s()},
           {"control_period_s", planner::RecedingHorizonControllerOptions{}.control_period_s},

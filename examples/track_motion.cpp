@@ -26,9 +26,7 @@ namespace {
 // The flat outputs over the postures the motion visits (the model's own ranges first).
 fpl::FlatOutputMap motion_flat_outputs(std::shared_ptr<const fp::MusculoskeletalModel> model,
                                        const fp::ProcessedCoordinates& motion, const fpl::JointReference& reference) {
-  std::vector<Eigen::VectorXd> postures;
-  for (double t : motion.report_times_s) postures.push_back(reference.jet(t, 1).col(0));
-  fpl::FlatOutputMap flat = fpl::flat_outputs_for_task(model, postures);
+  fpl::FlatOutputMap flat = fpl::flat_outputs_for_task(model, fpl::reference_postures(reference, motion.report_times_s));
   if (!flat.flatOutputs().region.empty())
     std::cout << "track_motion: no flat outputs satisfy Assumption 1 over the joint ranges; chosen over the motion's region "
               << fp::describe_region(model->description(), flat.flatOutputs().region) << "\n";
@@ -102,15 +100,10 @@ int main(int argc, char** argv) {
     }
     fpl::RecedingHorizonController controller(flat, options, plant);
     const double t0 = reference->startTime_s();
-    const fpl::Jet start = reference->jet(t0, 2);
-    SimTK::State s = fpl::start_state(plant ? flat.withModel(plant) : flat, start.col(0), start.col(1), std::nullopt,
-                                      options.plan.reserves_N);
-    s.setTime(t0);
-    fp::ClosedLoopOptions loop;
-    loop.integrator = fp::IntegratorKind::MuscleRosenbrock;
-    loop.accuracy = 1e-5;
+    const SimTK::State s = fpl::tracking_start_state(plant ? flat.withModel(plant) : flat, *reference, options.plan.reserves_N);
     const double tolerance_rad = tolerance_deg * ex::kRadPerDeg;
-    const fpl::TrackingRun run = fpl::run_tracking(controller, s, loop, tolerance_rad, tolerance_deg * 1e-3);
+    const fpl::TrackingRun run =
+        fpl::run_tracking(controller, s, fpl::tracking_loop_options(), tolerance_rad, tolerance_deg * 1e-3);
 
     std::vector<double> step_seconds;
     nlohmann::json free_starts = nlohmann::json::array();  // periods whose plan could not start from the muscles

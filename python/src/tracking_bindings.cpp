@@ -43,8 +43,7 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
     py::gil_scoped_release release;
     const plugin::ProcessedCoordinates motion = planner::read_motion_for(model, motion_file, cutoff_hz);
     auto reference = std::make_shared<const planner::JointReference>(planner::JointReference::fromMotion(model, motion));
-    std::vector<Eigen::VectorXd> postures;
-    for (double t : motion.report_times_s) postures.push_back(reference->jet(t, 1).col(0));
+    const std::vector<Eigen::VectorXd> postures = planner::reference_postures(*reference, motion.report_times_s);
     auto flat = flat_for_task(m, postures);
     // A linear effort prices the steps' LP (the map's); a nonlinear one is each step's sequential QP.
     const bool linear = chosen && chosen->tendonForceWeights();
@@ -53,14 +52,8 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
     options.plan.reference = reference;
     planner::RecedingHorizonController controller(planning, options, plant.is_none() ? nullptr : given_plant.model);
     auto plant_flat = plant.is_none() ? flat : flat_for_task(given_plant, postures);
-    const double t0 = reference->startTime_s();
-    const planner::Jet start = reference->jet(t0, 2);
-    SimTK::State initial = planner::start_state(*plant_flat, start.col(0), start.col(1), std::nullopt, options.plan.reserves_N);
-    initial.setTime(t0);
-    plugin::ClosedLoopOptions loop;
-    loop.integrator = plugin::IntegratorKind::MuscleRosenbrock;
-    loop.accuracy = 1e-5;
-    run = planner::run_tracking(controller, initial, loop, tolerance, 1e-3);
+    const SimTK::State initial = planner::tracking_start_state(*plant_flat, *reference, options.plan.reserves_N);
+    run = planner::run_tracking(controller, initial, planner::tracking_loop_options(), tolerance, 1e-3);
     steps = controller.steps();
     plan_failures = controller.planFailures();
     clamped = controller.clampedSamples();

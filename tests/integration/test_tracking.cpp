@@ -47,9 +47,8 @@ struct Tracked {
 Tracked track_arm26(double plant_strength, std::shared_ptr<const fpl::Effort> effort = nullptr) {
   auto model = arm26_opensim2();
   auto reference = std::make_shared<const fpl::JointReference>(fpl::JointReference::fromMotion(*model, tutorial_motion()));
-  std::vector<Eigen::VectorXd> postures;
-  for (double t : tutorial_motion().report_times_s) postures.push_back(reference->jet(t, 1).col(0));
-  const fpl::FlatOutputMap flat = fpl::flat_outputs_for_task(model, postures);
+  const fpl::FlatOutputMap flat =
+      fpl::flat_outputs_for_task(model, fpl::reference_postures(*reference, tutorial_motion().report_times_s));
   fpl::RecedingHorizonControllerOptions o;
   o.plan.reference = reference;
   o.plan.reserves_N = Eigen::VectorXd::Constant(model->numMuscles(), 1.0);
@@ -62,15 +61,9 @@ Tracked track_arm26(double plant_strength, std::shared_ptr<const fpl::Effort> ef
     plant = std::make_shared<const fp::MusculoskeletalModel>(std::move(d));
   }
   fpl::RecedingHorizonController controller(flat, o, plant);
-  const double t0 = reference->startTime_s();
-  const fpl::Jet r0 = reference->jet(t0, 2);
-  SimTK::State s = fpl::start_state(plant ? flat.withModel(plant) : flat, r0.col(0), r0.col(1), std::nullopt, o.plan.reserves_N);
-  s.setTime(t0);
-  fp::ClosedLoopOptions loop;
-  loop.integrator = fp::IntegratorKind::MuscleRosenbrock;
-  loop.accuracy = 1e-5;
+  const SimTK::State s = fpl::tracking_start_state(plant ? flat.withModel(plant) : flat, *reference, o.plan.reserves_N);
   Tracked out;
-  out.run = fpl::run_tracking(controller, s, loop, 0.5 * kDeg);
+  out.run = fpl::run_tracking(controller, s, fpl::tracking_loop_options(), 0.5 * kDeg);
   out.clamps = controller.clampedSamples();
   out.plan_failures = controller.planFailures();
   out.steps = controller.steps();
@@ -270,13 +263,8 @@ TEST(Tracking, APlantOfOtherStrengthsKeepsEveryTendonTautOverTheFirstPeriod) {
   for (std::size_t j = 0; j < d.muscles.size(); ++j) d.muscles[j].parameters.max_isometric_force_N *= factors[j];
   auto plant = std::make_shared<const fp::MusculoskeletalModel>(std::move(d));
   fpl::RecedingHorizonController controller(flat, o, plant);
-  const fpl::Jet r0 = reference->jet(reference->startTime_s(), 2);
-  SimTK::State s = fpl::start_state(flat.withModel(plant), r0.col(0), r0.col(1), std::nullopt, o.plan.reserves_N);
-  s.setTime(reference->startTime_s());
-  fp::ClosedLoopOptions loop;
-  loop.integrator = fp::IntegratorKind::MuscleRosenbrock;
-  loop.accuracy = 1e-5;
-  const fpl::TrackingRun run = fpl::run_tracking(controller, s, loop, 2.0 * kDeg);
+  const SimTK::State s = fpl::tracking_start_state(flat.withModel(plant), *reference, o.plan.reserves_N);
+  const fpl::TrackingRun run = fpl::run_tracking(controller, s, fpl::tracking_loop_options(), 2.0 * kDeg);
   EXPECT_TRUE(run.success()) << (run.failures.empty() ? "" : run.failures.front());
   EXPECT_EQ(controller.planFailures(), 0);
   int free_starts = 0;

@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "flatsos/planner/rest_state.hpp"
+
 namespace flatsos::planner {
 
 namespace {
@@ -63,6 +65,29 @@ TrackingRun run_tracking(RecedingHorizonController& controller, const SimTK::Sta
     run.failures.push_back(why.str());
   }
   return run;
+}
+
+std::vector<Eigen::VectorXd> reference_postures(const JointReference& reference, const std::vector<double>& times_s) {
+  std::vector<Eigen::VectorXd> postures;
+  postures.reserve(times_s.size());
+  for (double t : times_s) postures.push_back(reference.jet(t, 1).col(0));
+  return postures;
+}
+
+SimTK::State tracking_start_state(const FlatOutputMap& plant_flat, const JointReference& reference,
+                                  const Eigen::VectorXd& reserves_N) {
+  const double t0 = reference.startTime_s();
+  const Jet start = reference.jet(t0, 2);
+  SimTK::State s = start_state(plant_flat, start.col(0), start.col(1), std::nullopt, reserves_N);
+  s.setTime(t0);
+  return s;
+}
+
+plugin::ClosedLoopOptions tracking_loop_options() {
+  plugin::ClosedLoopOptions loop;
+  loop.integrator = plugin::IntegratorKind::MuscleRosenbrock;
+  loop.accuracy = 1e-5;
+  return loop;
 }
 
 }  // namespace flatsos::planner

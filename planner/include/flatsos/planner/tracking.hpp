@@ -35,4 +35,15 @@ TrackingRun run_tracking(RecedingHorizonController& controller, const SimTK::Sta
                          const plugin::ClosedLoopOptions& options,
                          double tolerance_rad = 3.14159265358979323846 / 180.0, double tolerance_m = 1e-3);
 
+/// What a tracking run is set up with (the programs, flatsos.track, the bench and the tests alike):
+/// the postures the reference visits at `times_s` (to choose flat outputs over:
+/// flat_outputs_for_task).
+std::vector<Eigen::VectorXd> reference_postures(const JointReference& reference, const std::vector<double>& times_s);
+/// The plant's state on the reference at its first time (position and speed), its muscles at the
+/// minimum-effort rest there with `reserves_N` (start_state), the time set.
+SimTK::State tracking_start_state(const FlatOutputMap& plant_flat, const JointReference& reference,
+                                  const Eigen::VectorXd& reserves_N);
+/// The closed loop's simulation: each muscle integrated on its own (MuscleRosenbrock) to 1e-5.
+plugin::ClosedLoopOptions tracking_loop_options();
+
 }  // namespace flatsos::planner
