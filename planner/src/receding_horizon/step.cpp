@@ -128,6 +128,8 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.message.clear();
   step.first_period_sampled = false;
   step.grid_seconds = step.bounds_seconds = step.effort_seconds = 0.0;
+  step.bounds_imposed = false;
+  step.bound_iterations = step.bound_lp_pivots = 0;
   if (o.reference) fit_tracking_path(o.horizon_s, std::min(o.tracking_correction_s, o.horizon_s), q, qd, o.start_qdd, o.start_qddd, o.reference, o.reference_time_s, step.path);
   else fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
   step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation
@@ -215,12 +217,15 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.status = step.slp.status;
   step.message = step.slp.message;
   const double before_bounds = wall.seconds();
-  detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
-  const double before_effort = wall.seconds();
-  detail::minimize_step_effort(flat, workspace, o, step);
+  // A nonlinear effort's sequential QP keeps the first period's bounds itself once it starts
+  // inside them; the bounds' sequential LP moves alpha there first where it does not.
+  if (!o.effort || !detail::minimize_step_effort(flat, workspace, o, step)) {
+    detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
+    step.bounds_seconds = wall.seconds() - before_bounds;
+    if (o.effort) detail::minimize_step_effort(flat, workspace, o, step);
+  }
   step.wall_seconds = wall.seconds();
-  step.bounds_seconds = before_effort - before_bounds;
-  step.effort_seconds = step.wall_seconds - before_effort;
+  step.effort_seconds = step.wall_seconds - before_bounds - step.bounds_seconds;
 }
 
 }  // namespace flatsos::planner

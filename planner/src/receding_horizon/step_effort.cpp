@@ -23,6 +23,10 @@ constexpr double kRelativeDecrease = 1e-8;
 // A trial alpha counts as inside the bounds while every row keeps half its margin (the samples
 // then stay strictly inside; bound_rows.hpp).
 constexpr double kRowTolerance = 0.5 * kSampleMargin;
+// A start may leave its rows by this much in all (row_violation): the last step's optimum, at
+// the rows it was pressed against, leaves this step's by 0.02-0.03 on arm26, and the first QP
+// steps clear them. Farther out the bounds' sequential LP moves alpha in first.
+constexpr double kMaxStartViolation = 1e-1;
 
 // The effort over the horizon's grid (trapezoid weights) with its gradient and Gauss-Newton
 // Hessian in alpha (each muscle's term's second derivatives times the outer products of the
@@ -86,18 +90,22 @@ std::vector<BoundPoint> effort_points(const FlatOutputMap& flat, plugin::ModelWo
   return step_points(flat, step, grid, h, count);
 }
 
-// Inside every reserve row (to their tolerance) and every bound row.
-bool inside(const RecedingHorizonStep& step, const NonlinearRows* rows, const Eigen::VectorXd& alpha) {
-  if (alpha.minCoeff() < 0.0) return false;
+// How far alpha leaves its rows: the sum of each bound row's excess beyond kRowTolerance below 0
+// (activation units), plus the reserve rows' and alpha >= 0's excess over the largest reserve
+// bound (0: inside every row).
+double row_violation(const RecedingHorizonStep& step, const NonlinearRows* rows, const Eigen::VectorXd& alpha) {
   const double scale = 1.0 + step.bound_N.cwiseAbs().maxCoeff();
-  if ((step.reserve_rows * alpha - step.bound_N).minCoeff() < -1e-9 * scale) return false;
-  if (!rows) return true;
-  const BoundRowsAt at = (*rows)(alpha, false);
-  return at.value.empty() || *std::min_element(at.value.begin(), at.value.end()) >= -kRowTolerance;
+  double excess = (-alpha).cwiseMax(0.0).sum() / scale;
+  for (Eigen::Index i = 0; i < step.bound_N.size(); ++i)
+    excess += std::max(0.0, step.bound_N[i] - step.reserve_rows.row(i).dot(alpha) - 1e-9 * scale) / scale;
+  if (rows)
+    for (const double r : (*rows)(alpha, false).value) excess += std::max(0.0, -r - kRowTolerance);
+  return excess;
 }
 
 // The QP's rows J d >= lower: the bound rows linearized at alpha, the reserve rows, alpha + d >= 0.
-// Reserve rows and alpha >= 0 hold at alpha (inside), so d = 0 meets every row.
+// A violated bound row asks the step to clear it; one that alpha does not move (rows at t = 0 of
+// a plan that starts from the muscles' state) only not to get worse.
 void qp_rows(const RecedingHorizonStep& step, const NonlinearRows* rows, const Eigen::VectorXd& alpha, Eigen::MatrixXd& J,
              Eigen::VectorXd& lower) {
   const Eigen::Index p = alpha.size(), reserves = step.reserve_rows.rows();
@@ -106,44 +114,48 @@ void qp_rows(const RecedingHorizonStep& step, const NonlinearRows* rows, const E
   const auto bound_rows = static_cast<Eigen::Index>(at.value.size());
   J.setZero(bound_rows + reserves + p, p);
   lower.resize(J.rows());
-  // A row alpha left slightly violated (within kRowTolerance; rows at t = 0 of a plan that starts
-  // from the muscles' state do not depend on alpha at all) must only not get worse.
-  for (Eigen::Index r = 0; r < bound_rows; ++r) lower[r] = std::min(-at.value[static_cast<std::size_t>(r)], 0.0);
   for (const Eigen::Triplet<double>& e : at.jacobian) J(e.row(), e.col()) += e.value();
+  for (Eigen::Index r = 0; r < bound_rows; ++r) {
+    lower[r] = -at.value[static_cast<std::size_t>(r)];
+    if (J.row(r).cwiseAbs().maxCoeff() <= 1e-12) lower[r] = std::min(lower[r], 0.0);
+  }
   J.middleRows(bound_rows, reserves) = step.reserve_rows;
-  lower.segment(bound_rows, reserves) = (step.bound_N - step.reserve_rows * alpha).cwiseMin(0.0);
+  lower.segment(bound_rows, reserves) = step.bound_N - step.reserve_rows * alpha;
   J.bottomRows(p).setIdentity();
   lower.tail(p) = -alpha;
 }
 
 }  // namespace
 
-void minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
                           RecedingHorizonStep& step) {
   step.effort_iterations = 0;
   step.effort_value = 0.0;
-  if (step.status != SolveStatus::Solved || !o.effort) return;
+  if (step.status != SolveStatus::Solved || !o.effort) return true;
   const Effort& effort = *o.effort;
+  const PeriodExcitationBounds& b = o.excitation_bounds;
+  // The first period's samples at the SLP's alpha: its torque grid for the bound rows.
+  if (b.enforce && !sample_period(flat, workspace, b, step)) return false;
   std::vector<double> weights_s;
   const std::vector<BoundPoint> points = effort_points(flat, workspace, o, step, weights_s);
-  const PeriodExcitationBounds& b = o.excitation_bounds;
   std::vector<BoundPoint> period;
-  if (b.enforce) period = period_points(flat, b, step);  // the period's torque grid: impose_period_bounds sampled it
+  if (b.enforce) period = period_points(flat, b, step);
   const NonlinearRows bound_rows = bound_rows_of(flat, period, activation_minima(flat, 0.0), kSampleMargin);
   const NonlinearRows* rows = b.enforce ? &bound_rows : nullptr;
 
-  // Start from the SLP's alpha or from the previous step's optimum, usually close to this one's,
-  // whichever costs less (where the effort can be evaluated at all).
-  Eigen::VectorXd alpha = step.slp.alpha;
+  // Start from the SLP's alpha or from the previous step's optimum, usually close to this one's:
+  // the one nearer the bound rows, then the one that costs less.
+  Eigen::VectorXd alpha;
   EffortModel model, trial;
-  bool valid = evaluate(flat, effort, points, weights_s, alpha, false, model);
-  const Eigen::VectorXd& previous = step.buffers.effort_alpha;
-  if (previous.size() == alpha.size() && inside(step, rows, previous) &&
-      evaluate(flat, effort, points, weights_s, previous, false, trial) && (!valid || trial.value < model.value)) {
-    alpha = previous;
-    valid = true;
+  double violation = kMaxStartViolation;
+  for (const Eigen::VectorXd* candidate : {&step.slp.alpha, &step.buffers.effort_alpha}) {
+    if (candidate->size() != step.slp.alpha.size()) continue;
+    const double v = row_violation(step, rows, *candidate);
+    if (!(v <= violation) || !evaluate(flat, effort, points, weights_s, *candidate, false, trial)) continue;
+    if (alpha.size() && v == violation && trial.value >= model.value) continue;
+    alpha = *candidate, violation = v, model.value = trial.value;
   }
-  if (!valid) return;  // the SLP's plan stands
+  if (alpha.size() == 0) return false;  // the first period's bounds must move alpha first
   evaluate(flat, effort, points, weights_s, alpha, true, model);
   DenseQpWorkspace qp;
   Eigen::MatrixXd J;
@@ -157,23 +169,28 @@ void minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     const DenseQpResult r = solve_dense_qp(H, model.gradient, J, lower, qp, d);
     if (!r.solved) break;
     const double predicted = model.gradient.dot(d) + 0.5 * d.dot(model.hessian * d);
-    if (!(predicted < -kRelativeDecrease * (1e-12 + std::abs(model.value)))) break;
-    double s = 1.0;
+    if (violation == 0.0 && !(predicted < -kRelativeDecrease * (1e-12 + std::abs(model.value)))) break;
+    // Inside the rows, a step must keep them and lower the effort (Armijo); outside, come closer.
+    double s = 1.0, trial_violation = 0.0;
     bool accepted = false;
     for (int k = 0; k < kMaxHalvings && !accepted; ++k, s *= 0.5) {
       trial_alpha = alpha + s * d;
-      accepted = inside(step, rows, trial_alpha) && evaluate(flat, effort, points, weights_s, trial_alpha, false, trial) &&
-                 trial.value <= model.value + 1e-4 * s * predicted;
+      trial_violation = row_violation(step, rows, trial_alpha);
+      accepted = (violation == 0.0 ? trial_violation == 0.0 : trial_violation < violation) &&
+                 evaluate(flat, effort, points, weights_s, trial_alpha, false, trial) &&
+                 (violation > 0.0 || trial.value <= model.value + 1e-4 * s * predicted);
     }
     if (!accepted) break;
-    alpha = trial_alpha;
+    alpha = trial_alpha, violation = trial_violation;
     evaluate(flat, effort, points, weights_s, alpha, true, model);
   }
+  if (violation > 0.0) return false;  // could not reach the bounds from here
   step.slp.alpha = alpha;
+  step.slp.cost_N = step.buffers.slp.costOf(alpha);
   step.effort_value = model.value;
   step.buffers.effort_alpha = alpha;
-  step.first_period_sampled = false;
-  if (b.enforce) step.first_period_sampled = sample_period(flat, workspace, b, step) && worst_excess(flat, step).value <= 0.0;
+  step.first_period_sampled = b.enforce && sample_period(flat, workspace, b, step) && worst_excess(flat, step).value <= 0.0;
+  return true;
 }
 
 }  // namespace flatsos::planner::detail

@@ -13,12 +13,14 @@
 
 namespace flatsos::planner::detail {
 
-/// From a solved step whose alpha meets its reserve rows and first-period bounds (the SLP's
-/// optimum moved inside them), moves alpha to the minimum of options.effort over the horizon's
-/// grid: step.slp.alpha, effort_value, effort_iterations and the first period's samples updated.
-/// Starts from the previous step's effort optimum instead when that meets this step's rows and
-/// costs less. Leaves the step as it was where the effort cannot be evaluated at its alpha.
-void minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
+/// Moves a solved step's alpha to the minimum of options.effort over the horizon's grid, keeping
+/// its reserve rows and first-period bounds: step.slp.alpha, effort_value, effort_iterations and
+/// the first period's samples updated. Starts from the step's alpha (the SLP's) or the previous
+/// step's optimum, whichever meets every row and costs less. Returns false, the step unchanged,
+/// when neither does (or the effort cannot be evaluated at them): the first period's bounds
+/// must move alpha inside first (impose_period_bounds), then call again. True (nothing to do)
+/// for a step that is not solved or without options.effort.
+bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
                           RecedingHorizonStep& step);
 
 }  // namespace flatsos::planner::detail
