@@ -20,8 +20,8 @@ sanitize() {
   local status=0
   FLATSOS_BUILD_DIR="$root/build-sanitize" FLATSOS_BUILD_TYPE=RelWithDebInfo \
     "$root/scripts/build.sh" -DFLATSOS_SANITIZE=ON
-  # The longest optimizations run in the Release suite only: under the sanitizers each took
-  # 50-200 s and their code is exercised by the shorter tests (CI's time limit is 90 min).
+  # The longest runs are in the Release suite only: under the sanitizers each took 50-280 s and
+  # their code is exercised by the shorter tests (CI's time limit is 90 min).
   local long_runs=(
     OpenSimModels.TheRecedingHorizonLoopReachesItsTargetAlsoOnAWeakerOrStrongerPlant
     FreePath.TheOptimizedPathsPlanIsValidCheaperAndNoSmallMoveLowersItsCost
@@ -35,6 +35,8 @@ sanitize() {
     FreePath.AStartPlanInACoarserNestedBasisLeadsToTheSamePlan
     CollocationReference.TheFlatnessFreePathComesWithinTwoPercentWithAnExecutablePlan
     StaticOptimization.Arm26AgreesWithOpenSimsStaticOptimization
+    Arm26OpenSim2.TheTutorialsForwardSimulationIsReproducedWithOpenSim2MusclesAndGeometricPaths  # 276 s
+    package_install_and_consume  # packaging, not memory: the Release suite checks it
   )
   # The command-line tests skip their longest runs too (the left leg's controller).
   export FLATSOS_SANITIZER_RUN=1
