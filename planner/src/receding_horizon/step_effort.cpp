@@ -6,7 +6,6 @@
 
 #include "bounds/sequential_lp.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
-#include "flatsos/plugin/stopwatch.hpp"
 #include "numerics/dense_qp.hpp"
 #include "receding_horizon/period_bounds.hpp"
 
@@ -28,8 +27,7 @@ constexpr double kRowTolerance = 0.5 * kSampleMargin;
 // steps clear them. Farther out the bounds' sequential LP moves alpha in first.
 constexpr double kMaxStartViolation = 1e-1;
 
-// The effort over the horizon's grid (trapezoid weights) with its gradient and Gauss-Newton
-// Hessian in alpha (each muscle's term's second derivatives times the outer products of the
+// The effort over the horizon's grid with its gradient and Gauss-Newton Hessian in alpha (each muscle's term's second derivatives times the outer products of the
 // gradients of F, a and n).
 struct EffortModel {
   double value = 0.0;
@@ -74,6 +72,15 @@ bool evaluate(const FlatOutputMap& flat, const Effort& effort, const std::vector
   return std::isfinite(out.value);
 }
 
+// The torques the step's muscles produce (its path's, less the offset) at times i h, i < count.
+void muscle_torques(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+                    const RecedingHorizonStep& step, double h_s, int count, TorqueJetGrid& grid) {
+  flat.torqueJetsOnGrid(
+      workspace, [&](double t, Jet& jet) { rest_held_jet(step.path, t, jet); }, 0.0, h_s, count, grid);
+  if (o.torque_offset_N_m.size())
+    for (TorqueJet& tj : grid.jets) tj.tau.col(0) -= o.torque_offset_N_m;
+}
+
 // The horizon's grid for the effort: `grid_points` times i T / grid_points, each weighing T /
 // grid_points (the horizon's end, where the plan's torques jump to the rest that follows it, is
 // left out).
@@ -81,13 +88,9 @@ std::vector<BoundPoint> effort_points(const FlatOutputMap& flat, plugin::ModelWo
                                       const RecedingHorizonOptions& o, RecedingHorizonStep& step, std::vector<double>& weights_s) {
   const int count = o.grid_points;
   const double h = o.horizon_s / count;
-  TorqueJetGrid& grid = step.buffers.effort_grid;
-  flat.torqueJetsOnGrid(
-      workspace, [&](double t, Jet& jet) { rest_held_jet(step.path, t, jet); }, 0.0, h, count, grid);
-  if (o.torque_offset_N_m.size())
-    for (TorqueJet& tj : grid.jets) tj.tau.col(0) -= o.torque_offset_N_m;
+  muscle_torques(flat, workspace, o, step, h, count, step.buffers.effort_grid);
   weights_s.assign(static_cast<std::size_t>(count), h);
-  return step_points(flat, step, grid, h, count);
+  return step_points(flat, step, step.buffers.effort_grid, h, count);
 }
 
 // How far alpha leaves its rows: the sum of each bound row's excess beyond kRowTolerance below 0
@@ -134,12 +137,13 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   if (step.status != SolveStatus::Solved || !o.effort) return true;
   const Effort& effort = *o.effort;
   const PeriodExcitationBounds& b = o.excitation_bounds;
-  // The first period's samples at the SLP's alpha: its torque grid for the bound rows.
-  if (b.enforce && !sample_period(flat, workspace, b, step)) return false;
   std::vector<double> weights_s;
   const std::vector<BoundPoint> points = effort_points(flat, workspace, o, step, weights_s);
   std::vector<BoundPoint> period;
-  if (b.enforce) period = period_points(flat, b, step);
+  if (b.enforce) {  // the first period's samples, where sample_period puts them
+    muscle_torques(flat, workspace, o, step, b.period_s / (b.samples - 1), b.samples, step.buffers.period.torque_grid);
+    period = period_points(flat, b, step);
+  }
   const NonlinearRows bound_rows = bound_rows_of(flat, period, activation_minima(flat, 0.0), kSampleMargin);
   const NonlinearRows* rows = b.enforce ? &bound_rows : nullptr;
 
