@@ -23,7 +23,7 @@ nlohmann::json timing_with(const planner::FlatOutputMap& flat, std::shared_ptr<c
   options.plan.reference = reference;
   options.plan.reserves_N = Eigen::VectorXd::Constant(flat.numMuscles(), 1.0);
   options.plan.effort = effort;
-  options.plan.tracking_correction_s = 0.06;  // track_motion's and flatsos.track's
+  options.plan.tracking_correction_s = planner::tracking_correction_for(effort.get());  // the programs'  
   const double seconds_of_motion = reference->endTime_s() - reference->startTime_s();
   const SimTK::State initial = planner::tracking_start_state(flat, *reference, options.plan.reserves_N);
   const plugin::ClosedLoopOptions loop = planner::tracking_loop_options();

@@ -52,7 +52,6 @@ int main(int argc, char** argv) {
   std::string model_path, motion_path, out_dir = "results/track_motion", effort_name = "excitation_squared";
   double cutoff_hz = 6.0, tolerance_deg = 1.0, plant_strength = 1.0, reserve_N = 1.0;
   fpl::RecedingHorizonControllerOptions options;
-  options.plan.tracking_correction_s = 0.06;  // with the default squared effort (receding_horizon_step.hpp)
   ex::OpenSimModelOptions osim;
   app.add_option("--model", model_path, "model file (JSON), or an OpenSim model (.osim) imported on the way")->required();
   app.add_option("--coordinates", motion_path, "measured motion: coordinates table (.mot or .sto)")->required()->check(CLI::ExistingFile);
@@ -62,8 +61,9 @@ int main(int argc, char** argv) {
   app.add_option("--horizon-s", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--period-s", options.control_period_s, "control period, s")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--correction-s", options.plan.tracking_correction_s,
-                 "time over which each plan removes the measured offset from the motion, s (at most the horizon)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+                 "time over which each plan removes the measured offset from the motion, s (at most the horizon; "
+                 "default 0.06 with a squared or cubed effort, 0.075 with tendon_force)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--observer-gain-per-s", options.disturbance_observer_gain_per_s,
                  "disturbance observer gain in [0, 1000] 1/s (0: none)")
       ->capture_default_str()->check(CLI::Range(0.0, 1000.0));
@@ -83,6 +83,9 @@ int main(int argc, char** argv) {
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
   try {
     if (options.control_period_s > options.plan.horizon_s) throw CLI::ValidationError("--period-s", "must not exceed --horizon-s");
+    if (effort_name != "tendon_force") options.plan.effort = fpl::effort_named(effort_name);
+    if (!app.count("--correction-s"))
+      options.plan.tracking_correction_s = std::min(fpl::tracking_correction_for(options.plan.effort.get()), options.plan.horizon_s);
     if (options.plan.tracking_correction_s > options.plan.horizon_s)
       throw CLI::ValidationError("--correction-s", "must not exceed --horizon-s");
     const auto model = ex::load_model(model_path, "track_motion", osim);
@@ -90,7 +93,6 @@ int main(int argc, char** argv) {
     auto reference = std::make_shared<const fpl::JointReference>(fpl::JointReference::fromMotion(*model, motion));
     const fpl::FlatOutputMap flat = motion_flat_outputs(model, motion, *reference);
     options.plan.reference = reference;
-    if (effort_name != "tendon_force") options.plan.effort = fpl::effort_named(effort_name);
     options.plan.reserves_N = Eigen::VectorXd::Constant(model->numMuscles(), reserve_N);
     std::shared_ptr<const fp::MusculoskeletalModel> plant;
     if (plant_strength != 1.0) {

@@ -24,7 +24,9 @@ The study description (a dict, or a JSON file on the command line):
                 (flatsos.track) on a plant whose muscles are the sample's strengths and the
                 controller's the model's: {"coordinates": motion file (.mot or .sto),
                 "options": track's keywords in its units (horizon, period, correction in s,
-                observer_gain in 1/s, reserves in N, cutoff_hz, tolerance in rad)}. The table then has each joint's RMS and largest
+                observer_gain in 1/s, reserves in N, cutoff_hz, tolerance in rad; effort: a
+                name such as "activation_squared", or null for the model's linear effort;
+                default "excitation_squared")}. The table then has each joint's RMS and largest
                 tracking error (deg; a slider's m) and the integral of the summed squared
                 excitations; "plan" and "target_deg" do not apply.
 Samples are drawn on the client from numpy's generator with the given seed, so a study gives
@@ -50,8 +52,9 @@ from ._flatsos import Model, plan_open_loop, track
 _PLAN_TIMING_COLUMNS = ("setup_s", "solve_s", "certify_s", "check_s", "plan_s", "worker")
 TIMING_COLUMNS = _PLAN_TIMING_COLUMNS + ("track_s",)
 _TRACK_KEYWORDS = {"horizon", "period", "correction", "observer_gain", "reserves", "cutoff_hz", "tolerance", "effort"}
-_TRACK_EFFORTS = {"tendon_force", "excitation_squared", "excitation_cubed", "activation_squared", "activation_cubed",
-                  "stress_squared", "stress_cubed"}
+# The efforts a study can name (null: the model's effort_weights, the paper's linear effort).
+_TRACK_EFFORTS = {"excitation_squared", "excitation_cubed", "activation_squared", "activation_cubed", "stress_squared",
+                  "stress_cubed"}
 _SAMPLES_FOR_PEAKS = 301
 
 
@@ -176,8 +179,8 @@ def _track_description(track_spec):
         raise StudyError(f"track.options: expected an object of {', '.join(sorted(_TRACK_KEYWORDS))}")
     for key, value in options.items():  # numbers (reserves: one or one per muscle), refused here
         if key == "effort":
-            if value not in _TRACK_EFFORTS:
-                raise StudyError(f"track.options.effort: expected one of {', '.join(sorted(_TRACK_EFFORTS))}")
+            if value is not None and not (isinstance(value, str) and value in _TRACK_EFFORTS):
+                raise StudyError(f"track.options.effort: expected null or one of {', '.join(sorted(_TRACK_EFFORTS))}")
             continue
         values = value if key == "reserves" and isinstance(value, list) else [value]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):

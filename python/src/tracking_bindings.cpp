@@ -2,7 +2,9 @@
 // does).
 #include "bindings.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "flatsos/planner/effort.hpp"
@@ -17,7 +19,7 @@ namespace flatsos::python {
 namespace {
 
 py::dict track(const Model& m, const std::string& motion_file, const py::object& effort, const py::object& weights,
-               const py::object& plant, double horizon, double period, double correction, double observer_gain,
+               const py::object& plant, double horizon, double period, std::optional<double> correction, double observer_gain,
                const py::object& reserves, double cutoff_hz, double tolerance) {
   const plugin::MusculoskeletalModel& model = *m.model;
   if (!plant.is_none() && !py::isinstance<Model>(plant)) throw py::value_error("plant: expected a flatsos.Model");
@@ -31,7 +33,6 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
   }
   planner::RecedingHorizonControllerOptions options;
   options.plan.horizon_s = horizon;
-  options.plan.tracking_correction_s = correction;
   options.plan.reserves_N = vector_argument(reserves, model.numMuscles(), "reserves", true);
   options.control_period_s = period;
   options.disturbance_observer_gain_per_s = observer_gain;
@@ -49,6 +50,8 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
     const bool linear = chosen && chosen->tendonForceWeights();
     const planner::FlatOutputMap planning = linear ? flat->withEffort(chosen) : *flat;
     if (chosen && !linear) options.plan.effort = chosen;
+    options.plan.tracking_correction_s =
+        correction.value_or(std::min(planner::tracking_correction_for(options.plan.effort.get()), horizon));
     options.plan.reference = reference;
     planner::RecedingHorizonController controller(planning, options, plant.is_none() ? nullptr : given_plant.model);
     auto plant_flat = plant.is_none() ? flat : flat_for_task(given_plant, postures);
@@ -89,14 +92,15 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
 void register_tracking(py::module_& m) {
   m.def("track", &track, py::arg("model"), py::arg("motion_file"), py::kw_only(), py::arg("effort") = "excitation_squared",
         py::arg("weights") = py::none(), py::arg("plant") = py::none(), py::arg("horizon") = 0.5,
-        py::arg("period") = 0.05, py::arg("correction") = 0.06, py::arg("observer_gain") = 40.0,
+        py::arg("period") = 0.05, py::arg("correction") = py::none(), py::arg("observer_gain") = 40.0,
         py::arg("reserves") = 1.0, py::arg("cutoff_hz") = 6.0, py::arg("tolerance") = M_PI / 180.0,
         "The receding-horizon controller following a measured motion on a Simbody plant (what OpenSim's CMC does). "
         "The motion (an OpenSim coordinates table, .mot or .sto, degrees or radians as its header says) is filtered "
         "at `cutoff_hz` and splined as OpenSim's tools do; the plant (`plant`, a flatsos.Model with the same joints "
         "and muscles, or the model itself) starts on it at its first time with its muscles at the minimum-effort "
         "rest; every `period` s the controller plans the motion's next `horizon` s from the measured state "
-        "(removing the offset within `correction` s, starting from where the muscles are) and applies the first "
+        "(removing the offset within `correction` s: None is 0.06 with a squared or cubed effort, 0.075 with a "
+        "linear one; starting from where the muscles are) and applies the first "
         "period's excitations. effort: what each plan minimizes over its horizon: 'excitation_squared' (the "
         "default, as CMC and Moco), 'excitation_cubed', 'activation_squared', 'activation_cubed', "
         "'stress_squared', 'stress_cubed' (weights per muscle optional), 'tendon_force' (with `weights`), or None "

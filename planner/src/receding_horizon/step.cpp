@@ -218,14 +218,23 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.message = step.slp.message;
   const double before_bounds = wall.seconds();
   // A nonlinear effort's sequential QP keeps the first period's bounds itself once it starts
-  // inside them; the bounds' sequential LP moves alpha there first where it does not.
-  if (!o.effort || !detail::minimize_step_effort(flat, workspace, o, step)) {
+  // near them; the bounds' sequential LP moves alpha inside first where it does not.
+  bool minimized = false;
+  if (o.effort) {
+    minimized = detail::minimize_step_effort(flat, workspace, o, step);
+    step.effort_seconds = wall.seconds() - before_bounds;
+  }
+  if (!minimized) {
+    const double before = wall.seconds();
     detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
-    step.bounds_seconds = wall.seconds() - before_bounds;
-    if (o.effort) detail::minimize_step_effort(flat, workspace, o, step);
+    step.bounds_seconds = wall.seconds() - before;
+    if (o.effort) {
+      const double before_effort = wall.seconds();
+      detail::minimize_step_effort(flat, workspace, o, step);
+      step.effort_seconds += wall.seconds() - before_effort;
+    }
   }
   step.wall_seconds = wall.seconds();
-  step.effort_seconds = step.wall_seconds - before_bounds - step.bounds_seconds;
 }
 
 }  // namespace flatsos::planner

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "bounds/sequential_lp.hpp"
@@ -69,7 +71,7 @@ bool evaluate(const FlatOutputMap& flat, const Effort& effort, const std::vector
       out.hessian.noalias() += (w * term.d_excitation2) * g_excitation * g_excitation.transpose();
     }
   }
-  return std::isfinite(out.value);
+  return std::isfinite(out.value) && (!derivatives || (out.gradient.allFinite() && out.hessian.allFinite()));
 }
 
 // The torques the step's muscles produce (its path's, less the offset) at times i h, i < count.
@@ -98,7 +100,8 @@ std::vector<BoundPoint> effort_points(const FlatOutputMap& flat, plugin::ModelWo
 // bound (0: inside every row).
 double row_violation(const RecedingHorizonStep& step, const NonlinearRows* rows, const Eigen::VectorXd& alpha) {
   const double scale = 1.0 + step.bound_N.cwiseAbs().maxCoeff();
-  double excess = (-alpha).cwiseMax(0.0).sum() / scale;
+  // alpha >= 0 and the reserve rows to rounding: the QP meets them only so.
+  double excess = (-alpha.array() - 1e-9 * scale).cwiseMax(0.0).sum() / scale;
   for (Eigen::Index i = 0; i < step.bound_N.size(); ++i)
     excess += std::max(0.0, step.bound_N[i] - step.reserve_rows.row(i).dot(alpha) - 1e-9 * scale) / scale;
   if (rows)
@@ -133,7 +136,7 @@ void qp_rows(const RecedingHorizonStep& step, const NonlinearRows* rows, const E
 bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
                           RecedingHorizonStep& step) {
   step.effort_iterations = 0;
-  step.effort_value = 0.0;
+  step.effort_value = o.effort ? std::numeric_limits<double>::quiet_NaN() : 0.0;  // until minimized
   if (step.status != SolveStatus::Solved || !o.effort) return true;
   const Effort& effort = *o.effort;
   const PeriodExcitationBounds& b = o.excitation_bounds;
@@ -159,13 +162,13 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     if (alpha.size() && v == violation && trial.value >= model.value) continue;
     alpha = *candidate, violation = v, model.value = trial.value;
   }
-  if (alpha.size() == 0) return false;  // the first period's bounds must move alpha first
-  evaluate(flat, effort, points, weights_s, alpha, true, model);
+  if (alpha.size() == 0 || !evaluate(flat, effort, points, weights_s, alpha, true, model))
+    return false;  // the first period's bounds must move alpha first
   DenseQpWorkspace qp;
   Eigen::MatrixXd J;
   Eigen::VectorXd lower, d, trial_alpha;
-  for (int it = 0; it < kMaxIterations; ++it) {
-    step.effort_iterations = it + 1;
+  int iterations = 0;
+  for (; iterations < kMaxIterations; ++iterations) {
     qp_rows(step, rows, alpha, J, lower);
     // Levenberg's shift keeps the model strictly convex where the effort is flat in a direction.
     Eigen::MatrixXd H = model.hessian;
@@ -186,14 +189,24 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     }
     if (!accepted) break;
     alpha = trial_alpha, violation = trial_violation;
-    evaluate(flat, effort, points, weights_s, alpha, true, model);
+    if (!evaluate(flat, effort, points, weights_s, alpha, true, model)) break;  // its value is alpha's still
   }
   if (violation > 0.0) return false;  // could not reach the bounds from here
+  step.effort_iterations = iterations + 1;
   step.slp.alpha = alpha;
   step.slp.cost_N = step.buffers.slp.costOf(alpha);
   step.effort_value = model.value;
   step.buffers.effort_alpha = alpha;
-  step.first_period_sampled = b.enforce && sample_period(flat, workspace, b, step) && worst_excess(flat, step).value <= 0.0;
+  if (!b.enforce) return true;
+  // The rows keep every sample inside by half their margin; a sample outside all the same is a
+  // failed step, as the bounds' sequential LP would report it.
+  const bool finite = sample_period(flat, workspace, b, step);
+  const SampleExcess excess = finite ? worst_excess(flat, step) : SampleExcess{1.0, 0, 0};
+  step.first_period_sampled = finite && excess.value <= 0.0;
+  if (!step.first_period_sampled) {
+    step.status = SolveStatus::Failed;
+    step.message = "the effort's optimum leaves the first period's bounds (excess " + std::to_string(excess.value) + ")";
+  }
   return true;
 }
 

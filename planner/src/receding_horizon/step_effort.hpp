@@ -15,11 +15,13 @@ namespace flatsos::planner::detail {
 
 /// Moves a solved step's alpha to the minimum of options.effort over the horizon's grid, keeping
 /// its reserve rows and first-period bounds: step.slp.alpha, effort_value, effort_iterations and
-/// the first period's samples updated. Starts from the step's alpha (the SLP's) or the previous
-/// step's optimum, whichever meets every row and costs less. Returns false, the step unchanged,
-/// when neither does (or the effort cannot be evaluated at them): the first period's bounds
-/// must move alpha inside first (impose_period_bounds), then call again. True (nothing to do)
-/// for a step that is not solved or without options.effort.
+/// the first period's samples updated (a sample outside the bounds all the same fails the
+/// step). Starts from the step's alpha (the SLP's) or the previous step's optimum, whichever is
+/// nearer its rows (at most kMaxStartViolation outside) and costs less. Returns false when
+/// neither is near enough, the effort cannot be evaluated there, or the QPs do not reach the
+/// rows: alpha unchanged, effort_value NaN; the first period's bounds must move alpha inside
+/// first (impose_period_bounds), then call again. True (nothing to do) for a step that is not
+/// solved or without options.effort.
 bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
                           RecedingHorizonStep& step);
 

@@ -83,6 +83,10 @@ SimTK::State tracking_start_state(const FlatOutputMap& plant_flat, const JointRe
   return s;
 }
 
+double tracking_correction_for(const Effort* effort) {
+  return effort && !effort->tendonForceWeights() ? 0.06 : RecedingHorizonOptions{}.tracking_correction_s;
+}
+
 plugin::ClosedLoopOptions tracking_loop_options() {
   plugin::ClosedLoopOptions loop;
   loop.integrator = plugin::IntegratorKind::MuscleRosenbrock;

@@ -56,10 +56,10 @@ struct RecedingHorizonOptions {
   /// muscle torques are ID(path) - offset. The RH controller's disturbance observer sets it.
   Eigen::VectorXd torque_offset_N_m;
   PeriodExcitationBounds excitation_bounds;
-  /// What each step minimizes over its horizon: null (or an effort linear in the tendon forces,
-  /// which must then be the map's own: FlatOutputMap::withEffort) the map's linear effort by the
-  /// SLP; a nonlinear one (PowerEffort: squared excitations, activations, stresses) by a
-  /// sequential QP from the SLP's alpha (receding_horizon/step_effort.hpp).
+  /// What each step minimizes over its horizon: null, the map's linear effort by the SLP (another
+  /// linear effort is given to the map: FlatOutputMap::withEffort; here it is refused); a
+  /// nonlinear one (PowerEffort: squared excitations, activations, stresses) by a sequential QP
+  /// from the SLP's alpha or the last step's optimum (receding_horizon/step_effort.hpp).
   std::shared_ptr<const Effort> effort;
 };
 
@@ -96,8 +96,9 @@ struct RecedingHorizonStep {
   /// for count < 1, h <= 0 or tau0 < 0.
   Eigen::MatrixXd excitations(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, double tau0_s, double h_s,
                               int count) const;
-  /// A nonlinear effort's value over the horizon's grid at alpha (options.effort's unit) and its
-  /// sequential QP's iterations (0 for the linear effort).
+  /// A nonlinear effort's value over the horizon's grid at alpha (options.effort's unit; NaN when
+  /// it could not be minimized and the SLP's plan stands) and its sequential QP's iterations (0
+  /// for the linear effort).
   double effort_value = 0.0;
   int effort_iterations = 0;
   double wall_seconds = 0.0;

@@ -45,5 +45,10 @@ SimTK::State tracking_start_state(const FlatOutputMap& plant_flat, const JointRe
                                   const Eigen::VectorXd& reserves_N);
 /// The closed loop's simulation: each muscle integrated on its own (MuscleRosenbrock) to 1e-5.
 plugin::ClosedLoopOptions tracking_loop_options();
+/// The correction time the programs track with (RecedingHorizonOptions::tracking_correction_s)
+/// when none is given: 0.06 s for a nonlinear effort (on arm26 it holds plants 20 % weaker or
+/// stronger), the library's 0.075 s for the paper's linear one (null), which failed 11 of 20
+/// plans at 0.06 s on the paper's arm with uneven strengths.
+double tracking_correction_for(const Effort* effort);
 
 }  // namespace flatsos::planner
