@@ -204,11 +204,10 @@ TEST(Tracking, Arm26WithAPlantOneFifthWeaker) {
 }
 
 TEST(Tracking, Arm26WithSquaredExcitationsSharesTheLoadAndCostsLess) {
-  // The paper's linear effort: 0.334 (measured, at its 0.075 s correction). Each step minimizing the integral of the squared
-  // excitations over its horizon instead: 0.247. The per-frame minimum of sum a^2 along the motion
-  // with the muscles' passive forces counted (a rigid-tendon static optimization) is 0.162: the
-  // plans' flat outputs are constant over a horizon, and a muscle that would go slack later in
-  // it holds its synergists up now.
+  // The paper's linear effort: 0.334 (measured, at its 0.075 s correction). Each step
+  // minimizing the integral of the squared excitations over its horizon instead: 0.247. The
+  // per-frame minimum of sum a^2 along the motion with the muscles' passive forces counted (a
+  // rigid-tendon static optimization) is 0.162 (docs/method/receding_horizon.md: the gap).
   const Tracked linear = track_arm26(1.0);
   const Tracked& squared = arm26_squared();
   EXPECT_TRUE(squared.run.success());
