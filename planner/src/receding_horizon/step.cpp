@@ -83,6 +83,32 @@ bool start_from_last_optimum(RecedingHorizonStep& step) {
   step.slp.wall_seconds = 0.0;
   return true;
 }
+
+// The SLP over the step's rows, or, for a nonlinear effort whose last optimum meets them, that
+// optimum: its sequential QP starts there (the first period's bounds are checked as always).
+void solve_slp_of(const RecedingHorizonOptions& o, const RecedingHorizonStudyOptions& study, RecedingHorizonStep& step) {
+  if (o.effort && !study.slp_by_ipopt && start_from_last_optimum(step)) return;
+  if (study.slp_by_ipopt) solve_slp_by_ipopt(step.reserve_rows, step.bound_N, study.warm_start, step.buffers.slp, step.slp);
+  else solve_slp(step.reserve_rows, step.bound_N, o.solver, step.buffers.slp, step.slp);
+}
+
+// The first period's bounds and a nonlinear effort's minimum, each timed. The effort's
+// sequential QP keeps the bounds itself once it starts near them; the bounds' sequential LP moves
+// alpha inside first where it does not.
+void bound_and_minimize(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+                        const RecedingHorizonStudyOptions& study, RecedingHorizonStep& step) {
+  const Stopwatch effort_time;
+  const bool minimized = o.effort && detail::minimize_step_effort(flat, workspace, o, step);
+  if (o.effort) step.effort_seconds = effort_time.seconds();
+  if (minimized) return;
+  const Stopwatch bounds_time;
+  detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
+  step.bounds_seconds = bounds_time.seconds();
+  if (!o.effort) return;
+  const Stopwatch again;
+  detail::minimize_step_effort(flat, workspace, o, step);
+  step.effort_seconds += again.seconds();
+}
 }  // namespace
 
 RecedingHorizonStep plan_receding_horizon_step(const FlatOutputMap& flat, const Eigen::VectorXd& q,
@@ -206,34 +232,10 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
     if (!flat_output_sum) step.buffers.slp.cost.noalias() = flat.CY().transpose() * flat.effortPricingWeights();
   }
   step.grid_seconds = wall.seconds();
-  if (o.effort && !study.slp_by_ipopt && start_from_last_optimum(step)) {
-    // A nonlinear effort's last optimum meets this step's reserve rows: its sequential QP starts
-    // there (the first period's bounds are checked as always), and the SLP's vertex is not needed.
-  } else if (study.slp_by_ipopt) {
-    solve_slp_by_ipopt(step.reserve_rows, step.bound_N, study.warm_start, step.buffers.slp, step.slp);
-  } else {
-    solve_slp(step.reserve_rows, step.bound_N, o.solver, step.buffers.slp, step.slp);
-  }
+  solve_slp_of(o, study, step);
   step.status = step.slp.status;
   step.message = step.slp.message;
-  const double before_bounds = wall.seconds();
-  // A nonlinear effort's sequential QP keeps the first period's bounds itself once it starts
-  // near them; the bounds' sequential LP moves alpha inside first where it does not.
-  bool minimized = false;
-  if (o.effort) {
-    minimized = detail::minimize_step_effort(flat, workspace, o, step);
-    step.effort_seconds = wall.seconds() - before_bounds;
-  }
-  if (!minimized) {
-    const double before = wall.seconds();
-    detail::impose_period_bounds(flat, workspace, o, study.bound_max_iterations, step);
-    step.bounds_seconds = wall.seconds() - before;
-    if (o.effort) {
-      const double before_effort = wall.seconds();
-      detail::minimize_step_effort(flat, workspace, o, step);
-      step.effort_seconds += wall.seconds() - before_effort;
-    }
-  }
+  bound_and_minimize(flat, workspace, o, study, step);
   step.wall_seconds = wall.seconds();
 }
 
