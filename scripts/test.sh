@@ -36,6 +36,12 @@ sanitize() {
     CollocationReference.TheFlatnessFreePathComesWithinTwoPercentWithAnExecutablePlan
     StaticOptimization.Arm26AgreesWithOpenSimsStaticOptimization
     Arm26OpenSim2.TheTutorialsForwardSimulationIsReproducedWithOpenSim2MusclesAndGeometricPaths  # 276 s
+    # 70-110 s each at -O1, most of it importing arm26 again; their code runs in the others.
+    IpoptLinearSolvers.CollocationAgrees
+    OpenSimModels.TheSosOptimumIsWithinOnePercentAboveAnIndependentDenseGridBound
+    TaskRegion.ARegionOutsideTheRangesIsRefused
+    TaskRegion.IsThePosturesSpanWidenedByTheMarginAndClippedToTheRanges
+    Tracking.RefusesAControllerWithoutAReference
     package_install_and_consume  # packaging, not memory: the Release suite checks it
   )
   # The command-line tests skip their longest runs too (the left leg's controller).
