@@ -7,6 +7,7 @@
 #include <Eigen/QR>
 
 #include "flatsos/planner/receding_horizon_study.hpp"
+#include "first_period_constraints.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -40,25 +41,9 @@ struct PaperFirstStep {
   }
 };
 
-// Every constraint of the bounded step as c(alpha) >= 0: per sample and muscle n, 1 - n,
-// a - floor, 1 - a; then C_Y alpha - B; then alpha.
+// Every constraint of the bounded step as c(alpha) >= 0 (first_period_constraints.hpp).
 Eigen::VectorXd constraints(PaperFirstStep& s, const fpl::RecedingHorizonStep& step, const Eigen::VectorXd& alpha) {
-  Eigen::MatrixXd n, a;
-  EXPECT_TRUE(s.sample(step, alpha, n, a));
-  const int m = 6;
-  Eigen::VectorXd c(4 * n.size() + m + alpha.size());
-  int k = 0;
-  for (Eigen::Index i = 0; i < n.rows(); ++i)
-    for (int j = 0; j < m; ++j) {
-      const double floor = s.arm.model->muscle(j).getParameters().activation_floor;
-      c[k++] = n(i, j);
-      c[k++] = 1.0 - n(i, j);
-      c[k++] = a(i, j) - floor;
-      c[k++] = 1.0 - a(i, j);
-    }
-  c.segment(k, m) = s.arm.flat.CY() * alpha - step.bound_N;
-  c.tail(alpha.size()) = alpha;
-  return c;
+  return flatsos::test::first_period_constraints(s.arm.flat, s.ws, s.options.excitation_bounds, step, alpha);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <Eigen/QR>
 
 #include "flatsos/planner/receding_horizon_step.hpp"
+#include "first_period_constraints.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
@@ -42,28 +43,9 @@ struct PaperStep {
                                              options.grid_points, scratch, n));
     return h * n.squaredNorm();
   }
-  // Every constraint as c(alpha) >= 0: per first-period sample and muscle n, 1 - n, a - floor,
-  // 1 - a; then C_Y alpha - B (N); then alpha (N).
+  // Every constraint as c(alpha) >= 0 (first_period_constraints.hpp).
   Eigen::VectorXd constraints(const fpl::RecedingHorizonStep& step, const Eigen::VectorXd& alpha) {
-    const auto& b = options.excitation_bounds;
-    fpl::PlanExcitationScratch scratch;
-    Eigen::MatrixXd n, a;
-    EXPECT_TRUE(fpl::sample_plan_excitations(arm.flat, ws, step.path, alpha, step.torque_offset_N_m, 0.0,
-                                             b.period_s / (b.samples - 1), b.samples, scratch, n, &a));
-    const int m = 6;
-    Eigen::VectorXd c(4 * n.size() + m + alpha.size());
-    int k = 0;
-    for (Eigen::Index i = 0; i < n.rows(); ++i)
-      for (int j = 0; j < m; ++j) {
-        const double floor = arm.model->muscle(j).getParameters().activation_floor;
-        c[k++] = n(i, j);
-        c[k++] = 1.0 - n(i, j);
-        c[k++] = a(i, j) - floor;
-        c[k++] = 1.0 - a(i, j);
-      }
-    c.segment(k, m) = arm.flat.CY() * alpha - step.bound_N;
-    c.tail(alpha.size()) = alpha;
-    return c;
+    return flatsos::test::first_period_constraints(arm.flat, ws, options.excitation_bounds, step, alpha);
   }
 };
 
