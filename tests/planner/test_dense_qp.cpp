@@ -118,3 +118,29 @@ TEST(DenseQp, BadInputThrowsNamingTheProblem) {
                                   Eigen::VectorXd::Zero(0), w, x),
                std::invalid_argument);
 }
+
+// A hint (rows to try first) changes the work, not the optimum: the last active set of a nearby
+// problem, a hint with rows that hold, repeated and out-of-range entries, all reach the same
+// optimality conditions, and the last active set spares most iterations' scans.
+TEST(DenseQp, AHintOfRowsToTryFirstReachesTheSameOptimum) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  fd::DenseQpWorkspace w;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 4 + trial % 9, m = 6 * n;
+    Qp qp = random_qp(rng, n, m, trial % 2 ? 1e4 : 10.0);
+    Eigen::VectorXd x0, lambda0;
+    ASSERT_TRUE(fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x0, &lambda0).solved);
+    std::vector<int> hint = w.active;
+    hint.push_back(-3), hint.push_back(m + 5), hint.push_back(0), hint.push_back(0);
+    // A nearby problem, as the next step of a sequential QP sees.
+    qp.g += 0.05 * Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+    Eigen::VectorXd x_cold, lambda_cold, x_hot, lambda_hot;
+    const fd::DenseQpResult cold = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_cold, &lambda_cold);
+    const fd::DenseQpResult hot = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_hot, &lambda_hot, 1e-10, &hint);
+    ASSERT_TRUE(cold.solved && hot.solved) << hot.failure;
+    EXPECT_LT(kkt_residual(qp, x_hot, lambda_hot), 1e-8) << "trial " << trial;
+    EXPECT_LT((x_hot - x_cold).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + x_cold.cwiseAbs().maxCoeff())) << "trial " << trial;
+    EXPECT_NEAR(hot.objective, cold.objective, 1e-9 * (1.0 + std::abs(cold.objective)));
+  }
+}

@@ -94,7 +94,7 @@ int most_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eige
 
 DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A,
                              const Eigen::VectorXd& b, DenseQpWorkspace& w, Eigen::VectorXd& x,
-                             Eigen::VectorXd* multipliers, double feasibility_tolerance) {
+                             Eigen::VectorXd* multipliers, double feasibility_tolerance, const std::vector<int>* hint) {
   check_sizes(H, g, A, b);
   const int n = static_cast<int>(g.size()), m = static_cast<int>(A.rows());
   w.cholesky.compute(H);
@@ -113,8 +113,18 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
   w.is_active.assign(static_cast<std::size_t>(m), 0);
   int q = 0;
   const int max_iterations = 10 * (n + m) + 10;
+  std::size_t next_hint = 0;
   while (true) {
-    const int p = most_violated(A, b, x, w, feasibility_tolerance);
+    // The hinted rows first, each while violated (any violated row may join: the order only
+    // changes the work), then the most violated of all.
+    int p = -1;
+    while (hint && next_hint < hint->size() && p < 0) {
+      const int row = (*hint)[next_hint++];
+      if (row >= 0 && row < m && !w.is_active[static_cast<std::size_t>(row)] &&
+          A.row(row).dot(x) - b[row] < -feasibility_tolerance * (1.0 + std::abs(b[row])))
+        p = row;
+    }
+    if (p < 0) p = most_violated(A, b, x, w, feasibility_tolerance);
     if (p < 0) break;
     double u_new = 0.0;  // the multiplier of row p while it joins
     while (true) {
@@ -154,6 +164,7 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
     }
   }
   result.solved = true;
+  w.active.resize(static_cast<std::size_t>(q));
   result.objective = 0.5 * x.dot(H * x) + g.dot(x);
   if (multipliers) {
     multipliers->setZero(m);

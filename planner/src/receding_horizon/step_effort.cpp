@@ -6,16 +6,14 @@
 #include <string>
 #include <vector>
 
+#include "bounds/effort_model.hpp"
 #include "bounds/sequential_lp.hpp"
-#include "flatsos/muscles/muscle_inverse.hpp"
 #include "numerics/dense_qp.hpp"
 #include "receding_horizon/period_bounds.hpp"
 
 namespace flatsos::planner::detail {
 
 namespace {
-
-namespace fm = flatsos::muscles;
 
 constexpr int kMaxIterations = 30;
 constexpr int kMaxHalvings = 10;
@@ -28,51 +26,6 @@ constexpr double kRowTolerance = 0.5 * kSampleMargin;
 // the rows it was pressed against, leaves this step's by 0.02-0.03 on arm26, and the first QP
 // steps clear them. Farther out the bounds' sequential LP moves alpha in first.
 constexpr double kMaxStartViolation = 1e-1;
-
-// The effort over the horizon's grid with its gradient and Gauss-Newton Hessian in alpha (each muscle's term's second derivatives times the outer products of the
-// gradients of F, a and n).
-struct EffortModel {
-  double value = 0.0;
-  Eigen::VectorXd gradient;
-  Eigen::MatrixXd hessian;
-};
-
-fm::SecondOrderJet force_jet(const BoundPoint& bp, int j, const Eigen::VectorXd& alpha) {
-  return {bp.base(j, 0) + bp.slope[0].row(j).dot(alpha), bp.base(j, 1) + bp.slope[1].row(j).dot(alpha),
-          bp.base(j, 2) + bp.slope[2].row(j).dot(alpha)};
-}
-
-// False where a muscle leaves its domain (no activation or excitation gives the forces).
-bool evaluate(const FlatOutputMap& flat, const Effort& effort, const std::vector<BoundPoint>& points,
-              const std::vector<double>& weights_s, const Eigen::VectorXd& alpha, bool derivatives, EffortModel& out) {
-  const int m = flat.numMuscles(), p = static_cast<int>(alpha.size());
-  out.value = 0.0;
-  if (derivatives) out.gradient.setZero(p), out.hessian.setZero(p, p);
-  Eigen::VectorXd g_force(p), g_activation(p), g_excitation(p);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const BoundPoint& bp = points[i];
-    for (int j = 0; j < m; ++j) {
-      const fm::MuscleParameters& params = flat.model().muscle(j).getParameters();
-      const fm::MuscleInverse inv = fm::invert_muscle(params, force_jet(bp, j, alpha), bp.path[static_cast<std::size_t>(j)], derivatives);
-      if (inv.stage != fm::MuscleInverse::Stage::Complete || !inv.excitation_real) return false;
-      const MuscleEffortJet term = effort.muscleTerm(j, params, bp.base(j, 0) + bp.slope[0].row(j).dot(alpha), inv.activation, inv.excitation);
-      if (!std::isfinite(term.value)) return false;
-      out.value += weights_s[i] * term.value;
-      if (!derivatives) continue;
-      for (int c = 0; c < p; ++c) {
-        g_force[c] = bp.slope[0](j, c);
-        g_activation[c] = column_derivative(bp, inv.activation_gradient, j, static_cast<std::size_t>(c));
-        g_excitation[c] = column_derivative(bp, inv.excitation_gradient, j, static_cast<std::size_t>(c));
-      }
-      const double w = weights_s[i];
-      out.gradient += w * (term.d_force * g_force + term.d_activation * g_activation + term.d_excitation * g_excitation);
-      out.hessian.noalias() += (w * term.d_force2) * g_force * g_force.transpose();
-      out.hessian.noalias() += (w * term.d_activation2) * g_activation * g_activation.transpose();
-      out.hessian.noalias() += (w * term.d_excitation2) * g_excitation * g_excitation.transpose();
-    }
-  }
-  return std::isfinite(out.value) && (!derivatives || (out.gradient.allFinite() && out.hessian.allFinite()));
-}
 
 // The torques the step's muscles produce (its path's, less the offset) at times i h, i < count.
 void muscle_torques(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
@@ -158,11 +111,11 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   for (const Eigen::VectorXd* candidate : {&step.slp.alpha, &step.buffers.effort_alpha}) {
     if (candidate->size() != step.slp.alpha.size()) continue;
     const double v = row_violation(step, rows, *candidate);
-    if (!(v <= violation) || !evaluate(flat, effort, points, weights_s, *candidate, false, trial)) continue;
+    if (!(v <= violation) || !evaluate_effort(flat, effort, points, weights_s, *candidate, false, trial)) continue;
     if (alpha.size() && v == violation && trial.value >= model.value) continue;
     alpha = *candidate, violation = v, model.value = trial.value;
   }
-  if (alpha.size() == 0 || !evaluate(flat, effort, points, weights_s, alpha, true, model))
+  if (alpha.size() == 0 || !evaluate_effort(flat, effort, points, weights_s, alpha, true, model))
     return false;  // the first period's bounds must move alpha first
   DenseQpWorkspace qp;
   Eigen::MatrixXd J;
@@ -184,12 +137,12 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
       trial_alpha = alpha + s * d;
       trial_violation = row_violation(step, rows, trial_alpha);
       accepted = (violation == 0.0 ? trial_violation == 0.0 : trial_violation < violation) &&
-                 evaluate(flat, effort, points, weights_s, trial_alpha, false, trial) &&
+                 evaluate_effort(flat, effort, points, weights_s, trial_alpha, false, trial) &&
                  (violation > 0.0 || trial.value <= model.value + 1e-4 * s * predicted);
     }
     if (!accepted) break;
     alpha = trial_alpha, violation = trial_violation;
-    if (!evaluate(flat, effort, points, weights_s, alpha, true, model)) break;  // its value is alpha's still
+    if (!evaluate_effort(flat, effort, points, weights_s, alpha, true, model)) break;  // its value is alpha's still
   }
   if (violation > 0.0) return false;  // could not reach the bounds from here
   step.effort_iterations = iterations + 1;
