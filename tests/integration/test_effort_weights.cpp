@@ -196,8 +196,7 @@ TEST(EffortWeights, TheRecedingHorizonStepWeighsItsConstantFlatOutputsByTheEffor
 
 TEST(EffortWeights, AnEffortGivenWithThePlanIsTheModelFilesWeights) {
   // OpenLoopOptions::effort and FlatOutputMap::withEffort (the receding-horizon step's map)
-  // plan exactly what the model file's per-muscle weights plan; an effort that is not linear
-  // in the tendon forces is refused by name.
+  // plan exactly what the model file's per-muscle weights plan.
   fp::EffortWeights w;
   w.kind = fp::EffortWeights::Kind::PerMuscle;
   w.per_muscle = Eigen::Vector3d(1.0, 0.01, 1.0);
@@ -227,14 +226,23 @@ TEST(EffortWeights, AnEffortGivenWithThePlanIsTheModelFilesWeights) {
   ASSERT_EQ(a.status, fpl::SolveStatus::Solved) << a.message;
   EXPECT_LT((a.slp.alpha - b.slp.alpha).norm(), 1e-9 * (1.0 + b.slp.alpha.norm()));
 
+  // A nonlinear effort is planned by its own sequential QP (test_open_loop_effort.cpp), along the
+  // prescribed path only: with the free path it is refused by name.
   o.effort = fpl::effort_named("excitation_squared");
+  const fpl::OpenLoopPlan squared = fpl::plan_open_loop(paper, start, o);
+  ASSERT_EQ(squared.status, fpl::SolveStatus::Solved) << squared.message;
+  EXPECT_EQ(squared.sos.effort_name, "excitation_squared");
+  EXPECT_EQ(given.sos.effort_name, "tendon_force");
+  o.free_path.enabled = true;
   try {
     fpl::plan_open_loop(paper, start, o);
-    FAIL() << "a nonlinear effort was planned by the linear programs";
+    FAIL() << "a nonlinear effort was planned along a free path";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("'excitation_squared' is not linear in the tendon forces"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("the effort 'excitation_squared' is planned along the prescribed path"),
+              std::string::npos)
         << e.what();
   }
+  o.free_path.enabled = false;
   o.effort = std::make_shared<fpl::TendonForceEffort>(Eigen::Vector2d(1.0, 1.0));
   EXPECT_THROW(fpl::plan_open_loop(paper, start, o), std::invalid_argument);
 }

@@ -44,6 +44,7 @@ inline planner::OpenLoopOptions open_loop_options(double T, int degree = 4, int 
   o.duration_s = T;
   o.sos.flat_output_degree = degree;
   o.sos.flat_output_spans = spans;
+  o.sos.flat_output_span_growth = 1.0;  // uniform, explicitly: the study code below reads it unresolved
   o.torque.pieces = std::max(12, spans);
   return o;
 }

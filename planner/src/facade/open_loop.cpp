@@ -27,10 +27,22 @@ int automatic_flat_output_spans(int flat_outputs, int degree) {
   return std::clamp(kCoefficients / std::max(flat_outputs, 1) - degree, 1, kMostSpans);
 }
 
+double automatic_span_growth(const Effort* effort) {
+  constexpr double kNonlinearEffortGrowth = 1.06;
+  return effort && !effort->tendonForceWeights() ? kNonlinearEffortGrowth : 1.0;
+}
+
 OpenLoopOptions resolve_basis(const FlatOutputMap& flat, OpenLoopOptions o) {
   if (o.sos.flat_output_spans == 0)
     o.sos.flat_output_spans = automatic_flat_output_spans(flat.numFlatOutputs(), o.sos.flat_output_degree);
-  if (o.torque.pieces == 0) o.torque.pieces = std::max(12, o.sos.flat_output_spans);
+  const bool automatic_growth = o.sos.flat_output_span_growth == 0.0;
+  if (automatic_growth)
+    o.sos.flat_output_span_growth = automatic_span_growth(o.sos.effort ? o.sos.effort.get() : o.effort.get());
+  if (o.torque.pieces == 0) {
+    o.torque.pieces = std::max(12, o.sos.flat_output_spans);
+    if (automatic_growth && o.torque.pieces == o.sos.flat_output_spans)
+      o.torque.piece_growth = o.sos.flat_output_span_growth;
+  }
   return o;
 }
 
@@ -174,10 +186,20 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initia
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const MuscleState& initial,
                             const OpenLoopOptions& options, const OpenLoopStudyOptions& study) {
-  if (options.effort) {  // the same plan on a map that minimizes this effort
+  if (options.effort) {
+    options.effort->validate(flat.numMuscles());
     OpenLoopOptions rest = options;
     rest.effort = nullptr;
-    return plan_open_loop(flat.withEffort(options.effort), workspace, initial, rest, study);
+    // A linear effort: the same plan on a map that minimizes it. A nonlinear one: the SOS
+    // program minimizes it from the optimum of the map's own linear effort.
+    if (options.effort->tendonForceWeights())
+      return plan_open_loop(flat.withEffort(options.effort), workspace, initial, rest, study);
+    if (options.free_path.enabled)
+      throw std::invalid_argument("open-loop plan: the free joint path minimizes efforts linear in the tendon forces; "
+                                  "the effort '" + options.effort->name() + "' is planned along the prescribed path "
+                                  "(free_path.enabled = false)");
+    rest.sos.effort = options.effort;
+    return OpenLoopPlanning(flat, workspace, initial, resolve_basis(flat, rest), study).plan();
   }
   return OpenLoopPlanning(flat, workspace, initial, resolve_basis(flat, options), study).plan();
 }

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "flatsos/plugin/stopwatch.hpp"
+#include "sos/effort_exchange.hpp"
 #include "sos/sos_bounds.hpp"
 #include "sos/sos_exchange.hpp"
 #include "sos/sos_setup.hpp"
@@ -12,8 +13,14 @@
 namespace flatsos::planner {
 
 namespace {
-void finish(const detail::SosSetup& setup, const Eigen::VectorXd& theta, SosProgramResult& result) {
+void finish(const FlatOutputMap& flat, const detail::SosSetup& setup, const Eigen::VectorXd& theta,
+            SosProgramResult& result) {
   result.cost_N_s = setup.effort_cost_constant + setup.effort_cost.dot(theta);
+  if (result.effort_name.empty()) {  // the map's linear effort
+    result.effort_name = "tendon_force";
+    result.effort_value = result.cost_N_s;
+    result.effort_unit = flat.effortUnit();
+  }
   result.Y = detail::flat_outputs_of(setup, theta);
   result.status = SolveStatus::Solved;
 }
@@ -38,6 +45,9 @@ SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, dou
 
   Eigen::VectorXd theta;
   const bool bounds = muscles && options.bounds.enforce;
+  if (options.effort && (!muscles || options.method != SosProgramMethod::Exchange))
+    throw std::invalid_argument("SOS program: the effort '" + options.effort->name() +
+                                "' needs the muscles along the path and the exchange method");
   if (options.method == SosProgramMethod::WholeProgramNlp) {
     if (!detail::solve_whole_program(setup, options, theta, result)) return result;
     if (bounds) {
@@ -45,7 +55,7 @@ SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, dou
       result.solve_seconds += result.bounds_seconds;
       if (!within) return result;
     }
-    finish(setup, theta, result);
+    finish(flat, setup, theta, result);
     return result;
   }
   SequentialLpBasis basis;
@@ -57,7 +67,12 @@ SosProgramResult solve(const FlatOutputMap& flat, const TorqueModel& torque, dou
     result.solve_seconds += result.bounds_seconds;
     if (!bounded) return result;
   }
-  finish(setup, theta, result);
+  if (options.effort) {
+    const bool minimized = detail::minimize_effort_by_exchange(setup, *muscles, options, *options.effort, theta, result);
+    result.solve_seconds += result.effort_seconds;
+    if (!minimized) return result;
+  }
+  finish(flat, setup, theta, result);
   if (options.certify) detail::certify_near_active_pieces(setup, theta, options, result);
   return result;
 }

@@ -21,6 +21,7 @@ struct SosSettings {
   double near_active_N = 1.0;
   ExchangeStudyOptions exchange;
   BoundsSettings bounds;
+  std::shared_ptr<const Effort> effort;  // nonlinear; null: the map's linear effort
 };
 
 inline SosSettings sos_settings(const SosProgramOptions& options, const SosProgramStudyOptions& study) {
@@ -28,6 +29,7 @@ inline SosSettings sos_settings(const SosProgramOptions& options, const SosProgr
   s.flat_output_degree = options.flat_output_degree;
   s.flat_output_spans = options.flat_output_spans;
   s.flat_output_span_growth = options.flat_output_span_growth;
+  s.effort = options.effort;
   s.method = study.method;
   s.whole_program = study.whole_program;
   s.feasibility_margin_N = study.feasibility_margin_N;

@@ -19,12 +19,14 @@
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/flat_outputs.hpp"
 #include "flatsos/planner/joint_paths.hpp"
 #include "flatsos/planner/numerics/linear_program.hpp"
@@ -67,6 +69,10 @@ struct SosProgramOptions {
   /// coefficients where the forces change.
   double flat_output_span_growth = 1.0;
   ExcitationBoundsOptions bounds;      ///< used when the muscles along the path are given
+  /// A nonlinear effort (effort.hpp) to minimize instead of the map's linear one, which then
+  /// only finds the start: a sequential QP from its optimum (needs the muscles along the path).
+  /// Null: the map's linear effort.
+  std::shared_ptr<const Effort> effort;
 };
 
 struct SosProgramResult {
@@ -101,6 +107,13 @@ struct SosProgramResult {
   double max_bound_excess = 0.0;
   double setup_seconds = 0.0, solve_seconds = 0.0, certify_seconds = 0.0;
   double bounds_seconds = 0.0;         ///< checks and NLP solves of the bounds (part of solve_seconds)
+  /// What the plan minimized: SosProgramOptions::effort's name, value (its Gauss-Legendre
+  /// quadrature) and unit; for the map's linear effort "tendon_force", cost_N_s and its unit.
+  std::string effort_name;
+  double effort_value = 0.0;
+  std::string effort_unit;
+  int effort_rounds = 0, effort_iterations = 0;  ///< the nonlinear effort's exchange rounds and QP steps
+  double effort_seconds = 0.0;         ///< minimizing the nonlinear effort (part of solve_seconds)
 };
 
 /// Throws std::invalid_argument for bad sizes, NaN, T <= 0, a negative reserve or a basis too
