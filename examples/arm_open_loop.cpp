@@ -60,8 +60,15 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--flat-output-span-growth", options.sos.flat_output_span_growth,
                  "each of the flat outputs' spans this many times as long as the one before (1: uniform; above 1: "
-                 "short spans at the start, where a low-effort transfer spends its effort)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+                 "short spans at the start, where a low-effort transfer spends its effort; 0: by the effort, 1 for "
+                 "a linear one, 1.06 for a nonlinear one)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  std::string effort_name = "paper";
+  app.add_option("--effort", effort_name,
+                 "what the plan minimizes: paper (the model's effort_weights times the tendon forces, the paper's "
+                 "linear effort; tendon_force is the same) or the integral of squared or cubed excitations (OpenSim "
+                 "Moco's default: excitation_squared), activations or stresses, along the prescribed path")
+      ->capture_default_str()->check(CLI::IsMember(ex::effort_option_names()));
   int free_path_spans = 0;
   app.add_option("--free-path-spans", free_path_spans,
                  "optimize the joint path too: a degree-8 B-spline on this many spans through the same boundary "
@@ -148,6 +155,7 @@ int main(int argc, char** argv) {
     options.duration_s = in.duration_s;
     options.target_q_rad = in.target_q_rad;
     options.reserves_N = in.reserves_N;
+    options.effort = ex::effort_option(effort_name);
     study.torque.samples_per_piece = std::max(study.torque.samples_per_piece, options.torque.pieces == 1 ? 31 : 0);
 
     SimTK::State s = ex::initial_state(flat, in);
@@ -174,7 +182,8 @@ int main(int argc, char** argv) {
     summary["preset"] = fpl::to_string(paper ? fpl::Preset::Paper : fpl::Preset::Best);
     summary["warnings"] = ex::print_warnings("arm_open_loop", model->warnings(), plan.warnings);
     std::cout << "arm_open_loop: plan " << fpl::to_string(plan.status) << (plan.message.empty() ? "" : ": " + plan.message)
-              << "\n  cost " << plan.sos.cost_N_s << " N s, " << plan.sos.ipopt_iterations << " Ipopt iterations in "
+              << "\n  " << (plan.sos.effort_name.empty() ? std::string("effort") : plan.sos.effort_name) << " "
+              << plan.sos.effort_value << " " << plan.sos.effort_unit << ", " << plan.sos.ipopt_iterations << " Ipopt iterations in "
               << plan.sos.ipopt_calls << " calls"
               << (plan.sos.ipopt_linear_solver.empty() ? "" : " (KKT systems by " + plan.sos.ipopt_linear_solver + ")")
               << ", setup " << 1e3 * plan.setup_seconds << " ms, solve "

@@ -66,6 +66,17 @@ Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::strin
   return to_vector(v);
 }
 
+std::vector<std::string> effort_option_names() {
+  std::vector<std::string> names = planner::effort_names();
+  names.insert(names.begin(), "paper");
+  return names;
+}
+
+std::shared_ptr<const planner::Effort> effort_option(const std::string& name) {
+  if (name == "paper" || name == "tendon_force") return nullptr;
+  return planner::effort_named(name);
+}
+
 std::string format(double x) {
   std::ostringstream out;
   out << x;
@@ -78,7 +89,7 @@ PlanTables plan_tables(const planner::FlatOutputMap& flat, const planner::OpenLo
   PlanTables out{plugin::make_state_table(model, "plan"), plugin::make_controls_table(model, "plan_controls")};
   out.states.metadata = {{"status", planner::to_string(plan.status)},
                          {"success", plan.status == planner::SolveStatus::Solved ? "true" : "false"},
-                         {"objective", format(plan.sos.cost_N_s)},
+                         {"objective", format(plan.sos.effort_value)},
                          {"solver_duration", format(plan.setup_seconds + plan.solve_seconds)}};
   for (const auto& src : times_from.rows) {
     const double time = std::min(src[0], plan.path.duration_s);
@@ -207,6 +218,9 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
   const auto& s = plan.sos;
   j["cost_Ns"] = s.cost_N_s;  // the name kept for readers of older summaries; the unit is cost_unit
   j["cost_unit"] = flat.effortUnit();
+  j["effort"] = s.effort_name;  // what the plan minimized, its value and unit
+  j["effort_value"] = s.effort_value;
+  j["effort_unit"] = s.effort_unit;
   j["solve_seconds"] = plan.setup_seconds + plan.solve_seconds;
   j["setup_seconds"] = plan.setup_seconds;
   j["sos_method"] = s.method;

@@ -39,6 +39,12 @@ constexpr long kDefaultMaxIntegratorSteps = 1000000;
 CLI::Option* add_max_steps_option(CLI::App& app, long& max_steps);
 /// One value for all muscles or one per muscle.
 Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option);
+
+/// What --effort takes: planner::effort_names() and "paper" (the model's effort_weights, as
+/// "tendon_force" is).
+std::vector<std::string> effort_option_names();
+/// Null for "paper" and "tendon_force" (the model's own linear effort), else the named effort.
+std::shared_ptr<const planner::Effort> effort_option(const std::string& name);
 std::string format(double x);
 
 /// The plan evaluated at the times of `times_from` (its first column): its states with the

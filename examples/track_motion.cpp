@@ -77,13 +77,14 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--effort", effort_name,
                  "what each plan minimizes over its horizon: the integral of the squared or cubed excitations (as CMC and "
-                 "Moco), activations or stresses, or tendon_force (the model's effort_weights: the paper's linear effort)")
-      ->capture_default_str()->check(CLI::IsMember(fpl::effort_names()));
+                 "Moco), activations or stresses, or paper (the model's effort_weights: the paper's linear effort; "
+                 "tendon_force is the same)")
+      ->capture_default_str()->check(CLI::IsMember(ex::effort_option_names()));
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
   try {
     if (options.control_period_s > options.plan.horizon_s) throw CLI::ValidationError("--period-s", "must not exceed --horizon-s");
-    if (effort_name != "tendon_force") options.plan.effort = fpl::effort_named(effort_name);
+    options.plan.effort = ex::effort_option(effort_name);
     if (!app.count("--correction-s"))
       options.plan.tracking_correction_s = std::min(fpl::tracking_correction_for(options.plan.effort.get()), options.plan.horizon_s);
     if (options.plan.tracking_correction_s > options.plan.horizon_s)

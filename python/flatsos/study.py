@@ -12,7 +12,8 @@ The study description (a dict, or a JSON file on the command line):
     "plan":     the plan of every sample, plan_open_loop's inputs in the model files' units:
                 q0_deg, qd0_deg_per_s, a0 (null: the minimum-effort rest state at q0),
                 target_deg, duration_s, reserves_N (one number or one per muscle) and
-                "options" (plan_open_loop's keywords); what it leaves out comes from the
+                "options" (plan_open_loop's keywords; with a nonlinear "effort" such as
+                "excitation_squared" the table's cost column is cost_s); what it leaves out comes from the
                 model file's "open_loop" scenario, else q0 = 0, at rest, 30 deg on, 1 s, 10 N.
                 A slider's entries are in m (m/s), as in the model file; its default
                 target is 0.05 m on.
@@ -52,8 +53,8 @@ from ._flatsos import Model, plan_open_loop, track
 _PLAN_TIMING_COLUMNS = ("setup_s", "solve_s", "certify_s", "check_s", "plan_s", "worker")
 TIMING_COLUMNS = _PLAN_TIMING_COLUMNS + ("track_s",)
 _TRACK_KEYWORDS = {"horizon", "period", "correction", "observer_gain", "reserves", "cutoff_hz", "tolerance", "effort"}
-# The efforts a study can name (null: the model's effort_weights, the paper's linear effort).
-_TRACK_EFFORTS = {"excitation_squared", "excitation_cubed", "activation_squared", "activation_cubed", "stress_squared",
+# The nonlinear efforts a study can name (null or "paper": the model's effort_weights, the linear effort).
+_NONLINEAR_EFFORTS = {"excitation_squared", "excitation_cubed", "activation_squared", "activation_cubed", "stress_squared",
                   "stress_cubed"}
 _SAMPLES_FOR_PEAKS = 301
 
@@ -126,10 +127,15 @@ class Study:
         self.reserves_N = _numbers(given.get("reserves_N", 10.0), m, "plan.reserves_N", broadcast=True)
         self.options = dict(plan.get("options", {}))
         keywords = {"preset", "flat_output_degree", "flat_output_spans", "flat_output_span_growth", "torque_pieces",
-                    "torque_piece_growth", "torque_degree", "bounds"}
+                    "torque_piece_growth", "torque_degree", "bounds", "effort", "weights"}
         if set(self.options) - keywords:
             raise StudyError(f"plan.options: unknown field(s) {sorted(set(self.options) - keywords)} "
                              f"({', '.join(sorted(keywords))})")
+        effort = self.options.get("effort")
+        if effort is not None and effort != "paper" and effort not in _NONLINEAR_EFFORTS:
+            raise StudyError(f"plan.options.effort: expected null, \"paper\" or one of {', '.join(sorted(_NONLINEAR_EFFORTS))}")
+        # The cost's unit: N s for the model's linear effort, s for the others (dimensionless integrands).
+        self.cost_column = "cost_Ns" if effort in (None, "paper") else "cost_s"
         self.strength = _range(description["strength"], m, "strength", True) if "strength" in description else None
         self.target_box = _range(description["target_deg"], n, "target_deg", False) \
             if "target_deg" in description else None
@@ -159,7 +165,7 @@ class Study:
                     ["excitation_squared_integral", "message", "track_s", "worker"])
         return (["sample"] + [f"strength_{name}" for name in self.muscles] +
                 [f"target_{name}_deg" for name in self.joints] +
-                ["status", "cost_Ns", "peak_excitation", "peak_activation", "min_activation", "message"] +
+                ["status", self.cost_column, "peak_excitation", "peak_activation", "min_activation", "message"] +
                 list(_PLAN_TIMING_COLUMNS))
 
 
@@ -179,8 +185,8 @@ def _track_description(track_spec):
         raise StudyError(f"track.options: expected an object of {', '.join(sorted(_TRACK_KEYWORDS))}")
     for key, value in options.items():  # numbers (reserves: one or one per muscle), refused here
         if key == "effort":
-            if value is not None and not (isinstance(value, str) and value in _TRACK_EFFORTS):
-                raise StudyError(f"track.options.effort: expected null or one of {', '.join(sorted(_TRACK_EFFORTS))}")
+            if value is not None and not (isinstance(value, str) and value in _NONLINEAR_EFFORTS):
+                raise StudyError(f"track.options.effort: expected null or one of {', '.join(sorted(_NONLINEAR_EFFORTS))}")
             continue
         values = value if key == "reserves" and isinstance(value, list) else [value]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
@@ -230,7 +236,8 @@ def _plan_one(model, study, index, strength, target_deg):
             peaks = (s["excitation"].max(), s["activation"].max(), s["activation"].min())
     except ValueError as e:  # the library refused this sample's inputs: a row that says why
         status, cost, message, seconds = "failed", None, f"error: {e}", {}
-    row.update(status=status, cost_Ns=math.nan if cost is None else cost, peak_excitation=peaks[0],
+    row[study.cost_column] = math.nan if cost is None else cost
+    row.update(status=status, peak_excitation=peaks[0],
                peak_activation=peaks[1], min_activation=peaks[2], message=message,
                setup_s=seconds.get("setup", math.nan), solve_s=seconds.get("solve", math.nan),
                certify_s=seconds.get("certify", math.nan), check_s=seconds.get("check", math.nan),
@@ -333,7 +340,7 @@ def _summarize(study, rows, samples, seed, where, wall_s):
     return {
         "model": study.source, "samples": samples, "seed": seed, "study": study.description, "ran_on": where,
         "statuses": dict(statuses), "feasible_fraction": statuses["solved"] / samples,
-        "cost_Ns": spread("cost_Ns"), "peak_excitation": spread("peak_excitation"),
+        study.cost_column: spread(study.cost_column), "peak_excitation": spread("peak_excitation"),
         "peak_activation": spread("peak_activation"),
         "plan_seconds_median": float(np.median([row["plan_s"] for row in rows])),
         "wall_seconds": wall_s, "plans_per_second": samples / wall_s,

@@ -10,6 +10,19 @@ namespace py = pybind11;
 
 namespace flatsos::python {
 
+std::shared_ptr<const planner::Effort> effort_argument(const py::handle& effort, const py::handle& weights,
+                                                       Eigen::Index muscles) {
+  if (!effort.is_none() && !py::isinstance<py::str>(effort))
+    throw py::value_error("effort: expected None, 'paper' or a name such as 'excitation_squared'");
+  const std::string name = effort.is_none() ? "paper" : py::cast<std::string>(effort);
+  if (name == "paper") {
+    if (!weights.is_none()) throw py::value_error("weights: the 'paper' effort weighs the muscles by the model's effort_weights");
+    return nullptr;
+  }
+  const Eigen::VectorXd w = weights.is_none() ? Eigen::VectorXd() : vector_argument(weights, muscles, "weights", true);
+  return planner::effort_named(name, w);  // std::invalid_argument (ValueError) naming the known efforts
+}
+
 Eigen::VectorXd vector_argument(const py::handle& x, Eigen::Index n, const std::string& name, bool broadcast) {
   const std::string expected = std::to_string(n) + (broadcast ? " numbers or one number" : " numbers");
   if (py::isinstance<py::str>(x) || x.is_none()) throw py::value_error(name + ": expected " + expected);

@@ -49,6 +49,12 @@ using Table = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMa
 /// ValueError naming the argument otherwise.
 Eigen::VectorXd vector_argument(const pybind11::handle& x, Eigen::Index n, const std::string& name, bool broadcast = false);
 
+/// The `effort=` keyword: None or "paper" give null (the model's own linear effort, its
+/// effort_weights); another name the effort of planner::effort_names(), weighted per muscle by
+/// `weights` (None: 1 each); a ValueError naming the known efforts otherwise.
+std::shared_ptr<const planner::Effort> effort_argument(const pybind11::handle& effort, const pybind11::handle& weights,
+                                                       Eigen::Index muscles);
+
 /// a0 of the API: None, or one activation in (0, 1] per muscle (a ValueError otherwise).
 std::optional<Eigen::VectorXd> activations_argument(const pybind11::handle& a0, Eigen::Index muscles);
 

@@ -75,10 +75,11 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
                     std::optional<int> flat_output_degree, std::optional<int> flat_output_spans,
                     std::optional<double> flat_output_span_growth, std::optional<int> torque_pieces,
                     std::optional<double> torque_piece_growth, std::optional<int> torque_degree, bool bounds,
-                    const std::string& method) {
+                    const std::string& method, const py::object& effort, const py::object& weights) {
   OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves,
                                        {preset, flat_output_degree, flat_output_spans, flat_output_span_growth,
                                         torque_pieces, torque_piece_growth, torque_degree, bounds});
+  in.options.effort = effort_argument(effort, weights, m.model->numMuscles());
   try {
     in.study.sos.method = planner::sos_program_method(method);
   } catch (const std::invalid_argument& e) {
@@ -173,6 +174,10 @@ py::dict sample(const Plan& self, const Eigen::VectorXd& times) {
   return out;
 }
 
+std::string cost_unit(const Plan& p) {
+  return p.plan.sos.effort_unit.empty() ? p.flat->effortUnit() : p.plan.sos.effort_unit;
+}
+
 }  // namespace
 
 void register_open_loop(py::module_& m) {
@@ -184,11 +189,15 @@ void register_open_loop(py::module_& m) {
           "cost",
           [](const Plan& p) -> std::optional<double> {
             if (p.plan.status != planner::SolveStatus::Solved) return std::nullopt;
-            return p.plan.sos.cost_N_s;
+            return p.plan.sos.effort_value;
           },
-          "the effort, in cost_unit (None when not solved)")
-      .def_property_readonly("cost_unit", [](const Plan& p) { return p.flat->effortUnit(); },
-                             "'N s' (tendon forces) or 's' (normalized tendon forces, the library's choice of flat outputs)")
+          "the effort's value, in cost_unit (None when not solved)")
+      .def_property_readonly("cost_unit", [](const Plan& p) { return cost_unit(p); },
+                             "'N s' (tendon forces), or 's' (normalized tendon forces, the library's choice of flat "
+                             "outputs, and the efforts of excitations, activations and stresses)")
+      .def_property_readonly(
+          "effort", [](const Plan& p) { return p.plan.sos.effort_name.empty() ? "tendon_force" : p.plan.sos.effort_name; },
+          "what the plan minimized: 'tendon_force' (the model's linear effort, the paper's) or the effort's name")
       .def_property_readonly("duration", [](const Plan& p) { return p.plan.path.duration_s; }, "s")
       .def_property_readonly("warnings", [](const Plan& p) { return p.plan.warnings; })
       .def_property_readonly(
@@ -234,7 +243,10 @@ void register_open_loop(py::module_& m) {
            "time, one column per joint), 'activation', 'excitation' and 'tendon_force' (N; one column per muscle).")
       .def("__repr__", [](const Plan& p) {
         return std::string("<flatsos.OpenLoopPlan ") + planner::to_string(p.plan.status) +
-               (p.plan.status == planner::SolveStatus::Solved ? ", " + std::to_string(p.plan.sos.cost_N_s) + " N s" : "") + ">";
+               (p.plan.status == planner::SolveStatus::Solved
+                    ? ", " + p.plan.sos.effort_name + " " + std::to_string(p.plan.sos.effort_value) + " " + cost_unit(p)
+                    : "") +
+               ">";
       });
 
   m.def("plan_open_loop", &plan_open_loop, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
@@ -242,7 +254,7 @@ void register_open_loop(py::module_& m) {
         py::arg("flat_output_degree") = py::none(), py::arg("flat_output_spans") = py::none(),
         py::arg("flat_output_span_growth") = py::none(), py::arg("torque_pieces") = py::none(),
         py::arg("torque_piece_growth") = py::none(), py::arg("torque_degree") = py::none(), py::arg("bounds") = true,
-        py::arg("method") = "exchange",
+        py::arg("method") = "exchange", py::arg("effort") = py::none(), py::arg("weights") = py::none(),
         "Minimum-effort open-loop plan from the initial state to rest at `target` in `duration` s.\n"
         "q0, qd0, target: rad and rad/s, one per joint; a0: initial activations in (0, 1], one per muscle, with "
         "tendons in static equilibrium (None: the minimum-effort rest state at q0); reserves: minimum tendon "
@@ -251,8 +263,11 @@ void register_open_loop(py::module_& m) {
         "overriding the preset's value where given, the flat outputs' B-spline degree and spans and how much longer each span is than the one before (1: uniform; above 1: short "
         "spans where a fast transfer starts), the torque model's pieces, their growth likewise, and degree, and whether excitations and activations are "
         "kept within their bounds; `method`: 'exchange' (the default) or 'whole_program_nlp' (the whole program as one "
-        "Ipopt problem, the reference formulation, which checks the bounds instead of imposing them). Bad input "
-        "raises ValueError; the GIL is released while planning.");
+        "Ipopt problem, the reference formulation, which checks the bounds instead of imposing them); `effort`: "
+        "None or 'paper' (the model's linear effort in the tendon forces, its effort_weights), or "
+        "'excitation_squared', 'excitation_cubed', 'activation_squared', 'activation_cubed', 'stress_squared', "
+        "'stress_cubed' (the integral of sum w_j x_j^p, minimized along the prescribed path from the linear "
+        "optimum), with `weights` w_j (None: 1 each). Bad input raises ValueError; the GIL is released while planning.");
 
   m.def("shortest_transfer", &shortest_transfer, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("target"), py::arg("reserves"), py::kw_only(), py::arg("longest"), py::arg("shortest") = 0.1,

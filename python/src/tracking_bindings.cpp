@@ -25,12 +25,7 @@ py::dict track(const Model& m, const std::string& motion_file, const py::object&
   if (!plant.is_none() && !py::isinstance<Model>(plant)) throw py::value_error("plant: expected a flatsos.Model");
   if (!(tolerance > 0.0)) throw py::value_error("tolerance: must be a positive angle, rad");
   const Model& given_plant = plant.is_none() ? m : plant.cast<const Model&>();
-  std::shared_ptr<const planner::Effort> chosen;
-  if (!effort.is_none()) {
-    const Eigen::VectorXd w = weights.is_none() ? Eigen::VectorXd()
-                                                : vector_argument(weights, model.numMuscles(), "weights", true);
-    chosen = planner::effort_named(py::cast<std::string>(effort), w);  // ValueError naming the known efforts
-  }
+  const std::shared_ptr<const planner::Effort> chosen = effort_argument(effort, weights, model.numMuscles());
   planner::RecedingHorizonControllerOptions options;
   options.plan.horizon_s = horizon;
   options.plan.reserves_N = vector_argument(reserves, model.numMuscles(), "reserves", true);

@@ -223,3 +223,17 @@ def test_a_bad_tracking_description_names_the_field(arm_file, tmp_path):
             ({"track": {"coordinates": motion, "options": {"effort": ["x"]}}}, "track.options.effort: expected null or")]:
         with pytest.raises(ValueError, match=match):
             study.run(arm_file, description, 2, workers=0)
+
+
+def test_a_plan_study_can_minimize_squared_excitations(arm, arm_file):
+    # The effort reaches every sample's plan; its cost column says its unit (s, not N s).
+    model, scenario = arm
+    options = dict(PAPER, effort="excitation_squared")
+    result = study.run(arm_file, {"plan": {"options": options}, "strength": {"low": 1.0, "high": 1.0}}, 1, workers=0)
+    t = result.table()
+    assert "cost_s" in result.study.columns() and "cost_Ns" not in result.study.columns()
+    assert list(t["status"]) == ["solved"], list(t["message"])
+    np.testing.assert_allclose(t["cost_s"], scenario.plan(model, effort="excitation_squared").cost, rtol=1e-12)
+    assert "cost_s" in result.summary
+    with pytest.raises(study.StudyError, match="plan.options.effort"):
+        study.run(arm_file, {"plan": {"options": {"effort": "squared"}}}, 1, workers=0)
