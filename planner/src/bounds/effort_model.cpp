@@ -20,6 +20,27 @@ fm::SecondOrderJet force_jet(const BoundPoint& bp, int j, const Eigen::VectorXd&
   return {F[0], F[1], F[2]};
 }
 
+// Where no excitation gives the activation's rate, the inverse's closest excitation has no
+// analytic gradient: central differences in the force's jet, so that the effort's model stays
+// consistent with its values (with a zero gradient there, steps the model promised lowered
+// nothing and the sequential QP stalled).
+fm::TendonForceJetGradient closest_excitation_gradient(const fm::MuscleParameters& p, const fm::SecondOrderJet& F,
+                                                       const fm::SecondOrderJet& path) {
+  fm::TendonForceJetGradient g{};
+  const double scale[3] = {1.0 + std::abs(F.value), 1.0 + std::abs(F.rate), 1.0 + std::abs(F.acceleration)};
+  for (int k = 0; k < 3; ++k) {
+    const double h = 1e-6 * scale[k];
+    fm::SecondOrderJet plus = F, minus = F;
+    double* up[3] = {&plus.value, &plus.rate, &plus.acceleration};
+    double* down[3] = {&minus.value, &minus.rate, &minus.acceleration};
+    *up[k] += h, *down[k] -= h;
+    const fm::MuscleInverse a = fm::invert_muscle(p, plus, path, false), b = fm::invert_muscle(p, minus, path, false);
+    if (a.stage == fm::MuscleInverse::Stage::Complete && b.stage == fm::MuscleInverse::Stage::Complete)
+      g[static_cast<std::size_t>(k)] = (a.excitation - b.excitation) / (2.0 * h);
+  }
+  return g;
+}
+
 // Adds w (l_F g_F + l_a g_a + l_n g_n) to the gradient and w (l_FF g_F g_F^T + ...) to the
 // Hessian, over the point's columns only.
 void add_derivatives(const BoundPoint& bp, int j, const fm::MuscleInverse& inv, const MuscleEffortJet& term, double w,
@@ -30,7 +51,7 @@ void add_derivatives(const BoundPoint& bp, int j, const fm::MuscleInverse& inv, 
   for (Eigen::Index c = 0; c < k; ++c) {
     g_force[c] = bp.slope[0](j, c);
     g_activation[c] = column_derivative(bp, inv.activation_gradient, j, static_cast<std::size_t>(c));
-    g_excitation[c] = inv.excitation_real ? column_derivative(bp, inv.excitation_gradient, j, static_cast<std::size_t>(c)) : 0.0;
+    g_excitation[c] = column_derivative(bp, inv.excitation_gradient, j, static_cast<std::size_t>(c));
   }
   for (Eigen::Index a = 0; a < k; ++a) {
     const int ca = bp.columns[static_cast<std::size_t>(a)];
@@ -59,8 +80,10 @@ bool evaluate_effort(const FlatOutputMap& flat, const Effort& effort, const std:
     for (int j = 0; j < m; ++j) {
       const fm::MuscleParameters& params = flat.model().muscle(j).getParameters();
       const fm::SecondOrderJet F = force_jet(bp, j, theta);
-      const fm::MuscleInverse inv = fm::invert_muscle(params, F, bp.path[static_cast<std::size_t>(j)], derivatives);
+      fm::MuscleInverse inv = fm::invert_muscle(params, F, bp.path[static_cast<std::size_t>(j)], derivatives);
       if (inv.stage != fm::MuscleInverse::Stage::Complete || (!inv.excitation_real && !closest_excitation)) return false;
+      if (derivatives && !inv.excitation_real)
+        inv.excitation_gradient = closest_excitation_gradient(params, F, bp.path[static_cast<std::size_t>(j)]);
       const MuscleEffortJet term = effort.muscleTerm(j, params, F.value, inv.activation, inv.excitation);
       if (!std::isfinite(term.value)) return false;
       out.value += weights_s[i] * term.value;

@@ -26,8 +26,8 @@ struct EffortModel {
 /// asked for). False where a muscle leaves its domain (no activation gives the forces) or a value
 /// is not finite: `out` is then unusable. Where no excitation gives the activation's rate (a
 /// faster deactivation than n = 0 allows), false too unless `closest_excitation`: the term then
-/// takes the closest excitation, constant in theta (a point outside the excitation bounds, which
-/// their own rows push back in).
+/// takes the inverse's closest excitation, its gradient by central differences (a point outside
+/// the excitation bounds, which their own rows push back in).
 bool evaluate_effort(const FlatOutputMap& flat, const Effort& effort, const std::vector<BoundPoint>& points,
                      const std::vector<double>& weights_s, const Eigen::VectorXd& theta, bool derivatives,
                      EffortModel& out, bool closest_excitation = false);
