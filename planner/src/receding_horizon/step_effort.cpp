@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bounds/effort_model.hpp"
@@ -133,16 +134,19 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     // Inside the rows, a step must keep them and lower the effort (Armijo); outside, come closer.
     double s = 1.0, trial_violation = 0.0;
     bool accepted = false;
-    for (int k = 0; k < kMaxHalvings && !accepted; ++k, s *= 0.5) {
+    // The full step, usually accepted, is evaluated with the derivatives the next QP needs.
+    int k = 0;
+    for (; k < kMaxHalvings && !accepted; ++k, s *= 0.5) {
       trial_alpha = alpha + s * d;
       trial_violation = row_violation(step, rows, trial_alpha);
       accepted = (violation == 0.0 ? trial_violation == 0.0 : trial_violation < violation) &&
-                 evaluate_effort(flat, effort, points, weights_s, trial_alpha, false, trial) &&
+                 evaluate_effort(flat, effort, points, weights_s, trial_alpha, k == 0, trial) &&
                  (violation > 0.0 || trial.value <= model.value + 1e-4 * s * predicted);
     }
     if (!accepted) break;
     alpha = trial_alpha, violation = trial_violation;
-    if (!evaluate_effort(flat, effort, points, weights_s, alpha, true, model)) break;  // its value is alpha's still
+    if (k == 1) std::swap(model, trial);
+    else if (!evaluate_effort(flat, effort, points, weights_s, alpha, true, model)) break;  // its value is alpha's still
   }
   if (violation > 0.0) return false;  // could not reach the bounds from here
   step.effort_iterations = iterations + 1;
