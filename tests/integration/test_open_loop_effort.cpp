@@ -49,6 +49,37 @@ double share_above(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan
   return static_cast<double>(above) / points;
 }
 
+// Simpson's rule of an effort of the seam (PowerEffort's terms, weights 1) from the exact inverse
+// map of the plan.
+double effort_of(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan, const fpl::Effort& effort,
+                 int intervals) {
+  const auto planned = fpl::PlannedExcitation::create(flat, plan.path, *plan.Y);
+  const double T = plan.path.duration_s, h = T / intervals;
+  double sum = 0.0;
+  for (int i = 0; i <= intervals; ++i) {
+    const double w = (i == 0 || i == intervals) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+    const fpl::MusclePoint mp = planned->at(i * h);
+    for (int j = 0; j < flat.numMuscles(); ++j)
+      sum += w * effort.muscleTerm(j, flat.model().muscle(j).getParameters(), mp.tendon_force_N[j], mp.activation[j],
+                                   mp.excitation[j]).value;
+  }
+  return sum * h / 3.0;
+}
+
+fpl::FlatOutputMap elbow_map(fpl::MuscleState& s0, fpl::OpenLoopOptions& o) {
+  const fp::ModelDescription d = fp::load_model_file(std::string(FLATSOS_SOURCE_DIR) + "/models/elbow_1dof.json");
+  const auto model = std::make_shared<const fp::MusculoskeletalModel>(d);
+  const fpl::FlatOutputMap flat(model);
+  const fp::ScenarioDescription& s = *d.scenario("open_loop");
+  o.duration_s = s.duration_s;
+  o.target_q_rad = s.target_q_rad;
+  o.reserves_N = Eigen::VectorXd::Constant(3, s.reserves_N[0]);
+  SimTK::State state = model->defaultState();
+  fpl::set_minimum_effort_rest_state(flat, state, s.q0_rad, o.reserves_N);
+  s0 = fpl::muscle_state_of(*model, state);
+  return flat;
+}
+
 struct SquaredPlan {
   fpl::OpenLoopPlan plan;
   double reference = 0.0;   // the collocation optimum along the plan's path
@@ -94,18 +125,10 @@ SquaredPlan plan_squared(const fpl::FlatOutputMap& flat, const fpl::MuscleState&
 }  // namespace
 
 TEST(OpenLoopEffort, SquaredExcitationsOnTheElbowShareTheLoadAndMatchTheCollocationOptimum) {
-  const fp::ModelDescription d = fp::load_model_file(std::string(FLATSOS_SOURCE_DIR) + "/models/elbow_1dof.json");
-  const auto model = std::make_shared<const fp::MusculoskeletalModel>(d);
-  const fpl::FlatOutputMap flat(model);
-  const fp::ScenarioDescription& s = *d.scenario("open_loop");
-  const Eigen::VectorXd reserves = Eigen::VectorXd::Constant(3, s.reserves_N[0]);
-  SimTK::State state = model->defaultState();
-  fpl::set_minimum_effort_rest_state(flat, state, s.q0_rad, reserves);
-  const fpl::MuscleState s0 = fpl::muscle_state_of(*model, state);
+  fpl::MuscleState s0;
   fpl::OpenLoopOptions o;
-  o.duration_s = s.duration_s;
-  o.target_q_rad = s.target_q_rad;
-  o.reserves_N = reserves;
+  const fpl::FlatOutputMap flat = elbow_map(s0, o);
+  const Eigen::VectorXd reserves = o.reserves_N;
   const SquaredPlan squared = plan_squared(flat, s0, o, "elbow");
   ASSERT_EQ(squared.plan.status, fpl::SolveStatus::Solved);
   const double effort = squared.plan.sos.effort_value;
@@ -146,4 +169,27 @@ TEST(OpenLoopEffort, SquaredExcitationsOnThePapersArmMatchTheCollocationOptimum)
   // what the muscles execute; held to 1e-4 deg it needs a feedback (the receding horizon).
   EXPECT_LT(squared.replay_error_rad[1], flatsos::test::deg(1e-3));
   EXPECT_GT(squared.replay_error_rad[0], 5.0 * squared.replay_error_rad[1]);
+}
+
+// Every nonlinear effort of the seam plans on the elbow: what the plan reports is the effort of
+// its own muscles (recomputed from the exact inverse map), and no more than the linear plan's
+// muscles cost under that effort.
+TEST(OpenLoopEffort, EveryEffortOfTheFieldPlansWhatItReports) {
+  fpl::MuscleState s0;
+  fpl::OpenLoopOptions o;
+  const fpl::FlatOutputMap flat = elbow_map(s0, o);
+  const fpl::OpenLoopPlan linear = fpl::plan_open_loop(flat, s0, o);
+  ASSERT_EQ(linear.status, fpl::SolveStatus::Solved) << linear.message;
+  for (const std::string& name : fpl::effort_names()) {
+    if (name == "tendon_force") continue;
+    o.effort = fpl::effort_named(name);
+    const fpl::OpenLoopPlan plan = fpl::plan_open_loop(flat, s0, o);
+    ASSERT_EQ(plan.status, fpl::SolveStatus::Solved) << name << ": " << plan.message;
+    EXPECT_EQ(plan.sos.effort_name, name);
+    const double recomputed = effort_of(flat, plan, *o.effort, 3000), of_linear = effort_of(flat, linear, *o.effort, 3000);
+    std::cout << name << ": " << plan.sos.effort_value << " s (recomputed " << recomputed << "; the linear plan's "
+              << of_linear << ")\n";
+    EXPECT_NEAR(recomputed, plan.sos.effort_value, 1e-3 * plan.sos.effort_value) << name;
+    EXPECT_LT(plan.sos.effort_value, of_linear) << name;
+  }
 }
