@@ -36,6 +36,9 @@ sanitize() {
     CollocationReference.TheFlatnessFreePathComesWithinTwoPercentWithAnExecutablePlan
     StaticOptimization.Arm26AgreesWithOpenSimsStaticOptimization
     Arm26OpenSim2.TheTutorialsForwardSimulationIsReproducedWithOpenSim2MusclesAndGeometricPaths  # 276 s
+    # 11 s in Release (a 200-interval collocation, two 3 s replays at 1e-10 and 1e-12); the
+    # nonlinear effort's code runs in the elbow's OpenLoopEffort tests.
+    OpenLoopEffort.SquaredExcitationsOnThePapersArmMatchTheCollocationOptimum
     # 70-110 s each at -O1, most of it importing arm26 again; their code runs in the others.
     IpoptLinearSolvers.CollocationAgrees
     OpenSimModels.TheSosOptimumIsWithinOnePercentAboveAnIndependentDenseGridBound
