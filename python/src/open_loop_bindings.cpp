@@ -261,7 +261,7 @@ void register_open_loop(py::module_& m) {
         "force, N, one number or one per muscle. Keywords: `preset`, 'best' (quintic B-splines on 48 spans, 48 "
         "cubic torque pieces: the default) or 'paper' (Richter & Warner's single quartic, 12 pieces); then, each "
         "overriding the preset's value where given, the flat outputs' B-spline degree and spans and how much longer each span is than the one before (1: uniform; above 1: short "
-        "spans where a fast transfer starts), the torque model's pieces, their growth likewise, and degree, and whether excitations and activations are "
+        "spans where a fast transfer starts; by default 1 for the linear effort, 1.06 for the others), the torque model's pieces, their growth likewise, and degree, and whether excitations and activations are "
         "kept within their bounds; `method`: 'exchange' (the default) or 'whole_program_nlp' (the whole program as one "
         "Ipopt problem, the reference formulation, which checks the bounds instead of imposing them); `effort`: "
         "None or 'paper' (the model's linear effort in the tendon forces, its effort_weights), or "
