@@ -1,5 +1,6 @@
 #include "bounds/effort_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "flatsos/muscles/muscle_inverse.hpp"
@@ -91,6 +92,15 @@ bool evaluate_effort(const FlatOutputMap& flat, const Effort& effort, const std:
     }
   }
   return std::isfinite(out.value) && (!derivatives || (out.gradient.allFinite() && out.hessian.allFinite()));
+}
+
+void place_linearized_bound_rows(const BoundRowsAt& at, Eigen::MatrixXd& J, Eigen::VectorXd& lower) {
+  for (const Eigen::Triplet<double>& e : at.jacobian) J(e.row(), e.col()) += e.value();
+  for (std::size_t i = 0; i < at.value.size(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    lower[r] = -at.value[i];
+    if (J.row(r).cwiseAbs().maxCoeff() <= 1e-12) lower[r] = std::min(lower[r], 0.0);
+  }
 }
 
 }  // namespace flatsos::planner::detail

@@ -32,4 +32,10 @@ bool evaluate_effort(const FlatOutputMap& flat, const Effort& effort, const std:
                      const std::vector<double>& weights_s, const Eigen::VectorXd& theta, bool derivatives,
                      EffortModel& out, bool closest_excitation = false);
 
+/// The bound rows `at` (with their Jacobian) as the first rows of a QP's J d >= lower, linearized:
+/// a violated row is asked to clear; a row no coefficient moves (at t = 0 of a plan that starts
+/// from the muscles' state) only not to get worse. J must have at least as many rows as `at`,
+/// zero in those rows.
+void place_linearized_bound_rows(const BoundRowsAt& at, Eigen::MatrixXd& J, Eigen::VectorXd& lower);
+
 }  // namespace flatsos::planner::detail

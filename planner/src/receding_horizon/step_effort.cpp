@@ -74,11 +74,7 @@ void qp_rows(const RecedingHorizonStep& step, const NonlinearRows* rows, const E
   const auto bound_rows = static_cast<Eigen::Index>(at.value.size());
   J.setZero(bound_rows + reserves + p, p);
   lower.resize(J.rows());
-  for (const Eigen::Triplet<double>& e : at.jacobian) J(e.row(), e.col()) += e.value();
-  for (Eigen::Index r = 0; r < bound_rows; ++r) {
-    lower[r] = -at.value[static_cast<std::size_t>(r)];
-    if (J.row(r).cwiseAbs().maxCoeff() <= 1e-12) lower[r] = std::min(lower[r], 0.0);
-  }
+  place_linearized_bound_rows(at, J, lower);
   J.middleRows(bound_rows, reserves) = step.reserve_rows;
   lower.segment(bound_rows, reserves) = step.bound_N - step.reserve_rows * alpha;
   J.bottomRows(p).setIdentity();

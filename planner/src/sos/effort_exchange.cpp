@@ -114,11 +114,7 @@ class EffortExchange {
     const auto bound_rows = static_cast<Eigen::Index>(at.value.size());
     J.setZero(bound_rows + reserves + 2 * n, n);
     lower.resize(J.rows());
-    for (const Eigen::Triplet<double>& e : at.jacobian) J(e.row(), e.col()) += e.value();
-    for (Eigen::Index r = 0; r < bound_rows; ++r) {
-      lower[r] = -at.value[static_cast<std::size_t>(r)];
-      if (J.row(r).cwiseAbs().maxCoeff() <= 1e-12) lower[r] = std::min(lower[r], 0.0);
-    }
+    place_linearized_bound_rows(at, J, lower);
     J.middleRows(bound_rows, reserves) = lp.G;
     lower.segment(bound_rows, reserves) = lp.row_lower - lp.G * theta_;
     J.block(bound_rows + reserves, 0, n, n).setIdentity();
