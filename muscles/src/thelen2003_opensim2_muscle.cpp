@@ -46,19 +46,38 @@ TendonJet tendon_jet(const MuscleParameters& p, double strain) {
 }
 
 // Lengthening velocity per Vmax(a) from the fibre's force Fv and its active capacity Fa (both per
-// Fmax), OpenSim 2.x's calcFiberVelocity.
-double lengthening_velocity(double fv, double fa, double af, double flen, double damping) {
-  const auto concentric = [&](double f) { return (f - fa) / (fa + f / af + damping); };
-  const auto b = [&](double f) { return (2.0 + 2.0 / af) * (fa * flen - f) / (flen - 1.0); };
-  const auto eccentric = [&](double f) { return (f - fa) / (b(f) + damping); };
+// Fmax), OpenSim 2.x's calcFiberVelocity, with its partial derivatives in Fv and Fa (each branch
+// is rational in both; the extrapolations are straight lines through two of its points).
+struct VelocityLaw {
+  double value = 0.0, d_force = 0.0, d_capacity = 0.0;
+};
+VelocityLaw lengthening_velocity(double fv, double fa, double af, double flen, double damping) {
+  const auto concentric = [&](double f) {
+    const double den = fa + f / af + damping;
+    return VelocityLaw{(f - fa) / den, (den - (f - fa) / af) / (den * den), (-den - (f - fa)) / (den * den)};
+  };
+  const double slope_b = (2.0 + 2.0 / af) / (flen - 1.0);  // b(f) = slope_b (fa flen - f)
+  const auto eccentric = [&](double f) {
+    const double den = slope_b * (fa * flen - f) + damping;
+    return VelocityLaw{(f - fa) / den, (den + slope_b * (f - fa)) / (den * den),
+                       (-den - (f - fa) * slope_b * flen) / (den * den)};
+  };
   if (fv < fa) {
     if (fv >= 0.0) return concentric(fv);
-    return concentric(0.0) + fv * (concentric(kSlopeStep) - concentric(0.0)) / kSlopeStep;
+    const VelocityLaw c0 = concentric(0.0), c1 = concentric(kSlopeStep);
+    const double slope = (c1.value - c0.value) / kSlopeStep;
+    return {c0.value + fv * slope, slope, c0.d_capacity + fv * (c1.d_capacity - c0.d_capacity) / kSlopeStep};
   }
-  const double f0 = kExtrapolationThreshold * fa * flen;
+  const double f0_per_fa = kExtrapolationThreshold * flen, f1_per_fa = (kExtrapolationThreshold + kSlopeStep) * flen;
+  const double f0 = f0_per_fa * fa;
   if (fv < f0) return eccentric(fv);
-  const double f1 = (kExtrapolationThreshold + kSlopeStep) * fa * flen;
-  return eccentric(f0) + (eccentric(f1) - eccentric(f0)) / (f1 - f0) * (fv - f0);
+  // Through e(f0) and e(f1), f0 and f1 proportional to fa.
+  const double f1 = f1_per_fa * fa;
+  const VelocityLaw e0 = eccentric(f0), e1 = eccentric(f1);
+  const double slope = (e1.value - e0.value) / (f1 - f0);
+  const double de0 = e0.d_force * f0_per_fa + e0.d_capacity, de1 = e1.d_force * f1_per_fa + e1.d_capacity;
+  const double d_slope = ((de1 - de0) * (f1 - f0) - (e1.value - e0.value) * (f1_per_fa - f0_per_fa)) / ((f1 - f0) * (f1 - f0));
+  return {e0.value + slope * (fv - f0), slope, de0 + d_slope * (fv - f0) - slope * f0_per_fa};
 }
 
 }  // namespace
@@ -147,27 +166,22 @@ CurveJet Thelen2003OpenSim2Muscle::maxVelocityScale(const MuscleParameters& p, d
 
 OwnFiberVelocity Thelen2003OpenSim2Muscle::ownFiberVelocity(const MuscleParameters& p, double activation,
                                                               double fiber_length_m, double fiber_force_N) const {
+  // u = -Vmax(a) Lopt V(A / Fmax, max(a, floor) f(L_M)), exact partials (the muscle's inverse
+  // differentiates them once more).
   const double fmax = p.max_isometric_force_N, lopt = p.optimal_fiber_length_m;
-  const auto shortening = [&](double a, double length_m, double force_N) {
-    const double fa = std::max(a, kVelocityActivationFloor) * activeForceLength(p, length_m).value;
-    const double vmax_m_per_s =
-        (a < 1.0 ? kMaxVelocityAtRestInOptimalLengthsPerS +
-                       a * (p.max_shortening_velocity_in_optimal_lengths_per_s - kMaxVelocityAtRestInOptimalLengthsPerS)
-                 : p.max_shortening_velocity_in_optimal_lengths_per_s) *
-        lopt;
-    return -vmax_m_per_s *
-           lengthening_velocity(force_N / fmax, fa, p.hill_constant, p.max_eccentric_force_ratio, p.fiber_damping);
-  };
+  const double vmax = p.max_shortening_velocity_in_optimal_lengths_per_s, v0 = kMaxVelocityAtRestInOptimalLengthsPerS;
+  const bool above_floor = activation > kVelocityActivationFloor;
+  const double a_law = above_floor ? activation : kVelocityActivationFloor;
+  const CurveJet f = activeForceLength(p, fiber_length_m);
+  const VelocityLaw v = lengthening_velocity(fiber_force_N / fmax, a_law * f.value, p.hill_constant,
+                                             p.max_eccentric_force_ratio, p.fiber_damping);
+  const double speed_m_per_s = (activation < 1.0 ? v0 + activation * (vmax - v0) : vmax) * lopt;
+  const double speed_d_activation = activation < 1.0 ? (vmax - v0) * lopt : 0.0;
   OwnFiberVelocity out;
-  out.shortening_m_per_s = shortening(activation, fiber_length_m, fiber_force_N);
-  // Central differences: the partials feed only an implicit integrator's iteration matrix.
-  const double h_force = 1e-7 * fmax, h_length = 1e-7 * lopt, h_activation = 1e-7;
-  out.d_fiber_force = (shortening(activation, fiber_length_m, fiber_force_N + h_force) -
-                       shortening(activation, fiber_length_m, fiber_force_N - h_force)) / (2.0 * h_force);
-  out.d_fiber_length = (shortening(activation, fiber_length_m + h_length, fiber_force_N) -
-                        shortening(activation, fiber_length_m - h_length, fiber_force_N)) / (2.0 * h_length);
-  out.d_activation = (shortening(activation + h_activation, fiber_length_m, fiber_force_N) -
-                      shortening(activation - h_activation, fiber_length_m, fiber_force_N)) / (2.0 * h_activation);
+  out.shortening_m_per_s = -speed_m_per_s * v.value;
+  out.d_fiber_force = -speed_m_per_s * v.d_force / fmax;
+  out.d_fiber_length = -speed_m_per_s * v.d_capacity * a_law * f.slope;
+  out.d_activation = -speed_d_activation * v.value - speed_m_per_s * v.d_capacity * (above_floor ? f.value : 0.0);
   return out;
 }
 
