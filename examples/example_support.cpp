@@ -336,12 +336,20 @@ double median(std::vector<double> v) {
 std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program,
                                                                const OpenSimModelOptions& options) {
   const bool osim = plugin::is_opensim_model_file(path);
-  if (!osim && (options.paths == "geometry" || options.opensim_2_muscles))
-    throw std::invalid_argument(std::string(options.opensim_2_muscles ? "--opensim-2-muscles" : "--paths geometry") +
-                                ": the model must be an OpenSim model (.osim), not '" + path + "'");
+  const char* osim_only = options.opensim_2_muscles           ? "--opensim-2-muscles"
+                          : options.degroote_muscles            ? "--degroote-muscles"
+                          : options.ignore_passive_fiber_forces ? "--ignore-passive-fiber-forces"
+                          : options.paths == "geometry"         ? "--paths geometry"
+                                                                : nullptr;
+  if (!osim && osim_only)
+    throw std::invalid_argument(std::string(osim_only) + ": the model must be an OpenSim model (.osim), not '" + path + "'");
   if (!osim) return plugin::MusculoskeletalModel::fromFile(path);
-  const plugin::OpenSimImport imported =
-      plugin::import_opensim_file(path, options.paths == "geometry", options.opensim_2_muscles);
+  plugin::OpenSimFileOptions file_options;
+  file_options.simulate_geometry = options.paths == "geometry";
+  file_options.opensim_2_muscles = options.opensim_2_muscles;
+  file_options.degroote_fregly2016_muscles = options.degroote_muscles;
+  file_options.ignore_passive_fiber_forces = options.ignore_passive_fiber_forces;
+  const plugin::OpenSimImport imported = plugin::import_opensim_file(path, file_options);
   std::cout << program << ": imported " << path << ": " << imported.model.numJoints() << " joint(s), "
             << imported.model.numMuscles() << " muscles\n";
   for (const std::string& note : imported.notes) std::cout << "  " << note << "\n";
@@ -354,9 +362,16 @@ void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim) {
                  "GeometryPaths with via points and wrapping, as OpenSim simulates them)")
       ->capture_default_str()
       ->check(CLI::IsMember({"fitted", "geometry"}));
-  app.add_flag("--opensim-2-muscles", osim.opensim_2_muscles,
-               "an .osim's Thelen2003Muscles, and its cylinder wrapping, as OpenSim 2.x modelled them (to "
-               "reproduce results of that time; OpenSim 4's otherwise)");
+  CLI::Option* opensim_2 = app.add_flag("--opensim-2-muscles", osim.opensim_2_muscles,
+                                        "an .osim's Thelen2003Muscles, and its cylinder wrapping, as OpenSim 2.x "
+                                        "modelled them (to reproduce results of that time; OpenSim 4's otherwise)");
+  CLI::Option* degroote = app.add_flag("--degroote-muscles", osim.degroote_muscles,
+                                       "every muscle of an .osim replaced by a DeGrooteFregly2016Muscle as OpenSim Moco's "
+                                       "ModOpReplaceMusclesWithDeGrooteFregly2016 does (smooth laws, as MocoInverse uses)");
+  degroote->excludes(opensim_2);
+  app.add_flag("--ignore-passive-fiber-forces", osim.ignore_passive_fiber_forces,
+               "with --degroote-muscles: their passive fibre force left out (Moco's ModOpIgnorePassiveFiberForcesDGF)")
+      ->needs(degroote);
 }
 
 }  // namespace flatsos::examples

@@ -85,18 +85,22 @@ void write_json(const std::string& path, const nlohmann::json& j);
 double median(std::vector<double> v);
 
 /// How a program reads an OpenSim model: which paths its simulation uses ("fitted", the
-/// polynomials plans use, or "geometry", the GeometryPaths) and whether its Thelen muscles are
-/// OpenSim 2.x's.
+/// polynomials plans use, or "geometry", the GeometryPaths), whether its Thelen muscles are
+/// OpenSim 2.x's, or every muscle DeGroote-Fregly's as OpenSim Moco replaces them (and their
+/// passive force ignored).
 struct OpenSimModelOptions {
   std::string paths = "fitted";
   bool opensim_2_muscles = false;
+  bool degroote_muscles = false;
+  bool ignore_passive_fiber_forces = false;
 };
 /// The model a program is given: a model file (JSON), or an OpenSim model (.osim) imported on
 /// the way with its own settings, the import's notes printed. std::invalid_argument when
 /// `osim` asks for what a JSON model cannot give.
 std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program,
                                                                const OpenSimModelOptions& osim = {});
-/// Adds --paths (fitted | geometry) and --opensim-2-muscles to a program.
+/// Adds --paths (fitted | geometry), --opensim-2-muscles, --degroote-muscles and
+/// --ignore-passive-fiber-forces to a program.
 void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim);
 
 }  // namespace flatsos::examples

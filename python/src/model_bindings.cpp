@@ -31,17 +31,27 @@ Model with_flat_outputs(std::shared_ptr<const plugin::MusculoskeletalModel> mode
 }
 
 // A model file, or an OpenSim model imported with its own settings (what the programs' --model,
-// --paths and --opensim-2-muscles do).
-Model load(const std::string& path, const std::string& paths, bool opensim_2_muscles) {
+// --paths, --opensim-2-muscles, --degroote-muscles and --ignore-passive-fiber-forces do).
+Model load(const std::string& path, const std::string& paths, bool opensim_2_muscles, bool degroote_muscles,
+           bool ignore_passive_fiber_forces) {
   if (paths != "fitted" && paths != "geometry") throw py::value_error("paths: 'fitted' or 'geometry', not '" + paths + "'");
   const bool osim = plugin::is_opensim_model_file(path);
-  if (!osim && (paths == "geometry" || opensim_2_muscles))
-    throw py::value_error(std::string(opensim_2_muscles ? "opensim_2_muscles" : "paths='geometry'") +
-                          ": the model must be an OpenSim model (.osim), not '" + path + "'");
+  const char* osim_only = opensim_2_muscles             ? "opensim_2_muscles"
+                          : degroote_muscles            ? "degroote_muscles"
+                          : ignore_passive_fiber_forces ? "ignore_passive_fiber_forces"
+                          : paths == "geometry"         ? "paths='geometry'"
+                                                        : nullptr;
+  if (!osim && osim_only)
+    throw py::value_error(std::string(osim_only) + ": the model must be an OpenSim model (.osim), not '" + path + "'");
+  plugin::OpenSimFileOptions options;
+  options.simulate_geometry = paths == "geometry";
+  options.opensim_2_muscles = opensim_2_muscles;
+  options.degroote_fregly2016_muscles = degroote_muscles;
+  options.ignore_passive_fiber_forces = ignore_passive_fiber_forces;
   py::gil_scoped_release release;  // the import and the flat-output choice may take seconds
   if (!osim) return with_flat_outputs(plugin::MusculoskeletalModel::fromFile(path));
-  return with_flat_outputs(std::make_shared<const plugin::MusculoskeletalModel>(
-      plugin::import_opensim_file(path, paths == "geometry", opensim_2_muscles).model));
+  return with_flat_outputs(
+      std::make_shared<const plugin::MusculoskeletalModel>(plugin::import_opensim_file(path, options).model));
 }
 
 Model from_json(const std::string& text, const std::string& source) {
@@ -91,10 +101,13 @@ py::tuple body_frames(const Model& self, const py::object& q) {
 void register_model(py::module_& m) {
   py::class_<Model>(m, "Model", "A flatsos model (a JSON model file or an OpenSim .osim): its joints, muscles and flat-output map.")
       .def(py::init(&load), py::arg("path"), py::kw_only(), py::arg("paths") = "fitted",
-           py::arg("opensim_2_muscles") = false,
+           py::arg("opensim_2_muscles") = false, py::arg("degroote_muscles") = false,
+           py::arg("ignore_passive_fiber_forces") = false,
            "Loads the model file, or imports an OpenSim model (.osim) with its own settings: paths='geometry' "
            "simulates its GeometryPaths (plans use the fitted ones), opensim_2_muscles its Thelen muscles and "
-           "cylinder wrapping as OpenSim 2.x modelled them. A bad file, or flat outputs the file gives that violate "
+           "cylinder wrapping as OpenSim 2.x modelled them, degroote_muscles replaces every muscle by a "
+           "DeGrooteFregly2016Muscle as OpenSim Moco's ModOpReplaceMusclesWithDeGrooteFregly2016 does, and "
+           "ignore_passive_fiber_forces (with it) leaves their passive force out. A bad file, or flat outputs the file gives that violate "
            "Assumption 1, raise ValueError; when none the library chooses serves the joint ranges (OpenSim's often), "
            "each plan or run chooses them over the region its task visits.")
       .def_static("from_json", &from_json, py::arg("text"), py::arg("source") = "model",

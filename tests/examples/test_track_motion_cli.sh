@@ -33,4 +33,10 @@ python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(0 if s[
   "$tmp/arm26/summary.json" || { echo "FAILED: the squared-excitation run spent as much as the linear effort's"; fail=1; }
 for f in states controls pErr; do [ -s "$tmp/arm26/arm26_$f.sto" ] || { echo "FAILED: arm26_$f.sto missing"; fail=1; }; done
 head -8 "$tmp/arm26/arm26_pErr.sto" | grep -q "^time	r_shoulder_elev	r_elbow_flex$" || { echo "FAILED: the position errors lack CMC's columns"; fail=1; }
+# The same motion with arm26's muscles replaced as OpenSim Moco's MocoInverse and MocoTrack
+# examples replace them (DeGroote-Fregly 2016, passive force ignored).
+expect 2 "--degroote-muscles" -- "$tm" --model "$arm26/arm26.osim" --ignore-passive-fiber-forces --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/o"
+expect 2 "--opensim-2-muscles" -- "$tm" --model "$arm26/arm26.osim" --degroote-muscles --opensim-2-muscles --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/o"
+expect 0 "plan failures 0" -- "$tm" --model "$arm26/arm26.osim" --degroote-muscles --ignore-passive-fiber-forces --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/arm26_dgf"
+grep -q '"success": true' "$tmp/arm26_dgf/summary.json" || { echo "FAILED: arm26 with DeGroote-Fregly muscles did not follow the motion"; fail=1; }
 exit $fail

@@ -28,6 +28,20 @@ def test_geometric_paths_and_opensim_2_muscles_are_asked_by_keyword(models_dir):
         flatsos.Model(str(models_dir / "arm_richter_warner.json"), opensim_2_muscles=True)
 
 
+def test_degroote_muscles_replace_the_files_as_moco_does(models_dir):
+    osim = str(models_dir / "opensim" / "Tug_of_War_Millard.osim")
+    model = flatsos.Model(osim, degroote_muscles=True, ignore_passive_fiber_forces=True)
+    assert model.muscles == ["RightMuscle", "LeftMuscle"]
+    plan = flatsos.plan_open_loop(model, [0.0], [0.0], None, [0.02], 1.0, 10.0)
+    assert plan.status == "solved", plan.message
+    with pytest.raises(ValueError, match="degroote_fregly2016_muscles"):
+        flatsos.Model(osim, ignore_passive_fiber_forces=True)
+    with pytest.raises(ValueError, match="exclude each other"):
+        flatsos.Model(osim, degroote_muscles=True, opensim_2_muscles=True)
+    with pytest.raises(ValueError, match="degroote_muscles"):
+        flatsos.Model(str(models_dir / "arm_richter_warner.json"), degroote_muscles=True)
+
+
 def test_arm26_as_downloaded_plans_15_to_90_deg_and_simbody_replays_it(models_dir):
     # The shoulder is held at 0 by the biceps against the triceps (arm26 has no deltoid); TRIlat
     # and TRImed share moment arms and strength, a tie the planner breaks.

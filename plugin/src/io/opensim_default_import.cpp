@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
@@ -77,19 +78,34 @@ void narrow_ranges(const OpenSimModel& osim, const OpenSimGeometryPaths& geometr
 }  // namespace
 
 OpenSimImport import_opensim_file(const std::string& osim_file, bool simulate_geometry, bool opensim_2_muscles) {
+  OpenSimFileOptions o;
+  o.simulate_geometry = simulate_geometry;
+  o.opensim_2_muscles = opensim_2_muscles;
+  return import_opensim_file(osim_file, o);
+}
+
+OpenSimImport import_opensim_file(const std::string& osim_file, const OpenSimFileOptions& file_options) {
+  if (file_options.opensim_2_muscles && file_options.degroote_fregly2016_muscles)
+    throw std::invalid_argument("opensim_2_muscles and degroote_fregly2016_muscles exclude each other: the muscles are "
+                                "either OpenSim 2.x's Thelen muscles or DeGroote-Fregly's");
+  if (file_options.ignore_passive_fiber_forces && !file_options.degroote_fregly2016_muscles)
+    throw std::invalid_argument("ignore_passive_fiber_forces applies to DeGroote-Fregly muscles (OpenSim Moco's "
+                                "ModOpIgnorePassiveFiberForcesDGF): ask for degroote_fregly2016_muscles too");
   const auto shared_osim = std::make_shared<const OpenSimModel>(read_opensim_model(osim_file));
   const OpenSimModel& osim = *shared_osim;
   std::vector<std::string> notes;
   OpenSimImportOptions options = default_options(osim, notes);
   options.osim_source = std::filesystem::path(osim_file).filename().string();
-  options.opensim_2_muscles = opensim_2_muscles;
+  options.opensim_2_muscles = file_options.opensim_2_muscles;
+  options.degroote_fregly2016_muscles = file_options.degroote_fregly2016_muscles;
+  options.ignore_passive_fiber_forces = file_options.ignore_passive_fiber_forces;
   auto read_geometry = std::make_shared<OpenSimGeometryPaths>(read_opensim_geometry_paths(osim_file));
-  read_geometry->opensim_2_wrapping = opensim_2_muscles;  // results of OpenSim 2.x: its wrapping too
+  read_geometry->opensim_2_wrapping = file_options.opensim_2_muscles;  // results of OpenSim 2.x: its wrapping too
   const std::shared_ptr<const OpenSimGeometryPaths> shared_geometry = read_geometry;
   const OpenSimGeometryPaths& geometry = *shared_geometry;
   narrow_ranges(osim, geometry, options, notes);
   OpenSimImport imported = import_opensim_model(osim, geometry, options);
-  if (simulate_geometry) {
+  if (file_options.simulate_geometry) {
     attach_geometry_paths(imported.model, shared_osim, shared_geometry, options.hold);
     notes.push_back("simulation uses the GeometryPaths (via points, wrapping) as OpenSim does; planning the fitted paths");
   }

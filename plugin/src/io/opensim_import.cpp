@@ -352,8 +352,7 @@ class Importer {
 
   MuscleDescription muscleOf(const OpenSimMuscle& m, const PolynomialPathDescription& path) {
     MuscleDescription md;
-    md.parameters = opensim_import::muscle_parameters_of(
-        m, out_.notes, {options_.opensim_2_muscles, options_.millard_with_flatsos_laws});
+    md.parameters = opensim_import::muscle_parameters_of(m, out_.notes, opensim_import::muscle_model_choice(options_));
     md.polynomial_path = path;
     return md;
   }
@@ -416,6 +415,8 @@ class Importer {
               "kept ranges with the other coordinates held, as OpenSim's PolynomialPathFitter fits; path_fit gives each "
               "muscle's length and moment-arm errors (m) between the fitting samples"};
     if (options_.opensim_2_muscles) provenance_["opensim_2_muscles"] = "Thelen2003Muscle as OpenSim 2.x modelled it";
+    if (options_.degroote_fregly2016_muscles)
+      provenance_["degroote_fregly2016_muscles"] = opensim_import::degroote_replacement(options_.ignore_passive_fiber_forces);
     provenance_["left_out_muscles"] = left_out_;
     provenance_["moment_arm_ranges_mm"] = moment_arms_;
     provenance_["notes"] = out_.notes;

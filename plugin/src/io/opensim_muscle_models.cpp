@@ -139,12 +139,49 @@ void take_other(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
   p.max_shortening_velocity_in_optimal_lengths_per_s = m.max_contraction_velocity_in_optimal_lengths_per_s;
 }
 
+// OpenSim Moco's DeGrooteFregly2016Muscle::replaceMuscles: the common properties and time
+// constants; from a Thelen muscle its FmaxTendonStrain and FmaxMuscleStrain (Thelen's defaults
+// where the file is silent) and no damping; from a Millard muscle its curves' strains and its
+// fiber_damping; a DeGrooteFregly2016Muscle as it is.
+void take_as_degroote(const OpenSimMuscle& m, muscles::MuscleParameters& p) {
+  p.model = muscles::muscle_model_named(muscles::DeGrooteFregly2016Muscle::kName);
+  p.model->setDefaults(p);
+  take_common(m, p);
+  if (m.type == "Thelen2003Muscle") {
+    muscles::MuscleParameters thelen;
+    thelen.model = muscles::muscle_model_named(muscles::Thelen2003Muscle::kName);
+    thelen.model->setDefaults(thelen);
+    take_thelen_curves(m, thelen);
+    p.tendon_strain_at_max_force = thelen.tendon_strain_at_max_force;
+    p.passive_fiber_strain_at_one_norm_force = thelen.passive_fiber_strain_at_one_norm_force;
+    p.fiber_damping = 0.0;
+  } else if (m.type == "Millard2012EquilibriumMuscle") {
+    p.tendon_strain_at_max_force = m.tendon_strain_at_one_norm_force;
+    p.passive_fiber_strain_at_one_norm_force = m.passive_fiber_strain_at_one_norm_force;
+    p.fiber_damping = muscles::Millard2012MuscleConfiguration().fiber_damping;
+    take(m, "fiber_damping", p.fiber_damping);
+  } else if (m.type == "DeGrooteFregly2016Muscle") {
+    take_degroote(m, p);
+  } else {
+    fail("muscle '" + m.name + "' is a " + m.type +
+         ", which OpenSim Moco does not replace by a DeGrooteFregly2016Muscle (it replaces Thelen2003Muscle and "
+         "Millard2012EquilibriumMuscle)");
+  }
+}
+
 }  // namespace
 
 muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vector<std::string>& notes,
                                                const MuscleModelChoice& choice) {
+  if (choice.opensim_2_muscles && choice.degroote_fregly2016_muscles)
+    fail("opensim_2_muscles and degroote_fregly2016_muscles exclude each other");
+  if (choice.ignore_passive_fiber_forces && !choice.degroote_fregly2016_muscles)
+    fail("ignore_passive_fiber_forces applies to DeGroote-Fregly muscles: ask for degroote_fregly2016_muscles too");
   muscles::MuscleParameters p;
-  if (m.type == "Thelen2003Muscle" && choice.opensim_2_muscles) {
+  if (choice.degroote_fregly2016_muscles) {
+    take_as_degroote(m, p);
+    if (choice.ignore_passive_fiber_forces) p.passive_fiber_strain_at_one_norm_force = 0.0;
+  } else if (m.type == "Thelen2003Muscle" && choice.opensim_2_muscles) {
     p.model = muscles::muscle_model_named(muscles::Thelen2003OpenSim2Muscle::kName);
     p.model->setDefaults(p);
     take_common(m, p);
@@ -171,6 +208,16 @@ muscles::MuscleParameters muscle_parameters_of(const OpenSimMuscle& m, std::vect
     fail(std::string(e.what()) + " (read from the OpenSim file)");
   }
   return p;
+}
+
+MuscleModelChoice muscle_model_choice(const OpenSimImportOptions& options) {
+  return {options.opensim_2_muscles, options.millard_with_flatsos_laws, options.degroote_fregly2016_muscles,
+          options.ignore_passive_fiber_forces};
+}
+
+std::string degroote_replacement(bool ignore_passive_fiber_forces) {
+  return std::string("every muscle replaced by a DeGrooteFregly2016Muscle as OpenSim Moco's replaceMuscles maps it") +
+         (ignore_passive_fiber_forces ? ", its passive fibre force ignored" : "");
 }
 
 std::string muscle_approximation(bool millard_with_flatsos_laws) {

@@ -41,6 +41,12 @@ struct OpenSimImportOptions {
   /// Thelen2003Muscle as OpenSim 2.x modelled it (thelen2003_opensim2), to reproduce results of
   /// that time; OpenSim 4's model otherwise.
   bool opensim_2_muscles = false;
+  /// Every muscle replaced by a DeGrooteFregly2016Muscle as OpenSim Moco's
+  /// ModOpReplaceMusclesWithDeGrooteFregly2016 does (the smooth muscle MocoInverse and MocoTrack
+  /// are run with); with ignore_passive_fiber_forces also Moco's
+  /// ModOpIgnorePassiveFiberForcesDGF. Not with opensim_2_muscles.
+  bool degroote_fregly2016_muscles = false;
+  bool ignore_passive_fiber_forces = false;
   /// Set by the GeometryPath overload: the fit's report as JSON (provenance "path_fit").
   std::string path_fit_json;
 };
@@ -79,5 +85,18 @@ OpenSimImport import_opensim_model(const OpenSimModel& osim, const OpenSimGeomet
 /// (OpenSimGeometryPaths::opensim_2_wrapping).
 OpenSimImport import_opensim_file(const std::string& osim_file, bool simulate_geometry = false,
                                   bool opensim_2_muscles = false);
+
+/// How import_opensim_file reads a file (the programs' --paths, --opensim-2-muscles,
+/// --degroote-muscles and --ignore-passive-fiber-forces; Python's Model keywords).
+struct OpenSimFileOptions {
+  bool simulate_geometry = false;
+  bool opensim_2_muscles = false;
+  bool degroote_fregly2016_muscles = false;  ///< OpenSimImportOptions' of the same name
+  bool ignore_passive_fiber_forces = false;  ///< with degroote_fregly2016_muscles only
+};
+
+/// The same with these options. Throws std::invalid_argument for opensim_2_muscles with
+/// degroote_fregly2016_muscles, or ignore_passive_fiber_forces without it.
+OpenSimImport import_opensim_file(const std::string& osim_file, const OpenSimFileOptions& options);
 
 }  // namespace flatsos::plugin
