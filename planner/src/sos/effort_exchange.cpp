@@ -106,10 +106,11 @@ class EffortExchange {
 
   // The QP's rows J d >= lower: the bound rows linearized at theta (a violated one asked to
   // clear, one theta does not move only not to get worse), the reserve rows, the box.
-  void qpRows(Eigen::MatrixXd& J, Eigen::VectorXd& lower) const {
+  void qpRows(Eigen::MatrixXd& J, Eigen::VectorXd& lower) {
     const LinearProgram& lp = setup_.lp;
     const Eigen::Index n = theta_.size(), reserves = lp.G.rows();
-    BoundRowsAt at;
+    BoundRowsAt& at = rows_at_theta_;
+    at = BoundRowsAt{};
     if (!bound_points_.empty()) at = evaluate_rows(flat_, bound_points_, a_min_, theta_, true);
     const auto bound_rows = static_cast<Eigen::Index>(at.value.size());
     J.setZero(bound_rows + reserves + 2 * n, n);
@@ -128,8 +129,7 @@ class EffortExchange {
   bool descend() {
     double current = violation(theta_);
     Eigen::MatrixXd J, H;
-    Eigen::VectorXd lower, d, trial_theta;
-    EffortModel trial;
+    Eigen::VectorXd lower, d;
     std::vector<int> hint;  // the last QP's active rows (the rows keep their indices in a round)
     while (result_.effort_iterations < kMaxIterations) {
       qpRows(J, lower);
@@ -140,28 +140,66 @@ class EffortExchange {
       hint = qp_.active;
       if (!r.solved) return fail("the effort's QP was not solved: " + r.failure);
       ++result_.effort_iterations;
-      const double predicted = model_.gradient.dot(d) + 0.5 * d.dot(model_.hessian * d);
-      if (current == 0.0 && !(predicted < -kRelativeDecrease * (1e-12 + std::abs(model_.value)))) return true;
-      // Inside the rows a step must keep them and lower the effort (Armijo); outside, come closer.
-      double s = 1.0, trial_violation = 0.0;
+      if (current == 0.0 && !(predictedDecrease(d) < -kRelativeDecrease * (1e-12 + std::abs(model_.value)))) return true;
+      // A full step inside the rows' linearization that leaves the curved rows: first the same QP
+      // with the rows' curvature along it taken in (a second-order correction, Nocedal and
+      // Wright 2006, section 18.3), then shorter steps.
       bool accepted = false;
-      for (int k = 0; k < kMaxHalvings && !accepted; ++k, s *= 0.5) {
-        trial_theta = theta_ + s * d;
-        trial_violation = violation(trial_theta);
-        accepted = (current == 0.0 ? trial_violation == 0.0 : trial_violation < current) &&
-                   evaluate_effort(flat_, effort_, effort_points_, weights_s_, trial_theta, false, trial, true) &&
-                   (current > 0.0 || trial.value <= model_.value + 1e-4 * s * predicted);
-      }
+      Eigen::VectorXd corrected = d;
+      if (current == 0.0 && violation(theta_ + d) > 0.0 && correctedStep(H, J, lower, corrected, hint))
+        accepted = lineSearch(corrected, current);
+      if (!accepted) accepted = lineSearch(d, current);
       if (!accepted) {
         if (current == 0.0) return true;  // no decrease along the QP's step: as low as the model sees
         return fail("the effort's sequential QP could not return inside the reserves and bounds (violation " +
                     std::to_string(current) + ")");
       }
-      theta_ = trial_theta, current = trial_violation;
       if (!evaluate_effort(flat_, effort_, effort_points_, weights_s_, theta_, true, model_, true))
         return fail("the effort could not be differentiated at an accepted step");
     }
     return fail("the effort's sequential QP did not converge in " + std::to_string(kMaxIterations) + " steps");
+  }
+
+  double predictedDecrease(const Eigen::VectorXd& d) const {
+    return model_.gradient.dot(d) + 0.5 * d.dot(model_.hessian * d);
+  }
+
+  // Halvings of d: inside the rows a step must keep them and lower the effort (Armijo);
+  // outside, come closer. On success theta and `current` move.
+  bool lineSearch(const Eigen::VectorXd& d, double& current) {
+    const double predicted = predictedDecrease(d);
+    EffortModel trial;
+    double s = 1.0;
+    for (int k = 0; k < kMaxHalvings; ++k, s *= 0.5) {
+      const Eigen::VectorXd trial_theta = theta_ + s * d;
+      const double trial_violation = violation(trial_theta);
+      if ((current == 0.0 ? trial_violation == 0.0 : trial_violation < current) &&
+          evaluate_effort(flat_, effort_, effort_points_, weights_s_, trial_theta, false, trial, true) &&
+          (current > 0.0 || trial.value <= model_.value + 1e-4 * s * predicted)) {
+        theta_ = trial_theta, current = trial_violation;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // d solved again with each bound row's lower bound moved by how far the row at theta + d
+  // differs from its linearization. False when there are no bound rows or the QP fails.
+  bool correctedStep(const Eigen::MatrixXd& H, const Eigen::MatrixXd& J, const Eigen::VectorXd& lower,
+                     Eigen::VectorXd& d, std::vector<int>& hint) {
+    const std::vector<double>& before = rows_at_theta_.value;
+    if (before.empty()) return false;
+    const std::vector<double> after = evaluate_rows(flat_, bound_points_, a_min_, theta_ + d, false).value;
+    Eigen::VectorXd corrected = lower;
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      const auto row = static_cast<Eigen::Index>(i);
+      if (J.row(row).cwiseAbs().maxCoeff() > 1e-12) corrected[row] -= after[i] - before[i] - J.row(row).dot(d);
+    }
+    Eigen::VectorXd step;
+    if (!solve_dense_qp(H, model_.gradient, J, corrected, qp_, step, nullptr, 1e-10, &hint).solved) return false;
+    hint = qp_.active;
+    d = step;
+    return true;
   }
 
   // The reserves' exact minima and the bounds on the check grid at theta: violations join as
@@ -206,6 +244,7 @@ class EffortExchange {
   std::vector<double> weights_s_;
   std::vector<TorqueJet> jets_;
   EffortModel model_;
+  BoundRowsAt rows_at_theta_;  // the bound rows at theta, as the last QP linearized them
   DenseQpWorkspace qp_;
 };
 
