@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "flatsos/planner/collocation.hpp"
 #include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/inverse_problem.hpp"
 #include "flatsos/planner/joint_reference.hpp"
@@ -51,23 +52,44 @@ fpl::InverseProblemResult solve(const fpl::FlatOutputMap& flat, const fp::Proces
   return r;
 }
 
+fp::ProcessedCoordinates tutorial_motion() {
+  return fp::process_coordinates_like_opensim(fp::read_sto(kArm26 + "inverse_kinematics/arm26_InverseKinematics.mot"),
+                                              6.0, std::vector<std::string>{"r_shoulder_elev", "r_elbow_flex"});
+}
+
+// arm26's muscles replaced as MocoInverse's examples replace them.
+fp::ModelDescription arm26_degroote() {
+  fp::OpenSimFileOptions file;
+  file.degroote_fregly2016_muscles = true;
+  file.ignore_passive_fiber_forces = true;
+  return fp::import_opensim_file(kArm26 + "arm26.osim", file).model;
+}
+
 // The tutorial's motion filtered at 6 Hz as OpenSim's tools do; the flat outputs chosen for the
-// motion's postures; squared excitations and the model's linear effort along it.
+// motion's postures; squared excitations (and, asked for, the model's linear effort) along it.
+Arm26Inverse solve_along_tutorial_motion(fp::ModelDescription description, bool linear_too) {
+  Arm26Inverse a;
+  a.model = std::make_shared<const fp::MusculoskeletalModel>(std::move(description));
+  a.motion = tutorial_motion();
+  const fpl::JointReference reference = fpl::JointReference::fromMotion(*a.model, a.motion);
+  a.flat.emplace(fpl::flat_outputs_for_task(a.model, fpl::reference_postures(reference, a.motion.report_times_s)));
+  a.squared = solve(*a.flat, a.motion, nullptr);
+  if (linear_too) a.linear = solve(*a.flat, a.motion, a.flat->effort());
+  return a;
+}
+
 const Arm26Inverse& arm26_inverse() {
+  static const Arm26Inverse solved = solve_along_tutorial_motion(arm26_degroote(), true);
+  return solved;
+}
+
+// The same with every fibre along its tendon (arm26 pennates TRIlong, BIClong and BRA by
+// 0.16-0.21 rad): the collocation reference models no pennation.
+const Arm26Inverse& arm26_unpennated_inverse() {
   static const Arm26Inverse solved = [] {
-    Arm26Inverse a;
-    fp::OpenSimFileOptions file;
-    file.degroote_fregly2016_muscles = true;
-    file.ignore_passive_fiber_forces = true;
-    a.model = std::make_shared<const fp::MusculoskeletalModel>(fp::import_opensim_file(kArm26 + "arm26.osim", file).model);
-    a.motion = fp::process_coordinates_like_opensim(
-        fp::read_sto(kArm26 + "inverse_kinematics/arm26_InverseKinematics.mot"), 6.0,
-        std::vector<std::string>{"r_shoulder_elev", "r_elbow_flex"});
-    const fpl::JointReference reference = fpl::JointReference::fromMotion(*a.model, a.motion);
-    a.flat.emplace(fpl::flat_outputs_for_task(a.model, fpl::reference_postures(reference, a.motion.report_times_s)));
-    a.squared = solve(*a.flat, a.motion, nullptr);
-    a.linear = solve(*a.flat, a.motion, a.flat->effort());
-    return a;
+    fp::ModelDescription d = arm26_degroote();
+    for (auto& m : d.muscles) m.parameters.pennation_angle_at_optimal_rad = 0.0;
+    return solve_along_tutorial_motion(std::move(d), false);
   }();
   return solved;
 }
@@ -162,4 +184,22 @@ TEST(InverseProblem, Arm26ExcitationsReplayedBySimbodyFollowTheMotion) {
   // MocoInverse's users ask for 1 deg over 0.5 s; the plan and the simulation are one model
   // here, so only integration separates them (measured 8e-10 deg).
   EXPECT_LT(error, deg(1e-4));
+}
+
+TEST(InverseProblem, UnpennatedArm26IsWithinOnePercentOfTheCollocationOptimumAlongTheSameMotion) {
+  const Arm26Inverse& a = arm26_unpennated_inverse();
+  ASSERT_EQ(a.squared.status, fpl::SolveStatus::Solved) << a.squared.message;
+  fp::ModelWorkspace workspace = a.flat->makeWorkspace();
+  fpl::CollocationOptions o;
+  o.effort = fpl::effort_named("excitation_squared");
+  o.mesh_intervals = 200;
+  const fpl::CollocationResult reference = fpl::solve_collocation_along_motion(
+      *a.flat, workspace, a.squared.plan.path, Eigen::VectorXd::Constant(a.flat->numMuscles(), 1.0), o);
+  ASSERT_EQ(reference.status, fpl::SolveStatus::Solved) << reference.message;
+  std::cout << "unpennated arm26: inverse problem " << a.squared.effort_value << " s in " << a.squared.wall_seconds
+            << " s, collocation " << reference.cost << " s in " << reference.solve_seconds << " s ("
+            << reference.iterations << " Ipopt iterations): " << 100.0 * (a.squared.effort_value / reference.cost - 1.0)
+            << " % above\n";
+  EXPECT_LE(a.squared.effort_value, 1.01 * reference.cost);
+  EXPECT_GE(a.squared.effort_value, 0.999 * reference.cost);
 }

@@ -1,12 +1,14 @@
 // The Hermite-Simpson transcription's exact derivatives against finite-difference twins: the
 // objective's gradient, every Jacobian entry (and no nonzero outside the declared pattern), and
 // the Hessian of the Lagrangian with random multipliers, on the paper's arm at a random point
-// away from the laws' kinks (slack tendon, u = 0): along a prescribed joint path and with the
-// path free (joint unknowns, inverse dynamics, lengths of q); with the arm's muscles following
+// away from the laws' kinks (slack tendon, u = 0): along a prescribed joint path, with the
+// path free (joint unknowns, inverse dynamics, lengths of q), and along a measured motion (the
+// muscles free at both ends, moment arms that change from point to point); with the arm's muscles following
 // each muscle model in turn (Thelen's and De Groote's without passive force), and minimizing each
 // kind of effort (tendon forces; powers of excitations, activations and stress).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 #include <optional>
 #include <random>
@@ -48,7 +50,9 @@ class CollocationDerivatives : public ::testing::TestWithParam<std::pair<std::st
   } arm{arm_with(GetParam().first)};
   fpl::MuscleState s0 = flatsos::test::open_loop_initial_state(*arm.model);
 
-  fpd::HermiteSimpsonProblem problem(bool free) {
+  // kind 0: along the plan's path; 1: the path free; 2: along it as a measured motion.
+  fpd::HermiteSimpsonProblem problem(int kind) {
+    const bool free = kind == 1;
     auto o = flatsos::test::open_loop_options();
     o.sos.bounds.enforce = false;
     // Reserves below the start's forces: De Groote's narrower active curve leaves the posterior
@@ -65,8 +69,12 @@ class CollocationDerivatives : public ::testing::TestWithParam<std::pair<std::st
                                                        : Eigen::VectorXd::LinSpaced(arm.model->numMuscles(), 0.5, 2.0);
     std::optional<fpd::FreeJoints> joints;
     if (free) joints = fpd::free_joints(arm.flat, plan.path);
-    return fpd::HermiteSimpsonProblem(fpd::collocation_muscles(arm.flat, s0, o.reserves_N, 0.0),
-                                      fpd::sample_path(arm.flat, ws, plan.path, 2), fpl::effort_named(effort, w), joints);
+    fpd::PathSamples samples = fpd::sample_path(arm.flat, ws, plan.path, 2);
+    if (kind == 2)  // arms that differ at every point, as posture-dependent ones do
+      for (int i = 0; i < samples.time_s.size(); ++i)
+        samples.moment_arms_at.push_back(samples.moment_arms_m * (1.0 + 0.1 * std::sin(1.0 + i)));
+    return fpd::HermiteSimpsonProblem(fpd::collocation_muscles(arm.flat, s0, o.reserves_N, 0.0), std::move(samples),
+                                      fpl::effort_named(effort, w), joints, kind == 2);
   }
 
   // The start, moved randomly: stretches by a few percent, activations and excitations inside
@@ -109,9 +117,9 @@ class CollocationDerivatives : public ::testing::TestWithParam<std::pair<std::st
 }  // namespace
 
 TEST_P(CollocationDerivatives, ThePatternsHaveNoDuplicatesAndTheHessianIsLowerTriangular) {
-  for (bool free : {false, true}) {
-    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
-    const auto p = problem(free);
+  for (int kind : {0, 1, 2}) {
+    SCOPED_TRACE(kind == 1 ? "free joint path" : kind == 2 ? "along a measured motion" : "prescribed joint path");
+    const auto p = problem(kind);
     std::set<std::pair<int, int>> jac, hess;
     for (int k = 0; k < p.jacobianNonzeros(); ++k) {
       EXPECT_TRUE(jac.insert({p.jacobianRows()[k], p.jacobianColumns()[k]}).second)
@@ -124,11 +132,15 @@ TEST_P(CollocationDerivatives, ThePatternsHaveNoDuplicatesAndTheHessianIsLowerTr
           << "duplicate Hessian entry " << k;
       EXPECT_GE(p.hessianRows()[k], p.hessianColumns()[k]);
     }
-    if (!free) {
+    if (kind == 0) {
       // 5 points x 6 muscles x 4 unknowns; 30 equilibrium rows, 4 x 2 torque rows (not at t = 0),
       // 2 intervals x 6 muscles x 4 defects, 6 rest rows.
       EXPECT_EQ(p.variables(), 120);
       EXPECT_EQ(p.constraints(), 30 + 8 + 48 + 6);
+    } else if (kind == 2) {
+      // torque rows at t = 0 too (no initial state fixes the forces there); the rest rows unbounded.
+      EXPECT_EQ(p.variables(), 120);
+      EXPECT_EQ(p.constraints(), 30 + 10 + 48 + 6);
     } else {
       // and 5 points x 2 joints x 3 unknowns; torque rows at all 5 points, 2 intervals x 2 joints
       // x 4 joint defects.
@@ -139,9 +151,9 @@ TEST_P(CollocationDerivatives, ThePatternsHaveNoDuplicatesAndTheHessianIsLowerTr
 }
 
 TEST_P(CollocationDerivatives, TheObjectiveGradientMatchesFiniteDifferences) {
-  for (bool free : {false, true}) {
-    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
-    const auto p = problem(free);
+  for (int kind : {0, 1, 2}) {
+    SCOPED_TRACE(kind == 1 ? "free joint path" : kind == 2 ? "along a measured motion" : "prescribed joint path");
+    const auto p = problem(kind);
     std::vector<double> x = random_point(p, 1);
     std::vector<double> grad(p.variables());
     p.objectiveGradient(x.data(), grad.data());
@@ -158,9 +170,9 @@ TEST_P(CollocationDerivatives, TheObjectiveGradientMatchesFiniteDifferences) {
 }
 
 TEST_P(CollocationDerivatives, EveryJacobianEntryMatchesFiniteDifferences) {
-  for (bool free : {false, true}) {
-    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
-    const auto p = problem(free);
+  for (int kind : {0, 1, 2}) {
+    SCOPED_TRACE(kind == 1 ? "free joint path" : kind == 2 ? "along a measured motion" : "prescribed joint path");
+    const auto p = problem(kind);
     for (unsigned seed : {2u, 3u}) {
       std::vector<double> x = random_point(p, seed);
       const auto J = jacobian(p, x);
@@ -191,9 +203,9 @@ TEST_P(CollocationDerivatives, EveryJacobianEntryMatchesFiniteDifferences) {
 }
 
 TEST_P(CollocationDerivatives, TheHessianOfTheLagrangianMatchesFiniteDifferencesOfTheGradients) {
-  for (bool free : {false, true}) {
-    SCOPED_TRACE(free ? "free joint path" : "prescribed joint path");
-    const auto p = problem(free);
+  for (int kind : {0, 1, 2}) {
+    SCOPED_TRACE(kind == 1 ? "free joint path" : kind == 2 ? "along a measured motion" : "prescribed joint path");
+    const auto p = problem(kind);
     std::vector<double> x = random_point(p, 4);
     std::mt19937 rng(5);
     std::normal_distribution<double> normal;

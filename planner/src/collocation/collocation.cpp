@@ -151,21 +151,22 @@ IpoptOutcome run_ipopt(const detail::HermiteSimpsonProblem& problem, std::vector
   return out;
 }
 
-void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleState& initial, const Eigen::VectorXd& reserves,
-              const CollocationOptions& o) {
+void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleState* initial, const Eigen::VectorXd& reserves,
+              const CollocationOptions& o, bool free_path) {
   const int m = flat.numMuscles();
   if (!(path.duration_s > 0.0) || !std::isfinite(path.duration_s))
     throw std::invalid_argument("collocation: the joint path's duration must be > 0 s");
   if (path.numJoints() != flat.numJoints())
     throw std::invalid_argument("collocation: the joint path has " + std::to_string(path.numJoints()) +
                                 " joint polynomials, the model " + std::to_string(flat.numJoints()) + " joints");
-  detail::require_initial_muscle_state(flat, initial);
+  if (initial) detail::require_initial_muscle_state(flat, *initial);
   detail::require_reserves(reserves, m);
   // The transcription's derivatives are written for fibres along the tendon without passive
-  // force: refuse the others rather than solve a different problem.
-  if (!flat.hasConstantMomentArms())
+  // force, and a free path's for constant moment arms: refuse the others rather than solve a
+  // different problem.
+  if (free_path && !flat.hasConstantMomentArms())
     throw std::invalid_argument("collocation: model '" + flat.model().description().name +
-                                "' has posture-dependent moment arms, which the collocation reference does not model");
+                                "' has posture-dependent moment arms, which the collocation reference models only along a prescribed path");
   for (const auto& muscle : flat.model().description().muscles) {
     const muscles::MuscleParameters& p = muscle.parameters;
     if (p.pennation_angle_at_optimal_rad != 0.0 || p.hasPassiveFiberForce())
@@ -212,7 +213,8 @@ PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& works
   samples.musculotendon_length_m.resize(m, P);
   samples.lengthening_rate_m_per_s.resize(m, P);
   samples.torque_N_m.resize(flat.numJoints(), P);
-  samples.moment_arms_m = flat.A();
+  const bool posture_dependent = !flat.hasConstantMomentArms();
+  samples.moment_arms_m = posture_dependent ? flat.momentArms(path.jet(0.0, 1).col(0)) : flat.A();
   samples.q_rad.resize(flat.numJoints(), P);
   samples.qd_rad_per_s.resize(flat.numJoints(), P);
   samples.qdd_rad_per_s2.resize(flat.numJoints(), P);
@@ -222,6 +224,7 @@ PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& works
     samples.qd_rad_per_s.col(i) = q.col(1);
     samples.qdd_rad_per_s2.col(i) = q.col(2);
     samples.torque_N_m.col(i) = flat.torque(workspace, q.col(0), q.col(1), q.col(2));
+    if (posture_dependent) samples.moment_arms_at.push_back(flat.momentArms(q.col(0)));
     for (int j = 0; j < m; ++j) {
       const muscles::SecondOrderJet L = flat.pathLengthJet(j, q);
       samples.musculotendon_length_m(j, i) = L.value;
@@ -270,30 +273,33 @@ Eigen::VectorXd flat_output_effort_weights(const FlatOutputMap& flat) {
 
 namespace {
 
-// Both problems: along the path, or (free) with the path free between its ends.
+// The problems: along the path from `initial` to rest, along it with the muscles free at both
+// ends (initial null), or (free) with the path free between its ends.
 CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                                    const MuscleState& initial, const Eigen::VectorXd& reserves_N,
+                                    const MuscleState* initial, const Eigen::VectorXd& reserves_N,
                                     const CollocationOptions& o, bool free) {
-  validate(flat, path, initial, reserves_N, o);
+  validate(flat, path, initial, reserves_N, o, free);
   const Stopwatch setup;
   const int m = flat.numMuscles(), N = flat.numJoints();
   const std::shared_ptr<const Effort> effort = o.effort                       ? o.effort
                                                : o.effort_weights.size() > 0 ? std::make_shared<TendonForceEffort>(o.effort_weights)
                                                                              : flat.effort();
   detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
+  MuscleState none;  // free muscle ends: no initial state to read
+  none.tendon_length_m = Eigen::VectorXd::Zero(m), none.activation = Eigen::VectorXd::Zero(m);
   std::vector<detail::CollocationMuscle> muscles =
-      detail::collocation_muscles(flat, initial, reserves_N, o.min_activation);
+      detail::collocation_muscles(flat, initial ? *initial : none, reserves_N, o.min_activation);
 
   std::optional<detail::FreeJoints> free_path;
   if (free) {
     free_path = detail::free_joints(flat, path);
-  } else {
+  } else if (initial) {
     // The initial state fixes every tendon force at t = 0; the path must start with the joint
     // accelerations they produce, or no plan exists along it.
     Eigen::VectorXd F0(m);
     for (int j = 0; j < m; ++j)
-      F0[j] = muscles::tendon_force(flat.model().muscle(j).getParameters(), initial.tendon_length_m[j]);
-    const Eigen::VectorXd torque_gap = flat.A() * F0 - samples.torque_N_m.col(0);
+      F0[j] = muscles::tendon_force(flat.model().muscle(j).getParameters(), initial->tendon_length_m[j]);
+    const Eigen::VectorXd torque_gap = samples.moment_arms_m * F0 - samples.torque_N_m.col(0);
     if (torque_gap.cwiseAbs().maxCoeff() > 1e-6 * (1.0 + samples.torque_N_m.col(0).cwiseAbs().maxCoeff())) {
       std::ostringstream why;
       why << "collocation: the joint path does not start with the accelerations of the initial state (the muscles' "
@@ -302,7 +308,8 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
       throw std::invalid_argument(why.str());
     }
   }
-  const detail::HermiteSimpsonProblem problem(std::move(muscles), std::move(samples), effort, std::move(free_path));
+  const detail::HermiteSimpsonProblem problem(std::move(muscles), std::move(samples), effort, std::move(free_path),
+                                              initial == nullptr);
 
   CollocationResult result;
   result.mesh_intervals = o.mesh_intervals;
@@ -311,14 +318,15 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   result.setup_seconds = setup.seconds();
 
   const Stopwatch solve;
-  const IpoptOutcome outcome =
-      run_ipopt(problem, constant_flat_output_start(flat, workspace, path, initial, problem), o,
-                objective_scaling(*effort, path.duration_s, m));
+  std::vector<double> start(static_cast<std::size_t>(problem.variables()));
+  if (initial) start = constant_flat_output_start(flat, workspace, path, *initial, problem);
+  else problem.startingPoint(start.data());
+  const IpoptOutcome outcome = run_ipopt(problem, std::move(start), o, objective_scaling(*effort, path.duration_s, m));
   result.solve_seconds = solve.seconds();
   result.solver_status = outcome.solver_status;
   result.linear_solver = outcome.linear_solver;
   result.iterations = outcome.iterations;
-  const std::string what = free ? "with a free joint path" : "along this joint path";
+  const std::string what = free ? "with a free joint path" : initial ? "along this joint path" : "along this motion";
   if (outcome.solved) {
     result.status = SolveStatus::Solved;
   } else if (outcome.infeasible) {
@@ -370,13 +378,19 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
 CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                                const JointPath& path, const MuscleState& initial,
                                                const Eigen::VectorXd& reserves_N, const CollocationOptions& o) {
-  return solve_collocation(flat, workspace, path, initial, reserves_N, o, false);
+  return solve_collocation(flat, workspace, path, &initial, reserves_N, o, false);
+}
+
+CollocationResult solve_collocation_along_motion(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                                 const JointPath& path, const Eigen::VectorXd& reserves_N,
+                                                 const CollocationOptions& o) {
+  return solve_collocation(flat, workspace, path, nullptr, reserves_N, o, false);
 }
 
 CollocationResult solve_collocation_free_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                               const JointPath& start_path, const MuscleState& initial,
                                               const Eigen::VectorXd& reserves_N, const CollocationOptions& o) {
-  return solve_collocation(flat, workspace, start_path, initial, reserves_N, o, true);
+  return solve_collocation(flat, workspace, start_path, &initial, reserves_N, o, true);
 }
 
 }  // namespace flatsos::planner

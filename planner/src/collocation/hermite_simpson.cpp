@@ -113,11 +113,11 @@ void HermiteSimpsonProblem::bounds(double* xl, double* xu, double* gl, double* g
       xl[index(i, j, kVelocity)] =
           muscles::force_velocity_inverse(p, muscles::force_ratio_exact_upper_bound(p)) / p.max_shortening_velocity_m_per_s();
       xu[index(i, j, kVelocity)] = 1.0;
-      if (i == 0) {  // the initial state
+      if (i == 0 && !free_muscle_ends_) {  // the initial state
         xl[index(i, j, kStretch)] = xu[index(i, j, kStretch)] = mu.initial_stretch;
         xl[index(i, j, kActivation)] = xu[index(i, j, kActivation)] = mu.initial_activation;
       }
-      if (i == P - 1) {  // rest at T: dL_S/dt = u + dL/dt = 0 (a free path ends with qd = 0)
+      if (i == P - 1 && !free_muscle_ends_) {  // rest at T: dL_S/dt = u + dL/dt = 0 (a free path ends with qd = 0)
         xl[index(i, j, kVelocity)] = xu[index(i, j, kVelocity)] =
             free_ ? 0.0 : -samples_.lengthening_rate_m_per_s(j, i) / p.max_shortening_velocity_m_per_s();
       }
@@ -134,23 +134,24 @@ void HermiteSimpsonProblem::bounds(double* xl, double* xu, double* gl, double* g
         }
   std::fill(gl, gl + constraints(), 0.0);
   std::fill(gu, gu + constraints(), 0.0);
+  if (free_muscle_ends_)
+    for (int j = 0; j < m; ++j) gl[restRow(j)] = -kInfinity, gu[restRow(j)] = kInfinity;
 }
 
 void HermiteSimpsonProblem::startingPoint(double* x) const {
   const int P = points(), m = muscles();
-  const Eigen::MatrixXd& A = samples_.moment_arms_m;
   Eigen::VectorXd fmax(m);
   for (int j = 0; j < m; ++j) fmax[j] = muscles_[j].parameters.max_isometric_force_N;
   const Eigen::MatrixXd W = fmax.array().square().matrix().asDiagonal();
-  // min sum (F_j / Fmax_j)^2 subject to A F = tau.
-  const Eigen::MatrixXd split = W * A.transpose() * (A * W * A.transpose()).inverse();
   for (int i = 0; i < P; ++i) {
-    const Eigen::VectorXd F = split * samples_.torque_N_m.col(i);
+    // min sum (F_j / Fmax_j)^2 subject to A F = tau.
+    const Eigen::MatrixXd& A = armsAt(i);
+    const Eigen::VectorXd F = W * A.transpose() * (A * W * A.transpose()).ldlt().solve(samples_.torque_N_m.col(i));
     for (int j = 0; j < m; ++j) {
       const auto& mu = muscles_[j];
       const auto& p = mu.parameters;
       double s, a;
-      if (i == 0) {
+      if (i == 0 && !free_muscle_ends_) {
         s = mu.initial_stretch, a = mu.initial_activation;
       } else {
         const double force = std::max(F[j], mu.reserve_N + 0.01 * p.max_isometric_force_N);
@@ -219,9 +220,9 @@ void HermiteSimpsonProblem::objectiveGradient(const double* x, double* grad) con
 
 void HermiteSimpsonProblem::constraintValues(const double* x, double* g) const {
   const int P = points(), m = muscles(), N = joints();
-  const Eigen::MatrixXd& A = samples_.moment_arms_m;
   Eigen::VectorXd F(m);
   for (int i = 0; i < P; ++i) {
+    const Eigen::MatrixXd& A = armsAt(i);
     for (int j = 0; j < m; ++j) {
       const MuscleAt e = evaluate(x, i, j);
       F[j] = e.F;

@@ -15,7 +15,8 @@
 //   joint torques      sum_j A_rj F_j - tau_r = 0 (N m)             (P - 1) N rows (not at
 //                      t = 0, where the initial state fixes F: checked when it is built)
 //   per interval and muscle: Simpson and interpolation defects of s and a   4 K m rows
-//   rest at T          n - a = 0 at the last point                  m rows
+//   rest at T          n - a = 0 at the last point                  m rows (free muscle ends:
+//                      unbounded)
 // (dL_S/dt = 0 at T fixes v there, the initial state fixes s and a at t = 0: bounds.)
 // With a free joint path (FreeJoints given), each point also has 3N unknowns q, qd, qdd (index
 // 4 m + kind N + r after the muscles), the torque rows hold at t = 0 too (they set qdd(0)), the
@@ -58,6 +59,8 @@ struct PathSamples {
   Eigen::MatrixXd lengthening_rate_m_per_s;  ///< m x P
   Eigen::MatrixXd torque_N_m;             ///< N x P, inverse dynamics along the path
   Eigen::MatrixXd moment_arms_m;          ///< N x m
+  /// Posture-dependent arms (N x m at each point) along a prescribed path; empty: moment_arms_m.
+  std::vector<Eigen::MatrixXd> moment_arms_at;
   Eigen::MatrixXd q_rad, qd_rad_per_s, qdd_rad_per_s2;  ///< N x P, the joint path itself
 };
 
@@ -89,9 +92,11 @@ class HermiteSimpsonProblem {
   enum JointUnknown { kAngle = 0, kSpeed = 1, kAcceleration = 2 };
 
   /// Minimizing `effort` (not null) along the sampled joint path, or (free given) with the path
-  /// free between its ends; the samples' path is then only the start.
+  /// free between its ends; the samples' path is then only the start. With free_muscle_ends
+  /// (along a prescribed path) neither the initial muscle state nor rest at T is imposed.
   HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples,
-                        std::shared_ptr<const Effort> effort, std::optional<FreeJoints> free = std::nullopt);
+                        std::shared_ptr<const Effort> effort, std::optional<FreeJoints> free = std::nullopt,
+                        bool free_muscle_ends = false);
 
   int points() const { return static_cast<int>(samples_.time_s.size()); }
   int intervals() const { return (points() - 1) / 2; }
@@ -160,10 +165,13 @@ class HermiteSimpsonProblem {
   MuscleAt evaluate(const double* x, int point, int muscle) const;
 
   int stride() const { return muscles() * kPerMuscle + (freePath() ? 3 * joints() : 0); }
-  int firstTorquePoint() const { return freePath() ? 0 : 1; }
+  int firstTorquePoint() const { return freePath() || free_muscle_ends_ ? 0 : 1; }
+  const Eigen::MatrixXd& armsAt(int point) const {
+    return samples_.moment_arms_at.empty() ? samples_.moment_arms_m : samples_.moment_arms_at[static_cast<std::size_t>(point)];
+  }
   int equilibriumRow(int point, int muscle) const { return point * muscles() + muscle; }
   // Along a prescribed path point 0 has no torque rows: the initial state fixes every tendon
-  // force there. With a free path they set qdd(0).
+  // force there. With a free path they set qdd(0); with free muscle ends they hold as anywhere.
   int torqueRow(int point, int joint) const {
     return points() * muscles() + (point - firstTorquePoint()) * joints() + joint;
   }
@@ -187,6 +195,7 @@ class HermiteSimpsonProblem {
   PathSamples samples_;
   std::shared_ptr<const Effort> effort_;
   std::optional<FreeJoints> free_;
+  bool free_muscle_ends_ = false;
   std::vector<double> stretch_scale_m_;  // eps L_slack
   std::vector<int> jac_rows_, jac_cols_, hess_rows_, hess_cols_;
 };

@@ -35,11 +35,12 @@ void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
     if (free_)
       free_->dynamics->inverseDynamicsJacobian(jointVector(x, i, kAngle), jointVector(x, i, kSpeed),
                                                jointVector(x, i, kAcceleration), torque_jacobian);
+    const Eigen::MatrixXd& arms = armsAt(i);
     for (int r = 0; r < N; ++r) {
       for (int j = 0; j < m; ++j)
-        if (A(r, j) != 0.0)
+        if (arms(r, j) != 0.0)
           sink(torqueRow(i, r), index(i, j, kStretch),
-               A(r, j) * muscles::tendon_force_derivative(muscles_[j].parameters, tendonLength(x, i, j)) *
+               arms(r, j) * muscles::tendon_force_derivative(muscles_[j].parameters, tendonLength(x, i, j)) *
                    stretch_scale_m_[j]);
       if (free_)
         for (int c = 0; c < 3 * N; ++c)
@@ -112,7 +113,7 @@ void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const do
       const double cost_weight = sigma * quadratureWeight(i);
       double F_weight = cost_weight * term.d_force;
       if (i >= firstTorquePoint())
-        for (int r = 0; r < N; ++r) F_weight += lambda[torqueRow(i, r)] * A(r, j);
+        for (int r = 0; r < N; ++r) F_weight += lambda[torqueRow(i, r)] * armsAt(i)(r, j);
       // The equilibrium row's F / Fmax - a f g.
       const double le = lambda[equilibriumRow(i, j)];
       const double ss = F_weight * e.F_ss + cost_weight * term.d_force2 * e.F_s * e.F_s +
@@ -174,8 +175,10 @@ void HermiteSimpsonProblem::hessianValues(const double* x, double sigma, const d
 }
 
 HermiteSimpsonProblem::HermiteSimpsonProblem(std::vector<CollocationMuscle> muscles, PathSamples samples,
-                                             std::shared_ptr<const Effort> effort, std::optional<FreeJoints> free)
-    : muscles_(std::move(muscles)), samples_(std::move(samples)), effort_(std::move(effort)), free_(std::move(free)) {
+                                             std::shared_ptr<const Effort> effort, std::optional<FreeJoints> free,
+                                             bool free_muscle_ends)
+    : muscles_(std::move(muscles)), samples_(std::move(samples)), effort_(std::move(effort)), free_(std::move(free)),
+      free_muscle_ends_(free_muscle_ends) {
   const int P = points(), m = this->muscles(), N = joints();
   if (!effort_) throw std::invalid_argument("Hermite-Simpson: no effort to minimize");
   effort_->validate(m);
@@ -184,6 +187,8 @@ HermiteSimpsonProblem::HermiteSimpsonProblem(std::vector<CollocationMuscle> musc
       samples_.lengthening_rate_m_per_s.rows() != m || samples_.lengthening_rate_m_per_s.cols() != P ||
       samples_.torque_N_m.cols() != P || samples_.moment_arms_m.rows() != N || samples_.moment_arms_m.cols() != m)
     throw std::invalid_argument("Hermite-Simpson: path samples of inconsistent sizes");
+  if (!samples_.moment_arms_at.empty() && (free_ || static_cast<int>(samples_.moment_arms_at.size()) != P))
+    throw std::invalid_argument("Hermite-Simpson: posture-dependent moment arms need a prescribed path and one per point");
   if (samples_.q_rad.rows() != N || samples_.q_rad.cols() != P || samples_.qd_rad_per_s.rows() != N ||
       samples_.qd_rad_per_s.cols() != P || samples_.qdd_rad_per_s2.rows() != N || samples_.qdd_rad_per_s2.cols() != P)
     throw std::invalid_argument("Hermite-Simpson: joint path samples of inconsistent sizes");

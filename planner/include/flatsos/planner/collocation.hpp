@@ -76,6 +76,13 @@ CollocationResult solve_collocation_along_path(const FlatOutputMap& flat, plugin
                                                const JointPath& path, const MuscleState& initial,
                                                const Eigen::VectorXd& reserves_N, const CollocationOptions& options = {});
 
+/// The same along a measured motion (the inverse problem's reference, what MocoInverse solves):
+/// the muscles' states free at both ends (no initial state, no rest at T), the torque rows at
+/// every point. Moment arms may depend on posture. Same errors and statuses.
+CollocationResult solve_collocation_along_motion(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                                 const JointPath& path, const Eigen::VectorXd& reserves_N,
+                                                 const CollocationOptions& options = {});
+
 /// The same problem with the joint path free too (the predictive problem): q, qd and qdd become
 /// unknowns at every point, joined by Hermite-Simpson's defects (q' = qd, qd' = qdd), the
 /// torques the model's inverse dynamics of them, the muscles' lengths functions of q. The path
