@@ -11,14 +11,15 @@ library's message; the C++ core releases the GIL while it plans.
     plan.status, plan.cost, plan.sample(np.linspace(0, 3, 301))["excitation"]
 
 Also: shortest_transfer (the least duration with a plan), simulate_plan (Simbody, open loop), run_receding_horizon (the closed loop),
-static_optimization (OpenSim's, along a measured motion), track (the controller following a
+static_optimization (OpenSim's, along a measured motion), solve_inverse (the inverse problem
+along a measured motion, as OpenSim's MocoInverse), track (the controller following a
 measured motion, as OpenSim's CMC); the
 submodules flatsos.study (batch studies on Dask), flatsos.animation (GIF and MP4 of planar
 models) and flatsos.sto (OpenSim tables and motion files), each runnable with python3 -m.
 """
 
 from ._flatsos import (Model, OpenLoopPlan, plan_open_loop, run_receding_horizon, shortest_transfer, simulate_plan,
-                       static_optimization, track)
+                       solve_inverse, static_optimization, track)
 
 __all__ = ["Model", "OpenLoopPlan", "plan_open_loop", "run_receding_horizon", "shortest_transfer", "simulate_plan",
-           "static_optimization", "track"]
+           "solve_inverse", "static_optimization", "track"]

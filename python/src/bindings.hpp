@@ -71,6 +71,7 @@ void register_open_loop(pybind11::module_& m);
 void register_simulation(pybind11::module_& m);
 void register_receding_horizon(pybind11::module_& m);
 void register_static_optimization(pybind11::module_& m);
+void register_inverse_problem(pybind11::module_& m);
 void register_tracking(pybind11::module_& m);
 
 }  // namespace flatsos::python

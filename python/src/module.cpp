@@ -7,5 +7,6 @@ PYBIND11_MODULE(_flatsos, m) {
   flatsos::python::register_simulation(m);
   flatsos::python::register_receding_horizon(m);
   flatsos::python::register_static_optimization(m);
+  flatsos::python::register_inverse_problem(m);
   flatsos::python::register_tracking(m);
 }
