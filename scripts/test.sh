@@ -45,6 +45,12 @@ sanitize() {
     TaskRegion.ARegionOutsideTheRangesIsRefused
     TaskRegion.IsThePosturesSpanWidenedByTheMarginAndClippedToTheRanges
     Tracking.RefusesAControllerWithoutAReference
+    # Each imports arm26 and solves its inverse problem again (6-13 s in Release); the inverse
+    # problem's code runs under the sanitizers in InverseProblem.Arm26AlongTheTutorialsMotion...
+    InverseProblem.Arm26FramesKeepTheBoundsAndTheMotionsTorques
+    InverseProblem.Arm26ExcitationsReplayedBySimbodyFollowTheMotion
+    InverseProblem.UnpennatedArm26IsWithinOnePercentOfTheCollocationOptimumAlongTheSameMotion
+    DeGrooteImport.Arm26sThelenMusclesBecomeDeGrooteFreglysAsMocoMapsThem  # two imports
     package_install_and_consume  # packaging, not memory: the Release suite checks it
   )
   # The command-line tests skip their longest runs too (the left leg's controller).
