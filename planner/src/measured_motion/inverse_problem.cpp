@@ -1,5 +1,7 @@
 #include "flatsos/planner/inverse_problem.hpp"
 
+#include <algorithm>
+#include <memory>
 #include <stdexcept>
 
 #include "flatness/input_checks.hpp"
