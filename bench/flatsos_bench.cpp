@@ -28,6 +28,7 @@
 #include "flatsos/plugin/stopwatch.hpp"
 #include "ipopt_linear_solvers.hpp"
 #include "scaling.hpp"
+#include "inverse_problem_bench.hpp"
 #include "static_optimization_bench.hpp"
 #include "tracking_bench.hpp"
 #include "scenario_inputs.hpp"
@@ -86,6 +87,10 @@ int main(int argc, char** argv) try {
   app.add_flag("--static-optimization-only", static_optimization_only,
                "time only static optimization: arm26 as downloaded along OpenSim's tutorial motion, with its "
                "geometry paths and with its fitted ones");
+  bool inverse_problem_only = false;
+  app.add_flag("--inverse-problem-only", inverse_problem_only,
+               "time only the inverse problem: arm26 with MocoInverse's muscles along OpenSim's CMC tutorial motion, "
+               "beside the collocation reference along the same motion");
   bool tracking_only = false;
   app.add_flag("--tracking-only", tracking_only,
                "time only tracking: arm26 as downloaded following OpenSim's CMC tutorial motion (the controller's "
@@ -105,6 +110,11 @@ int main(int argc, char** argv) try {
   if (static_optimization_only) {
     emit({{"machine", {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}}},
           {"static_optimization", flatsos::bench::static_optimization_timing(std::max(3, reps / 3))}});
+    return 0;
+  }
+  if (inverse_problem_only) {
+    emit({{"machine", {{"cpu", cpu_model()}, {"hardware_threads", std::thread::hardware_concurrency()}}},
+          {"inverse_problem", flatsos::bench::inverse_problem_timing(std::max(3, reps / 3))}});
     return 0;
   }
   if (tracking_only) {
@@ -586,6 +596,7 @@ int main(int argc, char** argv) try {
   j["ipopt_linear_solvers"] = linear_solver_study();
   j["static_optimization"] = flatsos::bench::static_optimization_timing(std::max(3, reps / 3));
   j["tracking"] = flatsos::bench::tracking_timing(std::max(3, reps / 3));
+  j["inverse_problem"] = flatsos::bench::inverse_problem_timing(std::max(3, reps / 3));
   j["scaling"] = scaling();
   emit(j);
   return 0;
