@@ -23,4 +23,7 @@ grep -q 'elbow_reserve' "$tmp/reserves/arm_richter_warner_StaticOptimization_for
 expect 0 "121 frames" -- "$so" --model "$arm26/arm26.osim" --opensim-2-muscles --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/arm26"
 head -8 "$tmp/arm26/arm26_StaticOptimization_activation.sto" | grep -q "^time	TRIlong	TRIlat	TRImed	BIClong	BICshort	BRA$" || { echo "FAILED: the activation table lacks OpenSim's columns"; fail=1; }
 grep -q '"strength_rule": "opensim2"' "$tmp/arm26/summary.json" || { echo "FAILED: the summary does not name OpenSim 2.x's rule"; fail=1; }
+# With MocoInverse's muscles (fitted paths: faster), to compare with the inverse problem.
+expect 0 "121 frames" -- "$so" --model "$arm26/arm26.osim" --degroote-muscles --ignore-passive-fiber-forces --paths fitted --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/arm26_dgf"
+expect 2 "--degroote-muscles" -- "$so" --model "$arm26/arm26.osim" --ignore-passive-fiber-forces --coordinates "$arm26/inverse_kinematics/arm26_InverseKinematics.mot" --out "$tmp/o"
 exit $fail
