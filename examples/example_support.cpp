@@ -365,10 +365,14 @@ void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim) {
   CLI::Option* opensim_2 = app.add_flag("--opensim-2-muscles", osim.opensim_2_muscles,
                                         "an .osim's Thelen2003Muscles, and its cylinder wrapping, as OpenSim 2.x "
                                         "modelled them (to reproduce results of that time; OpenSim 4's otherwise)");
+  add_degroote_options(app, osim, opensim_2);
+}
+
+void add_degroote_options(CLI::App& app, OpenSimModelOptions& osim, CLI::Option* opensim_2_muscles) {
   CLI::Option* degroote = app.add_flag("--degroote-muscles", osim.degroote_muscles,
                                        "every muscle of an .osim replaced by a DeGrooteFregly2016Muscle as OpenSim Moco's "
                                        "ModOpReplaceMusclesWithDeGrooteFregly2016 does (smooth laws, as MocoInverse uses)");
-  degroote->excludes(opensim_2);
+  degroote->excludes(opensim_2_muscles);
   app.add_flag("--ignore-passive-fiber-forces", osim.ignore_passive_fiber_forces,
                "with --degroote-muscles: their passive fibre force left out (Moco's ModOpIgnorePassiveFiberForcesDGF)")
       ->needs(degroote);

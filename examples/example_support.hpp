@@ -102,5 +102,8 @@ std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string
 /// Adds --paths (fitted | geometry), --opensim-2-muscles, --degroote-muscles and
 /// --ignore-passive-fiber-forces to a program.
 void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim);
+/// Adds --degroote-muscles (excluding the given --opensim-2-muscles) and
+/// --ignore-passive-fiber-forces, for a program that words its own --opensim-2-muscles.
+void add_degroote_options(CLI::App& app, OpenSimModelOptions& osim, CLI::Option* opensim_2_muscles);
 
 }  // namespace flatsos::examples

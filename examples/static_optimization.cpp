@@ -36,13 +36,7 @@ int main(int argc, char** argv) {
       app.add_flag("--opensim-2-muscles", osim.opensim_2_muscles,
                    "an .osim's Thelen2003Muscles as OpenSim 2.x modelled them, and OpenSim 2.x's force per activation "
                    "(to reproduce results of that time)");
-  CLI::Option* degroote = app.add_flag("--degroote-muscles", osim.degroote_muscles,
-                                       "every muscle of an .osim replaced by a DeGrooteFregly2016Muscle as OpenSim Moco's "
-                                       "ModOpReplaceMusclesWithDeGrooteFregly2016 does (to compare with MocoInverse)");
-  degroote->excludes(opensim_2);
-  app.add_flag("--ignore-passive-fiber-forces", osim.ignore_passive_fiber_forces,
-               "with --degroote-muscles: their passive fibre force left out (Moco's ModOpIgnorePassiveFiberForcesDGF)")
-      ->needs(degroote);
+  ex::add_degroote_options(app, osim, opensim_2);
   app.add_option("--cutoff-hz", cutoff_hz, "low-pass cutoff of the coordinates, Hz (OpenSim's; negative: no filtering)")
       ->capture_default_str();
   app.add_option("--activation-exponent", options.activation_exponent, "p in sum w a^p (OpenSim's activation_exponent)")

@@ -14,6 +14,7 @@
 
 #include "flatsos/planner/collocation.hpp"
 #include "flatsos/planner/effort.hpp"
+#include "plan_effort.hpp"
 #include "flatsos/planner/inverse_problem.hpp"
 #include "flatsos/planner/joint_reference.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
@@ -25,6 +26,7 @@
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
+using flatsos::test::squared_excitations_of;
 
 namespace {
 
@@ -92,18 +94,6 @@ const Arm26Inverse& arm26_unpennated_inverse() {
     return solve_along_tutorial_motion(std::move(d), false);
   }();
   return solved;
-}
-
-// Simpson's rule over `intervals` (even) of sum_j n_j^2 from the exact inverse map of the plan.
-double squared_excitations_of(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan, int intervals) {
-  const auto planned = fpl::PlannedExcitation::create(flat, plan.path, *plan.Y);
-  const double T = plan.path.duration_s, h = T / intervals;
-  double sum = 0.0;
-  for (int i = 0; i <= intervals; ++i) {
-    const double w = (i == 0 || i == intervals) ? 1.0 : (i % 2 ? 4.0 : 2.0);
-    sum += w * planned->at(i * h).excitation.squaredNorm();
-  }
-  return sum * h / 3.0;
 }
 
 // The largest joint-angle error of Simbody's open-loop replay over [0, duration_s], from the

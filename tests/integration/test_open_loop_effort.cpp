@@ -16,6 +16,7 @@
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/planner/collocation.hpp"
 #include "flatsos/planner/effort.hpp"
+#include "plan_effort.hpp"
 #include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "flatsos/planner/rest_state.hpp"
@@ -25,21 +26,9 @@
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
+using flatsos::test::squared_excitations_of;
 
 namespace {
-
-// Simpson's rule over `intervals` (even) uniform intervals of sum_j n_j^2 from the exact inverse
-// map of the plan (not the planner's torque model nor its quadrature).
-double squared_excitations_of(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan, int intervals) {
-  const auto planned = fpl::PlannedExcitation::create(flat, plan.path, *plan.Y);
-  const double T = plan.path.duration_s, h = T / intervals;
-  double sum = 0.0;
-  for (int i = 0; i <= intervals; ++i) {
-    const double w = (i == 0 || i == intervals) ? 1.0 : (i % 2 ? 4.0 : 2.0);
-    sum += w * planned->at(i * h).excitation.squaredNorm();
-  }
-  return sum * h / 3.0;
-}
 
 // The share of `points` uniform times at which muscle j pulls more than `force_N`.
 double share_above(const fpl::FlatOutputMap& flat, const fpl::OpenLoopPlan& plan, int j, double force_N, int points) {
