@@ -50,12 +50,16 @@ grep -q '"whole_program_nlp_solve_seconds"' "$tmp/olw/summary.json" || { echo "F
 grep -q '"cost_Ns": 958.3213' "$tmp/olw/summary.json" || { echo "FAILED: the whole-program NLP's cost is not the exchange's"; fail=1; }
 expect 1 "free_path plans by the exchange method" -- "$ol" --sos-method whole_program_nlp --free-path-spans 2 --out "$tmp/o"
 # A nonlinear effort (squared excitations): planned along the prescribed path and named with its
-# value and unit in the summary; an unknown name exits 2, a free path with it exits 1 naming why.
+# value and unit in the summary; an unknown name exits 2; with the path free it is planned by the
+# reduced quasi-Newton method (the elbow, 12 spans growing by 1.2), and the joint Newton method
+# exits 1 naming why.
 expect 0 "excitation_squared 0.2349" -- "$ol" --effort excitation_squared --integrator rosenbrock --accuracy 1e-6 --out "$tmp/ole"
 grep -q '"effort": "excitation_squared"' "$tmp/ole/summary.json" || { echo "FAILED: the summary does not name the effort"; fail=1; }
 grep -q '"effort_unit": "s"' "$tmp/ole/summary.json" || { echo "FAILED: the summary lacks the effort's unit"; fail=1; }
 expect 2 "--effort" -- "$ol" --effort squared --out "$tmp/o"
-expect 1 "planned along the prescribed path" -- "$ol" --effort excitation_squared --free-path-spans 2 --out "$tmp/o"
+expect 1 "takes the method 'reduced_quasi_newton'" -- "$ol" --effort excitation_squared --free-path-spans 2 --free-path-method joint_newton --out "$tmp/o"
+expect 0 "excitation_squared 0.0089" -- "$ol" --model "$models/elbow_1dof.json" --effort excitation_squared --free-path-spans 12 --free-path-span-growth 1.2 --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olef"
+grep -q '"optimized": true' "$tmp/olef/summary.json" || { echo "FAILED: the summary does not say the path was optimized"; fail=1; }
 # The shortest transfer: found, simulated over that duration, every plan of the search in the
 # summary; a longest duration without a plan fails the task.
 expect 2 "--shortest-time-ratio" -- "$ol" --shortest-time --shortest-time-ratio 1.5 --out "$tmp/o"

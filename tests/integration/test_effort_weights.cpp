@@ -14,6 +14,7 @@
 
 #include "../planner/scenario_fixture.hpp"
 #include "flatsos/planner/motion_planner.hpp"
+#include "flatsos/planner/open_loop_study.hpp"
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 
@@ -227,21 +228,29 @@ TEST(EffortWeights, AnEffortGivenWithThePlanIsTheModelFilesWeights) {
   EXPECT_LT((a.slp.alpha - b.slp.alpha).norm(), 1e-9 * (1.0 + b.slp.alpha.norm()));
 
   // A nonlinear effort is planned by its own sequential QP (test_open_loop_effort.cpp), along the
-  // prescribed path only: with the free path it is refused by name.
+  // prescribed path and, by the reduced quasi-Newton method, with the path free; the joint Newton
+  // method minimizes linear efforts only and refuses it by name.
   o.effort = fpl::effort_named("excitation_squared");
   const fpl::OpenLoopPlan squared = fpl::plan_open_loop(paper, start, o);
   ASSERT_EQ(squared.status, fpl::SolveStatus::Solved) << squared.message;
   EXPECT_EQ(squared.sos.effort_name, "excitation_squared");
   EXPECT_EQ(given.sos.effort_name, "tendon_force");
   o.free_path.enabled = true;
+  fpl::OpenLoopStudyOptions study;
+  study.free_path.method = fpl::FreePathMethod::JointNewton;
   try {
-    fpl::plan_open_loop(paper, start, o);
-    FAIL() << "a nonlinear effort was planned along a free path";
+    fpl::plan_open_loop(paper, start, o, study);
+    FAIL() << "the joint Newton method planned a nonlinear effort";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("the effort 'excitation_squared' is planned along the prescribed path"),
+    EXPECT_NE(std::string(e.what()).find("the effort 'excitation_squared' takes the method 'reduced_quasi_newton'"),
               std::string::npos)
         << e.what();
   }
+  const fpl::OpenLoopPlan free = fpl::plan_open_loop(paper, start, o);
+  ASSERT_EQ(free.status, fpl::SolveStatus::Solved) << free.message;
+  EXPECT_TRUE(free.free_path.optimized);
+  EXPECT_EQ(free.sos.effort_name, "excitation_squared");
+  EXPECT_LT(free.sos.effort_value, squared.sos.effort_value);
   o.free_path.enabled = false;
   o.effort = std::make_shared<fpl::TendonForceEffort>(Eigen::Vector2d(1.0, 1.0));
   EXPECT_THROW(fpl::plan_open_loop(paper, start, o), std::invalid_argument);

@@ -12,8 +12,10 @@
 
 #include "bounds/bound_rows.hpp"
 #include "executable_plan.hpp"
+#include "flatsos/planner/effort.hpp"
 #include "flatsos/planner/open_loop_study.hpp"
 #include "path/free_path.hpp"
+#include "path/path_effort.hpp"
 #include "path/path_rows.hpp"
 #include "scenario_fixture.hpp"
 #include "sos/bound_points.hpp"
@@ -111,6 +113,82 @@ TEST_F(FreePath, TheValuesGradientIsTheMultipliersTimesTheRowsDerivatives) {
     // Truncation estimated from the two steps; the SLP's convergence (1e-9 of V) over the step.
     const double tolerance = 10.0 * (std::abs(d2 - d1) / 3.0 + 1e-9 * at.cost_N_s / h) + 1e-3;
     EXPECT_NEAR(at.gradient[i], d1, tolerance) << "coefficient " << i;
+  }
+}
+
+// With a nonlinear effort V(c) is the effort's minimum over theta (its sequential QP), and its
+// gradient adds the effort's own derivative in c (the forces and lengths at its quadrature points
+// move with the path) to the rows' multipliers times their derivatives.
+TEST_F(FreePath, TheSquaredEffortsValueHasTheGradientOfItsPathAndItsMultipliers) {
+  o = open_loop_options(1.5, kDegree, 24);
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  const auto effort = fpl::effort_named("excitation_squared");
+  fpd::FreePathSettings settings = free_path();
+  settings.effort = effort.get();
+  Eigen::VectorXd c = fpd::path_coefficients(*p.setup, p.prescribed.path, p.initial_q_jet, o.target_q_rad, settings);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> move(-0.01, 0.01);
+  for (Eigen::Index i = 0; i < c.size(); ++i) c[i] += move(rng);
+  const std::vector<double> times = uniform_times(1.5, 48);
+  auto value_at = [&](const Eigen::VectorXd& at_c, const Eigen::VectorXd& theta) {
+    return fpd::path_value(*p.setup, arm.flat, p.initial_q_jet, o.target_q_rad, o.reserves_N, p.a_min, settings, times,
+                           at_c, theta);
+  };
+  const fpd::PathValue at = value_at(c, fpd::theta_of(*p.setup, *p.prescribed.Y));
+  ASSERT_TRUE(at.ok) << at.failure;
+  EXPECT_GT(at.active_bound_rows + at.active_reserve_rows, 0);
+  // The linear effort's value along the same path is in N s; this one is in s, far smaller.
+  EXPECT_LT(at.cost_N_s, 1.0);
+  ASSERT_EQ(at.gradient.size(), c.size());
+  EXPECT_GT(at.gradient.norm(), 1e-3);
+  const double h = 1e-4;
+  for (Eigen::Index i = 0; i < c.size(); ++i) {
+    auto V = [&](double step) {
+      Eigen::VectorXd moved = c;
+      moved[i] += step;
+      const fpd::PathValue v = value_at(moved, at.theta);
+      EXPECT_TRUE(v.ok) << v.failure;
+      return v.cost_N_s;
+    };
+    const double d1 = (V(h) - V(-h)) / (2 * h), d2 = (V(2 * h) - V(-2 * h)) / (4 * h);
+    // Truncation estimated from the two steps; the QP's convergence (1e-10 of V) over the step.
+    const double tolerance = 10.0 * (std::abs(d2 - d1) / 3.0 + 1e-10 * at.cost_N_s / h) + 1e-6 * at.gradient.norm();
+    EXPECT_NEAR(at.gradient[i], d1, tolerance) << "coefficient " << i;
+  }
+}
+
+// The effort along the path as a function of z = (theta, c): its gradient, through the muscle
+// inverse, the torque jet and the path lengths, is the twin of central differences of its value.
+TEST_F(FreePath, TheEffortAlongThePathHasTheGradientOfItsValue) {
+  o = open_loop_options(1.5, kDegree, 24);
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  const fpd::PathParameterization P = fpd::parameterize(free_path(), o.duration_s, p.initial_q_jet, o.target_q_rad);
+  const fpd::PathVariables v{p.setup->free_coefficients, P.free};
+  Eigen::VectorXd z(v.size());
+  z << fpd::theta_of(*p.setup, *p.prescribed.Y), fpd::fit_to(P, p.prescribed.path);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> move(-0.01, 0.01);
+  for (Eigen::Index i = v.thetas; i < z.size(); ++i) z[i] += move(rng);
+  for (const char* name : {"excitation_squared", "activation_cubed", "stress_squared"}) {
+    const auto effort = fpl::effort_named(name);
+    const fpd::PathEffort E(*p.setup, arm.flat, P, *effort);
+    Eigen::VectorXd g;
+    ASSERT_TRUE(E.gradient(z, g)) << name;
+    auto value = [&](const Eigen::VectorXd& at) {
+      double e = 0.0;
+      EXPECT_TRUE(E.value(at, e));
+      return e;
+    };
+    double worst = 0.0;
+    for (Eigen::Index i = 0; i < z.size(); ++i) {
+      const double h = 1e-6 * (1.0 + std::abs(z[i]));
+      Eigen::VectorXd up = z, down = z;
+      up[i] += h, down[i] -= h;
+      worst = std::max(worst, std::abs((value(up) - value(down)) / (2 * h) - g[i]));
+    }
+    EXPECT_LT(worst, 1e-6 * (1.0 + g.cwiseAbs().maxCoeff())) << name;
   }
 }
 

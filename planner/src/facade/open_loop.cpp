@@ -191,13 +191,10 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
     OpenLoopOptions rest = options;
     rest.effort = nullptr;
     // A linear effort: the same plan on a map that minimizes it. A nonlinear one: the SOS
-    // program minimizes it from the optimum of the map's own linear effort.
+    // program minimizes it from the optimum of the map's own linear effort (and the free path's
+    // stage from the prescribed path's plan).
     if (options.effort->tendonForceWeights())
       return plan_open_loop(flat.withEffort(options.effort), workspace, initial, rest, study);
-    if (options.free_path.enabled)
-      throw std::invalid_argument("open-loop plan: the free joint path minimizes efforts linear in the tendon forces; "
-                                  "the effort '" + options.effort->name() + "' is planned along the prescribed path "
-                                  "(free_path.enabled = false)");
     rest.sos.effort = options.effort;
     return OpenLoopPlanning(flat, workspace, initial, resolve_basis(flat, rest), study).plan();
   }

@@ -35,6 +35,10 @@ void validate_free_path_options(const FlatOutputMap& flat, const OpenLoopOptions
   if (!o.sos.bounds.enforce)
     throw std::invalid_argument("open-loop plan: free_path needs the excitation bounds (sos.bounds.enforce): without "
                                 "them a faster path always costs less");
+  if (o.sos.effort && study.free_path.method == FreePathMethod::JointNewton)
+    throw std::invalid_argument("open-loop plan: the free path's joint Newton method minimizes efforts linear in the "
+                                "tendon forces; the effort '" + o.sos.effort->name() + "' takes the method '" +
+                                to_string(FreePathMethod::ReducedQuasiNewton) + "'");
   if (study.sos.method != SosProgramMethod::Exchange)
     throw std::invalid_argument(std::string("open-loop plan: free_path plans by the exchange method, which imposes the "
                                             "excitation bounds; sos.method '") +
@@ -78,8 +82,15 @@ FreePathOutcome optimize_path(const FlatOutputMap& flat, const Eigen::MatrixXd& 
   const Eigen::VectorXd a_min = activation_minima(flat, o.sos.bounds.min_activation);
   const SplineTrajectory start_Y =
       start_spans == o.sos.flat_output_spans ? *plan.sos.Y : plan.sos.Y->inBasis(program.basis);
+  FreePathSettings settings(o.free_path, study.free_path);
+  settings.effort = o.sos.effort.get();
   return optimize_joint_path(program, flat, plan.path, initial_q_jet, o.target_q_rad, theta_of(program, start_Y),
-                             o.reserves_N, a_min, FreePathSettings(o.free_path, study.free_path));
+                             o.reserves_N, a_min, settings);
+}
+
+// What the plan minimized: the nonlinear effort's value, or the map's linear cost.
+double minimized(const OpenLoopOptions& o, const OpenLoopPlan& plan) {
+  return o.sos.effort ? plan.sos.effort_value : plan.sos.cost_N_s;
 }
 
 // The plan along the optimized path, started from the path stage's plan and points (it is
@@ -105,12 +116,12 @@ void refine_along_optimized_path(const FlatOutputMap& flat, plugin::ModelWorkspa
     // A solved plan beats a failed one and a cheaper one a dearer one; among failures the last
     // (finest torque model) says why.
     const bool solved = attempt.status == SolveStatus::Solved, best_solved = best.status == SolveStatus::Solved;
-    if ((solved && (!best_solved || attempt.sos.cost_N_s < best.sos.cost_N_s)) || (!solved && !best_solved)) {
+    if ((solved && (!best_solved || minimized(o, attempt) < minimized(o, best))) || (!solved && !best_solved)) {
       best = std::move(attempt);
       best_pieces = along.torque.pieces;
     }
     const bool close = best.status == SolveStatus::Solved &&
-                       best.sos.cost_N_s <= (1.0 + f.torque_model_relative_gap) * free.cost_N_s;
+                       minimized(o, best) <= (1.0 + f.torque_model_relative_gap) * free.cost_N_s;
     if (close || refinement == f.max_torque_refinements) break;
     along.torque.pieces *= 2;
     along.torque.piece_growth = std::sqrt(along.torque.piece_growth);
@@ -133,7 +144,7 @@ void plan_along_free_path(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   const Stopwatch wall;
   FreePathReport& report = plan.free_path;
   report.prescribed_status = to_string(plan.status);
-  report.prescribed_cost_N_s = plan.status == SolveStatus::Solved ? plan.sos.cost_N_s : 0.0;
+  report.prescribed_cost_N_s = plan.status == SolveStatus::Solved ? minimized(o, plan) : 0.0;
   report.start_flat_output_spans = start_spans;
   // From the prescribed path's plan, or, when the bounds cannot be met along it, from its closest.
   if (!plan.sos.Y) return;  // nothing to start from: the prescribed plan's status says why

@@ -21,12 +21,6 @@ void joint_jet_slope_into(const PathPoint& pt, int joints, Eigen::MatrixXd& dq) 
       dq.row(kOrders * r + l).head(columns) = pt.q_slope[static_cast<std::size_t>(l)].row(r);
 }
 
-Eigen::MatrixXd joint_jet_slope(const PathPoint& pt, int joints) {
-  Eigen::MatrixXd dq(kOrders * joints, static_cast<Eigen::Index>(pt.path_columns.size()));
-  joint_jet_slope_into(pt, joints, dq);
-  return dq;
-}
-
 // The tendon-force jets at a point, m x 3: F^(k) = base + slope theta + C_tau tau^(k).
 Eigen::MatrixXd force_jet(const PathPoint& pt, const Eigen::MatrixXd& Ctau, const Eigen::MatrixXd& tau,
                           const Eigen::VectorXd& theta) {
@@ -124,11 +118,33 @@ Eigen::VectorXd PathPoint::localPath(const Eigen::VectorXd& c) const {
   return out;
 }
 
+Eigen::MatrixXd joint_jet_slope(const PathPoint& pt, int joints) {
+  Eigen::MatrixXd dq(kOrders * joints, static_cast<Eigen::Index>(pt.path_columns.size()));
+  joint_jet_slope_into(pt, joints, dq);
+  return dq;
+}
+
 Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c) {
   Eigen::MatrixXd q = pt.q_base;
   const Eigen::VectorXd local = pt.localPath(c);
   for (int l = 0; l < kOrders; ++l) q.col(l) += pt.q_slope[static_cast<std::size_t>(l)] * local;
   return q;
+}
+
+std::vector<BoundPoint> bound_points_along_path(const FlatOutputMap& flat, const std::vector<PathPoint>& points,
+                                                const Eigen::VectorXd& c) {
+  const int m = flat.numMuscles();
+  std::vector<BoundPoint> out;
+  out.reserve(points.size());
+  for (const PathPoint& pt : points) {
+    const Eigen::MatrixXd q = joint_jet(pt, c);
+    BoundPoint bp = pt.flat;
+    bp.base += flat.Ctau() * flat.model().pinTree().torqueJet(q);
+    bp.path.resize(static_cast<std::size_t>(m));
+    for (int j = 0; j < m; ++j) bp.path[static_cast<std::size_t>(j)] = flat.pathLengthJet(j, q);
+    out.push_back(std::move(bp));
+  }
+  return out;
 }
 
 PathRows::PathRows(const FlatOutputMap& flat, const PathVariables& v, const std::vector<PathPoint>& points,

@@ -58,6 +58,12 @@ PathPoint make_path_point(const SosSetup& setup, const FlatOutputMap& flat, cons
 
 /// The joint jet (N x 5) of the path of c at a point.
 Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c);
+/// Its derivative in the point's path columns: 5N x columns, row 5 r + l for d^l q_r / dt^l.
+Eigen::MatrixXd joint_jet_slope(const PathPoint& pt, int joints);
+/// The points' tendon-force jets (base plus C_tau tau along the path of c, slope in theta) and
+/// path-length jets: BoundPoints over theta for the path c.
+std::vector<BoundPoint> bound_points_along_path(const FlatOutputMap& flat, const std::vector<PathPoint>& points,
+                                                const Eigen::VectorXd& c);
 
 /// The rows' variables z = (theta, c).
 struct PathVariables {

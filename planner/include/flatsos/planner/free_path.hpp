@@ -36,7 +36,8 @@ struct FreeJointPathOptions {
   double span_growth = 1.0;
 };
 
-/// What optimizing the joint path did (OpenLoopOptions::free_path).
+/// What optimizing the joint path did (OpenLoopOptions::free_path). With a nonlinear effort
+/// (OpenLoopOptions::effort) the costs below are its values, in its unit.
 struct FreePathReport {
   bool optimized = false;         ///< the path was optimized and the plan is along it
   /// The plan along the degree-8 path that started the path stage, in its basis of
