@@ -28,6 +28,7 @@
 #include "flatsos/plugin/stopwatch.hpp"
 #include "ipopt_linear_solvers.hpp"
 #include "scaling.hpp"
+#include "free_path_effort_bench.hpp"
 #include "inverse_problem_bench.hpp"
 #include "static_optimization_bench.hpp"
 #include "tracking_bench.hpp"
@@ -397,6 +398,8 @@ int main(int argc, char** argv) try {
     }
     j["open_loop_free_path_flatness_vs_collocation"] = row;
   }
+  j["open_loop_free_path_squared_excitations_vs_collocation"] =
+      flatsos::bench::free_path_squared_excitations(flat, ws, ms0, ol);
   if (versus_collocation_only) {
     emit(j);
     return 0;
