@@ -33,6 +33,7 @@ json free_path_squared_excitations(const fpl::FlatOutputMap& flat, plugin::Model
                        {"total", stats(t, 1e3, "ms")},
                        {"path_stage_and_final_plan", {{"value", 1e3 * plan.free_path.seconds}, {"unit", "ms"}}},
                        {"path_quasi_newton_steps", plan.free_path.path_iterations},
+                       {"path_value_evaluations", plan.free_path.evaluations},
                        {"path_exchange_rounds", plan.free_path.rounds},
                        {"path_points", plan.free_path.points},
                        {"path_effort_qp_steps", plan.free_path.sequential_lp_iterations}};
