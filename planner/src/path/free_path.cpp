@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -202,10 +203,14 @@ FreePathOutcome optimize_by_quasi_newton(const SosSetup& setup, const FlatOutput
   // gradient there are the closest excitation's, not smooth): its quadrature points are exchange
   // points from the start. On the paper's arm the quasi-Newton steps then converged (103 steps to
   // 0.098946 s) where they crept without (2024 steps to 0.099016 s).
-  if (o.effort)
-    for (double t : PathEffort(setup, flat, P, *o.effort).times_s()) pts.add(t);
+  std::optional<PathEffort> effort;
+  if (o.effort) {
+    effort.emplace(setup, flat, P, *o.effort);
+    for (double t : effort->times_s()) pts.add(t);
+  }
   const std::vector<PathPoint>& points = pts.points;  // V reads them as they grow
-  ValueFunction V(setup, flat, points, P, reserves, a_min, o.max_sequential_lp_iterations, o.effort);
+  ValueFunction V(setup, flat, points, P, reserves, a_min, o.max_sequential_lp_iterations,
+                  effort ? &*effort : nullptr);
   Evaluation start;
   start.theta = theta_start;
   start.radius = 0.1 * (1.0 + theta_start.cwiseAbs().maxCoeff());
@@ -269,7 +274,10 @@ PathValue path_value(const SosSetup& setup, const FlatOutputMap& flat, const Eig
   if (c.size() != P.free) throw std::invalid_argument("path value: c has " + std::to_string(c.size()) + " entries, the path " + std::to_string(P.free));
   std::vector<PathPoint> points;
   for (double t : times) points.push_back(make_path_point(setup, flat, P, t));
-  ValueFunction V(setup, flat, points, P, reserves, a_min, o.max_sequential_lp_iterations, o.effort);
+  std::optional<PathEffort> effort;
+  if (o.effort) effort.emplace(setup, flat, P, *o.effort);
+  ValueFunction V(setup, flat, points, P, reserves, a_min, o.max_sequential_lp_iterations,
+                  effort ? &*effort : nullptr);
   Evaluation start;
   start.theta = theta_start;
   start.radius = 0.1 * (1.0 + theta_start.cwiseAbs().maxCoeff());

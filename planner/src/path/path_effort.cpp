@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <boost/math/quadrature/gauss.hpp>
 #include <cmath>
+#include <utility>
 
 #include "flatsos/muscles/muscle_inverse.hpp"
 #include "sos/effort_exchange.hpp"
@@ -57,25 +58,11 @@ bool term_in_u(const fm::MuscleParameters& p, const Effort& effort, int j, const
 PathEffort::PathEffort(const SosSetup& setup, const FlatOutputMap& flat,
                        const PathParameterization& P, const Effort& effort)
     : flat_(flat), effort_(effort), thetas_(setup.free_coefficients) {
-  using Rule = boost::math::quadrature::gauss<double, kEffortGaussPoints>;
   std::vector<double> ends = setup.basis.breakpoints();
   ends.insert(ends.end(), P.basis.breakpoints().begin(), P.basis.breakpoints().end());
-  std::sort(ends.begin(), ends.end());
-  ends.erase(
-      std::unique(ends.begin(), ends.end(), [](double a, double b) { return b - a < 1e-12; }),
-      ends.end());
-  for (std::size_t k = 0; k + 1 < ends.size(); ++k) {
-    const double mid = 0.5 * (ends[k] + ends[k + 1]), half = 0.5 * (ends[k + 1] - ends[k]);
-    // Boost's rule keeps the non-negative abscissae; each but 0 stands for a pair +-x.
-    for (std::size_t i = 0; i < Rule::abscissa().size(); ++i) {
-      const double x = Rule::abscissa()[i], w = Rule::weights()[i];
-      for (const double sign : {-1.0, 1.0}) {
-        if (x == 0.0 && sign > 0.0) continue;
-        points_.push_back(make_path_point(setup, flat, P, mid + sign * half * x));
-        weights_s_.push_back(half * w);
-      }
-    }
-  }
+  const EffortQuadrature q = effort_quadrature(std::move(ends));
+  for (double t : q.times_s) points_.push_back(make_path_point(setup, flat, P, t));
+  weights_s_ = q.weights_s;
 }
 
 std::vector<BoundPoint> PathEffort::boundPoints(const Eigen::VectorXd& c) const {

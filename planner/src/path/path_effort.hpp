@@ -24,6 +24,7 @@ class PathEffort {
   /// (what the effort's sequential QP in theta works with).
   std::vector<BoundPoint> boundPoints(const Eigen::VectorXd& c) const;
   const std::vector<double>& weights_s() const { return weights_s_; }
+  const Effort& effort() const { return effort_; }
   /// The quadrature's times (s).
   std::vector<double> times_s() const;
 

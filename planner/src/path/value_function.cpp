@@ -60,7 +60,7 @@ static RowsAlongPath rows_along_path(const SosSetup& setup, const FlatOutputMap&
 ValueFunction::ValueFunction(const SosSetup& setup, const FlatOutputMap& flat,
                              const std::vector<PathPoint>& points, const PathParameterization& P,
                              const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
-                             int max_sequential_lp_iterations, const Effort* effort)
+                             int max_sequential_lp_iterations, const PathEffort* effort)
     : setup_(setup),
       flat_(flat),
       points_(points),
@@ -70,7 +70,6 @@ ValueFunction::ValueFunction(const SosSetup& setup, const FlatOutputMap& flat,
       effort_(effort) {
   v_.thetas = setup.free_coefficients;
   v_.paths = P.free;
-  if (effort_) path_effort_.emplace(setup, flat, P, *effort_);
 }
 
 // Starts the plan's SLP from `from` (theta, basis, radius).
@@ -112,26 +111,21 @@ Evaluation ValueFunction::operator()(const Eigen::VectorXd& c, const Evaluation&
 // The nonlinear effort's V(c): its sequential QP from e.theta at the rows along the path, and
 // dV/dc = dE/dc (theta fixed) - sum_k lambda_k d g_k / d c.
 Evaluation ValueFunction::minimizeEffort(const RowsAlongPath& rows, Evaluation e) {
-  const std::vector<BoundPoint> effort_points = path_effort_->boundPoints(e.c);
-  const EffortSqpProblem problem{flat_,
-                                 *effort_,
-                                 effort_points,
-                                 path_effort_->weights_s(),
-                                 rows.lp,
-                                 0.5 * kReserveMargin_N,
-                                 rows.bound_points,
-                                 a_min_};
+  const std::vector<BoundPoint> effort_points = effort_->boundPoints(e.c);
+  const EffortSqpProblem problem{
+      flat_,   effort_->effort(),      effort_points,     effort_->weights_s(),
+      rows.lp, 0.5 * kReserveMargin_N, rows.bound_points, a_min_};
   EffortSqp sqp(problem);
   if (!sqp.start(e.theta)) {
-    e.failure =
-        "the effort '" + effort_->name() + "' is not defined at the start of its sequential QP";
+    e.failure = "the effort '" + effort_->effort().name() +
+                "' is not defined at the start of its sequential QP";
     return e;
   }
   const bool solved = sqp.descend(e.theta, e.sequential_lp_iterations, max_slp_);
   sequential_lp_iterations += e.sequential_lp_iterations;
   Eigen::VectorXd z(v_.size()), effort_gradient;
   z << e.theta, e.c;
-  if (!solved || !path_effort_->gradient(z, effort_gradient)) {
+  if (!solved || !effort_->gradient(z, effort_gradient)) {
     e.failure = solved ? "the effort's gradient is not defined" : sqp.failure();
     return e;
   }

@@ -8,7 +8,6 @@
 
 #include <Eigen/Core>
 #include <limits>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,7 +36,7 @@ class ValueFunction {
   ValueFunction(const SosSetup& setup, const FlatOutputMap& flat,
                 const std::vector<PathPoint>& points, const PathParameterization& P,
                 const Eigen::VectorXd& reserves, const Eigen::VectorXd& a_min,
-                int max_sequential_lp_iterations, const Effort* effort);
+                int max_sequential_lp_iterations, const PathEffort* effort);
 
   int evaluations = 0, sequential_lp_iterations = 0;
 
@@ -58,8 +57,7 @@ class ValueFunction {
   const Eigen::VectorXd& reserves_;
   const Eigen::VectorXd& a_min_;
   const int max_slp_;
-  const Effort* effort_;
-  std::optional<PathEffort> path_effort_;  // with effort_
+  const PathEffort* effort_;  // null: the map's linear effort
   PathVariables v_;
 };
 

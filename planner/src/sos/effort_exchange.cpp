@@ -23,29 +23,15 @@ constexpr int kMaxIterations = 200;  // QP steps over all rounds
 std::vector<double> segment_ends(const SosSetup& setup) {
   std::vector<double> ends{0.0, setup.duration_s};
   for (const ConstraintPolynomial& c : setup.constraints) ends.push_back(c.t0_s), ends.push_back(c.t1_s);
-  std::sort(ends.begin(), ends.end());
-  ends.erase(std::unique(ends.begin(), ends.end(), [](double a, double b) { return b - a < 1e-12; }), ends.end());
   return ends;
 }
 
-// The effort's quadrature: kEffortGaussPoints Gauss-Legendre points per segment.
+// The effort's points on the program's segments, with their weights.
 std::vector<BoundPoint> quadrature_points(const SosSetup& setup, const MusclesAlongPath& mp, std::vector<double>& weights_s) {
-  using Rule = boost::math::quadrature::gauss<double, kEffortGaussPoints>;
-  const std::vector<double> ends = segment_ends(setup);
+  const EffortQuadrature q = effort_quadrature(segment_ends(setup));
   std::vector<BoundPoint> points;
-  weights_s.clear();
-  for (std::size_t k = 0; k + 1 < ends.size(); ++k) {
-    const double mid = 0.5 * (ends[k] + ends[k + 1]), half = 0.5 * (ends[k + 1] - ends[k]);
-    // Boost's rule keeps the non-negative abscissae; each but 0 stands for a pair +-x.
-    for (std::size_t i = 0; i < Rule::abscissa().size(); ++i) {
-      const double x = Rule::abscissa()[i], w = Rule::weights()[i];
-      for (const double sign : {-1.0, 1.0}) {
-        if (x == 0.0 && sign > 0.0) continue;
-        points.push_back(make_point(setup, mp, mid + sign * half * x));
-        weights_s.push_back(half * w);
-      }
-    }
-  }
+  for (double t : q.times_s) points.push_back(make_point(setup, mp, t));
+  weights_s = q.weights_s;
   return points;
 }
 
@@ -137,6 +123,26 @@ class EffortExchange {
 };
 
 }  // namespace
+
+EffortQuadrature effort_quadrature(std::vector<double> ends) {
+  using Rule = boost::math::quadrature::gauss<double, kEffortGaussPoints>;
+  std::sort(ends.begin(), ends.end());
+  ends.erase(std::unique(ends.begin(), ends.end(), [](double a, double b) { return b - a < 1e-12; }), ends.end());
+  EffortQuadrature out;
+  for (std::size_t k = 0; k + 1 < ends.size(); ++k) {
+    const double mid = 0.5 * (ends[k] + ends[k + 1]), half = 0.5 * (ends[k + 1] - ends[k]);
+    // Boost's rule keeps the non-negative abscissae; each but 0 stands for a pair +-x.
+    for (std::size_t i = 0; i < Rule::abscissa().size(); ++i) {
+      const double x = Rule::abscissa()[i], w = Rule::weights()[i];
+      for (const double sign : {-1.0, 1.0}) {
+        if (x == 0.0 && sign > 0.0) continue;
+        out.times_s.push_back(mid + sign * half * x);
+        out.weights_s.push_back(half * w);
+      }
+    }
+  }
+  return out;
+}
 
 bool minimize_effort_by_exchange(SosSetup& setup, const MusclesAlongPath& muscles, const SosSettings& options,
                                  const Effort& effort, Eigen::VectorXd& theta, SosProgramResult& result) {

@@ -9,6 +9,8 @@
 // until nothing is violated (the exchange of sos_exchange.hpp and sos_bounds.hpp, with a convex
 // model of the effort in place of the linear cost).
 
+#include <vector>
+
 #include "flatsos/planner/effort.hpp"
 #include "sos/sos_settings.hpp"
 #include "sos/sos_setup.hpp"
@@ -17,6 +19,13 @@ namespace flatsos::planner::detail {
 
 /// Gauss-Legendre points per segment of the effort's quadrature.
 constexpr int kEffortGaussPoints = 4;
+
+/// The effort's quadrature: kEffortGaussPoints Gauss-Legendre points on every segment between
+/// consecutive `ends` (any order; ends closer than 1e-12 s count as one).
+struct EffortQuadrature {
+  std::vector<double> times_s, weights_s;
+};
+EffortQuadrature effort_quadrature(std::vector<double> ends_s);
 
 /// Moves theta to the minimum of `effort` and fills result's effort fields. False with result's
 /// status and message when it fails; theta is then where it stopped.
