@@ -77,13 +77,13 @@ int main(int argc, char** argv) {
                  "storage file (.sto) of external forces on the plant's joints: a time column and one column per "
                  "joint or coordinate (N m on a pin, N along a slider), each row held until the next")
       ->check(CLI::ExistingFile);
-  // Defaults measured on this scenario against CPodes BDF at 1e-10 (README, Benchmarks): the
+  // Defaults measured on this scenario against CPodes BDF at 1e-10 (docs/benchmarks.md): the
   // Rosenbrock method at 1e-5 stays within 8e-4 deg of it (RTF ~70); BDF and RKM at 1e-8.
   app.add_option("--accuracy", accuracy,
                  "integrator accuracy (default: 1e-5 for rosenbrock, 1e-8 for bdf and rkm)")
       ->check(CLI::Range(1e-14, 1e-3));
   // Planned activations go down to ~1e-3, where the tendon ODE is stiff: an explicit method
-  // (rkm) needs ~4x the steps of an implicit one; see README "Benchmarks" for the measurements.
+  // (rkm) needs ~4x the steps of an implicit one; see docs/benchmarks.md for the measurements.
   std::string integrator = "rosenbrock";
   ex::add_integrator_option(app, integrator,
                             "rosenbrock (implicit in the muscles, explicit in the multibody), bdf (CPodes) or rkm "
