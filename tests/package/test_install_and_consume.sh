@@ -34,7 +34,7 @@ c++ -std=c++17 -DNDEBUG -UNDEBUG -I"$tmp/prefix/include" -I/usr/include/simbody 
   { echo "FAILED: -UNDEBUG after -DNDEBUG does not compile"; fail=1; }
 
 # The installed programs and models, relocated: libraries, headers, package, programs, models.
-for f in bin/arm_forward bin/arm_open_loop bin/arm_receding_horizon bin/flatsos_bench \
+for f in bin/flatsos bin/arm_forward bin/arm_open_loop bin/arm_receding_horizon bin/flatsos_bench \
          share/flatsos/models/arm_richter_warner.json share/flatsos/models/elbow_1dof.json \
          include/flatsos/plugin/force/hill_muscle.hpp; do
   [[ -e "$tmp/prefix/$f" ]] || { echo "FAILED: $f not installed"; fail=1; }
@@ -62,4 +62,12 @@ elif ! grep -q "\"model_file\": \"$tmp/moved/share/flatsos/models/arm_richter_wa
 fi
 "$tmp/moved/bin/arm_receding_horizon" --model "$tmp/moved/share/flatsos/models/elbow_1dof.json" --out rh >/dev/null 2>&1 ||
   { echo "FAILED: the installed arm_receding_horizon does not run"; fail=1; }
+# One command: flatsos <subcommand> runs the installed programs and the installed Python package.
+"$tmp/moved/bin/flatsos" plan --model "$tmp/moved/share/flatsos/models/elbow_1dof.json" --out plan >/dev/null 2>&1 &&
+  grep -q '"status": "solved"' plan/summary.json || { echo "FAILED: the installed 'flatsos plan' does not plan"; fail=1; }
+if [[ -n $python ]]; then
+  "$tmp/moved/bin/flatsos" animate --model "$tmp/moved/share/flatsos/models/elbow_1dof.json" \
+    --states plan/simulation.sto --out plan/motion.gif >/dev/null 2>&1 && [[ -s plan/motion.gif ]] ||
+    { echo "FAILED: the installed 'flatsos animate' does not find the installed Python package"; fail=1; }
+fi
 exit $fail
