@@ -58,10 +58,10 @@ int main(int argc, char** argv) {
                  "excitations over time: a controls .sto (OpenSim/Moco: time, /forceset/<muscle>, ...) or a CSV "
                  "(time,<muscle>,...); linear interpolation, held after the last row; default: excitation = "
                  "initial activation");
-  app.add_option("--duration-s", duration, "simulated time, s")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--duration-s", duration, "simulated time, s")->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-2));
   app.add_option("--report-interval-s", report_interval, "time between rows of states.sto, s")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   long max_steps = ex::kDefaultMaxIntegratorSteps;
   ex::add_max_steps_option(app, max_steps);
   std::string integrator = "rkm";

@@ -45,24 +45,24 @@ int main(int argc, char** argv) {
   app.add_option("--pieces", options.torque.pieces,
                  "torque-model pieces K (1 with --degree 0: the paper's box; 0: as many as the flat outputs' spans, "
                  "at least 12)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
-  study_group->add_option("--degree", study.torque.degree, "torque-model polynomial degree r")->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
+  study_group->add_option("--degree", study.torque.degree, "torque-model polynomial degree r")->capture_default_str()->check(flatsos::examples::nonnegative_number());
   app.add_option("--flat-output-degree", options.sos.flat_output_degree,
                  "degree of the flat outputs' B-splines Y (4 with 1 span: the paper's quartic, --paper)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--piece-growth", options.torque.piece_growth,
                  "each torque-model piece this many times as long as the one before (1: uniform; above 1: short "
                  "pieces at the start, where a fast motion's torques change)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--flat-output-spans", options.sos.flat_output_spans,
                  "knot spans of the flat outputs' B-splines (0: chosen from the model's size, about 212 coefficients "
                  "over all flat outputs, at most 48 spans: 48 on the paper's arm)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   app.add_option("--flat-output-span-growth", options.sos.flat_output_span_growth,
                  "each of the flat outputs' spans this many times as long as the one before (1: uniform; above 1: "
                  "short spans at the start, where a low-effort transfer spends its effort; 0: by the effort, 1 for "
                  "a linear one, 1.06 for a nonlinear one)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   std::string effort_name = "paper";
   app.add_option("--effort", effort_name,
                  "what the plan minimizes: paper (the model's effort_weights times the tendon forces, the paper's "
@@ -73,11 +73,11 @@ int main(int argc, char** argv) {
   app.add_option("--free-path-spans", free_path_spans,
                  "optimize the joint path too: a degree-8 B-spline on this many spans through the same boundary "
                  "conditions (0: the prescribed degree-8 polynomial)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   app.add_option("--free-path-span-growth", options.free_path.span_growth,
                  "each of the free path's spans this many times as long as the one before (1: uniform; above 1: "
                  "short spans at the start, where a low-effort transfer moves fast)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   study_group->add_option("--free-path-torque-refinements", study.free_path.max_torque_refinements,
                  "at most this many doublings of the torque pieces for the plan along the optimized path, while it "
                  "fails or costs more than 0.5 % above the path stage's cost at its points (0: none)")
@@ -85,11 +85,11 @@ int main(int argc, char** argv) {
   study_group->add_option("--free-path-start-min-spans", study.free_path.start_min_spans,
                  "the prescribed path's plan, which starts the free path's optimization, in the coarsest basis "
                  "nested in the flat outputs' with at least this many spans (0: the flat outputs' own)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   study_group->add_option("--free-path-exchange-tolerance", study.free_path.exchange_relative_tolerance,
                  "joint_newton: the path's exchange ends once a round changes the cost at its points by at most this "
                  "fraction of it (0: only when the check grid holds)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   std::string free_path_method = fpl::to_string(study.free_path.method);
   study_group->add_option("--free-path-method", free_path_method,
                  "how the free joint path moves: reduced_quasi_newton (BFGS on the bounded plan's cost as a "
@@ -121,11 +121,11 @@ int main(int argc, char** argv) {
                "plan the shortest transfer instead: the least duration with a plan, searched down from --duration-s "
                "(which must have one) in steps of --shortest-time-ratio, then by bisection; simulates that plan");
   app.add_option("--shortest-time-lower-s", shortest.lower_s, "the shortest duration the search tries, s")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--shortest-time-ratio", shortest.scan_ratio, "each scanned duration is this fraction of the one before")
       ->capture_default_str()->check(CLI::Range(0.01, 0.99));
   app.add_option("--shortest-time-tolerance-s", shortest.tolerance_s, "the bisection's resolution, s")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
   long max_steps = ex::kDefaultMaxIntegratorSteps;
   ex::add_max_steps_option(app, max_steps);

@@ -41,10 +41,10 @@ int main(int argc, char** argv) {
   ex::OpenSimModelOptions osim_options;
   ex::add_opensim_model_options(app, osim_options);
   ex::add_scenario_options(app, given, "receding_horizon", false, 2.0, 1.0);
-  app.add_option("--horizon-s", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--horizon-s", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--grid-points", options.plan.grid_points, "torque-box grid points over the horizon")
       ->capture_default_str()->check(CLI::Range(2, 10000));
-  app.add_option("--period-s", options.control_period_s, "control period delta, s")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--period-s", options.control_period_s, "control period delta, s")->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option_group("Study", "second opinions (their defaults are the product's)")
       ->add_option("--slp-solver", solver,
                  "exact (vertex enumeration; the dual simplex where there are more than 20000 vertices), simplex "
@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
   app.add_option("--plant-strength", plant_strength,
                  "every maximum isometric force of the plant times this factor (a plant weaker or stronger than the "
                  "model)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   std::string disturbance_path;
   app.add_option("--disturbance", disturbance_path,
                  "storage file (.sto) of external forces on the plant's joints: a time column and one column per "

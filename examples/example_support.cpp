@@ -33,6 +33,28 @@ void require_count(const std::vector<double>& v, int n, const std::string& optio
     throw CLI::ValidationError(option, "expects " + std::to_string(n) + " comma-separated values, got " + std::to_string(v.size()));
 }
 
+namespace {
+
+CLI::Validator number_check(const char* name, const char* bound, bool (*holds)(double)) {
+  return CLI::Validator(
+      [bound, holds](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        return holds(value) ? std::string() : std::string("must be ") + bound + " (got " + text + ")";
+      },
+      name);
+}
+
+}  // namespace
+
+CLI::Validator positive_number() {
+  return number_check("POSITIVE", "> 0", [](double v) { return v > 0.0; });
+}
+
+CLI::Validator nonnegative_number() {
+  return number_check("NONNEGATIVE", ">= 0", [](double v) { return v >= 0.0; });
+}
+
 int parse_arguments(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
@@ -57,7 +79,7 @@ CLI::Option* add_max_steps_option(CLI::App& app, long& max_steps) {
                   "stop the simulation after this many integrator steps and fail (0: no limit); an explicit "
                   "integrator can take millions of tiny steps where the muscles' states are stiff")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(flatsos::examples::nonnegative_number());
 }
 
 Eigen::VectorXd per_muscle(const std::vector<double>& v, int m, const std::string& option) {
@@ -320,7 +342,7 @@ std::vector<std::string> print_warnings(const char* program, const std::vector<s
                                         const std::vector<std::string>& second) {
   std::vector<std::string> all = first;
   all.insert(all.end(), second.begin(), second.end());
-  for (const auto& w : all) std::cerr << program << ": warning: " << w << "\n";
+  for (const auto& w : second) std::cerr << program << ": warning: " << w << "\n";
   return all;
 }
 
@@ -333,6 +355,18 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+namespace {
+
+// The model's plausibility warnings, printed as soon as it is loaded: a failure later (a rest
+// state the SLP cannot find for a 1500 kg body) must not hide them.
+std::shared_ptr<const plugin::MusculoskeletalModel> with_warnings_printed(
+    std::shared_ptr<const plugin::MusculoskeletalModel> model, const std::string& program) {
+  for (const auto& w : model->warnings()) std::cerr << program << ": warning: " << w << "\n";
+  return model;
+}
+
+}  // namespace
+
 std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string& path, const std::string& program,
                                                                const OpenSimModelOptions& options) {
   const bool osim = plugin::is_opensim_model_file(path);
@@ -343,7 +377,7 @@ std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string
                                                                 : nullptr;
   if (!osim && osim_only)
     throw std::invalid_argument(std::string(osim_only) + ": the model must be an OpenSim model (.osim), not '" + path + "'");
-  if (!osim) return plugin::MusculoskeletalModel::fromFile(path);
+  if (!osim) return with_warnings_printed(plugin::MusculoskeletalModel::fromFile(path), program);
   plugin::OpenSimFileOptions file_options;
   file_options.simulate_geometry = options.paths == "geometry";
   file_options.opensim_2_muscles = options.opensim_2_muscles;
@@ -353,7 +387,7 @@ std::shared_ptr<const plugin::MusculoskeletalModel> load_model(const std::string
   std::cout << program << ": imported " << path << ": " << imported.model.numJoints() << " joint(s), "
             << imported.model.numMuscles() << " muscles\n";
   for (const std::string& note : imported.notes) std::cout << "  " << note << "\n";
-  return std::make_shared<const plugin::MusculoskeletalModel>(imported.model);
+  return with_warnings_printed(std::make_shared<const plugin::MusculoskeletalModel>(imported.model), program);
 }
 
 void add_opensim_model_options(CLI::App& app, OpenSimModelOptions& osim) {

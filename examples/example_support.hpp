@@ -26,6 +26,10 @@ Eigen::VectorXd to_display(const plugin::ModelDescription& model, const Eigen::V
 Eigen::VectorXd from_display(const plugin::ModelDescription& model, const Eigen::VectorXd& q_shown);
 /// Throws CLI::ValidationError unless v has n entries.
 void require_count(const std::vector<double>& v, int n, const std::string& option);
+/// Checks of a number option whose messages say the bound and the value given ("must be > 0 (got
+/// 0)"), where CLI11's PositiveNumber printed a range ending in DBL_MAX's 309 digits.
+CLI::Validator positive_number();
+CLI::Validator nonnegative_number();
 /// Parses the command line: -1 to go on, otherwise the exit code (0 after --help, 2 for bad
 /// arguments, with CLI11's message printed).
 int parse_arguments(CLI::App& app, int argc, char** argv);
@@ -74,7 +78,8 @@ nlohmann::json shortest_transfer_summary(const planner::ShortestTransfer& search
 /// number), the effort weights per muscle, and the joints' limit torques.
 nlohmann::json problem_summary(const planner::FlatOutputMap& flat);
 
-/// Prints every warning as "<program>: warning: <text>" on stderr and returns them all, for the
+/// Prints the task's warnings (`second`) as "<program>: warning: <text>" on stderr and returns the
+/// model's (`first`, printed by load_model when it loaded the model) and the task's, for the
 /// summary's "warnings".
 std::vector<std::string> print_warnings(const char* program, const std::vector<std::string>& first,
                                         const std::vector<std::string>& second = {});

@@ -2,12 +2,12 @@
 
 #include "flatsos/planner/rest_state.hpp"
 #include "flatsos/planner/task_region.hpp"
+#include "example_support.hpp"
 
 namespace flatsos::examples {
 
 namespace {
 
-constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
 constexpr double kFallbackTargetStepDeg = 30.0;
 constexpr double kFallbackTargetStepSlider_m = 0.05;
 
@@ -68,7 +68,7 @@ void add_scenario_options(CLI::App& app, ScenarioOptions& o, const std::string& 
                      std::to_string(int(kFallbackTargetStepDeg)) + " deg, a slider's + 0.05 m)")
       ->delimiter(',');
   app.add_option("--duration-s", o.duration_s, "duration, s" + from + CLI::detail::to_string(fallback_duration_s) + ")")
-      ->check(CLI::PositiveNumber);
+      ->check(flatsos::examples::positive_number());
   app.add_option("--reserves-N", o.reserves_N,
                  "minimum tendon forces, N, one for all muscles or one per muscle" + from +
                      CLI::detail::to_string(fallback_reserve_N) + ")")

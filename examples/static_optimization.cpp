@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(1.000001, 100.0));
   app.add_option("--reserve-optimal-torque-N-m", options.reserve_optimal_torque_N_m,
                  "one reserve actuator per joint with this optimal torque (N m; N on a slider); 0: none")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   app.add_option("--strength-rule", rule_name,
                  "a muscle's force per unit activation: opensim2 (isometric with its elastic tendon, passive force "
                  "included, times a generic force-velocity factor) or rigid-tendon (OpenSim 4's); default: opensim2 "

@@ -58,23 +58,23 @@ int main(int argc, char** argv) {
   ex::add_opensim_model_options(app, osim);
   app.add_option("--cutoff-hz", cutoff_hz, "low-pass cutoff of the coordinates, Hz (OpenSim's; negative: no filtering)")
       ->capture_default_str();
-  app.add_option("--horizon-s", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--period-s", options.control_period_s, "control period, s")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--horizon-s", options.plan.horizon_s, "planning horizon, s")->capture_default_str()->check(flatsos::examples::positive_number());
+  app.add_option("--period-s", options.control_period_s, "control period, s")->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--correction-s", options.plan.tracking_correction_s,
                  "time over which each plan removes the measured offset from the motion, s (at most the horizon; "
                  "default 0.06 with a squared or cubed effort, 0.075 with tendon_force)")
-      ->check(CLI::PositiveNumber);
+      ->check(flatsos::examples::positive_number());
   app.add_option("--observer-gain-per-s", options.disturbance_observer_gain_per_s,
                  "disturbance observer gain in [0, 1000] 1/s (0: none)")
       ->capture_default_str()->check(CLI::Range(0.0, 1000.0));
   app.add_option("--reserve-N", reserve_N, "the least tendon force every plan keeps in each muscle, N")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   app.add_option("--plant-strength", plant_strength,
                  "every maximum isometric force of the simulated plant times this factor (model mismatch)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--tolerance-deg", tolerance_deg,
                  "the task fails where a coordinate leaves the motion by more than this, deg (a slider: mm)")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(flatsos::examples::positive_number());
   app.add_option("--effort", effort_name,
                  "what each plan minimizes over its horizon: the integral of the squared or cubed excitations (as CMC and "
                  "Moco), activations or stresses, or paper (the model's effort_weights: the paper's linear effort; "

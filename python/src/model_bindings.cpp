@@ -30,6 +30,14 @@ Model with_flat_outputs(std::shared_ptr<const plugin::MusculoskeletalModel> mode
   return out;
 }
 
+// The model's plausibility warnings (unit mix-ups) as Python UserWarnings, when it is loaded:
+// before any plan, whose failure must not hide them.
+Model warned(Model model) {
+  for (const std::string& w : model.model->warnings())
+    if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 2) != 0) throw py::error_already_set();
+  return model;
+}
+
 // A model file, or an OpenSim model imported with its own settings (what the programs' --model,
 // --paths, --opensim-2-muscles, --degroote-muscles and --ignore-passive-fiber-forces do).
 Model load(const std::string& path, const std::string& paths, bool opensim_2_muscles, bool degroote_muscles,
@@ -48,15 +56,23 @@ Model load(const std::string& path, const std::string& paths, bool opensim_2_mus
   options.opensim_2_muscles = opensim_2_muscles;
   options.degroote_fregly2016_muscles = degroote_muscles;
   options.ignore_passive_fiber_forces = ignore_passive_fiber_forces;
-  py::gil_scoped_release release;  // the import and the flat-output choice may take seconds
-  if (!osim) return with_flat_outputs(plugin::MusculoskeletalModel::fromFile(path));
-  return with_flat_outputs(
-      std::make_shared<const plugin::MusculoskeletalModel>(plugin::import_opensim_file(path, options).model));
+  Model out;
+  {
+    py::gil_scoped_release release;  // the import and the flat-output choice may take seconds
+    out = !osim ? with_flat_outputs(plugin::MusculoskeletalModel::fromFile(path))
+                : with_flat_outputs(std::make_shared<const plugin::MusculoskeletalModel>(
+                      plugin::import_opensim_file(path, options).model));
+  }
+  return warned(std::move(out));
 }
 
 Model from_json(const std::string& text, const std::string& source) {
-  py::gil_scoped_release release;
-  return with_flat_outputs(std::make_shared<const plugin::MusculoskeletalModel>(plugin::parse_model_json(text, source)));
+  Model out;
+  {
+    py::gil_scoped_release release;
+    out = with_flat_outputs(std::make_shared<const plugin::MusculoskeletalModel>(plugin::parse_model_json(text, source)));
+  }
+  return warned(std::move(out));
 }
 // The model with each muscle's maximum isometric force multiplied by its factor, with the same
 // flat outputs (the library's choice, which scores moment arms, need not run again; a chosen
@@ -117,6 +133,9 @@ void register_model(py::module_& m) {
       .def_property_readonly(
           "name", [](const Model& self) { return self.model->description().name; })
       .def_property_readonly(
+          "warnings", [](const Model& self) { return self.model->warnings(); },
+          "implausible values of the model (unit mix-ups), each naming its field; also issued as UserWarning on loading")
+      .def_property_readonly(
           "joints",
           [](const Model& self) {
             std::vector<std::string> names;
@@ -171,6 +190,16 @@ void register_model(py::module_& m) {
       .def("body_frames", &body_frames, py::arg("q"),
            "Each joint's child body in the ground frame at posture q (rad; a slider's m): (origins, joints x 3, m; "
            "rotations, joints x 3 x 3, body to ground).")
+      .def(
+          "moment_arms",
+          [](const Model& self, const py::object& q) {
+            const Eigen::VectorXd q_rad = vector_argument(q, self.model->numJoints(), "q");
+            if (!q_rad.allFinite()) throw py::value_error("q: coordinates must be finite");
+            return Table(self.model->momentArmMatrix(q_rad).transpose());
+          },
+          py::arg("q"),
+          "The moment arms at posture q (rad; a slider's m): muscles x joints, m, r = -dL/dq (positive: the "
+          "muscle shortens as the coordinate grows).")
       .def("with_strength", &with_strength, py::arg("factors"),
            "A copy with each muscle's maximum isometric force multiplied by its factor (one number for all, or one "
            "per muscle; positive), with the same flat outputs. Bad factors raise ValueError.")

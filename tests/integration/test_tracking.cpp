@@ -227,7 +227,11 @@ TEST(Tracking, RefusesAControllerWithoutAReference) {
   o.plan.target_q_rad = postures.back();
   o.plan.reserves_N = Eigen::VectorXd::Constant(model->numMuscles(), 1.0);
   fpl::RecedingHorizonController set_point(flat, o);
-  SimTK::State s = fpl::start_state(flat, postures.front(), Eigen::Vector2d::Zero(), std::nullopt, o.plan.reserves_N);
+  // The motion's first frame (its elbow 0.05 deg outside the joint's range, as measured motions
+  // may be): the tracking start, which start_state would refuse as a transfer's start.
+  SimTK::State s = fpl::tracking_start_state(flat, *reference, o.plan.reserves_N);
+  EXPECT_THROW(fpl::start_state(flat, postures.front(), Eigen::Vector2d::Zero(), std::nullopt, o.plan.reserves_N),
+               std::invalid_argument);
   EXPECT_THROW(fpl::run_tracking(set_point, s, {}), std::invalid_argument);
   o.plan.reference = reference;
   o.plan.target_q_rad.resize(0);  // not needed when tracking

@@ -76,6 +76,9 @@ class OpenLoopPlanning {
     const int start_spans = planAlongPrescribedPath(plan);
     plan.setup_seconds += before_sos;
     if (o_.free_path.enabled) detail::plan_along_free_path(flat_, workspace_, bc_, y0_.q, o_, study_, start_spans, plan);
+    if (plan.status == SolveStatus::Solved)
+      for (auto& w : detail::joint_range_warnings(flat_.model().description(), plan.path, o_.duration_s, o_.check_points))
+        plan.warnings.push_back(std::move(w));
     return plan;
   }
 
@@ -86,12 +89,14 @@ class OpenLoopPlanning {
     if (!(o_.duration_s > 0.0) || !std::isfinite(o_.duration_s))
       throw std::invalid_argument("open-loop plan: duration T must be > 0 s");
     detail::require(o_.target_q_rad, n, "target joint angles");
+    detail::require_within_joint_ranges(flat_.model().description(), o_.target_q_rad, "target joint angles");
     detail::require_taut_tendons_possible(flat_.model(), o_.target_q_rad, "target joint angles");
     detail::require_reserves(o_.reserves_N, m);
     if (o_.check_points < 2) throw std::invalid_argument("open-loop plan: check_points must be >= 2");
     detail::validate_free_path_options(flat_, o_, study_);
     detail::require_initial_muscle_state(flat_, initial_);
     y0_ = flat_.forward(workspace_, initial_);  // validates q, qd sizes too
+    detail::require_within_joint_ranges(flat_.model().description(), initial_.q_rad, "initial joint angles");
   }
 
   OpenLoopPlan startPlan() const {

@@ -7,6 +7,7 @@
 
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
+#include "flatness/input_checks.hpp"
 
 namespace flatsos::planner {
 
@@ -46,6 +47,10 @@ const RecedingHorizonControllerOptions& validated(const RecedingHorizonControlle
   if (o.plan.horizon_s > 0.0 && !(o.control_period_s <= o.plan.horizon_s))
     throw std::invalid_argument("RH controller: the control period must not exceed the horizon");
   validate(controller_plan_options(o), flat);
+  // A set point must lie in the joints' ranges (a step's own target need not: the rest state
+  // plans one at a measured motion's first frame, which may lie a little outside).
+  if (!o.plan.reference)
+    detail::require_within_joint_ranges(flat.model().description(), o.plan.target_q_rad, "target joint angles");
   if (!o.planner) throw std::invalid_argument("RH controller: no planner function");
   return o;
 }
@@ -303,6 +308,8 @@ std::string plan_failures_sentence(const RecedingHorizonController& controller) 
 
 RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, const SimTK::State& initial,
                                         const plugin::ClosedLoopOptions& options, double settle_tolerance_rad) {
+  detail::require_within_joint_ranges(controller.plant().description(), controller.plant().jointAngles(initial),
+                                      "start joint angles (q0)");
   plugin::ClosedLoopOptions o = options;
   o.control_period_s = controller.options().control_period_s;
   RecedingHorizonRun run;

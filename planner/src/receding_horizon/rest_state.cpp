@@ -4,11 +4,17 @@
 
 #include "flatsos/planner/receding_horizon_step.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
+#include "flatness/input_checks.hpp"
 
 namespace flatsos::planner {
 
 void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& state, const Eigen::VectorXd& q,
                                    const Eigen::VectorXd& reserves) {
+  // The start's own checks first: the step below would name its angles the target. (Its range is
+  // the task's to check: a measured motion's first frame may lie a little outside.)
+  const char* start = "start joint angles (q0)";
+  detail::require(q, flat.numJoints(), start);
+  detail::require_taut_tendons_possible(flat.model(), q, start);
   RecedingHorizonOptions o;
   o.target_q_rad = q;
   o.reserves_N = reserves;
@@ -36,6 +42,8 @@ void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& stat
 SimTK::State start_state(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                          const std::optional<Eigen::VectorXd>& activations, const Eigen::VectorXd& reserves_N) {
   const plugin::MusculoskeletalModel& model = flat.model();
+  detail::require(q_rad, flat.numJoints(), "start joint angles (q0)");
+  detail::require_within_joint_ranges(model.description(), q_rad, "start joint angles (q0)");
   SimTK::State s = model.defaultState();
   if (activations) {
     model.setJointAngles(s, q_rad);

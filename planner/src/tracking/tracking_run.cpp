@@ -78,7 +78,11 @@ SimTK::State tracking_start_state(const FlatOutputMap& plant_flat, const JointRe
                                   const Eigen::VectorXd& reserves_N) {
   const double t0 = reference.startTime_s();
   const Jet start = reference.jet(t0, 2);
-  SimTK::State s = start_state(plant_flat, start.col(0), start.col(1), std::nullopt, reserves_N);
+  // The rest at the motion's first frame, which may lie a little outside a joint's range (a
+  // measured motion is not clamped to the model's ranges; start_state would refuse it).
+  SimTK::State s = plant_flat.model().defaultState();
+  set_minimum_effort_rest_state(plant_flat, s, start.col(0), reserves_N);
+  plant_flat.model().setJointSpeeds(s, start.col(1));
   s.setTime(t0);
   return s;
 }

@@ -24,7 +24,8 @@ void set_minimum_effort_rest_state(const FlatOutputMap& flat, SimTK::State& stat
 
 /// The state a plan or a closed loop starts from (a State of flat.model()): joint angles q and
 /// speeds qd with the given activations (held excitations equal) and their tendons in static
-/// equilibrium, or, without activations, the minimum-effort rest at q for `reserves_N`.
+/// equilibrium, or, without activations, the minimum-effort rest at q for `reserves_N`. Throws
+/// std::invalid_argument naming the joint when q lies outside a joint's range.
 SimTK::State start_state(const FlatOutputMap& flat, const Eigen::VectorXd& q_rad, const Eigen::VectorXd& qd_rad_per_s,
                          const std::optional<Eigen::VectorXd>& activations, const Eigen::VectorXd& reserves_N);
 
