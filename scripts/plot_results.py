@@ -41,6 +41,8 @@ from matplotlib.gridspec import GridSpec  # noqa: E402
 
 DPI = 110
 MAX_COLUMNS = 3  # muscle panels per row
+# Drawing order: thick lines and references under, the thin line that could vanish on top.
+ZORDER_UNDER, ZORDER_MIDDLE, ZORDER_OVER = 1, 2, 3
 # Tops of the shared activation axis: the smallest that holds the data. The smallest top, 0.1,
 # keeps an almost silent muscle (a ~ 0.002) near the bottom instead of filling its panel.
 ACTIVATION_TOPS = (0.1, 0.2, 0.5, 1.0)
@@ -207,17 +209,17 @@ def grid_shape(count):
 
 
 def plot_activations(axes, muscles, states, controls, excitation_style, excitation_label):
-    """Per muscle panel: the excitation (when the controls have it) under the activation; returns
-    the plotted series for the shared scale."""
+    """Per muscle panel: the activation, thick, and the excitation (when the controls have it) thin
+    on top of it, so that neither hides the other; returns the plotted series for the shared scale."""
     series = []
     for ax, m in zip(axes, muscles):
+        a = states["/forceset/%s/activation" % m]
+        ax.plot(states.time, a, color="tab:blue", lw=2.5, alpha=0.6, zorder=ZORDER_UNDER, label="activation")
+        series.append(a)
         n = excitation(controls, m)
         if n is not None:
-            ax.plot(controls.time, n, label=excitation_label, **excitation_style)
+            ax.plot(controls.time, n, label=excitation_label, zorder=ZORDER_OVER, **excitation_style)
             series.append(n)
-        a = states["/forceset/%s/activation" % m]
-        ax.plot(states.time, a, color="tab:blue", label="activation")
-        series.append(a)
     return series
 
 
@@ -278,11 +280,13 @@ def open_loop(folder, report):
     for ax, m in zip(axes, muscles):
         a_plan, a_sim = plan["/forceset/%s/activation" % m], sim["/forceset/%s/activation" % m]
         n_plan = excitation(plan_controls, m)
+        ax.plot(plan.time, a_plan, color="tab:blue", lw=2.5, alpha=0.6, zorder=ZORDER_UNDER, label="planned activation")
+        ax.plot(sim.time[::every], a_sim[::every], "o", ms=3, color="tab:red", zorder=ZORDER_MIDDLE,
+                label="simulated activation")
         if n_plan is not None:
-            ax.plot(plan_controls.time, n_plan, "--", color="tab:gray", lw=1, label="planned excitation")
+            # Thin and on top: where the excitation equals the activation it must not vanish under it.
+            ax.plot(plan_controls.time, n_plan, "--", color="black", lw=1, zorder=ZORDER_OVER, label="planned excitation")
             series.append(n_plan)
-        ax.plot(plan.time, a_plan, color="tab:blue", label="planned activation")
-        ax.plot(sim.time[::every], a_sim[::every], "o", ms=3, color="tab:red", label="simulated activation")
         series += [a_plan, a_sim]
     scales = finish_muscle_panels(axes, muscles, series)
     fig.suptitle("Open loop: planned vs simulated activations" +
@@ -298,17 +302,19 @@ def open_loop(folder, report):
                   label=joint_name(j) + " simulated")
     joint_legend(ax_q)
     for i, m in enumerate(muscles):
-        ax_f.plot(plan.time, plan["/forceset/%s/tendon_force" % m], color="C%d" % (i % 10), label=muscle_name(m))
+        # Over the reserve lines: a muscle at its reserve must stay visible.
+        ax_f.plot(plan.time, plan["/forceset/%s/tendon_force" % m], color="C%d" % (i % 10), zorder=ZORDER_OVER,
+                  label=muscle_name(m))
     reserves = summary_input(summary, "reserves_N", len(muscles))
     title = "Open loop: joint angles and planned tendon forces"
     if reserves is not None:
         # One line if all muscles share the reserve, else one per muscle in its colour.
         if len(set(reserves)) == 1:
-            ax_f.axhline(reserves[0], color="k", ls=":", lw=1.2, label="reserve %g N" % reserves[0])
+            ax_f.axhline(reserves[0], color="0.55", ls=":", lw=2, zorder=ZORDER_UNDER, label="reserve %g N" % reserves[0])
             title += " (reserve %g N)" % reserves[0]
         else:
             for i, r in enumerate(reserves):
-                ax_f.axhline(r, color="C%d" % (i % 10), ls=":", lw=1)
+                ax_f.axhline(r, color="C%d" % (i % 10), ls=":", lw=2, alpha=0.5, zorder=ZORDER_UNDER)
             title += " (reserves dotted)"
     ax_f.set_yscale("log")
     ax_f.set_xlabel("time (s)")
@@ -357,7 +363,7 @@ def receding_horizon(folder, report):
     rows, columns = grid_shape(len(muscles))
     fig = plt.figure(figsize=(4 * columns, 2.6 * rows + 0.8))
     axes = muscle_grid(fig, GridSpec(rows, columns, figure=fig), len(muscles))
-    series = plot_activations(axes, muscles, sim, controls, dict(color="tab:gray", lw=0.8), "applied excitation")
+    series = plot_activations(axes, muscles, sim, controls, dict(color="black", lw=0.8), "applied excitation")
     scales = finish_muscle_panels(axes, muscles, series)
     fig.suptitle("Receding horizon: activations" + (" and applied excitations" if controls is not None else ""))
     fig.tight_layout()
@@ -380,7 +386,7 @@ def forward(folder, report):
         ax_q.plot(states.time, np.degrees(states[j + "/value"]), color="C%d" % (i % 10), label=joint_name(j))
     joint_legend(ax_q)
     axes = muscle_grid(fig, grid, len(muscles), first_row=1)
-    series = plot_activations(axes, muscles, states, controls, dict(ls="--", color="tab:gray", lw=1), "excitation")
+    series = plot_activations(axes, muscles, states, controls, dict(ls="--", color="black", lw=1), "excitation")
     scales = finish_muscle_panels(axes, muscles, series)
     fig.suptitle("Forward simulation: joint angles, activations" + (" and excitations" if controls is not None else ""))
     fig.tight_layout()

@@ -1,5 +1,5 @@
-"""Motion you can watch: a planar model's bodies as a stick figure beside a bar per muscle
-coloured by its activation, from any state table the programs write, as GIF (and MP4 where
+"""Motion you can watch: a planar model's bodies as a stick figure with a line per muscle, beside
+a bar per muscle, each coloured by its activation, from any state table the programs write, as GIF (and MP4 where
 ffmpeg is installed).
 
     import flatsos, flatsos.animation
@@ -18,6 +18,8 @@ import numpy as np
 
 _PLANAR_COS = np.cos(np.radians(45.0))  # a joint axis this near the view's normal moves in its plane
 _PARALLEL = 1e-6  # |sin| of the angle between two directions that still counts as parallel
+_MUSCLE_OFFSET = 0.08  # a muscle line's largest distance from the bones, in body lengths
+_ATTACHMENT = 0.4  # where a muscle line starts and ends along its proximal and distal bodies
 
 
 class _Skeleton:
@@ -98,6 +100,59 @@ class _Skeleton:
                 out.append((flat(origins[i]), flat(origins[i] + rotations[i] @ self.tips[i])))
         return out
 
+    def muscle_paths(self, q, moment_arms):
+        """Per muscle, a schematic line in plane coordinates (m): from its proximal body past each
+        joint it crosses, on the side where it pulls (a positive moment arm turns the joint the
+        way the coordinate grows, so the muscle passes on that side of the child body), to a
+        point on its distal body; None for a muscle that crosses no joint. Its offset from the
+        bones grows with its moment arm."""
+        origins, rotations = self.model.body_frames(q)
+        e1, e2 = self.plane
+        normal = np.cross(e1, e2)
+        flat = lambda p: np.array([p @ e1, p @ e2])  # noqa: E731
+        centres = [flat(o) for o in origins]
+        ends = self._child_ends(origins, rotations, flat)
+        lengths = [max(np.linalg.norm(end - c), 1e-3) for c, end in zip(centres, ends)]
+        offset = _MUSCLE_OFFSET * np.median(lengths)
+        largest = max(np.abs(moment_arms).max(), 1e-12)
+        paths = []
+        for arms in np.asarray(moment_arms):
+            crossed = [i for i in range(len(centres)) if abs(arms[i]) > _PARALLEL * largest]
+            if not crossed:
+                paths.append(None)
+                continue
+            points = []
+            for k, i in enumerate(crossed):
+                along = (ends[i] - centres[i]) / lengths[i]
+                side = np.array([-along[1], along[0]])  # the child's counter-clockwise side in the view
+                turns = 1.0 if self._axis_in_ground(i, rotations) @ normal >= 0 else -1.0
+                shift = np.sign(arms[i]) * turns * offset * (0.5 + 0.5 * abs(arms[i]) / largest) * side
+                if k == 0:  # from the proximal body, or from above the joint on the ground
+                    parent = self.parent[i]
+                    back = centres[parent] - centres[i] if parent >= 0 else np.array([0.0, lengths[i]])
+                    points.append(centres[i] + _ATTACHMENT * back + shift)
+                points.append(centres[i] + shift)
+                if k == len(crossed) - 1:
+                    points.append(centres[i] + _ATTACHMENT * (ends[i] - centres[i]) + shift)
+            paths.append(np.array(points))
+        return paths
+
+    def _child_ends(self, origins, rotations, flat):
+        """Each joint's child body's far end in plane coordinates: its next joint or its tip."""
+        ends = []
+        for i in range(len(self.parent)):
+            children = [k for k in range(len(self.parent)) if self.parent[k] == i]
+            if children:
+                ends.append(flat(origins[children[0]]))
+            else:
+                tip = self.tips[i] if self.tips[i] is not None else np.zeros(3)
+                ends.append(flat(origins[i] + rotations[i] @ tip))
+        return ends
+
+    def _axis_in_ground(self, i, rotations):
+        r = np.eye(3) if self.parent[i] < 0 else rotations[self.parent[i]]
+        return r @ self.axes[i] / np.linalg.norm(self.axes[i])
+
     def bases(self):
         e1, e2 = self.plane
         return [np.array([b @ e1, b @ e2]) for b in self.base if b is not None]
@@ -146,7 +201,9 @@ def animate(model, time, q, activation, path, *, fps=25, speed=1.0, title=None, 
     q_frames = _resampled(time, q, frame_times)
     a_frames = np.clip(_resampled(time, activation, frame_times), 0.0, 1.0)
     drawn = [skeleton.segments(row) for row in q_frames]
-    points = np.array([p for segments in drawn for segment in segments for p in segment] + skeleton.bases())
+    muscle_paths = [skeleton.muscle_paths(row, model.moment_arms(row)) for row in q_frames]
+    points = np.array([p for segments in drawn for segment in segments for p in segment] + skeleton.bases() +
+                      [p for paths in muscle_paths for path in paths if path is not None for p in path])
     low, high = points.min(axis=0), points.max(axis=0)
     pad = 0.1 * max(high - low) + 0.02
 
@@ -159,10 +216,11 @@ def animate(model, time, q, activation, path, *, fps=25, speed=1.0, title=None, 
     body_ax.set_xlabel("m")
     for base in skeleton.bases():
         body_ax.plot(*base, "k^", markersize=12)
-    lines = [body_ax.plot([], [], "o-", color="tab:blue", lw=4, markersize=7)[0] for _ in drawn[0]]
+    lines = [body_ax.plot([], [], "o-", color="tab:blue", lw=4, markersize=7, zorder=3)[0] for _ in drawn[0]]
+    colours = matplotlib.colormaps["Reds"]
+    muscle_lines = [body_ax.plot([], [], "-", lw=2.5, solid_capstyle="round", zorder=2)[0] for _ in model.muscles]
     clock = body_ax.text(0.02, 0.96, "", transform=body_ax.transAxes, va="top")
     body_ax.set_title(title or model.name)
-    colours = matplotlib.colormaps["Reds"]
     bars = bar_ax.barh(range(muscles), a_frames[0], color=colours(a_frames[0]))
     bar_ax.set_xlim(0.0, 1.0)
     bar_ax.set_yticks(range(muscles), model.muscles, fontsize=7 if muscles > 12 else 9)
@@ -173,11 +231,15 @@ def animate(model, time, q, activation, path, *, fps=25, speed=1.0, title=None, 
     def update(k):
         for line, (start, end) in zip(lines, drawn[k]):
             line.set_data([start[0], end[0]], [start[1], end[1]])
+        for line, path, a in zip(muscle_lines, muscle_paths[k], a_frames[k]):
+            if path is not None:
+                line.set_data(path[:, 0], path[:, 1])
+                line.set_color(colours(0.3 + 0.7 * a))  # a silent muscle stays visible
         for bar, a in zip(bars, a_frames[k]):
             bar.set_width(a)
             bar.set_color(colours(0.15 + 0.85 * a))
         clock.set_text(f"t = {frame_times[k]:.2f} s")
-        return lines + list(bars) + [clock]
+        return lines + muscle_lines + list(bars) + [clock]
 
     movie = animation.FuncAnimation(fig, update, frames=frames, blit=False)
     path.parent.mkdir(parents=True, exist_ok=True)

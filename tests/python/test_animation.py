@@ -38,6 +38,42 @@ def test_the_arms_stick_figure_is_its_two_link_kinematics(arm):
         model.body_frames([0.1])
 
 
+
+def test_moment_arms_are_minus_the_path_lengths_slope(arm):
+    model, _ = arm
+    q = np.array([0.3, 1.2])
+    r = model.moment_arms(q)
+    assert r.shape == (len(model.muscles), len(model.joints))
+    elbow = json.loads(model.to_json())  # the paper's arm: constant moment arms, in the file per joint
+    for j, muscle in enumerate(elbow["muscles"]):
+        arms = muscle["moment_arms_m"]
+        expected = [arms.get(name, 0.0) for name in model.joints] if isinstance(arms, dict) else arms
+        np.testing.assert_allclose(r[j], expected, atol=1e-12)
+
+
+def test_each_muscle_line_passes_the_joints_it_crosses_on_the_side_it_pulls(arm):
+    """In the arm's view (axes along +z, counter-clockwise positive), a positive moment arm turns
+    the child counter-clockwise, so its muscle passes on the child's counter-clockwise side."""
+    model, _ = arm
+    skeleton = animation._Skeleton(model)
+    for q in ([0.3, 1.2], [1.5, 0.2]):
+        r = model.moment_arms(q)
+        paths = skeleton.muscle_paths(np.array(q), r)
+        segments = skeleton.segments(np.array(q))
+        for j, path in enumerate(paths):
+            crossed = [i for i in range(2) if abs(r[j, i]) > 0]
+            assert path is not None and len(path) == len(crossed) + 2, model.muscles[j]
+            for k, i in enumerate(crossed):
+                start, end = segments[i]
+                along = end - start
+                offset = path[k + 1] - start
+                assert np.linalg.norm(offset) > 0.005, "the line must not run through the joint"
+                side = np.sign(along[0] * offset[1] - along[1] * offset[0])
+                assert side == np.sign(r[j, i]), (model.muscles[j], i)
+    # Biceps and triceps pass the elbow on opposite sides.
+    sides = {m: np.sign(r[j, 1]) for j, m in enumerate(model.muscles) if r[j, 1] != 0}
+    assert sides["biceps"] == -sides["triceps_short"]
+
 def test_a_gif_of_a_plan_frame_by_frame(arm, tmp_path):
     model, scenario = arm
     plan = scenario.plan(model)
