@@ -38,6 +38,7 @@ constexpr Subcommand kSubcommands[] = {
     {"animate", "flatsos.animation",
      "a GIF or MP4 of a run's motion, each muscle coloured by its activation"},
     {"motion", "flatsos.sto", "an OpenSim motion file (.mot) of a run, for the original .osim"},
+    {"plot", "plot_results.py", "PNG figures of any program's output folders"},
 };
 
 void print_help(std::ostream& out) {
@@ -56,6 +57,7 @@ void print_help(std::ostream& out) {
 }
 
 bool is_python_module(const Subcommand& s) { return std::strncmp(s.program, "flatsos.", 8) == 0; }
+bool is_python_script(const Subcommand& s) { return fs::path(s.program).extension() == ".py"; }
 
 fs::path this_programs_folder() {
   std::error_code error;
@@ -69,6 +71,14 @@ fs::path python_package_folder(const fs::path& bin) {
   for (const fs::path& candidate :
        {bin.parent_path() / "python", bin.parent_path() / FLATSOS_PYTHON_INSTALL_DIR})
     if (fs::exists(candidate / "flatsos" / "__init__.py")) return candidate;
+  return {};
+}
+
+// A script of the project's: installed in share/flatsos/, or in the source tree of this build.
+fs::path script_path(const fs::path& bin, const char* name) {
+  for (const fs::path& candidate : {bin.parent_path() / "share" / "flatsos" / name,
+                                    fs::path(FLATSOS_SOURCE_DIR) / "scripts" / name})
+    if (fs::exists(candidate)) return candidate;
   return {};
 }
 
@@ -91,6 +101,15 @@ int run(const Subcommand& s, int argc, char** argv) {
     setenv("PYTHONPATH", path.c_str(), 1);
     executable = FLATSOS_PYTHON_EXECUTABLE;
     args = {executable, "-m", s.program};
+  } else if (is_python_script(s)) {
+    const fs::path script = script_path(bin, s.program);
+    if (script.empty()) {
+      std::cerr << "flatsos " << s.name << ": " << s.program
+                << " is neither installed nor in the source tree\n";
+      return 1;
+    }
+    executable = FLATSOS_PYTHON_EXECUTABLE;
+    args = {executable, script.string()};
   } else {
     executable = (bin / s.program).string();
     args = {display};

@@ -69,5 +69,7 @@ if [[ -n $python ]]; then
   "$tmp/moved/bin/flatsos" animate --model "$tmp/moved/share/flatsos/models/elbow_1dof.json" \
     --states plan/simulation.sto --out plan/motion.gif >/dev/null 2>&1 && [[ -s plan/motion.gif ]] ||
     { echo "FAILED: the installed 'flatsos animate' does not find the installed Python package"; fail=1; }
+  "$tmp/moved/bin/flatsos" plot plan >/dev/null 2>&1 && [[ -s plan/open_loop_activations.png ]] ||
+    { echo "FAILED: the installed 'flatsos plot' does not draw"; fail=1; }
 fi
 exit $fail

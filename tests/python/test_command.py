@@ -12,7 +12,8 @@ MODEL = BUILD_DIR / "share" / "flatsos" / "models" / "elbow_1dof.json"
 SUBCOMMANDS = {"plan": "arm_open_loop", "control": "arm_receding_horizon", "track": "track_motion",
                "static-optimization": "static_optimization", "simulate": "arm_forward",
                "import": "opensim_to_model", "process-motion": "process_motion", "bench": "flatsos_bench",
-               "study": "flatsos.study", "animate": "flatsos.animation", "motion": "flatsos.sto"}
+               "study": "flatsos.study", "animate": "flatsos.animation", "motion": "flatsos.sto",
+               "plot": "plot_results.py"}
 
 
 def flatsos(*args, cwd=None):
@@ -42,6 +43,8 @@ def test_each_subcommand_has_the_help_of_its_program(name):
     program = SUBCOMMANDS[name]
     if program.startswith("flatsos."):
         assert f"python3 -m {program}" in done.stdout or "usage:" in done.stdout
+    elif program.endswith(".py"):
+        assert f"Usage: {program}" in done.stdout
     else:
         assert f"Usage: flatsos {name} [OPTIONS]" in done.stdout
         alias = subprocess.run([str(BUILD_DIR / "bin" / program), "--help"], capture_output=True, text=True)
@@ -55,3 +58,6 @@ def test_plan_plans_and_a_bad_option_exits_2(tmp_path):
     summary = json.loads((tmp_path / "plan" / "summary.json").read_text())
     assert summary["status"] == "solved" and summary["effort"] == "excitation_squared"
     assert flatsos("plan", "--no-such-option", cwd=tmp_path).returncode == 2
+    drawn = flatsos("plot", "plan", cwd=tmp_path)
+    assert drawn.returncode == 0, drawn.stderr
+    assert (tmp_path / "plan" / "open_loop_activations.png").stat().st_size > 0
