@@ -10,7 +10,8 @@ library's message; the C++ core releases the GIL while it plans.
                                   target=np.radians([90, 0]), duration=3.0, reserves=10.0)
     plan.status, plan.cost, plan.sample(np.linspace(0, 3, 301))["excitation"]
 
-Also: shortest_transfer (the least duration with a plan), simulate_plan (Simbody, open loop), run_receding_horizon (the closed loop),
+Also: shortest_transfer (the least duration with a plan), simulate_plan (Simbody, open loop), simulate (Simbody
+under given excitations), run_receding_horizon (the closed loop),
 static_optimization (OpenSim's, along a measured motion), solve_inverse (the inverse problem
 along a measured motion, as OpenSim's MocoInverse), track (the controller following a
 measured motion, as OpenSim's CMC); the
@@ -18,8 +19,8 @@ submodules flatsos.study (batch studies on Dask), flatsos.animation (GIF and MP4
 models) and flatsos.sto (OpenSim tables and motion files), each runnable with python3 -m.
 """
 
-from ._flatsos import (Model, OpenLoopPlan, plan_open_loop, run_receding_horizon, shortest_transfer, simulate_plan,
-                       solve_inverse, static_optimization, track)
+from ._flatsos import (Model, OpenLoopPlan, plan_open_loop, run_receding_horizon, shortest_transfer, simulate,
+                       simulate_plan, solve_inverse, static_optimization, track)
 
-__all__ = ["Model", "OpenLoopPlan", "plan_open_loop", "run_receding_horizon", "shortest_transfer", "simulate_plan",
-           "solve_inverse", "static_optimization", "track"]
+__all__ = ["Model", "OpenLoopPlan", "plan_open_loop", "run_receding_horizon", "shortest_transfer", "simulate",
+           "simulate_plan", "solve_inverse", "static_optimization", "track"]

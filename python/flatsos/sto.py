@@ -1,5 +1,6 @@
-"""OpenSim storage files: read the tables the flatsos programs write (.sto), and write a motion
-(.mot) in OpenSim's coordinate names and degrees, which plays on the original .osim model.
+"""OpenSim storage files: read the tables the flatsos programs write (.sto), read and write
+controls tables (each muscle's excitation, as Moco writes them), and write a motion (.mot) in
+OpenSim's coordinate names and degrees, which plays on the original .osim model.
 
     python3 -m flatsos.sto --model models/seated_knee_r.json \\
         --states results/seated_knee_r/open_loop/simulation.sto --out knee.mot
@@ -84,10 +85,46 @@ def write_motion(model, time, q, path, name="flatsos"):
     types = model.joint_types
     columns = [time] + [q[:, i] if types[i] == "slider" else np.degrees(q[:, i]) for i in range(q.shape[1])] + \
         [np.full(time.size, math.degrees(held[c])) for c in sorted(held)]
-    data = np.column_stack(columns)
+    _write_table(path, name, labels, np.column_stack(columns), in_degrees=True)
+
+
+def write_controls(model, time, excitation, path, name="controls"):
+    """A controls table as OpenSim Moco and the flatsos programs write it (time, then
+    /forceset/<muscle>: each muscle's excitation), which `flatsos simulate --excitations` and
+    flatsos.simulate read back. Written whole or not at all."""
+    time = np.asarray(time, dtype=float)
+    excitation = np.asarray(excitation, dtype=float)
+    if time.ndim != 1 or excitation.shape != (time.size, len(model.muscles)):
+        raise ValueError(f"excitation: expected {time.size} rows of {len(model.muscles)} excitations, got shape "
+                         f"{excitation.shape}")
+    if not (np.isfinite(time).all() and np.isfinite(excitation).all()):
+        raise ValueError("time, excitation: values must be finite")
+    if (np.diff(time) <= 0).any():
+        raise ValueError("time: must increase strictly")
+    labels = ["time"] + [f"/forceset/{m}" for m in model.muscles]
+    _write_table(path, name, labels, np.column_stack([time, excitation]), in_degrees=False)
+
+
+def read_controls(model, path):
+    """(time, excitation: rows x muscles) of a controls table (columns /forceset/<muscle>, as Moco
+    writes them, or plain <muscle>). ValueError naming the file and a missing muscle."""
+    table = read_sto(path)
+    if "time" not in table:
+        raise ValueError(f"{path}: no column 'time'")
+    columns = []
+    for muscle in model.muscles:
+        label = next((c for c in (f"/forceset/{muscle}", muscle) if c in table), None)
+        if label is None:
+            raise ValueError(f"{path}: no column '/forceset/{muscle}'")
+        columns.append(table[label])
+    return table["time"], np.column_stack(columns)
+
+
+def _write_table(path, name, labels, data, in_degrees):
+    """OpenSim storage: a header, the labels and tab-separated rows, renamed into place."""
     path = pathlib.Path(path)
-    header = (f"{name}\nversion=1\nnRows={data.shape[0]}\nnColumns={data.shape[1]}\ninDegrees=yes\nendheader\n" +
-              "\t".join(labels) + "\n")
+    header = (f"{name}\nversion=1\nnRows={data.shape[0]}\nnColumns={data.shape[1]}\n"
+              f"inDegrees={'yes' if in_degrees else 'no'}\nendheader\n" + "\t".join(labels) + "\n")
     with tempfile.NamedTemporaryFile("w", dir=path.parent, suffix=".tmp", delete=False) as f:
         f.write(header)
         for row in data:

@@ -160,8 +160,13 @@ void register_model(py::module_& m) {
           },
           "muscle names, in model order")
       .def_property_readonly(
-          "flat_outputs", [](const Model& self) { return self.model->numMuscles() - self.model->numJoints(); },
-          "number of flat outputs (muscles minus joints)")
+          "flat_outputs",
+          [](const Model& self) -> py::object {
+            if (!self.flat) return py::none();
+            return py::cast(Table(self.flat->E()));
+          },
+          "the flat-output matrix E (flat outputs x muscles: Y = E F): the model file's, or the library's choice over "
+          "the joint ranges; None when none holds over the ranges (each plan or run then chooses E over its task)")
       .def_property_readonly(
           "max_isometric_forces",
           [](const Model& self) {

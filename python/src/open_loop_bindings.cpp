@@ -75,11 +75,17 @@ Plan plan_open_loop(const Model& m, const py::object& q0, const py::object& qd0,
                     std::optional<int> flat_output_degree, std::optional<int> flat_output_spans,
                     std::optional<double> flat_output_span_growth, std::optional<int> torque_pieces,
                     std::optional<double> torque_piece_growth, std::optional<int> torque_degree, bool bounds,
-                    const std::string& method, const py::object& effort, const py::object& weights) {
+                    const std::string& method, const py::object& effort, const py::object& weights,
+                    int free_path_spans, double free_path_span_growth) {
   OpenLoopInputs in = open_loop_inputs(m, q0, qd0, a0, target, duration, reserves,
                                        {preset, flat_output_degree, flat_output_spans, flat_output_span_growth,
                                         torque_pieces, torque_piece_growth, torque_degree, bounds});
   in.options.effort = effort_argument(effort, weights, m.model->numMuscles());
+  if (free_path_spans < 0) throw py::value_error("free_path_spans: must be >= 0 (0: the prescribed path)");
+  if (!(free_path_span_growth > 0.0)) throw py::value_error("free_path_span_growth: must be > 0");
+  in.options.free_path.enabled = free_path_spans > 0;
+  if (free_path_spans > 0) in.options.free_path.spans = free_path_spans;
+  in.options.free_path.span_growth = free_path_span_growth;
   try {
     in.study.sos.method = planner::sos_program_method(method);
   } catch (const std::invalid_argument& e) {
@@ -238,6 +244,25 @@ void register_open_loop(py::module_& m) {
           "how the reserves' program was solved: 'method', Ipopt's iterations, calls and linear solver, "
           "'exchange_rounds', the certificates ('certified', 'certified_pieces' of 'near_active_pieces'), the flat "
           "outputs' 'flat_output_breakpoints' and the 'torque_piece_starts' (s) and, for 'whole_program_nlp', its 'nlp_variables', 'nlp_equalities' and 'max_certificate_residual' (N)")
+      .def_property_readonly(
+          "free_path",
+          [](const Plan& p) -> py::object {
+            const planner::FreePathReport& r = p.plan.free_path;
+            if (!r.optimized && r.prescribed_status.empty()) return py::none();
+            py::dict d;
+            d["optimized"] = r.optimized;
+            d["prescribed_cost"] = r.prescribed_cost_N_s;
+            d["prescribed_status"] = r.prescribed_status;
+            d["cost_at_points"] = r.cost_at_points_N_s;
+            d["method"] = std::string(planner::to_string(r.method));
+            d["rounds"] = r.rounds;
+            d["points"] = r.points;
+            d["path_iterations"] = r.path_iterations;
+            return std::move(d);
+          },
+          "with free_path_spans: what optimizing the joint path did ('optimized', the plan along the prescribed "
+          "path's 'prescribed_cost' and 'prescribed_status', 'cost_at_points', 'method', 'rounds', 'points', "
+          "'path_iterations'; costs in cost_unit); None along the prescribed path")
       .def("sample", &sample, py::arg("times"),
            "The plan at `times` (s, within [0, duration]): a dict of numpy arrays 'time', 'q' (rad, one row per "
            "time, one column per joint), 'activation', 'excitation' and 'tendon_force' (N; one column per muscle).")
@@ -255,6 +280,7 @@ void register_open_loop(py::module_& m) {
         py::arg("flat_output_span_growth") = py::none(), py::arg("torque_pieces") = py::none(),
         py::arg("torque_piece_growth") = py::none(), py::arg("torque_degree") = py::none(), py::arg("bounds") = true,
         py::arg("method") = "exchange", py::arg("effort") = py::none(), py::arg("weights") = py::none(),
+        py::arg("free_path_spans") = 0, py::arg("free_path_span_growth") = 1.0,
         "Minimum-effort open-loop plan from the initial state to rest at `target` in `duration` s.\n"
         "q0, qd0, target: rad and rad/s, one per joint; a0: initial activations in (0, 1], one per muscle, with "
         "tendons in static equilibrium (None: the minimum-effort rest state at q0); reserves: minimum tendon "
@@ -267,7 +293,9 @@ void register_open_loop(py::module_& m) {
         "None or 'paper' (the model's linear effort in the tendon forces, its effort_weights), or "
         "'excitation_squared', 'excitation_cubed', 'activation_squared', 'activation_cubed', 'stress_squared', "
         "'stress_cubed' (the integral of sum w_j x_j^p, minimized along the prescribed path from the linear "
-        "optimum), with `weights` w_j (None: 1 each). Bad input raises ValueError; the GIL is released while planning.");
+        "optimum), with `weights` w_j (None: 1 each); `free_path_spans` > 0 optimizes the joint path too, a B-spline on that "
+        "many spans through the same boundary conditions, each `free_path_span_growth` times the one before (0: the "
+        "prescribed degree-8 path). Bad input raises ValueError; the GIL is released while planning.");
 
   m.def("shortest_transfer", &shortest_transfer, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("target"), py::arg("reserves"), py::kw_only(), py::arg("longest"), py::arg("shortest") = 0.1,

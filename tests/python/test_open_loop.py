@@ -14,10 +14,15 @@ def test_a_model_names_its_joints_and_muscles_in_model_order(arm, knee):
     assert model.joints == ["shoulder", "elbow"]
     assert model.muscles == ["anterior_deltoid", "posterior_deltoid", "biceps", "triceps_long", "triceps_short",
                              "brachialis"]
-    assert model.flat_outputs == 4
+    # The file's flat outputs: E's rows, with the weights the file gives each muscle.
+    E = model.flat_outputs
+    described = json.loads(model.to_json())["flat_outputs"]
+    assert E.shape == (4, 6)
+    for row, output in zip(E, described):
+        np.testing.assert_array_equal(row, [output["weights"].get(m, 0.0) for m in model.muscles])
     knee_model, _ = knee
     assert knee_model.joints == ["walker_knee_r"]  # OpenSim's joint (its coordinate: knee_angle_r)
-    assert len(knee_model.muscles) == 13 and knee_model.flat_outputs == 12  # chosen by the library
+    assert len(knee_model.muscles) == 13 and knee_model.flat_outputs.shape == (12, 13)  # chosen by the library
 
 
 @pytest.mark.parametrize("name", ["arm", "knee"])
