@@ -3,6 +3,7 @@
 // the package, with the same options; `flatsos <subcommand> --help` prints that program's help.
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>

@@ -11,7 +11,7 @@ packages=(
   python3 python3-matplotlib python3-numpy
   python3-dev pybind11-dev python3-pybind11 python3-pytest
   python3-dask python3-distributed python3-pil
-  python3-pip python3-venv python3-setuptools python3-wheel python3-build
+  python3-pip python3-venv python3-setuptools python3-wheel python3-build python3-jsonschema
 )
 if [[ "${FLATSOS_SANITIZE:-0}" == 1 ]]; then packages+=(clang libclang-rt-14-dev); fi
 
