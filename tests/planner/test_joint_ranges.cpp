@@ -74,4 +74,10 @@ TEST(JointRanges, APathLeavingTheRangeWarnsHowFarAndWhen) {
   EXPECT_TRUE(
       fpl::detail::joint_range_warnings(arm_with_elbow_range(0.0, peak + 1e-6), path, 1.0, 1001)
           .empty());
+  // Rounding at a range's end is not leaving it (a path that starts exactly there).
+  EXPECT_TRUE(
+      fpl::detail::joint_range_warnings(arm_with_elbow_range(0.0, peak - 1e-12), path, 1.0, 1001)
+          .empty());
+  EXPECT_NO_THROW(fpl::detail::require_within_joint_ranges(
+      arm_with_elbow_range(0.0, 2.5), Eigen::Vector2d(0.0, -1e-13), "start joint angles (q0)"));
 }

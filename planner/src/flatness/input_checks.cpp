@@ -63,11 +63,16 @@ std::string shown_range(const plugin::JointDescription& joint) {
   return s.str();
 }
 
+// Below this (rad or m) an angle at a range's end counts as inside: a path that starts exactly at
+// a range's end evaluates there to within rounding (2e-13 deg beyond arm26's elbow at 0).
+constexpr double kRangeRounding = 1e-9;
+
 // How far q lies beyond the joint's hard range (0 inside), in SI. A joint with a limit torque has
 // a soft stop: beyond its range its spring pushes back, and a task may press into it.
 double beyond_range(const plugin::JointDescription& joint, double q) {
   if (joint.limit.enabled()) return 0.0;
-  return std::max({joint.range_rad[0] - q, q - joint.range_rad[1], 0.0});
+  const double beyond = std::max({joint.range_rad[0] - q, q - joint.range_rad[1], 0.0});
+  return beyond > kRangeRounding ? beyond : 0.0;
 }
 
 }  // namespace
