@@ -211,9 +211,7 @@ void PathRows::emitRows(const Eigen::VectorXd& z, bool jacobian, double* values,
       const muscles::SecondOrderJet path = flat_.pathLengthJet(j, q_jet);
       const MuscleBoundRows bounds = muscle_bound_rows(flat_.model().muscle(j).getParameters(), {F(j, 0), F(j, 1), F(j, 2)},
                                                        path, a_min_[j], jacobian);
-      // At t = 0 the initial state fixes F: no margin there (a minimum-effort rest starts its
-      // muscles exactly at their reserves; plan_open_loop checks t = 0 itself).
-      values[row] = F(j, 0) - reserves_[j] - (pt.flat.t_s > 0.0 ? kReserveMargin_N : 0.0);
+      values[row] = F(j, 0) - reserves_[j] - reserve_margin_N(pt);
       for (int k = 0; k < kRowsPerMuscle; ++k) values[row + 1 + k] = bounds.value[static_cast<std::size_t>(k)];
       if (jacobian) {
         // The reserve row: dF / d(theta, c).

@@ -56,6 +56,13 @@ struct PathPoint {
 
 PathPoint make_path_point(const SosSetup& setup, const FlatOutputMap& flat, const PathParameterization& P, double t);
 
+/// The reserve rows' margin at a point: none at t = 0, where the initial state fixes every tendon
+/// force and nothing can move it (a minimum-effort rest starts a muscle exactly at its reserve;
+/// plan_open_loop checks the reserves at t = 0 itself).
+inline double reserve_margin_N(const PathPoint& pt) {
+  return pt.flat.t_s > 0.0 ? kReserveMargin_N : 0.0;
+}
+
 /// The joint jet (N x 5) of the path of c at a point.
 Eigen::MatrixXd joint_jet(const PathPoint& pt, const Eigen::VectorXd& c);
 /// Its derivative in the point's path columns: 5N x columns, row 5 r + l for d^l q_r / dt^l.

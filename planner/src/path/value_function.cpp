@@ -41,11 +41,8 @@ static RowsAlongPath rows_along_path(const SosSetup& setup, const FlatOutputMap&
       const Eigen::Index row = j * count + k;
       for (std::size_t col = 0; col < bp.columns.size(); ++col)
         lp.G(row, bp.columns[col]) = bp.slope[0](j, static_cast<Eigen::Index>(col));
-      lp.row_lower[row] = reserves[j] + kReserveMargin_N - bp.base(j, 0);
-      // A row no coefficient moves (t = 0, where the initial state fixes every tendon force) asks
-      // only what that state gives: a muscle starting exactly at its reserve (a minimum-effort
-      // rest) cannot also clear the margin. The plan checks the reserves at t = 0 on its own.
-      if (lp.G.row(row).isZero()) lp.row_lower[row] = std::min(lp.row_lower[row], 0.0);
+      lp.row_lower[row] =
+          reserves[j] + reserve_margin_N(points[static_cast<std::size_t>(k)]) - bp.base(j, 0);
     }
   for (int l = 0; l < p; ++l) {
     const OutputParameterization& y = setup.outputs[static_cast<std::size_t>(l)];
