@@ -7,6 +7,8 @@
 
 namespace flatsos::muscles::detail {
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 void check(const ActiveForceLengthCurveProperties& properties);
 void check_force_velocity(const ForceVelocityCurveProperties& properties);
 void check_force_velocity_inverse(const ForceVelocityCurveProperties& properties);

@@ -13,7 +13,7 @@
 namespace flatsos::muscles {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using detail::kPi;
 const double kRootEps = std::sqrt(std::numeric_limits<double>::epsilon());
 // SimTK::SignificantReal = eps^(7/8): OpenSim's floor for slopes that must be nonzero.
 const double kSignificantReal = std::pow(std::numeric_limits<double>::epsilon(), 7.0 / 8.0);

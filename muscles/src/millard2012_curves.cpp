@@ -11,7 +11,7 @@
 namespace flatsos::muscles {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using detail::kPi;
 
 /// The force-velocity corners in (velocity, force) order; the inverse swaps the axes.
 std::vector<QuinticBezierSegment> force_velocity_segments(const ForceVelocityCurveProperties& p,

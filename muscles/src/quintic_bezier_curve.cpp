@@ -13,7 +13,7 @@
 namespace flatsos::muscles {
 namespace {
 
-constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kMachineEpsilon = std::numeric_limits<double>::epsilon();
 
 template <std::size_t N>
 double de_casteljau(std::array<double, N> points, double u) {
@@ -76,7 +76,7 @@ double solve_parameter(const std::array<double, 6>& points, const Samples& sampl
     const double slope = de_casteljau(slope_points, u);
     double next = slope > 0.0 ? u - residual / slope : lower;
     if (!(next > lower && next < upper)) next = 0.5 * (lower + upper);
-    if (std::abs(next - u) <= 2.0 * kEps) return next;
+    if (std::abs(next - u) <= 2.0 * kMachineEpsilon) return next;
     u = next;
   }
   return u;
@@ -114,7 +114,7 @@ void check_segment(const QuinticBezierSegment& segment, std::size_t index,
 }
 
 bool joins(double end, double start) {
-  return std::abs(end - start) <= 64.0 * kEps * std::max({1.0, std::abs(end), std::abs(start)});
+  return std::abs(end - start) <= 64.0 * kMachineEpsilon * std::max({1.0, std::abs(end), std::abs(start)});
 }
 
 bool rises(const QuinticBezierSegment& segment) {
@@ -136,7 +136,7 @@ QuinticBezierSegment quintic_bezier_corner(double x0, double y0, double dydx0, d
     throw std::invalid_argument(what + ": curviness must be in [0, 1]");
   }
   const double c = 0.1 + 0.8 * curviness;
-  const double corner_x = std::abs(dydx0 - dydx1) > std::sqrt(kEps)
+  const double corner_x = std::abs(dydx0 - dydx1) > std::sqrt(kMachineEpsilon)
                               ? (y1 - y0 - x1 * dydx1 + x0 * dydx0) / (dydx0 - dydx1)
                               : 0.5 * (x0 + x1);
   const double corner_y = y1 + (corner_x - x1) * dydx1;

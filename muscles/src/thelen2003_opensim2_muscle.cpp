@@ -13,9 +13,9 @@ namespace {
 
 // OpenSim 2.x's tendon constants, as rounded there.
 constexpr double kToeStrainPerE0 = 0.609;
-constexpr double kToeForce = 0.333333;
+constexpr double kOpenSim2ToeForce = 0.333333;
 constexpr double kLinearStiffnessTimesE0 = 1.712;
-constexpr double kToeShape = 3.0;
+constexpr double kOpenSim2ToeShape = 3.0;
 constexpr double kSlackTendonForce = 0.001;  // times (1 + e), at every strain
 // The velocity law's constants: the activation floor inside it, the force step of its
 // extrapolation slopes, and where the eccentric branch is extrapolated.
@@ -32,10 +32,10 @@ TendonJet tendon_jet(const MuscleParameters& p, double strain) {
   const double toe_strain = kToeStrainPerE0 * e0, stiffness = kLinearStiffnessTimesE0 / e0;
   TendonJet t{kSlackTendonForce * (1.0 + strain), kSlackTendonForce, 0.0, 0.0};
   if (strain > toe_strain) {
-    t.value += stiffness * (strain - toe_strain) + kToeForce;
+    t.value += stiffness * (strain - toe_strain) + kOpenSim2ToeForce;
     t.d1 += stiffness;
   } else if (strain > 0.0) {
-    const double rate = kToeShape / toe_strain, scale = kToeForce / std::expm1(kToeShape);
+    const double rate = kOpenSim2ToeShape / toe_strain, scale = kOpenSim2ToeForce / std::expm1(kOpenSim2ToeShape);
     const double e = std::exp(rate * strain);
     t.value += scale * (e - 1.0);
     t.d1 += scale * rate * e;
@@ -131,7 +131,7 @@ double Thelen2003OpenSim2Muscle::tendonLengthFromForce(const MuscleParameters& p
   if (n <= kSlackTendonForce) {
     strain = n / kSlackTendonForce - 1.0;
   } else if (n >= tendon_jet(p, toe_strain).value) {
-    strain = (n - kToeForce - kSlackTendonForce + stiffness * toe_strain) / (stiffness + kSlackTendonForce);
+    strain = (n - kOpenSim2ToeForce - kSlackTendonForce + stiffness * toe_strain) / (stiffness + kSlackTendonForce);
   } else {  // the toe: increasing and convex, so Newton from its end converges from above
     strain = toe_strain;
     for (int i = 0; i < 100; ++i) {

@@ -17,7 +17,6 @@ namespace flatsos::planner {
 
 namespace {
 
-using Ipopt::Index;
 using Ipopt::Number;
 
 // Ipopt's view of the transcription.
@@ -26,7 +25,7 @@ class CollocationNlp : public Ipopt::TNLP {
   CollocationNlp(const detail::HermiteSimpsonProblem& problem, std::vector<double> start)
       : problem_(problem), start_(std::move(start)) {}
 
-  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac, Index& nnz_h, IndexStyleEnum& style) override {
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac, Ipopt::Index& nnz_h, IndexStyleEnum& style) override {
     n = problem_.variables();
     m = problem_.constraints();
     nnz_jac = problem_.jacobianNonzeros();
@@ -34,46 +33,46 @@ class CollocationNlp : public Ipopt::TNLP {
     style = C_STYLE;
     return true;
   }
-  bool get_bounds_info(Index, Number* xl, Number* xu, Index, Number* gl, Number* gu) override {
+  bool get_bounds_info(Ipopt::Index, Number* xl, Number* xu, Ipopt::Index, Number* gl, Number* gu) override {
     problem_.bounds(xl, xu, gl, gu);
     return true;
   }
-  bool get_starting_point(Index, bool init_x, Number* x, bool, Number*, Number*, Index, bool, Number*) override {
+  bool get_starting_point(Ipopt::Index, bool init_x, Number* x, bool, Number*, Number*, Ipopt::Index, bool, Number*) override {
     if (init_x) std::copy(start_.begin(), start_.end(), x);
     return true;
   }
-  bool eval_f(Index, const Number* x, bool, Number& f) override {
+  bool eval_f(Ipopt::Index, const Number* x, bool, Number& f) override {
     f = problem_.objective(x);
     return std::isfinite(f);
   }
-  bool eval_grad_f(Index, const Number* x, bool, Number* g) override {
+  bool eval_grad_f(Ipopt::Index, const Number* x, bool, Number* g) override {
     problem_.objectiveGradient(x, g);
     return true;
   }
-  bool eval_g(Index, const Number* x, bool, Index m, Number* g) override {
+  bool eval_g(Ipopt::Index, const Number* x, bool, Ipopt::Index m, Number* g) override {
     problem_.constraintValues(x, g);
-    for (Index r = 0; r < m; ++r)
+    for (Ipopt::Index r = 0; r < m; ++r)
       if (!std::isfinite(g[r])) return false;
     return true;
   }
-  bool eval_jac_g(Index, const Number* x, bool, Index, Index nnz, Index* irow, Index* jcol, Number* values) override {
+  bool eval_jac_g(Ipopt::Index, const Number* x, bool, Ipopt::Index, Ipopt::Index nnz, Ipopt::Index* irow, Ipopt::Index* jcol, Number* values) override {
     if (!values) {
-      for (Index k = 0; k < nnz; ++k) irow[k] = problem_.jacobianRows()[k], jcol[k] = problem_.jacobianColumns()[k];
+      for (Ipopt::Index k = 0; k < nnz; ++k) irow[k] = problem_.jacobianRows()[k], jcol[k] = problem_.jacobianColumns()[k];
       return true;
     }
     problem_.jacobianValues(x, values);
     return true;
   }
-  bool eval_h(Index, const Number* x, bool, Number objective_factor, Index, const Number* lambda, bool, Index nnz,
-              Index* irow, Index* jcol, Number* values) override {
+  bool eval_h(Ipopt::Index, const Number* x, bool, Number objective_factor, Ipopt::Index, const Number* lambda, bool, Ipopt::Index nnz,
+              Ipopt::Index* irow, Ipopt::Index* jcol, Number* values) override {
     if (!values) {
-      for (Index k = 0; k < nnz; ++k) irow[k] = problem_.hessianRows()[k], jcol[k] = problem_.hessianColumns()[k];
+      for (Ipopt::Index k = 0; k < nnz; ++k) irow[k] = problem_.hessianRows()[k], jcol[k] = problem_.hessianColumns()[k];
       return true;
     }
     problem_.hessianValues(x, objective_factor, lambda, values);
     return true;
   }
-  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index,
+  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Number* x, const Number*, const Number*, Ipopt::Index,
                          const Number*, const Number*, Number, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
     x_.assign(x, x + n);

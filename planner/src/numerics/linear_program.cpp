@@ -9,29 +9,28 @@ namespace flatsos::planner {
 
 namespace {
 
-using Ipopt::Index;
 using Ipopt::Number;
 
 class LinearProgramTnlp : public Ipopt::TNLP {
  public:
   LinearProgramTnlp(const LinearProgram& lp, const std::optional<Eigen::VectorXd>& start) : lp_(lp), start_(start) {}
 
-  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac, Index& nnz_h, IndexStyleEnum& style) override {
-    n = static_cast<Index>(lp_.cost.size());
-    m = static_cast<Index>(lp_.G.rows());
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac, Ipopt::Index& nnz_h, IndexStyleEnum& style) override {
+    n = static_cast<Ipopt::Index>(lp_.cost.size());
+    m = static_cast<Ipopt::Index>(lp_.G.rows());
     nnz_jac = n * m;
     nnz_h = 0;
     style = C_STYLE;
     return true;
   }
-  bool get_bounds_info(Index n, Number* xl, Number* xu, Index m, Number* gl, Number* gu) override {
-    for (Index i = 0; i < n; ++i) xl[i] = lp_.x_lower[i], xu[i] = lp_.x_upper[i];
-    for (Index r = 0; r < m; ++r) gl[r] = lp_.row_lower[r], gu[r] = lp_.row_upper[r];
+  bool get_bounds_info(Ipopt::Index n, Number* xl, Number* xu, Ipopt::Index m, Number* gl, Number* gu) override {
+    for (Ipopt::Index i = 0; i < n; ++i) xl[i] = lp_.x_lower[i], xu[i] = lp_.x_upper[i];
+    for (Ipopt::Index r = 0; r < m; ++r) gl[r] = lp_.row_lower[r], gu[r] = lp_.row_upper[r];
     return true;
   }
-  bool get_starting_point(Index n, bool init_x, Number* x, bool, Number*, Number*, Index, bool, Number*) override {
+  bool get_starting_point(Ipopt::Index n, bool init_x, Number* x, bool, Number*, Number*, Ipopt::Index, bool, Number*) override {
     if (init_x)
-      for (Index i = 0; i < n; ++i) {
+      for (Ipopt::Index i = 0; i < n; ++i) {
         double v = start_ ? (*start_)[i] : 0.0;
         // Inside the bounds: Ipopt would push it anyway, this keeps the start meaningful.
         v = std::min(std::max(v, lp_.x_lower[i]), lp_.x_upper[i]);
@@ -39,33 +38,33 @@ class LinearProgramTnlp : public Ipopt::TNLP {
       }
     return true;
   }
-  bool eval_f(Index n, const Number* x, bool, Number& f) override {
+  bool eval_f(Ipopt::Index n, const Number* x, bool, Number& f) override {
     f = 0.0;
-    for (Index i = 0; i < n; ++i) f += lp_.cost[i] * x[i];
+    for (Ipopt::Index i = 0; i < n; ++i) f += lp_.cost[i] * x[i];
     return true;
   }
-  bool eval_grad_f(Index n, const Number*, bool, Number* g) override {
-    for (Index i = 0; i < n; ++i) g[i] = lp_.cost[i];
+  bool eval_grad_f(Ipopt::Index n, const Number*, bool, Number* g) override {
+    for (Ipopt::Index i = 0; i < n; ++i) g[i] = lp_.cost[i];
     return true;
   }
-  bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
+  bool eval_g(Ipopt::Index n, const Number* x, bool, Ipopt::Index m, Number* g) override {
     const Eigen::Map<const Eigen::VectorXd> xv(x, n);
     Eigen::Map<Eigen::VectorXd>(g, m) = lp_.G * xv;
     return true;
   }
-  bool eval_jac_g(Index n, const Number*, bool, Index m, Index, Index* irow, Index* jcol, Number* values) override {
-    Index k = 0;
-    for (Index r = 0; r < m; ++r)
-      for (Index c = 0; c < n; ++c, ++k) {
+  bool eval_jac_g(Ipopt::Index n, const Number*, bool, Ipopt::Index m, Ipopt::Index, Ipopt::Index* irow, Ipopt::Index* jcol, Number* values) override {
+    Ipopt::Index k = 0;
+    for (Ipopt::Index r = 0; r < m; ++r)
+      for (Ipopt::Index c = 0; c < n; ++c, ++k) {
         if (values) values[k] = lp_.G(r, c);
         else irow[k] = r, jcol[k] = c;
       }
     return true;
   }
-  bool eval_h(Index, const Number*, bool, Number, Index, const Number*, bool, Index, Index*, Index*, Number*) override {
+  bool eval_h(Ipopt::Index, const Number*, bool, Number, Ipopt::Index, const Number*, bool, Ipopt::Index, Ipopt::Index*, Ipopt::Index*, Number*) override {
     return true;
   }
-  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index m,
+  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Number* x, const Number*, const Number*, Ipopt::Index m,
                          const Number*, const Number* lambda, Number obj, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
     x_ = Eigen::Map<const Eigen::VectorXd>(x, n);

@@ -11,7 +11,6 @@ namespace {
 
 constexpr double kInverseCurvatureFloor = 1e-3;
 
-using Ipopt::Index;
 using Ipopt::Number;
 
 // Y_l >= 0 at a point: the flat output's basis row over its free coefficients.
@@ -45,29 +44,29 @@ class JointPathNlp : public Ipopt::TNLP {
     for (const auto& t : rows_.hessianPattern()) hessian_pattern_.emplace_back(t.row(), t.col());
   }
 
-  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac, Index& nnz_h, IndexStyleEnum& style) override {
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac, Ipopt::Index& nnz_h, IndexStyleEnum& style) override {
     n = v_.size();
-    m = static_cast<Index>(linear_.size()) + rows_.rows();
-    nnz_jac = static_cast<Index>(jacobian_pattern_.size());
-    for (const auto& r : linear_) nnz_jac += static_cast<Index>(r.columns.size());
-    nnz_h = static_cast<Index>(hessian_pattern_.size());
+    m = static_cast<Ipopt::Index>(linear_.size()) + rows_.rows();
+    nnz_jac = static_cast<Ipopt::Index>(jacobian_pattern_.size());
+    for (const auto& r : linear_) nnz_jac += static_cast<Ipopt::Index>(r.columns.size());
+    nnz_h = static_cast<Ipopt::Index>(hessian_pattern_.size());
     style = C_STYLE;
     return true;
   }
-  bool get_bounds_info(Index n, Number* xl, Number* xu, Index m, Number* gl, Number* gu) override {
-    for (Index i = 0; i < n; ++i) {
+  bool get_bounds_info(Ipopt::Index n, Number* xl, Number* xu, Ipopt::Index m, Number* gl, Number* gu) override {
+    for (Ipopt::Index i = 0; i < n; ++i) {
       const bool theta = i < v_.thetas;
       xl[i] = theta ? setup_.lp.x_lower[i] : -1e19;
       xu[i] = theta ? setup_.lp.x_upper[i] : 1e19;
     }
-    for (Index r = 0; r < m; ++r) {
+    for (Ipopt::Index r = 0; r < m; ++r) {
       const auto linear = static_cast<std::size_t>(r);
       gl[r] = linear < linear_.size() ? linear_[linear].lower : 0.0;
       gu[r] = 1e19;
     }
     return true;
   }
-  bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_L, Number* z_U, Index m, bool init_lambda,
+  bool get_starting_point(Ipopt::Index n, bool init_x, Number* x, bool init_z, Number* z_L, Number* z_U, Ipopt::Index m, bool init_lambda,
                           Number* lambda) override {
     if (init_x) Eigen::Map<Eigen::VectorXd>(x, n) = at_.z;
     if (init_z) {
@@ -77,19 +76,19 @@ class JointPathNlp : public Ipopt::TNLP {
     if (init_lambda) Eigen::Map<Eigen::VectorXd>(lambda, m) = at_.rows;
     return true;
   }
-  bool eval_f(Index n, const Number* x, bool, Number& f) override {
+  bool eval_f(Ipopt::Index n, const Number* x, bool, Number& f) override {
     f = setup_.cost_constant + setup_.lp.cost.dot(Eigen::Map<const Eigen::VectorXd>(x, n).head(v_.thetas));
     return true;
   }
-  bool eval_grad_f(Index n, const Number*, bool, Number* g) override {
+  bool eval_grad_f(Ipopt::Index n, const Number*, bool, Number* g) override {
     Eigen::Map<Eigen::VectorXd> grad(g, n);
     grad.setZero();
     grad.head(v_.thetas) = setup_.lp.cost;
     return true;
   }
-  bool eval_g(Index n, const Number* x, bool, Index, Number* g) override {
+  bool eval_g(Ipopt::Index n, const Number* x, bool, Ipopt::Index, Number* g) override {
     const Eigen::Map<const Eigen::VectorXd> z(x, n);
-    Index r = 0;
+    Ipopt::Index r = 0;
     for (const auto& row : linear_) {
       double s = 0.0;
       for (std::size_t k = 0; k < row.columns.size(); ++k) s += row.values[k] * z[row.columns[k]];
@@ -98,11 +97,11 @@ class JointPathNlp : public Ipopt::TNLP {
     rows_.evaluateInto(z, g + r, nullptr);
     return true;
   }
-  bool eval_jac_g(Index n, const Number* x, bool, Index, Index, Index* irow, Index* jcol, Number* values) override {
-    Index k = 0;
-    const auto linear_rows = static_cast<Index>(linear_.size());
+  bool eval_jac_g(Ipopt::Index n, const Number* x, bool, Ipopt::Index, Ipopt::Index, Ipopt::Index* irow, Ipopt::Index* jcol, Number* values) override {
+    Ipopt::Index k = 0;
+    const auto linear_rows = static_cast<Ipopt::Index>(linear_.size());
     if (!values) {
-      for (Index r = 0; r < linear_rows; ++r)
+      for (Ipopt::Index r = 0; r < linear_rows; ++r)
         for (int c : linear_[static_cast<std::size_t>(r)].columns) irow[k] = r, jcol[k++] = c;
       for (const auto& [r, c] : jacobian_pattern_) irow[k] = linear_rows + r, jcol[k++] = c;
       return true;
@@ -113,10 +112,10 @@ class JointPathNlp : public Ipopt::TNLP {
     rows_.evaluateInto(Eigen::Map<const Eigen::VectorXd>(x, n), row_values_.data(), values + k);
     return true;
   }
-  bool eval_h(Index n, const Number* x, bool, Number, Index, const Number* lambda, bool, Index, Index* irow, Index* jcol,
+  bool eval_h(Ipopt::Index n, const Number* x, bool, Number, Ipopt::Index, const Number* lambda, bool, Ipopt::Index, Ipopt::Index* irow, Ipopt::Index* jcol,
               Number* values) override {
     if (!values) {
-      Index k = 0;
+      Ipopt::Index k = 0;
       for (const auto& [r, c] : hessian_pattern_) irow[k] = r, jcol[k++] = c;
       return true;
     }
@@ -124,7 +123,7 @@ class JointPathNlp : public Ipopt::TNLP {
     rows_.lagrangianHessianInto(Eigen::Map<const Eigen::VectorXd>(x, n), lambda + linear_.size(), values);
     return true;
   }
-  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number* z_L, const Number* z_U, Index m,
+  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Number* x, const Number* z_L, const Number* z_U, Ipopt::Index m,
                          const Number*, const Number* lambda, Number, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
     at_.z = Eigen::Map<const Eigen::VectorXd>(x, n);

@@ -17,7 +17,7 @@ constexpr double kReserveMargin_N = 1e-6;
 // convergence on curved active bounds), 204 LP steps over the leg's 30 periods to gain the last
 // 1e-5; the plan is replaced a period later. 108 steps with it, the closed loop's end within
 // 4e-4 deg of the exact one's.
-constexpr double kRelativeDecrease = 1e-5;
+constexpr double kBoundsLpRelativeDecrease = 1e-5;
 
 namespace {
 double sample_spacing_s(const PeriodExcitationBounds& b) { return b.period_s / (b.samples - 1); }
@@ -149,7 +149,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   }
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
   const SequentialLpOutcome slp =
-      solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis, {max_iterations, kRelativeDecrease});
+      solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis, {max_iterations, kBoundsLpRelativeDecrease});
   step.bound_iterations = slp.iterations;
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;

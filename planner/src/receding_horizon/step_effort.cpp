@@ -16,10 +16,10 @@ namespace flatsos::planner::detail {
 
 namespace {
 
-constexpr int kMaxIterations = 30;
-constexpr int kMaxHalvings = 10;
+constexpr int kStepMaxIterations = 30;
+constexpr int kStepMaxHalvings = 10;
 // Stops once the QP predicts a decrease below this fraction of the effort.
-constexpr double kRelativeDecrease = 1e-8;
+constexpr double kStepRelativeDecrease = 1e-8;
 // A trial alpha counts as inside the bounds while every row keeps half its margin (the samples
 // then stay strictly inside; bound_rows.hpp).
 constexpr double kRowTolerance = 0.5 * kSampleMargin;
@@ -118,7 +118,7 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   Eigen::MatrixXd J;
   Eigen::VectorXd lower, d, trial_alpha;
   int iterations = 0;
-  for (; iterations < kMaxIterations; ++iterations) {
+  for (; iterations < kStepMaxIterations; ++iterations) {
     qp_rows(step, rows, alpha, J, lower);
     // Levenberg's shift keeps the model strictly convex where the effort is flat in a direction.
     Eigen::MatrixXd H = model.hessian;
@@ -126,13 +126,13 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     const DenseQpResult r = solve_dense_qp(H, model.gradient, J, lower, qp, d);
     if (!r.solved) break;
     const double predicted = model.gradient.dot(d) + 0.5 * d.dot(model.hessian * d);
-    if (violation == 0.0 && !(predicted < -kRelativeDecrease * (1e-12 + std::abs(model.value)))) break;
+    if (violation == 0.0 && !(predicted < -kStepRelativeDecrease * (1e-12 + std::abs(model.value)))) break;
     // Inside the rows, a step must keep them and lower the effort (Armijo); outside, come closer.
     double s = 1.0, trial_violation = 0.0;
     bool accepted = false;
     // The full step, usually accepted, is evaluated with the derivatives the next QP needs.
     int k = 0;
-    for (; k < kMaxHalvings && !accepted; ++k, s *= 0.5) {
+    for (; k < kStepMaxHalvings && !accepted; ++k, s *= 0.5) {
       trial_alpha = alpha + s * d;
       trial_violation = row_violation(step, rows, trial_alpha);
       accepted = (violation == 0.0 ? trial_violation == 0.0 : trial_violation < violation) &&

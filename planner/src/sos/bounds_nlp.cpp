@@ -6,7 +6,6 @@ namespace flatsos::planner::detail {
 
 namespace {
 
-using Ipopt::Index;
 using Ipopt::Number;
 
 class BoundedSopNlp : public Ipopt::TNLP {
@@ -17,21 +16,21 @@ class BoundedSopNlp : public Ipopt::TNLP {
     const Eigen::MatrixXd& G = setup_.lp.G;
     for (Eigen::Index r = 0; r < G.rows(); ++r)
       for (Eigen::Index c = 0; c < G.cols(); ++c)
-        if (G(r, c) != 0.0) linear_.push_back({static_cast<Index>(r), static_cast<Index>(c)});
+        if (G(r, c) != 0.0) linear_.push_back({static_cast<Ipopt::Index>(r), static_cast<Ipopt::Index>(c)});
   }
 
-  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac, Index& nnz_h, IndexStyleEnum& style) override {
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac, Ipopt::Index& nnz_h, IndexStyleEnum& style) override {
     n = setup_.free_coefficients;
-    m = static_cast<Index>(setup_.lp.G.rows() + kRowsPerMuscle * points_.size() * muscles());
-    nnz_jac = static_cast<Index>(linear_.size());
-    for (const auto& bp : points_) nnz_jac += static_cast<Index>(kRowsPerMuscle * muscles() * bp.columns.size());
+    m = static_cast<Ipopt::Index>(setup_.lp.G.rows() + kRowsPerMuscle * points_.size() * muscles());
+    nnz_jac = static_cast<Ipopt::Index>(linear_.size());
+    for (const auto& bp : points_) nnz_jac += static_cast<Ipopt::Index>(kRowsPerMuscle * muscles() * bp.columns.size());
     nnz_h = 0;
     style = C_STYLE;
     return true;
   }
-  bool get_bounds_info(Index n, Number* xl, Number* xu, Index, Number* gl, Number* gu) override {
-    for (Index i = 0; i < n; ++i) xl[i] = setup_.lp.x_lower[i], xu[i] = setup_.lp.x_upper[i];
-    Index r = 0;
+  bool get_bounds_info(Ipopt::Index n, Number* xl, Number* xu, Ipopt::Index, Number* gl, Number* gu) override {
+    for (Ipopt::Index i = 0; i < n; ++i) xl[i] = setup_.lp.x_lower[i], xu[i] = setup_.lp.x_upper[i];
+    Ipopt::Index r = 0;
     for (; r < setup_.lp.G.rows(); ++r) gl[r] = setup_.lp.row_lower[r], gu[r] = 1e19;
     for (std::size_t i = 0; i < points_.size(); ++i)
       for (int j = 0; j < muscles(); ++j) {
@@ -39,24 +38,24 @@ class BoundedSopNlp : public Ipopt::TNLP {
       }
     return true;
   }
-  bool get_starting_point(Index n, bool init_x, Number* x, bool, Number*, Number*, Index, bool, Number*) override {
+  bool get_starting_point(Ipopt::Index n, bool init_x, Number* x, bool, Number*, Number*, Ipopt::Index, bool, Number*) override {
     if (init_x)
-      for (Index i = 0; i < n; ++i) x[i] = start_[i];
+      for (Ipopt::Index i = 0; i < n; ++i) x[i] = start_[i];
     return true;
   }
-  bool eval_f(Index n, const Number* x, bool, Number& f) override {
+  bool eval_f(Ipopt::Index n, const Number* x, bool, Number& f) override {
     f = setup_.lp.cost.dot(Eigen::Map<const Eigen::VectorXd>(x, n));
     return true;
   }
-  bool eval_grad_f(Index n, const Number*, bool, Number* g) override {
+  bool eval_grad_f(Ipopt::Index n, const Number*, bool, Number* g) override {
     Eigen::Map<Eigen::VectorXd>(g, n) = setup_.lp.cost;
     return true;
   }
-  bool eval_g(Index n, const Number* x, bool, Index, Number* g) override {
+  bool eval_g(Ipopt::Index n, const Number* x, bool, Ipopt::Index, Number* g) override {
     const Eigen::Map<const Eigen::VectorXd> theta(x, n);
     const Eigen::Index linear_rows = setup_.lp.G.rows();
     Eigen::Map<Eigen::VectorXd>(g, linear_rows) = setup_.lp.G * theta;
-    Index r = static_cast<Index>(linear_rows);
+    Ipopt::Index r = static_cast<Ipopt::Index>(linear_rows);
     for (const auto& bp : points_)
       for (int j = 0; j < muscles(); ++j) {
         const MuscleBoundRows rows = bound_rows(flat_, bp, j, a_min_[j], theta, false);
@@ -64,11 +63,11 @@ class BoundedSopNlp : public Ipopt::TNLP {
       }
     return true;
   }
-  bool eval_jac_g(Index n, const Number* x, bool, Index, Index, Index* irow, Index* jcol, Number* values) override {
-    Index k = 0;
+  bool eval_jac_g(Ipopt::Index n, const Number* x, bool, Ipopt::Index, Ipopt::Index, Ipopt::Index* irow, Ipopt::Index* jcol, Number* values) override {
+    Ipopt::Index k = 0;
     if (!values) {
       for (const auto& [r, c] : linear_) irow[k] = r, jcol[k++] = c;
-      Index r = static_cast<Index>(setup_.lp.G.rows());
+      Ipopt::Index r = static_cast<Ipopt::Index>(setup_.lp.G.rows());
       for (const auto& bp : points_)
         for (int j = 0; j < muscles(); ++j, r += kRowsPerMuscle)
           for (int which = 0; which < kRowsPerMuscle; ++which)
@@ -85,10 +84,10 @@ class BoundedSopNlp : public Ipopt::TNLP {
       }
     return true;
   }
-  bool eval_h(Index, const Number*, bool, Number, Index, const Number*, bool, Index, Index*, Index*, Number*) override {
+  bool eval_h(Ipopt::Index, const Number*, bool, Number, Ipopt::Index, const Number*, bool, Ipopt::Index, Ipopt::Index*, Ipopt::Index*, Number*) override {
     return false;  // limited-memory quasi-Newton
   }
-  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index,
+  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Number* x, const Number*, const Number*, Ipopt::Index,
                          const Number*, const Number*, Number, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
     x_ = Eigen::Map<const Eigen::VectorXd>(x, n);
@@ -104,7 +103,7 @@ class BoundedSopNlp : public Ipopt::TNLP {
   const std::vector<BoundPoint>& points_;
   const Eigen::VectorXd& a_min_;
   const Eigen::VectorXd& start_;
-  std::vector<std::pair<Index, Index>> linear_;
+  std::vector<std::pair<Ipopt::Index, Ipopt::Index>> linear_;
 };
 
 }  // namespace

@@ -23,9 +23,7 @@ namespace {
 using model_file::kMuscleModelKey;
 using model_file::kOptionalMuscleFields;
 
-std::string indexed(const std::string& list, std::size_t i) {
-  return list + "[" + std::to_string(i) + "]";
-}
+using model_file::indexed;
 
 // Reads fields of one JSON object, naming each by its path ("muscles[2].mass_kg") in errors,
 // and rejects keys nobody read (a typo must not silently fall back to a default).

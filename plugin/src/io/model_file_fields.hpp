@@ -4,7 +4,12 @@
 
 #include "flatsos/muscles/muscle_parameters.hpp"
 
+#include <string>
+
 namespace flatsos::plugin::model_file {
+
+// An element of a list as error messages name it: indexed("muscles", 2) is "muscles[2]".
+inline std::string indexed(const std::string& list, std::size_t i) { return list + "[" + std::to_string(i) + "]"; }
 
 // The optional MuscleParameters fields, by their JSON names (read and written alike).
 struct OptionalMuscleField {

@@ -10,10 +10,13 @@
 
 #include <SimTKcommon.h>
 
+#include "../io/model_file_fields.hpp"
+
 namespace flatsos::plugin {
 
 namespace {
-std::string indexed(const std::string& list, std::size_t i) { return list + "[" + std::to_string(i) + "]"; }
+using model_file::indexed;
+
 // Simbody's round trip of a body's inertia: about the mass centre -> about the body origin ->
 // back, each checked by SimTK::Inertia as Simbody checks it.
 bool central_inertia_survives_shift(const BodyDescription& b) {

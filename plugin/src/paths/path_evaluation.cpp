@@ -13,11 +13,6 @@ namespace flatsos::plugin {
 
 namespace {
 
-double value_of(const OpenSimCoordinateValues& q, const std::string& name) {
-  const auto it = q.find(name);
-  return it == q.end() ? 0.0 : it->second;
-}
-
 // The workspace of this thread: evaluations reuse its storage instead of allocating.
 template <class Workspace>
 Workspace& thread_workspace() {

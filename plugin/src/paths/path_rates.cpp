@@ -12,15 +12,6 @@
 
 namespace flatsos::plugin {
 
-namespace {
-
-double value_of(const OpenSimCoordinateValues& q, const std::string& name) {
-  const auto it = q.find(name);
-  return it == q.end() ? 0.0 : it->second;
-}
-
-}  // namespace
-
 double GeometryPathEvaluator::rate_along_path(const OpenSimCoordinateValues& q, Workspace& w, const std::string& coordinate,
                                               bool all_segments) const {
   // Each body's angular velocity and origin velocity (in ground) per unit rate of the coordinate.

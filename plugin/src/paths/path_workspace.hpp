@@ -56,4 +56,10 @@ struct GeometryPathEvaluator::Workspace {
   }
 };
 
+// A coordinate's value, 0 where the map does not give it.
+inline double value_of(const OpenSimCoordinateValues& q, const std::string& name) {
+  const auto it = q.find(name);
+  return it == q.end() ? 0.0 : it->second;
+}
+
 }  // namespace flatsos::plugin
