@@ -113,6 +113,12 @@ int run(const Subcommand& s, int argc, char** argv) {
     args = {executable, script.string()};
   } else {
     executable = (bin / s.program).string();
+    if (!fs::exists(executable)) {
+      std::cerr << "flatsos " << s.name << ": " << s.program << " is not built beside this program"
+                << (std::strcmp(s.name, "bench") == 0 ? " (configure with -DFLATSOS_BUILD_BENCH=ON)" : "")
+                << "\n";
+      return 1;
+    }
     args = {display};
   }
   for (int i = 2; i < argc; ++i) args.emplace_back(argv[i]);

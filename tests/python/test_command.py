@@ -61,3 +61,15 @@ def test_plan_plans_and_a_bad_option_exits_2(tmp_path):
     drawn = flatsos("plot", "plan", cwd=tmp_path)
     assert drawn.returncode == 0, drawn.stderr
     assert (tmp_path / "plan" / "open_loop_activations.png").stat().st_size > 0
+
+
+def test_a_program_not_built_is_named_with_how_to_build_it(tmp_path):
+    # A build for use has no benchmarks: the command alone in a folder stands for it.
+    (tmp_path / "bin").mkdir()
+    alone = tmp_path / "bin" / "flatsos"
+    alone.write_bytes(FLATSOS.read_bytes())
+    alone.chmod(0o755)
+    done = subprocess.run([str(alone), "bench", "--help"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1
+    assert "flatsos bench: flatsos_bench is not built beside this program" in done.stderr
+    assert "-DFLATSOS_BUILD_BENCH=ON" in done.stderr
