@@ -77,6 +77,26 @@ int main(int argc, char** argv) {
                  "storage file (.sto) of external forces on the plant's joints: a time column and one column per "
                  "joint or coordinate (N m on a pin, N along a slider), each row held until the next")
       ->check(CLI::ExistingFile);
+  fp::SensorOptions sensors;
+  double noise_deg = 0.0, noise_deg_per_s = 0.0;
+  app.add_option("--noise-deg", noise_deg, "standard deviation of the measured joint angles' noise, deg (pins; sliders are measured without noise)")
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
+  app.add_option("--noise-deg-per-s", noise_deg_per_s,
+                 "standard deviation of the measured joint speeds' noise, deg/s (pins)")
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
+  app.add_option("--seed", sensors.seed, "seed of the measurement noise (and of injected deadline misses)")
+      ->capture_default_str();
+  app.add_option("--measurement-delay-s", sensors.delay_s,
+                 "the joints measured at a control time were taken this long before it, s")
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
+  app.add_option("--deadline-s", options.deadline.deadline_s,
+                 "compute deadline of a control step's plan, s: a later plan is not used, the previous plan's tail "
+                 "runs instead and the miss is counted (0: none)")
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
+  app.get_option_group("Study")
+      ->add_option("--inject-deadline-misses", options.deadline.injected_miss_fraction,
+                   "for tests of the fallback: this fraction of the steps, at random, miss their deadline")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   // Defaults measured on this scenario against CPodes BDF at 1e-10 (docs/benchmarks.md): the
   // Rosenbrock method at 1e-5 stays within 8e-4 deg of it (RTF ~70); BDF and RKM at 1e-8.
   app.add_option("--accuracy", accuracy,
@@ -95,6 +115,9 @@ int main(int argc, char** argv) {
     const auto model = ex::load_model(model_path, "arm_receding_horizon", osim_options);
     const int n = model->numJoints();
     if (paper && app.count("--observer-gain-per-s") == 0) options.disturbance_observer_gain_per_s = 0.0;
+    sensors.angle_noise_rad = noise_deg * ex::kRadPerDeg;
+    sensors.speed_noise_rad_per_s = noise_deg_per_s * ex::kRadPerDeg;
+    options.deadline.seed = sensors.seed;
     // The plant: another model file and/or other strengths; null when it is the model itself.
     std::shared_ptr<const fp::MusculoskeletalModel> plant;
     if (!plant_path.empty() || plant_strength != 1.0 || !disturbance_path.empty()) {
@@ -133,6 +156,7 @@ int main(int argc, char** argv) {
     loop_options.duration_s = duration;
     loop_options.integrator = kind;
     loop_options.accuracy = accuracy;
+    loop_options.sensors = sensors;
     const fpl::RecedingHorizonRun rh_run = fpl::run_receding_horizon(controller, s, loop_options, ex::kRadPerDeg);
     const fp::ClosedLoopResult& run = rh_run.loop;
     std::vector<double> plan_times, step_times;
@@ -176,6 +200,23 @@ int main(int argc, char** argv) {
     summary["plant"] = {{"model_file", plant_path.empty() ? model_path : plant_path},
                         {"strength", plant_strength},
                         {"disturbance_file", disturbance_path}};
+    const fpl::ControllerFaults& faults = controller.faults();
+    summary["deadline_misses"] = faults.deadline_misses;
+    summary["longest_deadline_miss_run"] = faults.longest_miss_run;
+    summary["worst_step_seconds"] = controller.worstStepSeconds();
+    summary["fallbacks"] = faults.fallbacks;
+    summary["faults"] = {{"solver_failures", faults.solver_failures},
+                         {"non_finite_plans", faults.non_finite_plans},
+                         {"non_finite_measurements", faults.non_finite_measurements},
+                         {"deadline_misses", faults.deadline_misses},
+                         {"steps_without_plan", faults.steps_without_plan},
+                         {"integrator_failures", run.finite ? 0 : 1}};
+    summary["sensors"] = {{"noise_deg", noise_deg},
+                          {"noise_deg_per_s", noise_deg_per_s},
+                          {"measurement_delay_s", sensors.delay_s},
+                          {"seed", sensors.seed}};
+    summary["deadline"] = {{"deadline_s", options.deadline.deadline_s},
+                           {"injected_miss_fraction", options.deadline.injected_miss_fraction}};
     summary["horizon_s"] = options.plan.horizon_s;
     summary["control_period_s"] = options.control_period_s;
 

@@ -18,8 +18,8 @@ class Probe final : public fp::Controller {
  public:
   Probe(fpl::RecedingHorizonController& rh, std::function<void(int, const SimTK::State&)> after)
       : rh_(rh), after_(std::move(after)) {}
-  void control(SimTK::State& s) override {
-    rh_.step(s);
+  void control(SimTK::State& s, const fp::JointMeasurement& measured) override {
+    rh_.step(s, measured);
     after_(period_++, s);
   }
 

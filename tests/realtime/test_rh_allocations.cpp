@@ -22,9 +22,9 @@ namespace fpl = flatsos::planner;
 class CountingController final : public fp::Controller {
  public:
   explicit CountingController(fpl::RecedingHorizonController& rh) : rh_(rh) {}
-  void control(SimTK::State& state) override {
+  void control(SimTK::State& state, const fp::JointMeasurement& measured) override {
     const long before = heap_allocations();
-    rh_.control(state);
+    rh_.control(state, measured);
     per_period.push_back(heap_allocations() - before);
   }
   std::vector<long> per_period;

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
+#include <limits>
 #include <stdexcept>
 
 #include "flatsos/plugin/model/plausibility.hpp"
@@ -38,6 +38,26 @@ double squared_excitation_integral(const Eigen::MatrixXd& samples, double h) {
   return sum * h / (simpson ? 3.0 : 2.0);
 }
 
+void check_setpoints(const RecedingHorizonControllerOptions& o, const FlatOutputMap& flat) {
+  if (o.setpoints.empty()) return;
+  if (o.plan.reference) throw std::invalid_argument("RH controller: set points and a tracked reference exclude each other");
+  double previous = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < o.setpoints.size(); ++i) {
+    const Setpoint& s = o.setpoints[i];
+    const std::string at = "set point " + std::to_string(i + 1);
+    if (!std::isfinite(s.time_s) || !(s.time_s > previous))
+      throw std::invalid_argument("RH controller: " + at + ": times must be finite and ascending (got " +
+                                  std::to_string(s.time_s) + " s)");
+    if (s.target_q_rad.size() != flat.numJoints())
+      throw std::invalid_argument("RH controller: " + at + ": needs one angle per joint (" +
+                                  std::to_string(flat.numJoints()) + ", got " + std::to_string(s.target_q_rad.size()) + ")");
+    if (!s.target_q_rad.allFinite()) throw std::invalid_argument("RH controller: " + at + ": a target joint angle is not finite");
+    const std::string what = at + "'s target joint angles";
+    detail::require_within_joint_ranges(flat.model().description(), s.target_q_rad, what.c_str());
+    previous = s.time_s;
+  }
+}
+
 const RecedingHorizonControllerOptions& validated(const RecedingHorizonControllerOptions& o, const FlatOutputMap& flat) {
   if (!(o.control_period_s > 0.0) || !std::isfinite(o.control_period_s))
     throw std::invalid_argument("RH controller: control period must be > 0 s");
@@ -52,6 +72,12 @@ const RecedingHorizonControllerOptions& validated(const RecedingHorizonControlle
   if (!o.plan.reference)
     detail::require_within_joint_ranges(flat.model().description(), o.plan.target_q_rad, "target joint angles");
   if (!o.planner) throw std::invalid_argument("RH controller: no planner function");
+  check_setpoints(o, flat);
+  const DeadlineOptions& d = o.deadline;
+  if (!(d.deadline_s >= 0.0) || !std::isfinite(d.deadline_s))
+    throw std::invalid_argument("RH controller: the deadline must be finite and >= 0 s (0: none)");
+  if (!(d.injected_miss_fraction >= 0.0 && d.injected_miss_fraction <= 1.0))
+    throw std::invalid_argument("RH controller: the injected deadline-miss fraction must be in [0, 1]");
   return o;
 }
 
@@ -78,6 +104,7 @@ RecedingHorizonController::RecedingHorizonController(FlatOutputMap flat, Recedin
       observer_(flat_.numJoints(), options_.disturbance_observer_gain_per_s),
       estimator_(flat_.sharedModel()),
       fitter_(options_.excitation_samples_per_period, options_.control_period_s),
+      miss_random_(options_.deadline.seed),
       plan_options_(controller_plan_options(options_)) {
   const int n = flat_.numJoints(), m = flat_.numMuscles();
   for (auto* v : {&q_, &qd_, &qdd_, &measured_torque_, &muscle_torque_, &previous_q_, &previous_qd_, &previous_qdd_}) v->setZero(n);
@@ -120,10 +147,37 @@ void RecedingHorizonController::startFromPlanInUse(const SimTK::State& state, do
   plan_options_.flat_start.rate = start_flat_jet_.col(1);
 }
 
-void RecedingHorizonController::observe(const SimTK::State& state, double t) {
+const Eigen::VectorXd& RecedingHorizonController::targetAt(double t) const {
+  const Eigen::VectorXd* target = &options_.plan.target_q_rad;
+  for (const Setpoint& s : options_.setpoints)
+    if (s.time_s <= t) target = &s.target_q_rad;
+  return *target;
+}
+
+void RecedingHorizonController::takeMeasurement(const plugin::JointMeasurement& measured, RecedingHorizonRecord& rec) {
+  const int n = plant_->numJoints();
+  if (measured.q_rad.size() != n || measured.qd_rad_per_s.size() != n || measured.qdd_rad_per_s2.size() != n)
+    throw std::invalid_argument("RH controller: a measurement needs one angle, speed and acceleration per joint");
+  if (!measured.allFinite() && steps_ > 0) {  // the last valid one (the first is the run's start)
+    rec.measurement_held = true;
+    ++faults_.non_finite_measurements;
+    return;
+  }
+  q_ = measured.q_rad, qd_ = measured.qd_rad_per_s, qdd_ = measured.qdd_rad_per_s2;  // same sizes: no allocation
+}
+
+bool RecedingHorizonController::missedDeadline(double plan_seconds) {
+  const DeadlineOptions& d = options_.deadline;
+  bool missed = d.deadline_s > 0.0 && plan_seconds > d.deadline_s;
+  if (d.injected_miss_fraction > 0.0) missed = std::uniform_real_distribution<double>(0.0, 1.0)(miss_random_) < d.injected_miss_fraction || missed;
+  miss_run_ = missed ? miss_run_ + 1 : 0;
+  if (missed) ++faults_.deadline_misses;
+  faults_.longest_miss_run = std::max(faults_.longest_miss_run, miss_run_);
+  return missed;
+}
+
+void RecedingHorizonController::observe(double t) {
   if (!observer_.enabled()) return;
-  plant_->system().realize(state, SimTK::Stage::Acceleration);
-  for (int i = 0; i < plant_->numJoints(); ++i) qdd_[i] = plant_->joint(i).getOneUDot(state, 0);
   if (!estimator_.started()) return;
   // The model's muscles under the excitations applied since the previous step, along the
   // measured motion; what the measured motion needs beyond their torque is the disturbance.
@@ -181,22 +235,29 @@ void RecedingHorizonController::planStep(const SimTK::State& state, double t, Re
 }
 
 const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {
+  plugin::measure_joints(*plant_, state, exact_);
+  return step(state, exact_);
+}
+
+const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state, const plugin::JointMeasurement& measured) {
   const Stopwatch wall;
   const double t = state.getTime();
-  plant_->jointAngles(state, q_);
-  plant_->jointSpeeds(state, qd_);
-  observe(state, t);  // before the record is overwritten: it holds the previous period's time
-
   RecedingHorizonRecord& rec = record_;
+  rec.measurement_held = false;
+  takeMeasurement(measured, rec);
+  observe(t);  // before the record's time is overwritten: it holds the previous period's
+
   rec.time_s = t;
   rec.status = SolveStatus::Failed;
   rec.message.clear();
   rec.used_previous_plan = false;
+  rec.deadline_missed = false;
   rec.bounds_imposed = false;
   rec.clamped_samples = 0;
   rec.plan_seconds = rec.grid_seconds = rec.slp_seconds = rec.bounds_seconds = rec.effort_seconds = 0.0;
   rec.free_start_message.clear();
   plan_options_.reference_time_s = t;  // a tracked reference's time (unused for a set point)
+  if (!options_.setpoints.empty()) plan_options_.target_q_rad = targetAt(t);  // same size: no allocation
   if (observer_.enabled()) {
     plan_options_.torque_offset_N_m = observer_.torqueOffset_N_m();
     rec.observer_offset_N_m = plan_options_.torque_offset_N_m;
@@ -216,7 +277,8 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     rec.status = step_.status;
     rec.message = step_.message;
     rec.bounds_imposed = step_.bounds_imposed;
-    if (step_.status == SolveStatus::Solved) {
+    rec.deadline_missed = missedDeadline(rec.plan_seconds);  // too late: the previous plan's tail runs
+    if (step_.status == SolveStatus::Solved && !rec.deadline_missed) {
       candidate_.alpha = step_.alpha();
       candidate_.path = step_.path;
       candidate_.start_time_s = t;
@@ -231,7 +293,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
 
   // A bounded step has sampled exactly these excitations already (same samples, see
   // controller_plan_options).
-  bool have_excitations = false;
+  bool have_excitations = false, plan_not_finite = false;
   if (have_candidate && step_.first_period_sampled && step_.buffers.excitations.rows() == fitter_.samples()) {
     excitations_ = step_.buffers.excitations;  // same size every period: no allocation
     have_excitations = true;
@@ -244,6 +306,8 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     if (have_candidate) {
       rec.status = SolveStatus::Failed;
       rec.message = "the plan's excitations are undefined on the first period (left the valid domain)";
+      ++faults_.non_finite_plans;
+      plan_not_finite = true;
     }
     // Recursive feasibility: the previous plan's tail, with its own torque offset, is still a
     // valid plan.
@@ -260,82 +324,17 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
     rec.plan.alpha.resize(0);  // no plan in use: the muscles keep their current inputs
   }
   if (rec.status != SolveStatus::Solved) ++plan_failures_;
+  if (rec.status != SolveStatus::Solved && !plan_not_finite) ++faults_.solver_failures;
+  if (rec.used_previous_plan) ++faults_.fallbacks;
+  if (!have_excitations) ++faults_.steps_without_plan;
   clamped_samples_ += rec.clamped_samples;
   if (rec.bounds_imposed) ++bounded_steps_;
   ++steps_;
   previous_q_ = q_, previous_qd_ = qd_, previous_qdd_ = qdd_;
   rec.wall_seconds = wall.seconds();
+  worst_step_s_ = std::max(worst_step_s_, rec.wall_seconds);
   if (options_.keep_history) history_.push_back(rec);
   return rec;
-}
-
-std::vector<plugin::StoTable> prediction_tables(const RecedingHorizonController& controller) {
-  const plugin::MusculoskeletalModel& model = controller.plant();
-  std::vector<plugin::StoTable> out;
-  const auto& history = controller.history();
-  for (std::size_t k = 0; k < history.size(); ++k) {
-    const PlanInUse& plan = history[k].plan;
-    if (plan.empty()) continue;
-    plugin::StoTable t;
-    t.name = "prediction";
-    t.metadata = {{"step", std::to_string(k)}, {"planned_at_s", std::to_string(history[k].time_s)}};
-    t.columns = {"time"};
-    for (int j = 0; j < model.numJoints(); ++j) {
-      t.columns.push_back(plugin::coordinate_value_column(model, j));
-      t.columns.push_back(plugin::coordinate_speed_column(model, j));
-    }
-    for (int i = 0; i <= 10; ++i) {
-      const double tau = plan.path.duration_s * i / 10.0;
-      const Jet jq = plan.path.jet(tau, 2);
-      std::vector<double> row = {plan.start_time_s + tau};
-      for (int j = 0; j < model.numJoints(); ++j) row.push_back(jq(j, 0)), row.push_back(jq(j, 1));
-      t.rows.push_back(std::move(row));
-    }
-    out.push_back(std::move(t));
-  }
-  return out;
-}
-
-std::string plan_failures_sentence(const RecedingHorizonController& controller) {
-  std::ostringstream why;
-  why << controller.planFailures() << " of " << controller.steps() << " plans failed (the previous plan's tail ran instead)";
-  const auto& history = controller.history();
-  const auto first = std::find_if(history.begin(), history.end(),
-                                  [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
-  if (first != history.end()) why << ", the first at t = " << first->time_s << " s: " << first->message;
-  return why.str();
-}
-
-RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, const SimTK::State& initial,
-                                        const plugin::ClosedLoopOptions& options, double settle_tolerance_rad) {
-  detail::require_within_joint_ranges(controller.plant().description(), controller.plant().jointAngles(initial),
-                                      "start joint angles (q0)");
-  plugin::ClosedLoopOptions o = options;
-  o.control_period_s = controller.options().control_period_s;
-  RecedingHorizonRun run;
-  run.loop = plugin::simulate_closed_loop(controller.plant(), controller, initial, o);
-  run.predictions = prediction_tables(controller);
-  const Eigen::VectorXd& target = controller.options().plan.target_q_rad;
-  if (run.loop.finite)
-    run.settling_time_s = plugin::settling_time(controller.plant(), run.loop.states, target, settle_tolerance_rad);
-  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-  if (!run.loop.finite) run.failures.push_back("the simulation became non-finite");
-  if (run.loop.finite && run.settling_time_s < 0.0) {
-    const Eigen::VectorXd error = (controller.plant().jointAngles(run.loop.final_state) - target).cwiseAbs();
-    double error_rad = 0.0, error_m = 0.0;  // pins', sliders'
-    for (int j = 0; j < error.size(); ++j) {
-      double& worst = controller.plant().description().joints[static_cast<std::size_t>(j)].isSlider() ? error_m : error_rad;
-      worst = std::max(worst, error[j]);
-    }
-    std::ostringstream why;
-    why << "never settled within " << settle_tolerance_rad * kDegPerRad << " deg of the target in " << o.duration_s
-        << " s (final error " << error_rad * kDegPerRad << " deg";
-    if (error_m > 0.0) why << ", " << error_m << " m along sliders";
-    why << ")";
-    run.failures.push_back(why.str());
-  }
-  if (controller.planFailures() > 0) run.failures.push_back(plan_failures_sentence(controller));
-  return run;
 }
 
 }  // namespace flatsos::planner

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 #include <vector>
 
@@ -27,21 +28,35 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
     append_controls_row(plant, st, out.controls);
   };
   append_row(stepper->state());
-  std::vector<double> report_times(static_cast<std::size_t>(o.reports_per_period));
+  JointSensors sensors(plant, o.sensors, o.control_period_s, initial.getTime());
+  sensors.take(stepper->state());
+  const bool delayed = o.sensors.delay_s > 0.0;
+  // Each period's report times, the sensors' sample times, and both merged (reused storage).
+  std::vector<double> report_times(static_cast<std::size_t>(o.reports_per_period)), sample_times, times;
+  const auto report_or_sample = [&](const SimTK::State& st) {
+    const double t = st.getTime();
+    if (std::binary_search(report_times.begin(), report_times.end(), t)) append_row(st);
+    if (std::binary_search(sample_times.begin(), sample_times.end(), t)) sensors.take(st);
+  };
   const int periods = static_cast<int>(std::ceil(o.duration_s / o.control_period_s - 1e-9));
   for (int k = 0; k < periods && out.finite; ++k) {
     // The controller changes the inputs of the integrator's own state (no copy); Simbody's
     // integrators then restart (CPodes BDF cold), the Rosenbrock method keeps its step size.
     SimTK::State& state = stepper->updState();
-    plant.system().realize(state, SimTK::Stage::Acceleration);  // the measurement of qdd
-    controller.control(state);
+    const double t_begin = state.getTime();
+    if (!delayed && k > 0) sensors.take(state);  // (the start's was taken above)
+    controller.control(state, sensors.read(t_begin));
     stepper->inputsChanged();
-    const double t_begin = stepper->state().getTime();
     const double t_end = initial.getTime() + std::min(o.duration_s, (k + 1) * o.control_period_s);
     for (int r = 1; r <= o.reports_per_period; ++r)
       report_times[static_cast<std::size_t>(r - 1)] = t_begin + (t_end - t_begin) * r / o.reports_per_period;
     report_times.back() = t_end;
-    out.finite = stepper->advanceTo(t_end, report_times, append_row);
+    sample_times.clear();
+    sensors.sampleTimes(t_begin, t_end, sample_times);
+    times.clear();
+    std::set_union(report_times.begin(), report_times.end(), sample_times.begin(), sample_times.end(),
+                   std::back_inserter(times));
+    out.finite = stepper->advanceTo(t_end, times, report_or_sample);
   }
   out.integrator_steps = stepper->stepsTaken();
   out.integrator_attempts = stepper->stepsAttempted();
@@ -52,10 +67,13 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
 }
 
 double settling_time(const MusculoskeletalModel& model, const StoTable& states, const Eigen::VectorXd& target,
-                     double tolerance_rad, double slider_tolerance_m) {
+                     double tolerance_rad, double slider_tolerance_m, double from_s, double to_s) {
   if (target.size() != model.numJoints()) throw std::invalid_argument("settling time: target must have one angle per joint");
   double settled = -1.0;
   for (std::size_t r = states.rows.size(); r-- > 0;) {
+    const double t = states.rows[r][0];
+    if (t >= to_s) continue;
+    if (t < from_s) break;
     bool inside = true;
     for (int j = 0; j < model.numJoints(); ++j) {  // columns: time, then q and qdot per joint
       const double tolerance = model.description().joints[static_cast<std::size_t>(j)].isSlider() ? slider_tolerance_m : tolerance_rad;

@@ -1,15 +1,17 @@
 #pragma once
 // The receding-horizon (RH) controller of the paper (docs/method/receding_horizon.md), a
 // plugin::Controller that drives Simbody muscles through their excitation inputs. Every control
-// period delta: read q, qd (and qdd, for the observer) from the plant's State, update the
-// disturbance observer, plan one RH step (cubic to the target over the horizon, torque box, SLP),
+// period delta: take the measured q, qd (and qdd, for the observer; the closed loop's sensors
+// give them, late and noisy if asked; a non-finite one is replaced by the last valid one and
+// counted), update the disturbance observer, plan one RH step (cubic to the target over the horizon, torque box, SLP),
 // evaluate the plan's excitations on the first period by the exact inverse map, and give each
 // muscle a polynomial signal over [t, t + delta]. The step keeps the excitations of those
 // samples in [0, 1] (and activations in [floor, 1]) by construction unless the options turn its
 // bounds off (plan.excitation_bounds.enforce); any sample outside [0, 1] (such a step, or a
 // previous plan's tail after a failed step) is clamped by the muscle and counted here. A failed
 // step never stops the loop: the previous plan's tail, with the torque offset it was planned
-// for, is used and the failure recorded.
+// for, is used and the failure recorded. So is a plan that missed its compute deadline
+// (DeadlineOptions): it came too late for its period. Faults are counted by kind (faults()).
 //
 // Prepared once in the constructor (validated options, the planner's workspace, the excitation
 // fit's solution operator); per period only the feedback work remains, in storage the controller
@@ -22,6 +24,7 @@
 
 #include <functional>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -45,6 +48,33 @@ using RecedingHorizonPlanner =
     std::function<void(const FlatOutputMap&, plugin::ModelWorkspace&, const Eigen::VectorXd& q_rad,
                        const Eigen::VectorXd& qd_rad_per_s, const RecedingHorizonOptions&, RecedingHorizonStep& out)>;
 
+/// A set point from a time on: the target of every step planned at or after time_s.
+struct Setpoint {
+  double time_s = 0.0;
+  Eigen::VectorXd target_q_rad;
+};
+
+/// The compute deadline of a control step: a plan that takes longer arrives too late for its
+/// period and is not used; the previous plan's tail runs instead (counted as a deadline miss).
+struct DeadlineOptions {
+  double deadline_s = 0.0;              ///< the planning step's wall-time budget; 0: none
+  /// For tests of the fallback: this fraction of the steps, drawn at random, miss their
+  /// deadline whatever their time (their plan is made and discarded).
+  double injected_miss_fraction = 0.0;
+  unsigned seed = 1;                    ///< of the injected misses
+};
+
+/// What went wrong in a run's control steps, by kind. A step may count under several kinds.
+struct ControllerFaults {
+  int solver_failures = 0;            ///< the planner found no plan (SolveStatus other than Solved)
+  int non_finite_plans = 0;           ///< a plan's excitations were not finite on its first period
+  int non_finite_measurements = 0;    ///< a measurement was NaN or infinite: the last valid one was held
+  int deadline_misses = 0;            ///< the plan came later than DeadlineOptions::deadline_s (or was made to)
+  int longest_miss_run = 0;           ///< the most deadline misses in a row
+  int fallbacks = 0;                  ///< steps that ran the previous plan's tail instead of a new plan
+  int steps_without_plan = 0;         ///< steps with no plan at all to run: the muscles kept their inputs
+};
+
 struct RecedingHorizonControllerOptions {
   /// Horizon, grid, target, reserves, SLP solver, excitation bounds (their period and samples
   /// are the controller's own: control_period_s, excitation_samples_per_period).
@@ -63,6 +93,9 @@ struct RecedingHorizonControllerOptions {
   /// copies its plan: a few heap allocations per period; off, only last() is kept and the loop
   /// allocates nothing.
   bool keep_history = true;
+  /// Set points after the first (plan.target_q_rad until the first of them), ascending times.
+  std::vector<Setpoint> setpoints;
+  DeadlineOptions deadline;
 };
 
 /// A plan the controller runs on: constant flat outputs, the predicted joint motion, when it
@@ -81,6 +114,8 @@ struct RecedingHorizonRecord {
   SolveStatus status = SolveStatus::Failed;
   std::string message;
   bool used_previous_plan = false;   ///< this step failed and ran on the previous plan's tail
+  bool deadline_missed = false;      ///< its plan came too late (or was made to): not used
+  bool measurement_held = false;     ///< its measurement was not finite: the last valid one was used
   bool bounds_imposed = false;       ///< the step's SLP optimum left the excitation bounds: alpha was moved
   /// Tracking: why no plan could start from the muscles' states this period (it started free);
   /// empty when one did.
@@ -103,9 +138,12 @@ class RecedingHorizonController final : public plugin::Controller {
   RecedingHorizonController(FlatOutputMap planner_map, RecedingHorizonControllerOptions options,
                             std::shared_ptr<const plugin::MusculoskeletalModel> plant = nullptr);
 
-  /// Plans from the state at its time and installs the excitation signals for the next period.
+  /// Plans from `measured` and installs the excitation signals of the next period in `state`
+  /// (at its time).
+  const RecedingHorizonRecord& step(SimTK::State& state, const plugin::JointMeasurement& measured);
+  /// The same with the joints measured exactly from `state`.
   const RecedingHorizonRecord& step(SimTK::State& state);
-  void control(SimTK::State& state) override { step(state); }
+  void control(SimTK::State& state, const plugin::JointMeasurement& measured) override { step(state, measured); }
 
   /// Every period's record (empty unless options.keep_history).
   const std::vector<RecedingHorizonRecord>& history() const { return history_; }
@@ -113,6 +151,11 @@ class RecedingHorizonController final : public plugin::Controller {
   const RecedingHorizonRecord& last() const { return record_; }
   int steps() const { return steps_; }
   int planFailures() const { return plan_failures_; }
+  const ControllerFaults& faults() const { return faults_; }
+  /// The longest control step so far (observer, plan, excitations), s.
+  double worstStepSeconds() const { return worst_step_s_; }
+  /// The set point in force at time t.
+  const Eigen::VectorXd& targetAt(double t) const;
   int clampedSamples() const { return clamped_samples_; }
   /// Steps whose SLP optimum left the excitation bounds on the first period (alpha moved inside).
   int boundedSteps() const { return bounded_steps_; }
@@ -138,8 +181,12 @@ class RecedingHorizonController final : public plugin::Controller {
   // Plans this period's step into step_: a tracking step from the muscles' state, and when that
   // start is refused or its plan fails, again with a free start (said in rec).
   void planStep(const SimTK::State& state, double t, RecedingHorizonRecord& rec);
-  // Updates the observer from the measured motion (q_, qd_ and the plant's qdd) at time t.
-  void observe(const SimTK::State& state, double t);
+  // Takes the measurement into q_, qd_, qdd_ (holding the last valid one when it is not finite).
+  void takeMeasurement(const plugin::JointMeasurement& measured, RecedingHorizonRecord& rec);
+  // Updates the observer from the measured motion (q_, qd_, qdd_) at time t.
+  void observe(double t);
+  // Whether this step's plan is too late to be used (measured or injected).
+  bool missedDeadline(double plan_seconds);
   // Gives the muscles (and the observer's estimate of them) the excitations of this period.
   void applyExcitations(SimTK::State& state, double t);
   // Inverse-map excitations of `plan` over the period from t into excitations_ (samples x
@@ -157,6 +204,11 @@ class RecedingHorizonController final : public plugin::Controller {
   RecedingHorizonRecord record_;
   std::vector<RecedingHorizonRecord> history_;
   int steps_ = 0, plan_failures_ = 0, clamped_samples_ = 0, bounded_steps_ = 0;
+  ControllerFaults faults_;
+  int miss_run_ = 0;
+  double worst_step_s_ = 0.0;
+  std::mt19937 miss_random_;
+  plugin::JointMeasurement exact_;  ///< step(state)'s measurement
   double excitation_squared_integral_ = 0.0;
 
   // Storage reused every period (sized in the constructor or on the first period).
@@ -176,7 +228,10 @@ struct RecedingHorizonRun {
   /// One table per step that ran a plan: 11 points along it, at strictly increasing times
   /// (the step's time + tau), each joint's coordinate value and speed (state-table columns).
   std::vector<plugin::StoTable> predictions;
-  double settling_time_s = -1.0;  ///< every joint within the tolerance of the target from then on; -1: never
+  double settling_time_s = -1.0;  ///< every joint within the tolerance of the (last) target from then on; -1: never
+  /// With set points: per set point (the first: plan.target_q_rad from the start), how long after
+  /// it took effect the joints came within the tolerance and stayed there until the next; -1: never.
+  std::vector<double> setpoint_settling_s;
   /// Why the task failed, one sentence each: the run became non-finite, never settled, or some
   /// plans failed (the first one's time and message, when the controller keeps its history).
   /// Empty: the task (reach the target, stay within the tolerance, every plan solved) succeeded.

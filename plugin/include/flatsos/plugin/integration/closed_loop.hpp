@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "flatsos/plugin/integration/joint_sensors.hpp"
 #include "flatsos/plugin/integration/stepper.hpp"
 #include "flatsos/plugin/io/state_table.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
@@ -20,11 +21,11 @@ namespace flatsos::plugin {
 class Controller {
  public:
   virtual ~Controller() = default;
-  /// Reads the state at its time and changes its inputs (excitations, discrete variables) for
-  /// the next period. `state` is the stepper's own state: change it, do not keep it. It arrives
-  /// realized through Stage::Acceleration, so its accelerations can be read as measurements
-  /// (the plant's forward dynamics is the simulation's work, not the controller's).
-  virtual void control(SimTK::State& state) = 0;
+  /// Changes the inputs (excitations, discrete variables) of `state` for the next period, from
+  /// what the sensors measured (`measured`, the joints as ClosedLoopOptions::sensors give them).
+  /// `state` is the stepper's own state at the control time: change its inputs, do not keep it
+  /// and do not read the joints from it (that is the sensors' work).
+  virtual void control(SimTK::State& state, const JointMeasurement& measured) = 0;
 };
 
 struct ClosedLoopOptions {
@@ -33,6 +34,7 @@ struct ClosedLoopOptions {
   IntegratorKind integrator = IntegratorKind::RungeKuttaMerson;
   double accuracy = 1e-8;      ///< relative, the stepper's meaning
   int reports_per_period = 5;  ///< rows of the state table per period
+  SensorOptions sensors;       ///< noise and delay of the joint measurements (default: exact)
 };
 
 struct ClosedLoopResult {
@@ -53,10 +55,12 @@ struct ClosedLoopResult {
 ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Controller& controller,
                                       const SimTK::State& initial, const ClosedLoopOptions& options);
 
-/// The first time of `states` (a make_state_table of `model`) from which every pin stays within
-/// `tolerance_rad` and every slider within `slider_tolerance_m` of `target_q_rad` until the end;
-/// -1 when the last row is outside.
+/// The first time of `states` (a make_state_table of `model`) in [from_s, to_s) from which every
+/// pin stays within `tolerance_rad` and every slider within `slider_tolerance_m` of
+/// `target_q_rad` until the last row before to_s; -1 when that row is outside (or none is in
+/// the window).
 double settling_time(const MusculoskeletalModel& model, const StoTable& states, const Eigen::VectorXd& target_q_rad,
-                     double tolerance_rad, double slider_tolerance_m = 1e-3);
+                     double tolerance_rad, double slider_tolerance_m = 1e-3, double from_s = -1e300,
+                     double to_s = 1e300);
 
 }  // namespace flatsos::plugin
