@@ -48,11 +48,55 @@ std::shared_ptr<const plugin::MusculoskeletalModel> with_disturbance(const plugi
   return std::make_shared<const plugin::MusculoskeletalModel>(std::move(d), std::move(torques));
 }
 
+// setpoints: a sequence of (time_s, target_rad per joint), ascending times.
+std::vector<planner::Setpoint> setpoints_argument(const py::object& rows, Eigen::Index joints) {
+  std::vector<planner::Setpoint> out;
+  if (rows.is_none()) return out;
+  const char* shape = "setpoints: a sequence of (time_s, target angles per joint, rad)";
+  if (!py::isinstance<py::sequence>(rows)) throw py::value_error(shape);
+  for (const py::handle row : rows) {
+    if (!py::isinstance<py::sequence>(row) || py::len(row) != 2) throw py::value_error(shape);
+    const auto pair = py::reinterpret_borrow<py::sequence>(row);
+    planner::Setpoint s;
+    try {
+      s.time_s = py::cast<double>(pair[0]);
+    } catch (const py::cast_error&) {
+      throw py::value_error("setpoints: a row's time is not a number");
+    }
+    s.target_q_rad = vector_argument(pair[1], joints, "setpoints target");
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+// What the sensors, deadlines and set points did, as the program's summary names it.
+void add_real_time_report(py::dict& out, const planner::RecedingHorizonController& controller,
+                          const planner::RecedingHorizonRun& run) {
+  const planner::ControllerFaults& f = controller.faults();
+  out["deadline_misses"] = f.deadline_misses;
+  out["longest_deadline_miss_run"] = f.longest_miss_run;
+  out["worst_step_seconds"] = controller.worstStepSeconds();
+  out["fallbacks"] = f.fallbacks;
+  py::dict faults;
+  faults["solver_failures"] = f.solver_failures;
+  faults["non_finite_plans"] = f.non_finite_plans;
+  faults["non_finite_measurements"] = f.non_finite_measurements;
+  faults["deadline_misses"] = f.deadline_misses;
+  faults["steps_without_plan"] = f.steps_without_plan;
+  faults["integrator_failures"] = run.loop.finite ? 0 : 1;
+  out["faults"] = faults;
+  py::list settling;
+  for (const double s : run.setpoint_settling_s) settling.append(s >= 0.0 ? py::object(py::float_(s)) : py::object(py::none()));
+  out["setpoint_settling"] = settling;
+}
+
 py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::object& target, double duration,
                               const py::object& qd0, const py::object& a0, const py::object& reserves, double horizon,
                               int grid_points, double period, const std::string& solver, bool bounds,
                               double observer_gain, const std::string& integrator, const py::object& accuracy,
-                              const py::object& plant, double settle_tolerance, const py::object& disturbance) {
+                              const py::object& plant, double settle_tolerance, const py::object& disturbance,
+                              double noise_deg, double noise_deg_per_s, unsigned seed, double measurement_delay,
+                              double deadline, double inject_deadline_misses, const py::object& setpoints) {
   const plugin::MusculoskeletalModel& model = *m.model;
   const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
   const Eigen::VectorXd q0_rad = vector_argument(q0, joints, "q0"), target_rad = vector_argument(target, joints, "target");
@@ -79,8 +123,12 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
   options.plan.excitation_bounds.enforce = bounds;
   options.control_period_s = period;
   options.disturbance_observer_gain_per_s = observer_gain;
+  options.setpoints = setpoints_argument(setpoints, joints);
+  options.deadline = {deadline, inject_deadline_misses, seed};  // checked by the controller (ValueError)
   plugin::ClosedLoopOptions loop;
   loop.duration_s = duration;
+  // Standard deviations in deg and deg/s, as the program takes them; the sensors check them.
+  loop.sensors = {noise_deg * M_PI / 180.0, noise_deg_per_s * M_PI / 180.0, measurement_delay, seed};
   loop.integrator = plugin::integrator_from_name(integrator);  // std::invalid_argument (ValueError) naming the choices
   // The program's defaults (arm_receding_horizon): 1e-5 for the muscle Rosenbrock method, else 1e-8.
   loop.accuracy = !accuracy.is_none()                                            ? py::cast<double>(accuracy)
@@ -98,13 +146,15 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
 
   py::dict out;
   planner::RecedingHorizonRun run;
+  std::unique_ptr<planner::RecedingHorizonController> kept;
   std::vector<std::string> warnings;
   int plan_failures = 0, steps = 0, clamped = 0, bounded = 0;
   {
     py::gil_scoped_release release;
     // Bad options: std::invalid_argument naming the field (a ValueError).
     const auto flat = flat_for_task(m, {q0_rad, target_rad});
-    planner::RecedingHorizonController controller(*flat, options, plant_model);
+    kept = std::make_unique<planner::RecedingHorizonController>(*flat, options, plant_model);
+    planner::RecedingHorizonController& controller = *kept;
     auto plant_flat = plant.is_none() ? flat : flat_for_task(given_plant, {q0_rad, target_rad});
     if (pushed) plant_flat = std::make_shared<const planner::FlatOutputMap>(plant_flat->withModel(pushed));
     const SimTK::State initial = planner::start_state(*plant_flat, q0_rad, qd0_rad_per_s, activations, reserves_N);
@@ -133,6 +183,7 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
   out["bounded_steps"] = bounded;
   out["integrator_steps"] = run.loop.integrator_steps;
   out["warnings"] = warnings;
+  add_real_time_report(out, *kept, run);
   return out;
 }
 
@@ -144,7 +195,9 @@ void register_receding_horizon(py::module_& m) {
         py::arg("reserves") = 1.0, py::arg("horizon") = 0.5, py::arg("grid_points") = 11, py::arg("period") = 0.05,
         py::arg("solver") = "exact", py::arg("bounds") = true, py::arg("observer_gain") = 40.0,
         py::arg("integrator") = "rosenbrock", py::arg("accuracy") = py::none(), py::arg("plant") = py::none(),
-        py::arg("settle_tolerance") = M_PI / 180.0, py::arg("disturbance") = py::none(),
+        py::arg("settle_tolerance") = M_PI / 180.0, py::arg("disturbance") = py::none(), py::arg("noise_deg") = 0.0,
+        py::arg("noise_deg_per_s") = 0.0, py::arg("seed") = 1u, py::arg("measurement_delay") = 0.0,
+        py::arg("deadline") = 0.0, py::arg("inject_deadline_misses") = 0.0, py::arg("setpoints") = py::none(),
         "The receding-horizon controller moving the model from rest at q0 (rad) to `target` (rad) on a Simbody "
         "plant for `duration` s: every `period` s a plan over `horizon` s (a cubic to the target, the torque box "
         "on `grid_points` postures, the SLP by `solver`: 'exact', 'simplex' or 'ipopt'), its excitations kept "
@@ -154,12 +207,20 @@ void register_receding_horizon(py::module_& m) {
         "observer_gain: the disturbance observer, 1/s (default 40: removes the offset of a "
         "model mismatch or a push; 0: the paper's controller). plant: another flatsos.Model with the same joints and muscles to simulate instead of "
         "`model` (model mismatch). disturbance: rows (time_s, forces per joint: N m, N along a slider) pushing "
-        "the plant's joints, each held until the next row's time. integrator: 'rosenbrock' (default accuracy 1e-5), 'bdf' or 'rkm' (1e-8).\n"
+        "the plant's joints, each held until the next row's time. noise_deg, noise_deg_per_s: standard "
+        "deviations of the measured pins' angles and speeds (seed: of the noise and of injected misses); "
+        "measurement_delay: s between a measurement and the control time it is used at. deadline: s a plan may "
+        "take; a later one is not used (the previous plan's tail runs; 0: none); inject_deadline_misses: for "
+        "tests, this fraction of the steps miss it at random. setpoints: (time_s, target_rad) rows, each the "
+        "target from its time on. integrator: 'rosenbrock' (default accuracy 1e-5), 'bdf' or 'rkm' (1e-8).\n"
         "Returns a dict: 'time' (s), 'q' (rad, one row per report), 'activation' and 'excitation' (one column "
         "per muscle; the excitation in effect), 'settling_time' (s from which every joint stays within "
         "settle_tolerance rad of the target; None: never), 'real_time_factor', 'success' (settled, finite, every "
         "plan solved) and 'message' (why not), 'steps', 'plan_failures', 'clamped_samples', 'bounded_steps', "
-        "'integrator_steps', 'warnings'. Releases the GIL while it runs.");
+        "'integrator_steps', 'warnings', 'deadline_misses', 'longest_deadline_miss_run', 'worst_step_seconds', "
+        "'fallbacks' (steps run on the previous plan's tail), 'faults' (counts by kind) and 'setpoint_settling' "
+        "(with setpoints: per target, s after it took effect until settled; None: never). Releases the GIL while "
+        "it runs.");
 }
 
 }  // namespace flatsos::python

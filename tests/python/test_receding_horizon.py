@@ -97,6 +97,14 @@ def test_a_failed_task_says_why_and_is_not_a_success(arm):
     (dict(observer_gain=-1.0), "observer gain must be a finite number >= 0"),
     (dict(settle_tolerance=0.0), "settle_tolerance"),
     (dict(plant="arm.json"), "plant: expected a flatsos.Model"),
+    (dict(noise_deg=-0.1), "angle noise must be finite and >= 0"),
+    (dict(noise_deg_per_s=float("nan")), "speed noise must be finite and >= 0"),
+    (dict(measurement_delay=-0.01), "measurement delay must be finite and >= 0"),
+    (dict(deadline=-1.0), "deadline must be finite and >= 0 s"),
+    (dict(inject_deadline_misses=1.5), "deadline-miss fraction must be in"),
+    (dict(setpoints=[(1.0, [0.5])]), "setpoints target: expected 2 numbers"),
+    (dict(setpoints=[(1.0, [0.5, 0.5]), (0.5, [0.6, 0.6])]), "set point 2: times must be finite and ascending"),
+    (dict(setpoints=5), "setpoints: a sequence of"),
 ])
 def test_bad_input_raises_a_value_error_naming_the_argument(arm, kwargs, match):
     model, _ = arm
