@@ -75,6 +75,27 @@ TEST(JointSensors, ADelayedMeasurementIsThePlantAsItWasThatLongBefore) {
   }
 }
 
+// Sensors only look: a delay whose sample times fall on the report times leaves the simulation
+// exactly as it was without them (the same integrator steps, to the bit).
+TEST(JointSensors, SamplingOnTheReportTimesLeavesTheSimulationUnchanged) {
+  flatsos::test::RecedingHorizonScenario rh;
+  std::vector<fp::ClosedLoopResult> runs;
+  for (const double delay_s : {0.0, 0.01, 0.03}) {
+    auto loop = rh.loop(0.5, fp::IntegratorKind::MuscleRosenbrock, 1e-5);
+    loop.control_period_s = 0.05;
+    loop.reports_per_period = 5;
+    loop.sensors.delay_s = delay_s;
+    Recorder recorder(*rh.model);
+    runs.push_back(fp::simulate_closed_loop(*rh.model, recorder, rh.restState(), loop));
+  }
+  for (std::size_t r = 1; r < runs.size(); ++r) {
+    EXPECT_EQ(runs[r].integrator_steps, runs[0].integrator_steps);
+    ASSERT_EQ(runs[r].states.rows.size(), runs[0].states.rows.size());
+    for (std::size_t i = 0; i < runs[0].states.rows.size(); ++i)
+      EXPECT_EQ(runs[r].states.rows[i], runs[0].states.rows[i]) << i;
+  }
+}
+
 TEST(JointSensors, NoiseHasTheGivenSpreadNoBiasAndTheSameSeedGivesTheSameNoise) {
   flatsos::test::RecedingHorizonScenario rh;
   const SimTK::State s = rh.restState();

@@ -53,6 +53,10 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
     report_times.back() = t_end;
     sample_times.clear();
     sensors.sampleTimes(t_begin, t_end, sample_times);
+    // A sample due at a report time (to rounding) is taken there: no step of a few ulps between.
+    for (double& s : sample_times)
+      for (const double r : report_times)
+        if (std::abs(s - r) < 1e-9) s = r;
     times.clear();
     std::set_union(report_times.begin(), report_times.end(), sample_times.begin(), sample_times.end(),
                    std::back_inserter(times));
