@@ -20,6 +20,7 @@
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatsos/planner/receding_horizon_study.hpp"
 #include "flatsos/plugin/io/disturbance_file.hpp"
+#include "flatsos/plugin/io/setpoint_file.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -76,6 +77,12 @@ int main(int argc, char** argv) {
   app.add_option("--disturbance", disturbance_path,
                  "storage file (.sto) of external forces on the plant's joints: a time column and one column per "
                  "joint or coordinate (N m on a pin, N along a slider), each row held until the next")
+      ->check(CLI::ExistingFile);
+  std::string setpoint_path;
+  app.add_option("--setpoints", setpoint_path,
+                 "storage file (.sto) of set points: a time column and one column per joint or coordinate, each "
+                 "row the target from its time on (degrees with inDegrees=yes in the header; the scenario's target "
+                 "before the first row)")
       ->check(CLI::ExistingFile);
   fp::SensorOptions sensors;
   double noise_deg = 0.0, noise_deg_per_s = 0.0;
@@ -141,6 +148,10 @@ int main(int argc, char** argv) {
         fpl::plan_receding_horizon_step(f, w, q, qd, o, by_ipopt, out);
       };
     options.plan.excitation_bounds.enforce = !no_bounds;
+    if (!setpoint_path.empty()) {
+      const fp::SetpointRows rows = fp::read_setpoint_file(model->description(), setpoint_path);
+      for (std::size_t k = 0; k < rows.times_s.size(); ++k) options.setpoints.push_back({rows.times_s[k], rows.targets_q_rad[k]});
+    }
     if (options.control_period_s > options.plan.horizon_s)
       throw CLI::ValidationError("--period-s", "must not exceed --horizon-s");
     const fp::IntegratorKind kind = fp::integrator_from_name(integrator);
@@ -217,6 +228,10 @@ int main(int argc, char** argv) {
                           {"seed", sensors.seed}};
     summary["deadline"] = {{"deadline_s", options.deadline.deadline_s},
                            {"injected_miss_fraction", options.deadline.injected_miss_fraction}};
+    summary["setpoint_settling_s"] = nlohmann::json::array();
+    for (const double settled : rh_run.setpoint_settling_s)
+      summary["setpoint_settling_s"].push_back(settled >= 0.0 ? nlohmann::json(settled) : nlohmann::json(nullptr));
+    summary["setpoints_file"] = setpoint_path;
     summary["horizon_s"] = options.plan.horizon_s;
     summary["control_period_s"] = options.control_period_s;
 

@@ -53,3 +53,25 @@ def test_set_points_are_each_reached(arm):
     assert len(run["setpoint_settling"]) == 2 and all(s is not None for s in run["setpoint_settling"])
     assert np.degrees(np.abs(run["q"][-1] - np.radians([40, 60])).max()) < 1.0
     assert np.degrees(np.abs(run["q"][run["time"] <= 1.5][-1] - np.radians([80, 80])).max()) < 1.0
+
+
+SETPOINTS_STO = "setpoints\nversion=1\nnRows=1\nnColumns={columns}\ninDegrees=yes\nendheader\n{header}\n{row}\n"
+
+
+def test_the_programs_set_points_file_is_pythons_setpoints(arm, build_dir, tmp_path):
+    model, _ = arm
+    (tmp_path / "sp.sto").write_text(SETPOINTS_STO.format(columns=3, header="time\tshoulder\telbow", row="1.5\t40\t60"))
+    program = subprocess.run([str(build_dir / "bin" / "arm_receding_horizon"), "--setpoints", str(tmp_path / "sp.sto"),
+                              "--duration-s", "3", "--out", str(tmp_path / "out")], capture_output=True, text=True)
+    assert program.returncode == 0, program.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    run = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 3.0,
+                                       setpoints=[(1.5, np.radians([40, 60]))])
+    assert summary["setpoint_settling_s"] == run["setpoint_settling"]
+    assert np.degrees(np.abs(run["q"][-1] - np.radians(summary["final_q_deg"])).max()) < 1e-9
+    # A joint without a column is named, nothing is run.
+    (tmp_path / "one.sto").write_text(SETPOINTS_STO.format(columns=2, header="time\tshoulder", row="1.5\t40"))
+    refused = subprocess.run([str(build_dir / "bin" / "arm_receding_horizon"), "--setpoints", str(tmp_path / "one.sto"),
+                              "--out", str(tmp_path / "refused")], capture_output=True, text=True)
+    assert refused.returncode == 1 and "no column for joint 'elbow'" in refused.stderr
+    assert not (tmp_path / "refused").exists()
