@@ -15,6 +15,9 @@
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/model/static_equilibrium.hpp"
+#include "programs.hpp"
+
+namespace flatsos::programs::arm_forward {
 
 namespace fp = flatsos::plugin;
 namespace ex = flatsos::examples;
@@ -26,7 +29,7 @@ void require_count_if_given(const std::vector<double>& v, int n, const std::stri
 }
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Forward simulation of a muscle-driven Simbody model with flatsos Hill muscles.\n"
                "The tendons' initial state is required: give --ls0-m (one tendon length per muscle) or\n"
                "--equilibrate-tendons (static equilibrium for a0 at q0).\n"
@@ -152,3 +155,5 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace flatsos::programs::arm_forward

@@ -21,12 +21,15 @@
 #include "flatsos/plugin/model/static_equilibrium.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "scenario_inputs.hpp"
+#include "programs.hpp"
+
+namespace flatsos::programs::arm_open_loop {
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 namespace ex = flatsos::examples;
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Open-loop minimum-effort transfer of a muscle-driven model (default: the arm of Richter & Warner)\n"
                "planned by flatness and SOS optimization, then simulated open loop in Simbody.\n"
                "Writes OUT/plan.sto, OUT/simulation.sto (states), OUT/plan_controls.sto, OUT/simulation_controls.sto\n"
@@ -252,3 +255,5 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace flatsos::programs::arm_open_loop

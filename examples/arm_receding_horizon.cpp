@@ -24,12 +24,15 @@
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
+#include "programs.hpp"
+
+namespace flatsos::programs::arm_receding_horizon {
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 namespace ex = flatsos::examples;
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Receding-horizon control of a muscle-driven model (default: the arm of Richter & Warner):\n"
                "flatness-based SLP planning every control period, Simbody plant.\n"
                "Writes OUT/simulation.sto (states), OUT/simulation_controls.sto (excitations), OUT/predictions/\n"
@@ -273,3 +276,5 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace flatsos::programs::arm_receding_horizon

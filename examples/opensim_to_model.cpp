@@ -14,6 +14,9 @@
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/io/opensim_import.hpp"
 #include "flatsos/plugin/io/sto_file.hpp"
+#include "programs.hpp"
+
+namespace flatsos::programs::opensim_to_model {
 
 namespace fp = flatsos::plugin;
 namespace ex = flatsos::examples;
@@ -42,7 +45,7 @@ double number(const std::string& text, const std::string& option) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"A flatsos model from an OpenSim model (.osim).\n"
                "Muscle lengths are polynomials of the kept coordinates fitted to the model's GeometryPaths (via points, "
                "wrapping) over the kept ranges, as OpenSim's PolynomialPathFitter fits them, each muscle's error reported; "
@@ -132,3 +135,5 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace flatsos::programs::opensim_to_model

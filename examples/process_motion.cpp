@@ -9,11 +9,14 @@
 #include "example_support.hpp"
 #include "flatsos/plugin/io/motion_processing.hpp"
 #include "flatsos/plugin/io/sto_file.hpp"
+#include "programs.hpp"
+
+namespace flatsos::programs::process_motion {
 
 namespace fp = flatsos::plugin;
 namespace ex = flatsos::examples;
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"OpenSim's inverse-dynamics preprocessing of a coordinates table.\n"
                "Pads each column by half its length (point reflection), resamples it on a uniform grid, low-pass "
                "filters it (3rd-order Butterworth, forward and backward), converts degrees to radians and fits a "
@@ -54,3 +57,5 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace flatsos::programs::process_motion

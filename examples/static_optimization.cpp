@@ -10,12 +10,15 @@
 #include "example_support.hpp"
 #include "flatsos/planner/static_optimization.hpp"
 #include "flatsos/plugin/io/sto_file.hpp"
+#include "programs.hpp"
+
+namespace flatsos::programs::static_optimization {
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 namespace ex = flatsos::examples;
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Static optimization along a measured motion, as OpenSim's StaticOptimization tool solves it.\n"
                "The motion (an OpenSim coordinates table: .mot or .sto, degrees or radians as its header says) is "
                "filtered and splined as OpenSim's tools do; at each frame the activations a in [0, 1] of least "
@@ -89,3 +92,5 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace flatsos::programs::static_optimization

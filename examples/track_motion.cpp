@@ -16,6 +16,9 @@
 #include "flatsos/planner/tracking.hpp"
 #include "flatsos/plugin/io/sto_file.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
+#include "programs.hpp"
+
+namespace flatsos::programs::track_motion {
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
@@ -40,7 +43,7 @@ std::vector<double> in_display_units(const fp::MusculoskeletalModel& model, cons
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"Tracking a measured motion with the receding-horizon controller (what OpenSim's CMC does).\n"
                "The motion (an OpenSim coordinates table: .mot or .sto, degrees or radians as its header says) is "
                "filtered and splined as OpenSim's tools do. The plant starts on the motion at its first time with its "
@@ -170,3 +173,5 @@ int main(int argc, char** argv) {
     return 1;
   }
 }
+
+}  // namespace flatsos::programs::track_motion
