@@ -2,12 +2,16 @@
 // arm, the model file's scenario "receding_horizon"). The model rests at q0 with its muscles in
 // the minimum-effort static equilibrium; a receding-horizon controller (horizon 0.5 s, 11-point
 // grid, replanned every 0.05 s by the SLP) moves it to the target ([20, 20] -> [80, 80] deg).
-// Writes OUT/simulation.sto, OUT/simulation_controls.sto, OUT/predictions/step_NNNN.sto (the
-// predicted joint path of every step) and OUT/summary.json.
+// Writes OUT/simulation.sto and OUT/simulation_controls.sto (row by row: a run of any length
+// keeps no table), OUT/predictions/step_NNNN.sto (the predicted joint path of every step, unless
+// --no-predictions) and OUT/summary.json. SIGTERM or SIGINT ends the run at the next control
+// step with complete files of what it simulated and a summary that says it was interrupted.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -21,6 +25,7 @@
 #include "flatsos/planner/receding_horizon_study.hpp"
 #include "flatsos/plugin/io/disturbance_file.hpp"
 #include "flatsos/plugin/io/setpoint_file.hpp"
+#include "flatsos/plugin/io/sto_stream.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/model/plausibility.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
@@ -31,6 +36,39 @@ namespace flatsos::programs::arm_receding_horizon {
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 namespace ex = flatsos::examples;
+
+namespace {
+
+// A stop asked for by SIGTERM or SIGINT (lock-free atomics may be set in a signal handler).
+std::atomic<bool> stop_requested{false};
+std::atomic<int> stop_signal{0};
+extern "C" void request_stop(int signal_number) {
+  stop_signal.store(signal_number);
+  stop_requested.store(true);
+}
+
+// The run's rows straight to OUT/simulation.sto and OUT/simulation_controls.sto.
+struct RowStreams {
+  RowStreams(const fp::MusculoskeletalModel& model, const std::string& out_dir)
+      : plant(model),
+        states(out_dir + "/simulation.sto", fp::make_state_table(model, "simulation")),
+        controls(out_dir + "/simulation_controls.sto", fp::make_controls_table(model, "simulation_controls")),
+        row(fp::make_state_table(model)),
+        control_row(fp::make_controls_table(model)) {}
+  void report(const SimTK::State& state) {
+    fp::append_state_row(plant, state, row);
+    fp::append_controls_row(plant, state, control_row);
+    states.append(row.rows.back());
+    controls.append(control_row.rows.back());
+    row.rows.clear();
+    control_row.rows.clear();
+  }
+  const fp::MusculoskeletalModel& plant;
+  fp::StoStream states, controls;
+  fp::StoTable row, control_row;  // one row at a time
+};
+
+}  // namespace
 
 int run(int argc, char** argv) {
   CLI::App app{"Receding-horizon control of a muscle-driven model (default: the arm of Richter & Warner):\n"
@@ -99,6 +137,10 @@ int run(int argc, char** argv) {
   app.add_option("--measurement-delay-s", sensors.delay_s,
                  "the joints measured at a control time were taken this long before it, s")
       ->capture_default_str()->check(flatsos::examples::nonnegative_number());
+  double actuation_delay_s = 0.0;
+  app.add_option("--actuation-delay-s", actuation_delay_s,
+                 "the excitations a control step sets reach the muscles this long after it, s")
+      ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   app.add_option("--deadline-s", options.deadline.deadline_s,
                  "compute deadline of a control step's plan, s: a later plan is not used, the previous plan's tail "
                  "runs instead and the miss is counted (0: none)")
@@ -119,6 +161,11 @@ int run(int argc, char** argv) {
                             "rosenbrock (implicit in the muscles, explicit in the multibody), bdf (CPodes) or rkm "
                             "(Runge-Kutta-Merson)");
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
+  bool write_predictions = true;
+  app.add_flag("--predictions,!--no-predictions", write_predictions,
+               "write each step's predicted joint path (OUT/predictions/); without, the controller keeps no "
+               "history and memory stays flat however long the run")
+      ->capture_default_str();
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
   try {
@@ -151,6 +198,7 @@ int run(int argc, char** argv) {
         fpl::plan_receding_horizon_step(f, w, q, qd, o, by_ipopt, out);
       };
     options.plan.excitation_bounds.enforce = !no_bounds;
+    options.keep_history = write_predictions;
     if (!setpoint_path.empty()) {
       const fp::SetpointRows rows = fp::read_setpoint_file(model->description(), setpoint_path);
       for (std::size_t k = 0; k < rows.times_s.size(); ++k) options.setpoints.push_back({rows.times_s[k], rows.targets_q_rad[k]});
@@ -171,22 +219,39 @@ int run(int argc, char** argv) {
     loop_options.integrator = kind;
     loop_options.accuracy = accuracy;
     loop_options.sensors = sensors;
+    loop_options.actuation_delay_s = actuation_delay_s;
+    std::filesystem::create_directories(out_dir);
+    RowStreams rows(controller.plant(), out_dir);
+    loop_options.keep_tables = false;
+    loop_options.report = [&rows](const SimTK::State& state) { rows.report(state); };
+    loop_options.stop = &stop_requested;
+    std::signal(SIGTERM, request_stop);
+    std::signal(SIGINT, request_stop);
     const fpl::RecedingHorizonRun rh_run = fpl::run_receding_horizon(controller, s, loop_options, ex::kRadPerDeg);
+    std::signal(SIGTERM, SIG_DFL);
+    std::signal(SIGINT, SIG_DFL);
     const fp::ClosedLoopResult& run = rh_run.loop;
-    std::vector<double> plan_times, step_times;
-    for (const auto& rec : controller.history()) plan_times.push_back(rec.plan_seconds), step_times.push_back(rec.wall_seconds);
-    const int steps = static_cast<int>(controller.history().size());
+    std::vector<double> plan_times;
+    for (const auto& rec : controller.history()) plan_times.push_back(rec.plan_seconds);
+    const fpl::StepTimeHistogram& step_times = controller.stepTimes();
+    const int steps = controller.steps();
     const bool finite = run.finite;
     const double settling = rh_run.settling_time_s;
     const Eigen::VectorXd target = options.plan.target_q_rad;
     const Eigen::VectorXd q_final = ex::to_display(model->description(), model->jointAngles(run.final_state));
     // The task: reach the target and stay within 1 deg of it, with every plan solved. A run that
     // fails it still writes its (complete) files, says why in the summary and exits 1.
+    std::vector<std::string> failures = rh_run.failures;
+    if (run.stopped)  // the run's own words name no signal
+      failures.front() = std::string("interrupted by ") + (stop_signal.load() == SIGINT ? "SIGINT" : "SIGTERM") +
+                         " at t = " + ex::format(run.final_state.getTime()) + " s of " + ex::format(duration) + " s";
     std::string message;
-    for (const auto& f : rh_run.failures) message += (message.empty() ? "" : "; ") + f;
+    for (const auto& f : failures) message += (message.empty() ? "" : "; ") + f;
     nlohmann::json summary;
     summary["success"] = rh_run.success();
     summary["message"] = message;
+    summary["interrupted"] = run.stopped;
+    summary["simulated_s"] = run.final_state.getTime() - s.getTime();
     summary["final_q_deg"] = std::vector<double>(q_final.data(), q_final.data() + n);
     summary["target_q_deg"] = std::vector<double>(n);
     const Eigen::VectorXd target_shown = ex::to_display(model->description(), target);  // a slider's in m
@@ -197,8 +262,11 @@ int run(int argc, char** argv) {
     summary["warnings"] = warnings;
     summary["settling_time_s"] = settling >= 0.0 ? nlohmann::json(settling) : nlohmann::json(nullptr);
     summary["steps"] = steps;
-    summary["plan_seconds"] = {{"median", ex::median(plan_times)}, {"max", *std::max_element(plan_times.begin(), plan_times.end())}};
-    summary["control_step_seconds"] = {{"median", ex::median(step_times)}, {"max", *std::max_element(step_times.begin(), step_times.end())}};
+    if (!plan_times.empty())  // (kept with the history only)
+      summary["plan_seconds"] = {{"median", ex::median(plan_times)}, {"max", *std::max_element(plan_times.begin(), plan_times.end())}};
+    summary["control_step_seconds"] = {{"median", step_times.quantile(0.5)},  // to 1 %
+                                       {"p99", step_times.quantile(0.99)},
+                                       {"max", controller.worstStepSeconds()}};
     summary["wall_seconds"] = run.wall_seconds;
     summary["real_time_factor"] = run.real_time_factor;
     summary["excitation_clamps"] = controller.clampedSamples();
@@ -219,15 +287,12 @@ int run(int argc, char** argv) {
     summary["longest_deadline_miss_run"] = faults.longest_miss_run;
     summary["worst_step_seconds"] = controller.worstStepSeconds();
     summary["fallbacks"] = faults.fallbacks;
-    summary["faults"] = {{"solver_failures", faults.solver_failures},
-                         {"non_finite_plans", faults.non_finite_plans},
-                         {"non_finite_measurements", faults.non_finite_measurements},
-                         {"deadline_misses", faults.deadline_misses},
-                         {"steps_without_plan", faults.steps_without_plan},
-                         {"integrator_failures", run.finite ? 0 : 1}};
+    summary["faults"] = nlohmann::json::object();
+    for (const auto& [name, count] : fpl::named_fault_counts(faults, run.finite)) summary["faults"][name] = count;
     summary["sensors"] = {{"noise_deg", noise_deg},
                           {"noise_deg_per_s", noise_deg_per_s},
                           {"measurement_delay_s", sensors.delay_s},
+                          {"actuation_delay_s", actuation_delay_s},
                           {"seed", sensors.seed}};
     summary["deadline"] = {{"deadline_s", options.deadline.deadline_s},
                            {"injected_miss_fraction", options.deadline.injected_miss_fraction}};
@@ -238,15 +303,15 @@ int run(int argc, char** argv) {
     summary["horizon_s"] = options.plan.horizon_s;
     summary["control_period_s"] = options.control_period_s;
 
-    std::filesystem::create_directories(out_dir);
-    fp::StoTable sim = run.states;
-    sim.metadata = {{"success", finite ? "true" : "false"}, {"integrator_accuracy", ex::format(accuracy)}};
-    fp::write_sto(out_dir + "/simulation.sto", sim);
-    fp::write_sto(out_dir + "/simulation_controls.sto", run.controls);
+    rows.states.header().metadata = {{"success", finite ? "true" : "false"},
+                                     {"integrator_accuracy", ex::format(accuracy)},
+                                     {"interrupted", run.stopped ? "true" : "false"}};
+    rows.states.finish();
+    rows.controls.finish();
     // One file per step (OpenSim tables need strictly increasing time); none left from a longer run.
     const std::filesystem::path predictions = std::filesystem::path(out_dir) / "predictions";
     std::filesystem::remove_all(predictions);
-    std::filesystem::create_directories(predictions);
+    if (write_predictions) std::filesystem::create_directories(predictions);
     for (const auto& table : rh_run.predictions) {
       char file[32];
       std::snprintf(file, sizeof file, "step_%04d.sto", std::stoi(table.metadataValue("step")));
@@ -261,11 +326,11 @@ int run(int argc, char** argv) {
               << (settling >= 0 ? ex::format(settling) + " s" : std::string("never")) << ", plan failures "
               << controller.planFailures() << ", clamped samples " << controller.clampedSamples() << ", bounded steps "
               << controller.boundedSteps() << "\n  median step "
-              << 1e3 * ex::median(step_times) << " ms, real-time factor " << run.real_time_factor << "\n  wrote " << out_dir
+              << 1e3 * step_times.quantile(0.5) << " ms, real-time factor " << run.real_time_factor << "\n  wrote " << out_dir
               << "/{simulation.sto, simulation_controls.sto, predictions/step_*.sto, summary.json}\n";
     if (!rh_run.success()) {
       std::cerr << "arm_receding_horizon: task failed: " << message << "\n";
-      return 1;
+      return run.stopped ? 128 + stop_signal.load() : 1;  // the shell's code for a run ended by a signal
     }
     return 0;
   } catch (const CLI::ValidationError& e) {

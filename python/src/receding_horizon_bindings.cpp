@@ -23,26 +23,43 @@ planner::SlpSolver slp_solver_from_name(const std::string& name) {
   throw py::value_error("solver: unknown SLP solver '" + name + "' (exact, simplex or ipopt)");
 }
 
-// The model with `rows` of (time_s, forces per joint: N m, N along a slider) acting on its
-// joints, each held until the next row.
-std::shared_ptr<const plugin::MusculoskeletalModel> with_disturbance(const plugin::MusculoskeletalModel& model,
-                                                                     const py::object& rows) {
-  std::vector<double> times_s;
-  std::vector<Eigen::VectorXd> forces;
-  const char* shape = "disturbance: a sequence of rows (time_s, forces per joint)";
+struct TimedRow {
+  double time_s;
+  Eigen::VectorXd values;
+};
+
+// `rows`: the argument `what` (e.g. "setpoints"), a sequence of (time_s, `values` per joint).
+std::vector<TimedRow> timed_rows(const py::object& rows, Eigen::Index joints, const std::string& what,
+                                 const std::string& values) {
+  std::vector<TimedRow> out;
+  const std::string shape = what + ": a sequence of (time_s, " + values + " per joint)";
   if (!py::isinstance<py::sequence>(rows)) throw py::value_error(shape);
   for (const py::handle row : rows) {
     if (!py::isinstance<py::sequence>(row) || py::len(row) != 2) throw py::value_error(shape);
     const auto pair = py::reinterpret_borrow<py::sequence>(row);
+    TimedRow r;
     try {
-      times_s.push_back(py::cast<double>(pair[0]));
+      r.time_s = py::cast<double>(pair[0]);
     } catch (const py::cast_error&) {
-      throw py::value_error("disturbance: a row's time is not a number");
+      throw py::value_error(what + ": a row's time is not a number");
     }
-    forces.push_back(vector_argument(pair[1], model.numJoints(), "disturbance forces"));
+    r.values = vector_argument(pair[1], joints, what + " " + values);
+    out.push_back(std::move(r));
   }
-  Eigen::MatrixXd table(static_cast<Eigen::Index>(forces.size()), model.numJoints());
-  for (std::size_t k = 0; k < forces.size(); ++k) table.row(static_cast<Eigen::Index>(k)) = forces[k].transpose();
+  return out;
+}
+
+// The model with `rows` of (time_s, forces per joint: N m, N along a slider) acting on its
+// joints, each held until the next row.
+std::shared_ptr<const plugin::MusculoskeletalModel> with_disturbance(const plugin::MusculoskeletalModel& model,
+                                                                     const py::object& rows) {
+  const std::vector<TimedRow> timed = timed_rows(rows, model.numJoints(), "disturbance", "forces");
+  std::vector<double> times_s;
+  Eigen::MatrixXd table(static_cast<Eigen::Index>(timed.size()), model.numJoints());
+  for (std::size_t k = 0; k < timed.size(); ++k) {
+    times_s.push_back(timed[k].time_s);
+    table.row(static_cast<Eigen::Index>(k)) = timed[k].values.transpose();
+  }
   plugin::ModelDescription d = model.description();
   auto torques = plugin::disturbance_torques(d, times_s, table);  // std::invalid_argument: ValueError
   return std::make_shared<const plugin::MusculoskeletalModel>(std::move(d), std::move(torques));
@@ -52,20 +69,8 @@ std::shared_ptr<const plugin::MusculoskeletalModel> with_disturbance(const plugi
 std::vector<planner::Setpoint> setpoints_argument(const py::object& rows, Eigen::Index joints) {
   std::vector<planner::Setpoint> out;
   if (rows.is_none()) return out;
-  const char* shape = "setpoints: a sequence of (time_s, target angles per joint, rad)";
-  if (!py::isinstance<py::sequence>(rows)) throw py::value_error(shape);
-  for (const py::handle row : rows) {
-    if (!py::isinstance<py::sequence>(row) || py::len(row) != 2) throw py::value_error(shape);
-    const auto pair = py::reinterpret_borrow<py::sequence>(row);
-    planner::Setpoint s;
-    try {
-      s.time_s = py::cast<double>(pair[0]);
-    } catch (const py::cast_error&) {
-      throw py::value_error("setpoints: a row's time is not a number");
-    }
-    s.target_q_rad = vector_argument(pair[1], joints, "setpoints target");
-    out.push_back(std::move(s));
-  }
+  for (TimedRow& r : timed_rows(rows, joints, "setpoints", "target"))
+    out.push_back({r.time_s, std::move(r.values)});
   return out;
 }
 
@@ -78,12 +83,7 @@ void add_real_time_report(py::dict& out, const planner::RecedingHorizonControlle
   out["worst_step_seconds"] = controller.worstStepSeconds();
   out["fallbacks"] = f.fallbacks;
   py::dict faults;
-  faults["solver_failures"] = f.solver_failures;
-  faults["non_finite_plans"] = f.non_finite_plans;
-  faults["non_finite_measurements"] = f.non_finite_measurements;
-  faults["deadline_misses"] = f.deadline_misses;
-  faults["steps_without_plan"] = f.steps_without_plan;
-  faults["integrator_failures"] = run.loop.finite ? 0 : 1;
+  for (const auto& [name, count] : planner::named_fault_counts(f, run.loop.finite)) faults[name.c_str()] = count;
   out["faults"] = faults;
   py::list settling;
   for (const double s : run.setpoint_settling_s) settling.append(s >= 0.0 ? py::object(py::float_(s)) : py::object(py::none()));
@@ -96,7 +96,7 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
                               double observer_gain, const std::string& integrator, const py::object& accuracy,
                               const py::object& plant, double settle_tolerance, const py::object& disturbance,
                               double noise_deg, double noise_deg_per_s, unsigned seed, double measurement_delay,
-                              double deadline, double inject_deadline_misses, const py::object& setpoints) {
+                              double actuation_delay, double deadline, double inject_deadline_misses, const py::object& setpoints) {
   const plugin::MusculoskeletalModel& model = *m.model;
   const Eigen::Index joints = model.numJoints(), muscles = model.numMuscles();
   const Eigen::VectorXd q0_rad = vector_argument(q0, joints, "q0"), target_rad = vector_argument(target, joints, "target");
@@ -129,6 +129,7 @@ py::dict run_receding_horizon(const Model& m, const py::object& q0, const py::ob
   loop.duration_s = duration;
   // Standard deviations in deg and deg/s, as the program takes them; the sensors check them.
   loop.sensors = {noise_deg * M_PI / 180.0, noise_deg_per_s * M_PI / 180.0, measurement_delay, seed};
+  loop.actuation_delay_s = actuation_delay;  // checked by the loop (ValueError)
   loop.integrator = plugin::integrator_from_name(integrator);  // std::invalid_argument (ValueError) naming the choices
   // The program's defaults (arm_receding_horizon): 1e-5 for the muscle Rosenbrock method, else 1e-8.
   loop.accuracy = !accuracy.is_none()                                            ? py::cast<double>(accuracy)
@@ -197,7 +198,7 @@ void register_receding_horizon(py::module_& m) {
         py::arg("integrator") = "rosenbrock", py::arg("accuracy") = py::none(), py::arg("plant") = py::none(),
         py::arg("settle_tolerance") = M_PI / 180.0, py::arg("disturbance") = py::none(), py::arg("noise_deg") = 0.0,
         py::arg("noise_deg_per_s") = 0.0, py::arg("seed") = 1u, py::arg("measurement_delay") = 0.0,
-        py::arg("deadline") = 0.0, py::arg("inject_deadline_misses") = 0.0, py::arg("setpoints") = py::none(),
+        py::arg("actuation_delay") = 0.0, py::arg("deadline") = 0.0, py::arg("inject_deadline_misses") = 0.0, py::arg("setpoints") = py::none(),
         "The receding-horizon controller moving the model from rest at q0 (rad) to `target` (rad) on a Simbody "
         "plant for `duration` s: every `period` s a plan over `horizon` s (a cubic to the target, the torque box "
         "on `grid_points` postures, the SLP by `solver`: 'exact', 'simplex' or 'ipopt'), its excitations kept "
@@ -209,7 +210,8 @@ void register_receding_horizon(py::module_& m) {
         "`model` (model mismatch). disturbance: rows (time_s, forces per joint: N m, N along a slider) pushing "
         "the plant's joints, each held until the next row's time. noise_deg, noise_deg_per_s: standard "
         "deviations of the measured pins' angles and speeds (seed: of the noise and of injected misses); "
-        "measurement_delay: s between a measurement and the control time it is used at. deadline: s a plan may "
+        "measurement_delay: s between a measurement and the control time it is used at; actuation_delay: s "
+        "between a control time and its excitations reaching the muscles. deadline: s a plan may "
         "take; a later one is not used (the previous plan's tail runs; 0: none); inject_deadline_misses: for "
         "tests, this fraction of the steps miss it at random. setpoints: (time_s, target_rad) rows, each the "
         "target from its time on. integrator: 'rosenbrock' (default accuracy 1e-5), 'bdf' or 'rkm' (1e-8).\n"

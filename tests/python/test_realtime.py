@@ -8,19 +8,25 @@ import numpy as np
 import flatsos
 
 
-def test_noise_and_delay_give_the_programs_run_for_the_same_seed(arm, build_dir, models_dir, tmp_path):
+def test_noise_and_delays_give_the_programs_run_for_the_same_seed(arm, build_dir, models_dir, tmp_path):
     model, _ = arm
     run = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 2.0,
-                                       noise_deg=0.2, noise_deg_per_s=2.0, measurement_delay=0.01, seed=5)
+                                       noise_deg=0.2, noise_deg_per_s=2.0, measurement_delay=0.01,
+                                       actuation_delay=0.02, seed=5)
     program = subprocess.run([str(build_dir / "bin" / "arm_receding_horizon"), "--noise-deg", "0.2",
-                              "--noise-deg-per-s", "2", "--measurement-delay-s", "0.01", "--seed", "5",
-                              "--out", str(tmp_path)], capture_output=True, text=True)
+                              "--noise-deg-per-s", "2", "--measurement-delay-s", "0.01", "--actuation-delay-s",
+                              "0.02", "--seed", "5", "--out", str(tmp_path)], capture_output=True, text=True)
     assert program.returncode == 0, program.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert run["success"] and summary["success"]
     assert run["settling_time"] == summary["settling_time_s"]
     assert np.degrees(np.abs(run["q"][-1] - np.radians(summary["final_q_deg"])).max()) < 1e-9
-    assert summary["sensors"] == {"noise_deg": 0.2, "noise_deg_per_s": 2.0, "measurement_delay_s": 0.01, "seed": 5}
+    assert summary["sensors"] == {"noise_deg": 0.2, "noise_deg_per_s": 2.0, "measurement_delay_s": 0.01,
+                                  "actuation_delay_s": 0.02, "seed": 5}
+    # The actuation delay reaches the plant: without it, another run.
+    on_time = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 2.0, noise_deg=0.2,
+                                           noise_deg_per_s=2.0, measurement_delay=0.01, seed=5)
+    assert np.abs(on_time["q"][-1] - run["q"][-1]).max() > 1e-9
     # Another seed is another run: the noise reaches the plan.
     other = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 2.0,
                                          noise_deg=0.2, noise_deg_per_s=2.0, measurement_delay=0.01, seed=6)

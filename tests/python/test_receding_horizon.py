@@ -100,6 +100,7 @@ def test_a_failed_task_says_why_and_is_not_a_success(arm):
     (dict(noise_deg=-0.1), "angle noise must be finite and >= 0"),
     (dict(noise_deg_per_s=float("nan")), "speed noise must be finite and >= 0"),
     (dict(measurement_delay=-0.01), "measurement delay must be finite and >= 0"),
+    (dict(actuation_delay=-0.01), "actuation delay: must be a finite time >= 0 s"),
     (dict(deadline=-1.0), "deadline must be finite and >= 0 s"),
     (dict(inject_deadline_misses=1.5), "deadline-miss fraction must be in"),
     (dict(setpoints=[(1.0, [0.5])]), "setpoints target: expected 2 numbers"),

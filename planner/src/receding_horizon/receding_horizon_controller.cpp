@@ -333,6 +333,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   previous_q_ = q_, previous_qd_ = qd_, previous_qdd_ = qdd_;
   rec.wall_seconds = wall.seconds();
   worst_step_s_ = std::max(worst_step_s_, rec.wall_seconds);
+  step_times_.add(rec.wall_seconds);
   if (options_.keep_history) history_.push_back(rec);
   return rec;
 }

@@ -5,8 +5,11 @@
 
 #include "flatsos/planner/receding_horizon_controller.hpp"
 #include "flatness/input_checks.hpp"
+#include "settling_tracker.hpp"
 
 namespace flatsos::planner {
+
+using detail::SettlingTracker;
 
 std::vector<plugin::StoTable> prediction_tables(const RecedingHorizonController& controller) {
   const plugin::MusculoskeletalModel& model = controller.plant();
@@ -46,23 +49,16 @@ std::string plan_failures_sentence(const RecedingHorizonController& controller) 
 }
 
 namespace {
-// Per set point (the first: the options' target from the start), when after it the joints
-// settled within the tolerance until the next one took effect (-1: never).
-std::vector<double> setpoint_settling_times(const RecedingHorizonController& controller, const plugin::StoTable& states,
-                                            double tolerance_rad, double end_s) {
-  const auto& setpoints = controller.options().setpoints;
-  if (setpoints.empty()) return {};
-  std::vector<double> out;
-  double from = states.rows.empty() ? 0.0 : states.rows.front()[0];
-  for (std::size_t i = 0; i <= setpoints.size(); ++i) {
-    const double to = i < setpoints.size() ? setpoints[i].time_s : end_s + 1.0;
-    if (from > end_s) break;  // set points after the run's end
-    const Eigen::VectorXd& target = i == 0 ? controller.options().plan.target_q_rad : setpoints[i - 1].target_q_rad;
-    const double settled = plugin::settling_time(controller.plant(), states, target, tolerance_rad, 1e-3, from, to);
-    out.push_back(settled < 0.0 ? -1.0 : settled - from);
-    from = to;
+// The tracker of a run's settling: one window per set point (the first: the options' target
+// from the start), each until the next took effect.
+SettlingTracker settling_tracker(const RecedingHorizonController& controller, double start_s, double tolerance_rad) {
+  std::vector<double> starts{start_s};
+  std::vector<Eigen::VectorXd> targets{controller.options().plan.target_q_rad};
+  for (const Setpoint& s : controller.options().setpoints) {
+    starts.push_back(s.time_s);
+    targets.push_back(s.target_q_rad);
   }
-  return out;
+  return SettlingTracker(controller.plant(), std::move(starts), std::move(targets), tolerance_rad, 1e-3);
 }
 }  // namespace
 
@@ -72,18 +68,31 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
                                       "start joint angles (q0)");
   plugin::ClosedLoopOptions o = options;
   o.control_period_s = controller.options().control_period_s;
+  SettlingTracker settling = settling_tracker(controller, initial.getTime(), settle_tolerance_rad);
+  o.report = [&](const SimTK::State& state) {
+    settling.observe(state);
+    if (options.report) options.report(state);
+  };
   RecedingHorizonRun run;
   run.loop = plugin::simulate_closed_loop(controller.plant(), controller, initial, o);
   run.predictions = prediction_tables(controller);
   const double end_s = run.loop.final_state.getTime();
   const Eigen::VectorXd& target = controller.targetAt(end_s);
   const auto& setpoints = controller.options().setpoints;
-  const double last_change_s = setpoints.empty() ? -1e300 : setpoints.back().time_s;
   constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+  if (run.loop.stopped)
+    run.failures.push_back("stopped at t = " + std::to_string(end_s) + " s of " + std::to_string(o.duration_s) +
+                           " s: a stop was requested");
   if (run.loop.finite) {
-    run.settling_time_s = plugin::settling_time(controller.plant(), run.loop.states, target, settle_tolerance_rad, 1e-3,
-                                                last_change_s);
-    run.setpoint_settling_s = setpoint_settling_times(controller, run.loop.states, settle_tolerance_rad, end_s);
+    const std::vector<double> settled = settling.settledTimes();  // absolute times, -1: never
+    run.settling_time_s = settled.empty() ? -1.0 : settled.back();
+    if (!setpoints.empty()) {
+      const double first_s = initial.getTime();
+      for (std::size_t i = 0; i < settled.size(); ++i) {
+        const double from = i == 0 ? first_s : setpoints[i - 1].time_s;
+        run.setpoint_settling_s.push_back(settled[i] < 0.0 ? -1.0 : settled[i] - from);
+      }
+    }
     const auto missed = std::count(run.setpoint_settling_s.begin(), run.setpoint_settling_s.end() - (setpoints.empty() ? 0 : 1), -1.0);
     if (missed > 0)
       run.failures.push_back(std::to_string(missed) + " of " + std::to_string(setpoints.size()) +
@@ -91,7 +100,7 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
                              std::to_string(settle_tolerance_rad * kDegPerRad) + " deg before the next one");
   }
   if (!run.loop.finite) run.failures.push_back("the simulation became non-finite");
-  if (run.loop.finite && run.settling_time_s < 0.0) {
+  if (run.loop.finite && !run.loop.stopped && run.settling_time_s < 0.0) {
     const Eigen::VectorXd error = (controller.plant().jointAngles(run.loop.final_state) - target).cwiseAbs();
     double error_rad = 0.0, error_m = 0.0;  // pins', sliders'
     for (int j = 0; j < error.size(); ++j) {
@@ -112,6 +121,16 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
                            " plans missed their compute deadline (" + std::to_string(faults.steps_without_plan) +
                            " steps had no earlier plan to run)");
   return run;
+}
+
+std::vector<std::pair<std::string, int>> named_fault_counts(const ControllerFaults& faults,
+                                                            bool integration_finite) {
+  return {{"solver_failures", faults.solver_failures},
+          {"non_finite_plans", faults.non_finite_plans},
+          {"non_finite_measurements", faults.non_finite_measurements},
+          {"deadline_misses", faults.deadline_misses},
+          {"steps_without_plan", faults.steps_without_plan},
+          {"integrator_failures", integration_finite ? 0 : 1}};
 }
 
 }  // namespace flatsos::planner

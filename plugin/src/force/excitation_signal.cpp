@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace flatsos::plugin {
 
@@ -31,6 +32,26 @@ void ExcitationPolynomial::validate() const {
   if (!std::isfinite(start_time_s)) throw std::invalid_argument("excitation polynomial: start time is not finite");
   if (!(duration_s > 0.0) || !std::isfinite(duration_s))
     throw std::invalid_argument("excitation polynomial: duration must be a finite time > 0 s");
+}
+
+namespace {
+class DelayedSignal final : public ExcitationSignal {
+ public:
+  DelayedSignal(std::shared_ptr<const ExcitationSignal> signal, double delay_s)
+      : signal_(std::move(signal)), delay_s_(delay_s) {}
+  double value(double time_s) const override { return signal_->value(time_s - delay_s_); }
+
+ private:
+  std::shared_ptr<const ExcitationSignal> signal_;
+  double delay_s_;
+};
+}  // namespace
+
+ExcitationInput delayed(const ExcitationInput& input, double delay_s) {
+  ExcitationInput out{input.piece, nullptr};
+  out.piece.start_time_s += delay_s;
+  if (input.signal) out.signal = std::make_shared<DelayedSignal>(input.signal, delay_s);
+  return out;
 }
 
 namespace {

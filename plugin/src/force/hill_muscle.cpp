@@ -50,6 +50,14 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   void setSignal(SimTK::State& s, SignalPtr signal) const {
     SimTK::Value<SignalPtr>::updDowncast(s.updDiscreteVariable(forces_, signal_)) = std::move(signal);
   }
+  ExcitationInput input(const SimTK::State& s) const {
+    return {static_cast<const SimTK::Value<ExcitationPolynomial>&>(s.getDiscreteVariable(forces_, held_excitation_)).get(),
+            static_cast<const SimTK::Value<SignalPtr>&>(s.getDiscreteVariable(forces_, signal_)).get()};
+  }
+  void setInput(SimTK::State& s, const ExcitationInput& input) const {
+    SimTK::Value<ExcitationPolynomial>::updDowncast(s.updDiscreteVariable(forces_, held_excitation_)) = input.piece;
+    setSignal(s, input.signal);
+  }
   double unclampedExcitation(const SimTK::State& s) const {
     // static_cast: both variables were allocated with these types in realizeTopology, and
     // Value<T>::downcast's dynamic_cast measured ~10 % of an integration step.
@@ -230,6 +238,10 @@ void HillMuscle::setExcitationPolynomial(SimTK::State& s, const ExcitationPolyno
 }
 void HillMuscle::setExcitationSignal(SimTK::State& s, std::shared_ptr<const ExcitationSignal> signal) const {
   impl().setSignal(s, std::move(signal));
+}
+ExcitationInput HillMuscle::getExcitationInput(const SimTK::State& s) const { return impl().input(s); }
+void HillMuscle::setExcitationInput(SimTK::State& s, const ExcitationInput& input) const {
+  impl().setInput(s, input);
 }
 double HillMuscle::getExcitation(const SimTK::State& s) const { return impl().excitation(s); }
 double HillMuscle::getUnclampedExcitation(const SimTK::State& s) const {

@@ -6,9 +6,33 @@
 #include <stdexcept>
 #include <vector>
 
+#include "flatsos/plugin/integration/actuation_delay.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 
 namespace flatsos::plugin {
+
+namespace {
+
+// Advances `stepper` to t_end through `times` (see Stepper::advanceTo), stopping where a delayed
+// command reaches the muscles before t_end to set it (one due at t_end is set at the next
+// control time, before the controller acts).
+bool advance_with_commands_due(Stepper& stepper, ActuationDelay& actuation, double t_end,
+                               const std::vector<double>& times, std::vector<double>& segment_times,
+                               const Stepper::Report& report) {
+  auto next = times.begin();
+  while (actuation.nextDue() < t_end - 1e-9) {
+    const double due = std::max(actuation.nextDue(), stepper.state().getTime());
+    segment_times.clear();
+    for (; next != times.end() && *next <= due; ++next) segment_times.push_back(*next);
+    if (!stepper.advanceTo(due, segment_times, report)) return false;
+    actuation.applyDue(stepper.updState());
+    stepper.inputsChanged();
+  }
+  segment_times.assign(next, times.end());
+  return stepper.advanceTo(t_end, segment_times, report);
+}
+
+}  // namespace
 
 ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Controller& controller,
                                       const SimTK::State& initial, const ClosedLoopOptions& o) {
@@ -24,15 +48,20 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
   const auto stepper = make_stepper(plant, o.integrator, o.accuracy);
   stepper->initialize(initial);
   const auto append_row = [&](const SimTK::State& st) {
-    append_state_row(plant, st, out.states);
-    append_controls_row(plant, st, out.controls);
+    if (o.keep_tables) {
+      append_state_row(plant, st, out.states);
+      append_controls_row(plant, st, out.controls);
+    }
+    if (o.report) o.report(st);
   };
   append_row(stepper->state());
   JointSensors sensors(plant, o.sensors, o.control_period_s, initial.getTime());
   sensors.take(stepper->state());
+  ActuationDelay actuation(plant, o.actuation_delay_s, o.control_period_s);
   const bool delayed = o.sensors.delay_s > 0.0;
   // Each period's report times, the sensors' sample times, and both merged (reused storage).
-  std::vector<double> report_times(static_cast<std::size_t>(o.reports_per_period)), sample_times, times;
+  std::vector<double> report_times(static_cast<std::size_t>(o.reports_per_period)), sample_times, times,
+      segment_times;
   const auto report_or_sample = [&](const SimTK::State& st) {
     const double t = st.getTime();
     if (std::binary_search(report_times.begin(), report_times.end(), t)) append_row(st);
@@ -40,12 +69,21 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
   };
   const int periods = static_cast<int>(std::ceil(o.duration_s / o.control_period_s - 1e-9));
   for (int k = 0; k < periods && out.finite; ++k) {
+    if (o.stop && o.stop->load()) {
+      out.stopped = true;
+      break;
+    }
     // The controller changes the inputs of the integrator's own state (no copy); Simbody's
     // integrators then restart (CPodes BDF cold), the Rosenbrock method keeps its step size.
     SimTK::State& state = stepper->updState();
     const double t_begin = state.getTime();
     if (!delayed && k > 0) sensors.take(state);  // (the start's was taken above)
+    if (actuation.active()) {
+      actuation.applyDue(state);
+      actuation.keepInputsInEffect(state);
+    }
     controller.control(state, sensors.read(t_begin));
+    if (actuation.active()) actuation.holdBack(state);
     stepper->inputsChanged();
     const double t_end = initial.getTime() + std::min(o.duration_s, (k + 1) * o.control_period_s);
     for (int r = 1; r <= o.reports_per_period; ++r)
@@ -60,7 +98,7 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
     times.clear();
     std::set_union(report_times.begin(), report_times.end(), sample_times.begin(), sample_times.end(),
                    std::back_inserter(times));
-    out.finite = stepper->advanceTo(t_end, times, report_or_sample);
+    out.finite = advance_with_commands_due(*stepper, actuation, t_end, times, segment_times, report_or_sample);
   }
   out.integrator_steps = stepper->stepsTaken();
   out.integrator_attempts = stepper->stepsAttempted();

@@ -53,14 +53,20 @@ void write_file_atomically(const std::string& path, const std::string& contents)
   }
 }
 
-void write_sto(const std::string& path, const StoTable& t) {
+std::string sto_header(const StoTable& t, std::size_t rows) {
   std::ostringstream out;
-  out << t.name << "\nversion=1\nnRows=" << t.rows.size() << "\nnColumns=" << t.columns.size()
+  out << t.name << "\nversion=1\nnRows=" << rows << "\nnColumns=" << t.columns.size()
       << "\ninDegrees=" << (t.in_degrees ? "yes" : "no") << '\n';
   for (const auto& [k, v] : t.metadata) out << k << '=' << v << '\n';
   out << "endheader\n";
   for (std::size_t c = 0; c < t.columns.size(); ++c) out << (c ? "\t" : "") << t.columns[c];
-  out << '\n' << std::setprecision(std::numeric_limits<double>::max_digits10);
+  out << '\n';
+  return out.str();
+}
+
+void write_sto(const std::string& path, const StoTable& t) {
+  std::ostringstream out;
+  out << sto_header(t, t.rows.size()) << std::setprecision(std::numeric_limits<double>::max_digits10);
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     if (t.rows[r].size() != t.columns.size())
       throw std::runtime_error("write_sto '" + path + "': row " + std::to_string(r) + " has " +

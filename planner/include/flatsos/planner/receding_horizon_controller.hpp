@@ -26,6 +26,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Simbody.h>
@@ -35,6 +36,7 @@
 #include "flatsos/planner/muscle_state_estimator.hpp"
 #include "flatsos/planner/plan_excitations.hpp"
 #include "flatsos/planner/receding_horizon_step.hpp"
+#include "flatsos/planner/step_time_histogram.hpp"
 #include "flatsos/plugin/integration/closed_loop.hpp"
 #include "flatsos/plugin/io/state_table.hpp"
 
@@ -74,6 +76,11 @@ struct ControllerFaults {
   int fallbacks = 0;                  ///< steps that ran the previous plan's tail instead of a new plan
   int steps_without_plan = 0;         ///< steps with no plan at all to run: the muscles kept their inputs
 };
+
+/// The faults of a closed-loop run by the names its summaries give them (the programs' JSON and
+/// Python), the integrator's failure (`integration_finite` false) among them.
+std::vector<std::pair<std::string, int>> named_fault_counts(const ControllerFaults& faults,
+                                                            bool integration_finite);
 
 struct RecedingHorizonControllerOptions {
   /// Horizon, grid, target, reserves, SLP solver, excitation bounds (their period and samples
@@ -154,6 +161,8 @@ class RecedingHorizonController final : public plugin::Controller {
   const ControllerFaults& faults() const { return faults_; }
   /// The longest control step so far (observer, plan, excitations), s.
   double worstStepSeconds() const { return worst_step_s_; }
+  /// Every step's wall time (kept without the history, in constant memory).
+  const StepTimeHistogram& stepTimes() const { return step_times_; }
   /// The set point in force at time t.
   const Eigen::VectorXd& targetAt(double t) const;
   int clampedSamples() const { return clamped_samples_; }
@@ -207,6 +216,7 @@ class RecedingHorizonController final : public plugin::Controller {
   ControllerFaults faults_;
   int miss_run_ = 0;
   double worst_step_s_ = 0.0;
+  StepTimeHistogram step_times_;
   std::mt19937 miss_random_;
   plugin::JointMeasurement exact_;  ///< step(state)'s measurement
   double excitation_squared_integral_ = 0.0;

@@ -36,6 +36,17 @@ struct ExcitationPolynomial {
   void validate() const;
 };
 
+/// A muscle's excitation input as its State holds it: the held piece, or a signal that, when
+/// set, overrides the piece.
+struct ExcitationInput {
+  ExcitationPolynomial piece;
+  std::shared_ptr<const ExcitationSignal> signal;
+};
+
+/// `input` late by `delay_s`: its value at t is the given input's at t - delay_s. A piece is
+/// moved (no allocation); a signal is wrapped in a new one.
+ExcitationInput delayed(const ExcitationInput& input, double delay_s);
+
 /// Linear interpolation between samples; held constant before the first and after the last.
 class PiecewiseLinearSignal final : public ExcitationSignal {
  public:

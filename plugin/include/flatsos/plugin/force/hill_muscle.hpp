@@ -84,6 +84,9 @@ class HillMuscle : public SimTK::Force::Custom {
   void setExcitationPolynomial(SimTK::State& s, const ExcitationPolynomial& piece) const;
   /// Drive the excitation by a signal of time (nullptr: back to the held value).
   void setExcitationSignal(SimTK::State& s, std::shared_ptr<const ExcitationSignal> signal) const;
+  /// The whole input (held piece and signal), to set again later, e.g. late by a delay.
+  ExcitationInput getExcitationInput(const SimTK::State& s) const;
+  void setExcitationInput(SimTK::State& s, const ExcitationInput& input) const;
   /// Excitation in effect at the state's time, clamped to [0, 1].
   double getExcitation(const SimTK::State& s) const;
   /// Same before clamping (to count and report clamps).

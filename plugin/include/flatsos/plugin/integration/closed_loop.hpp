@@ -9,6 +9,8 @@
 #include <Simbody.h>
 
 #include <Eigen/Core>
+#include <atomic>
+#include <functional>
 
 #include "flatsos/plugin/integration/joint_sensors.hpp"
 #include "flatsos/plugin/integration/stepper.hpp"
@@ -35,6 +37,15 @@ struct ClosedLoopOptions {
   double accuracy = 1e-8;      ///< relative, the stepper's meaning
   int reports_per_period = 5;  ///< rows of the state table per period
   SensorOptions sensors;       ///< noise and delay of the joint measurements (default: exact)
+  /// The controller's inputs reach the muscles this much later (ActuationDelay; 0: at once).
+  double actuation_delay_s = 0.0;
+  /// Called with the state at every report time (the start's included), in order: a long run
+  /// streams its rows from here instead of keeping the tables.
+  std::function<void(const SimTK::State&)> report;
+  bool keep_tables = true;  ///< false: ClosedLoopResult's tables stay empty (memory stays flat)
+  /// Set (by a signal handler, say) to end the run at the next control time: ClosedLoopResult
+  /// says it stopped, and its tables and final state are the run up to there.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 struct ClosedLoopResult {
@@ -42,6 +53,7 @@ struct ClosedLoopResult {
   StoTable controls;              ///< make_controls_table columns, the same times (the excitation in effect there)
   SimTK::State final_state;
   bool finite = true;             ///< false: a state became NaN/Inf or the integrator could not continue; the run stopped there
+  bool stopped = false;           ///< ClosedLoopOptions::stop ended the run before its duration
   double wall_seconds = 0.0;      ///< controller and integration
   double real_time_factor = 0.0;  ///< simulated time / wall time
   long integrator_steps = 0;
@@ -51,7 +63,8 @@ struct ClosedLoopResult {
 /// Runs `controller` on `plant` from `initial`. The controller acts at initial time + k period
 /// (k = 0, 1, ...) on the stepper's own state; the muscle Rosenbrock method keeps its step size
 /// across these input changes, Simbody's integrators restart. Throws std::invalid_argument for a
-/// non-positive duration or period, or reports_per_period < 1.
+/// non-positive duration or period, reports_per_period < 1, or a sensor or actuation delay that
+/// is negative.
 ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Controller& controller,
                                       const SimTK::State& initial, const ClosedLoopOptions& options);
 

@@ -26,6 +26,8 @@ struct StoTable {
 
 /// Throws std::runtime_error when the folder cannot be written or a row has the wrong width.
 void write_sto(const std::string& path, const StoTable& table);
+/// The header of `table` for `rows` rows, through the column labels' line.
+std::string sto_header(const StoTable& table, std::size_t rows);
 /// Throws std::runtime_error naming the file and line on malformed input.
 StoTable read_sto(const std::string& path);
 
