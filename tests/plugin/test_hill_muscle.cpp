@@ -170,10 +170,11 @@ TEST(SimulationStepLimit, AStiffExplicitRunStopsAtTheLimitWithItsRowsAndTheReaso
   EXPECT_TRUE(r.step_limit_reached);
   EXPECT_TRUE(r.finite);
   EXPECT_FALSE(r.completed());
-  EXPECT_GE(r.integrator_steps, limit);
+  EXPECT_EQ(r.integrator_steps, limit);
   for (const char* part : {"integration stopped at t = ", "the step limit", "rosenbrock or bdf"})
     EXPECT_NE(r.message.find(part), std::string::npos) << part << " not in: " << r.message;
-  // Stopped at a report time well before the end, every row so far kept and finite.
+  // Stopped at the limit well before the end (between report times), every row so far kept and
+  // finite, and a last row where it stopped.
   ASSERT_GE(r.states.rows.size(), 2u);
   const double stopped_s = r.states.rows.back()[0];
   EXPECT_LT(stopped_s, 0.5 - 0.01);
@@ -181,10 +182,32 @@ TEST(SimulationStepLimit, AStiffExplicitRunStopsAtTheLimitWithItsRowsAndTheReaso
   EXPECT_EQ(r.controls.rows.size(), r.states.rows.size());
   for (const auto& row : r.states.rows)
     for (double v : row) EXPECT_TRUE(std::isfinite(v));
-  // A higher limit goes further along the same trajectory: the limit only says where to stop.
+  // A higher limit goes further along the same trajectory: the limit only says where to stop
+  // (the report rows before the stop are the same).
   const auto further = fall_with_step_limit(*arm, fp::IntegratorKind::RungeKuttaMerson, 2 * limit);
   ASSERT_GT(further.states.rows.size(), r.states.rows.size());
-  for (std::size_t k = 0; k < r.states.rows.size(); ++k) EXPECT_EQ(further.states.rows[k], r.states.rows[k]) << "row " << k;
+  for (std::size_t k = 0; k + 1 < r.states.rows.size(); ++k)
+    EXPECT_EQ(further.states.rows[k], r.states.rows[k]) << "row " << k;
+}
+
+// The limit holds inside a report interval too: a run reported only at its end, or asked for an
+// absurd duration, stops at the limit instead of integrating for hours.
+TEST(SimulationStepLimit, TheLimitHoldsBetweenReportTimesForEveryIntegrator) {
+  const auto arm = flatsos::test::load_arm();
+  for (const auto kind : {fp::IntegratorKind::RungeKuttaMerson, fp::IntegratorKind::CPodesBdf,
+                          fp::IntegratorKind::MuscleRosenbrock}) {
+    SimTK::State s = paper_state(*arm);
+    fp::SimulationOptions o;
+    o.duration_s = 1e30;
+    o.report_interval_s = 1e29;
+    o.integrator = kind;
+    o.max_steps = 250;
+    const auto r = fp::simulate(*arm, s, o);
+    EXPECT_TRUE(r.step_limit_reached) << fp::integrator_name(kind);
+    EXPECT_EQ(r.integrator_steps, 250) << fp::integrator_name(kind);
+    EXPECT_EQ(r.states.rows.size(), 2u);  // the start, and where it stopped
+    EXPECT_NEAR(r.states.rows.back()[0], r.final_state.getTime(), 1e-12);
+  }
 }
 
 TEST(SimulationStepLimit, AnImplicitIntegratorFinishesTheSameRunWithinIt) {

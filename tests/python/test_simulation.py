@@ -44,14 +44,17 @@ def test_other_integrators_and_bad_options(arm):
         flatsos.simulate_plan(plan, reports=0)
     with pytest.raises(ValueError, match="max_steps"):
         flatsos.simulate_plan(plan, max_steps=-1)
-    # Stopped at the step limit: the rows so far, the reason, not completed.
+    # Stopped at the step limit, exactly: the report rows so far, a last row where it stopped,
+    # the reason, not completed.
     stopped = flatsos.simulate_plan(plan, max_steps=100)
     assert stopped["step_limit_reached"] and stopped["finite"] and not stopped["completed"]
-    assert "the step limit" in stopped["message"] and stopped["integrator_steps"] >= 100
+    assert "the step limit" in stopped["message"] and stopped["integrator_steps"] == 100
     assert 1 < len(stopped["time"]) < 301 and stopped["q"].shape == (len(stopped["time"]), 2)
     full = flatsos.simulate_plan(plan)
     assert full["completed"] and not full["step_limit_reached"]
-    np.testing.assert_array_equal(stopped["q"], full["q"][:len(stopped["time"])])
+    reported = len(stopped["time"]) - 1
+    np.testing.assert_array_equal(stopped["q"][:reported], full["q"][:reported])
+    assert full["time"][reported - 1] < stopped["time"][-1] < full["time"][reported]
     infeasible = scenario.plan(model, torque_pieces=1, torque_degree=0)
     with pytest.raises(ValueError, match="nothing to simulate"):
         flatsos.simulate_plan(infeasible)

@@ -3,12 +3,12 @@
 #include <cmath>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 namespace flatsos::plugin {
 
 namespace {
-// Thrown from the report callback to leave the stepping loop at the step limit.
-struct StepLimitReached {};
+constexpr double kMaxReports = 1e8;  // rows of a table: 1e8 rows of the arm's are some 30 GB
 }  // namespace
 
 bool all_states_finite(const SimTK::State& s) {
@@ -39,21 +39,23 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
   const auto append_rows = [&](const SimTK::State& s) {
     append_state_row(model, s, result.states);
     append_controls_row(model, s, result.controls);
-    // At the end the run is complete, however many steps it took.
-    if (o.max_steps > 0 && stepper->stepsTaken() >= o.max_steps && s.getTime() < t_end) throw StepLimitReached{};
   };
   append_rows(stepper->state());
 
+  if (o.duration_s / o.report_interval_s > kMaxReports)
+    throw std::invalid_argument("simulation: a duration of " + std::to_string(o.duration_s) + " s reported every " +
+                                std::to_string(o.report_interval_s) + " s is more than 1e8 rows");
+  stepper->setStepLimit(o.max_steps);  // at the end the run is complete, however many steps it took
   const auto reports = static_cast<long>(std::ceil(o.duration_s / o.report_interval_s - 1e-9));
   std::vector<double> times;
   for (long k = 1; k <= reports; ++k) times.push_back(t0 + std::min(o.duration_s, static_cast<double>(k) * o.report_interval_s));
-  try {
-    if (!stepper->advanceTo(t_end, times, append_rows)) {
-      result.finite = false;
-      result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
-                       " s: a state became non-finite or the step size collapsed";
-    }
-  } catch (const StepLimitReached&) {
+  const bool reached_the_end = stepper->advanceTo(t_end, times, append_rows);
+  if (!reached_the_end && !stepper->stepLimitReached()) {
+    result.finite = false;
+    result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) +
+                     " s: a state became non-finite or the step size collapsed";
+  } else if (!reached_the_end) {
+    append_rows(stepper->state());  // the tables end where the run stopped
     result.step_limit_reached = true;
     result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) + " s of " +
                      std::to_string(t_end) + " s after " + std::to_string(stepper->stepsTaken()) +

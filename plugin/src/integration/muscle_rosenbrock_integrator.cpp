@@ -259,6 +259,7 @@ bool MuscleRosenbrockIntegrator::advanceUnchecked(double t_end, const std::vecto
   if (!initialized_) throw std::logic_error("muscle Rosenbrock integrator: advanceTo before initialize");
   std::size_t next_report = 0;  // the times are in (now, t_end], ascending (checked by Stepper::advanceTo)
   while (state_.getTime() < t_end) {
+    if (stepLimitReached()) return false;
     const double t = state_.getTime(), remaining = t_end - t;
     if (!f0_valid_) {
       // Not finite at the start of the step: no step size helps.

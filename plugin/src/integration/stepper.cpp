@@ -1,5 +1,7 @@
 #include "flatsos/plugin/integration/stepper.hpp"
 
+#include <algorithm>
+
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -30,15 +32,19 @@ class SimbodyStepper final : public Stepper {
     try {
       // The first stepTo after initialize() only reports the start of the interval without
       // advancing: step until t is really reached.
-      while (integ_->getTime() < t && all_states_finite(integ_->getState()))
-        if (integ_->stepTo(t) == SimTK::Integrator::EndOfSimulation) break;
+      // stepTo returns after every internal step, so that a step limit is kept exactly (CPodes
+      // reads a limit on internal steps only when it starts). Always, not only with a limit: the
+      // same run with and without one is the same to the bit (measured: no slower).
+      integ_->setReturnEveryInternalStep(true);
+      while (integ_->getTime() < t && all_states_finite(integ_->getState()) && !stepLimitReached()) {
+        const auto status = integ_->stepTo(t);
+        count();
+        if (status == SimTK::Integrator::EndOfSimulation) break;
+      }
     } catch (const std::exception&) {
       failed = true;  // StepFailed (step size collapsed) or the model threw: the contract is false
     }
-    steps_ += integ_->getNumStepsTaken() - counted_;
-    counted_ = integ_->getNumStepsTaken();
-    attempts_ += integ_->getNumStepsAttempted() - counted_attempts_;
-    counted_attempts_ = integ_->getNumStepsAttempted();
+    count();
     return !failed && all_states_finite(integ_->getState()) && integ_->getTime() >= t;
   }
   const SimTK::State& state() const override { return pending_ ? changed_ : integ_->getState(); }
@@ -60,6 +66,13 @@ class SimbodyStepper final : public Stepper {
   SimTK::State changed_;
   bool pending_ = false;  // changed_ holds edits not yet handed to the integrator
   long steps_ = 0, counted_ = 0, attempts_ = 0, counted_attempts_ = 0;
+
+  void count() {
+    steps_ += integ_->getNumStepsTaken() - counted_;
+    counted_ = integ_->getNumStepsTaken();
+    attempts_ += integ_->getNumStepsAttempted() - counted_attempts_;
+    counted_attempts_ = integ_->getNumStepsAttempted();
+  }
 };
 }  // namespace
 

@@ -65,6 +65,11 @@ class Stepper {
   virtual long stepsTaken() const = 0;
   /// Steps tried since construction, rejected ones included.
   virtual long stepsAttempted() const = 0;
+  /// At most this many steps taken in all (0: no limit): an advance that reaches it stops short
+  /// of its target time and returns false, with stepLimitReached() true.
+  void setStepLimit(long steps) { step_limit_ = steps; }
+  bool stepLimitReached() const { return step_limit_ > 0 && stepsTaken() >= step_limit_; }
+  long stepLimit() const { return step_limit_; }
 
  protected:
   /// advanceTo(t) after the checks.
@@ -72,6 +77,9 @@ class Stepper {
   /// advanceTo(t_end, report_times, report) after the checks; the default steps to each report
   /// time.
   virtual bool advanceUnchecked(double t_end, const std::vector<double>& report_times, const Report& report);
+
+ private:
+  long step_limit_ = 0;
 };
 
 /// A stepper for `system` whose muscles are `muscles` (used by the Rosenbrock method only).
