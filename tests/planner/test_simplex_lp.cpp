@@ -3,6 +3,8 @@
 // exactly, honours both row bounds and "no bound" (1e19), and rejects bad data by name.
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include <random>
 
 #include "flatsos/planner/numerics/simplex_lp.hpp"
@@ -99,6 +101,15 @@ TEST(SimplexLp, BadDataIsRejected) {
   bad = lp;
   bad.row_lower.resize(2);
   EXPECT_THROW(fpl::solve_linear_program_simplex(bad), std::invalid_argument);
+  // Clp aborts the process on a cost of 1e25 (an assertion): refused before, naming the scale.
+  bad = lp;
+  bad.cost[0] = 1e25;
+  try {
+    fpl::solve_linear_program_simplex(bad);
+    ADD_FAILURE() << "accepted a cost of 1e25";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("out of range"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SimplexLp, SparseAndDenseFormsGiveTheSameOptimum) {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <ClpSimplex.hpp>
@@ -34,12 +35,19 @@ Eigen::VectorXd clp_bounds(const Eigen::VectorXd& v) {
   return out;
 }
 
+constexpr double kMaxClpCost = 1e20;
+
 void require_consistent(Eigen::Index n, Eigen::Index rows, Eigen::Index g_rows, Eigen::Index g_cols, const Eigen::VectorXd& cost,
                         const Eigen::VectorXd& rl, const Eigen::VectorXd& ru, const Eigen::VectorXd& xl, const Eigen::VectorXd& xu) {
   if (g_cols != n || g_rows != rows || rl.size() != rows || ru.size() != rows || xl.size() != n || xu.size() != n)
     throw std::invalid_argument("simplex LP: inconsistent sizes");
   if (!cost.allFinite() || rl.hasNaN() || ru.hasNaN() || xl.hasNaN() || xu.hasNaN())
     throw std::invalid_argument("simplex LP: NaN or infinite data");
+  // Clp aborts the process (an assertion) on a cost of 1e25 or more.
+  if (cost.size() > 0 && cost.cwiseAbs().maxCoeff() >= kMaxClpCost)
+    throw std::invalid_argument("simplex LP: a cost of " + std::to_string(cost.cwiseAbs().maxCoeff()) +
+                                " is beyond the solver's range (1e20): the problem's scale (its duration, "
+                                "forces or weights) is out of range");
 }
 
 unsigned char clp_status(BasisStatus s) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iterator>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "flatsos/plugin/integration/actuation_delay.hpp"
@@ -12,6 +13,8 @@
 namespace flatsos::plugin {
 
 namespace {
+
+constexpr double kMaxPeriods = 1e9;  // 1.6 years at 50 ms
 
 // Advances `stepper` to t_end through `times` (see Stepper::advanceTo), stopping where a delayed
 // command reaches the muscles before t_end to set it (one due at t_end is set at the next
@@ -40,6 +43,9 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
   if (!(o.control_period_s > 0.0) || !std::isfinite(o.control_period_s))
     throw std::invalid_argument("closed loop: control period must be > 0 s");
   if (o.reports_per_period < 1) throw std::invalid_argument("closed loop: need at least one report per period");
+  if (o.duration_s / o.control_period_s > kMaxPeriods)  // the period count must fit an int
+    throw std::invalid_argument("closed loop: a duration of " + std::to_string(o.duration_s) + " s is more than " +
+                                std::to_string(static_cast<long>(kMaxPeriods)) + " control periods");
   ClosedLoopResult out;
   out.states = make_state_table(plant, "simulation");
   out.controls = make_controls_table(plant, "simulation_controls");
