@@ -11,7 +11,7 @@ fuzzer=$1 runs=$2; shift 2
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 mkdir "$tmp/corpus"
 while (($#)) && [[ $1 != -- ]]; do
-  if [[ -d $1 ]]; then cp "$1"/* "$tmp/corpus/"; else cp "$1" "$tmp/corpus/"; fi
+  if [[ -d $1 ]]; then find "$1" -maxdepth 1 -type f -exec cp {} "$tmp/corpus/" \;; else cp "$1" "$tmp/corpus/"; fi
   shift
 done
 if (($#)); then shift; fi
