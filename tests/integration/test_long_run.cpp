@@ -171,3 +171,20 @@ TEST(LongRun, ADurationOfMoreThanABillionPeriodsIsRefused) {
     EXPECT_NE(std::string(e.what()).find("control periods"), std::string::npos) << e.what();
   }
 }
+
+// Without the history a failed run still says when its first plan failed and why, as with it.
+TEST(LongRun, TheFirstFailedPlanIsNamedWithoutTheHistoryToo) {
+  std::vector<std::string> sentences;
+  for (const bool history : {true, false}) {
+    flatsos::test::RecedingHorizonScenario rh;
+    rh.options.plan.target_q_rad = Eigen::Vector2d(deg(80), deg(170));  // beyond the muscles
+    rh.options.keep_history = history;
+    const auto outcome = rh.run(rh.loop(0.3, fp::IntegratorKind::MuscleRosenbrock, 1e-5));
+    ASSERT_GT(outcome.controller->planFailures(), 0);
+    EXPECT_EQ(outcome.controller->firstFailureTime(), 0.0);
+    EXPECT_FALSE(outcome.controller->firstFailureMessage().empty());
+    sentences.push_back(fpl::plan_failures_sentence(*outcome.controller));
+  }
+  EXPECT_NE(sentences[1].find("the first at t = 0 s: "), std::string::npos) << sentences[1];
+  EXPECT_EQ(sentences[0], sentences[1]);
+}

@@ -234,6 +234,19 @@ void RecedingHorizonController::planStep(const SimTK::State& state, double t, Re
   }
 }
 
+void RecedingHorizonController::countStep(const RecedingHorizonRecord& rec, bool have_excitations, bool plan_not_finite) {
+  if (rec.status != SolveStatus::Solved && ++plan_failures_ == 1) {  // allocates once, at the first failure
+    first_failure_time_s_ = rec.time_s;
+    first_failure_message_ = rec.message;
+  }
+  if (rec.status != SolveStatus::Solved && !plan_not_finite) ++faults_.solver_failures;
+  if (rec.used_previous_plan) ++faults_.fallbacks;
+  if (!have_excitations) ++faults_.steps_without_plan;
+  clamped_samples_ += rec.clamped_samples;
+  if (rec.bounds_imposed) ++bounded_steps_;
+  ++steps_;
+}
+
 const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state) {
   plugin::measure_joints(*plant_, state, exact_);
   return step(state, exact_);
@@ -323,13 +336,7 @@ const RecedingHorizonRecord& RecedingHorizonController::step(SimTK::State& state
   } else {
     rec.plan.alpha.resize(0);  // no plan in use: the muscles keep their current inputs
   }
-  if (rec.status != SolveStatus::Solved) ++plan_failures_;
-  if (rec.status != SolveStatus::Solved && !plan_not_finite) ++faults_.solver_failures;
-  if (rec.used_previous_plan) ++faults_.fallbacks;
-  if (!have_excitations) ++faults_.steps_without_plan;
-  clamped_samples_ += rec.clamped_samples;
-  if (rec.bounds_imposed) ++bounded_steps_;
-  ++steps_;
+  countStep(rec, have_excitations, plan_not_finite);
   previous_q_ = q_, previous_qd_ = qd_, previous_qdd_ = qdd_;
   rec.wall_seconds = wall.seconds();
   worst_step_s_ = std::max(worst_step_s_, rec.wall_seconds);

@@ -41,10 +41,8 @@ std::vector<plugin::StoTable> prediction_tables(const RecedingHorizonController&
 std::string plan_failures_sentence(const RecedingHorizonController& controller) {
   std::ostringstream why;
   why << controller.planFailures() << " of " << controller.steps() << " plans failed (the previous plan's tail ran instead)";
-  const auto& history = controller.history();
-  const auto first = std::find_if(history.begin(), history.end(),
-                                  [](const RecedingHorizonRecord& r) { return r.status != SolveStatus::Solved; });
-  if (first != history.end()) why << ", the first at t = " << first->time_s << " s: " << first->message;
+  if (controller.firstFailureTime() >= 0.0)
+    why << ", the first at t = " << controller.firstFailureTime() << " s: " << controller.firstFailureMessage();
   return why.str();
 }
 

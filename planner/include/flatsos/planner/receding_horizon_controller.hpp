@@ -158,6 +158,9 @@ class RecedingHorizonController final : public plugin::Controller {
   const RecedingHorizonRecord& last() const { return record_; }
   int steps() const { return steps_; }
   int planFailures() const { return plan_failures_; }
+  /// The first failed plan's time and message (kept without the history too; time -1: none).
+  double firstFailureTime() const { return first_failure_time_s_; }
+  const std::string& firstFailureMessage() const { return first_failure_message_; }
   const ControllerFaults& faults() const { return faults_; }
   /// The longest control step so far (observer, plan, excitations), s.
   double worstStepSeconds() const { return worst_step_s_; }
@@ -197,6 +200,8 @@ class RecedingHorizonController final : public plugin::Controller {
   // Whether this step's plan is too late to be used (measured or injected).
   bool missedDeadline(double plan_seconds);
   // Gives the muscles (and the observer's estimate of them) the excitations of this period.
+  /// The step's counts: failures (and the first one's time and message), faults, clamps.
+  void countStep(const RecedingHorizonRecord& rec, bool have_excitations, bool plan_not_finite);
   void applyExcitations(SimTK::State& state, double t);
   // Inverse-map excitations of `plan` over the period from t into excitations_ (samples x
   // muscles); false when they are not finite (the plan left the valid domain).
@@ -213,6 +218,8 @@ class RecedingHorizonController final : public plugin::Controller {
   RecedingHorizonRecord record_;
   std::vector<RecedingHorizonRecord> history_;
   int steps_ = 0, plan_failures_ = 0, clamped_samples_ = 0, bounded_steps_ = 0;
+  double first_failure_time_s_ = -1.0;
+  std::string first_failure_message_;
   ControllerFaults faults_;
   int miss_run_ = 0;
   double worst_step_s_ = 0.0;
@@ -243,7 +250,7 @@ struct RecedingHorizonRun {
   /// it took effect the joints came within the tolerance and stayed there until the next; -1: never.
   std::vector<double> setpoint_settling_s;
   /// Why the task failed, one sentence each: the run became non-finite, never settled, or some
-  /// plans failed (the first one's time and message, when the controller keeps its history).
+  /// plans failed (the first one's time and message).
   /// Empty: the task (reach the target, stay within the tolerance, every plan solved) succeeded.
   std::vector<std::string> failures;
   bool success() const { return failures.empty(); }
@@ -253,8 +260,8 @@ RecedingHorizonRun run_receding_horizon(RecedingHorizonController& controller, c
                                         const plugin::ClosedLoopOptions& options,
                                         double settle_tolerance_rad = 3.14159265358979323846 / 180.0);
 
-/// "N of M plans failed ...", with the first failure's time and message when the controller
-/// keeps its history: a run's failure sentence (run_receding_horizon, run_tracking).
+/// "N of M plans failed ...", with the first failure's time and message: a run's failure
+/// sentence (run_receding_horizon, run_tracking).
 std::string plan_failures_sentence(const RecedingHorizonController& controller);
 
 /// The predicted joint paths of the controller's history (see RecedingHorizonRun::predictions).
