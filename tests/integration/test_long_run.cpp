@@ -15,18 +15,11 @@
 
 #include "flatsos/planner/step_time_histogram.hpp"
 #include "rh_scenario.hpp"
+#include "under_asan.hpp"
 
 namespace fp = flatsos::plugin;
 namespace fpl = flatsos::planner;
 using flatsos::test::deg;
-
-#if defined(__SANITIZE_ADDRESS__)  // GCC
-#define FLATSOS_UNDER_ASAN 1
-#elif defined(__has_feature)  // Clang
-#if __has_feature(address_sanitizer)
-#define FLATSOS_UNDER_ASAN 1
-#endif
-#endif
 
 namespace {
 

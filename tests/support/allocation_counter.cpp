@@ -4,13 +4,7 @@
 #include <cstddef>
 #include <new>
 
-#if defined(__SANITIZE_ADDRESS__)  // GCC
-#define FLATSOS_UNDER_ASAN 1
-#elif defined(__has_feature)      // Clang
-#if __has_feature(address_sanitizer)
-#define FLATSOS_UNDER_ASAN 1
-#endif
-#endif
+#include "under_asan.hpp"
 
 #if defined(FLATSOS_UNDER_ASAN)
 // AddressSanitizer owns malloc: nothing is replaced and nothing is counted.
