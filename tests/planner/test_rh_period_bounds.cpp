@@ -159,6 +159,38 @@ TEST(RecedingHorizonStepBounds, InfeasibleBoundsAreReportedWithTheMuscleAndTime)
   EXPECT_NE(bounded.message.find(" s: activation "), std::string::npos) << bounded.message;
 }
 
+TEST(RecedingHorizonStepBounds, ABoundsLpStuckAtALocalStationaryPointIsRestarted) {
+  // The seated knee from rest to near its flexion limit: from the SLP's optimum (most flat outputs
+  // at their reserve) the bounds' sequential LP settled 0.005 below vastus lateralis' activation
+  // floor, in co-contraction, at each of these starts (an infeasible verdict, 1 step in 12000 of a
+  // 10-minute run); feasible flat outputs exist there. Each step must now come out inside.
+  const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
+  const fpl::FlatOutputMap flat(model);
+  fp::ModelWorkspace ws = flat.makeWorkspace();
+  fpl::RecedingHorizonOptions o;
+  o.target_q_rad = Eigen::VectorXd::Constant(1, deg(100.72));
+  o.reserves_N = Eigen::VectorXd::Constant(13, 1.0);
+  const auto& b = o.excitation_bounds;
+  for (double start_deg : {94.1, 94.3, 94.5, 94.8}) {
+    SCOPED_TRACE(start_deg);
+    const auto step = fpl::plan_receding_horizon_step(flat, ws, Eigen::VectorXd::Constant(1, deg(start_deg)),
+                                                      Eigen::VectorXd::Zero(1), o);
+    ASSERT_EQ(step.status, fpl::SolveStatus::Solved) << step.message;
+    ASSERT_TRUE(step.bounds_imposed);
+    fpl::PlanExcitationScratch scratch;
+    Eigen::MatrixXd n, a;
+    ASSERT_TRUE(fpl::sample_plan_excitations(flat, ws, step.path, step.alpha(), step.torque_offset_N_m, 0.0,
+                                             b.period_s / (b.samples - 1), b.samples, scratch, n, &a));
+    for (int j = 0; j < flat.numMuscles(); ++j)
+      EXPECT_GE(a.col(j).minCoeff(), model->muscle(j).getParameters().activation_floor) << "muscle " << j;
+    EXPECT_LE(a.maxCoeff(), 1.0);
+    EXPECT_GE(n.minCoeff(), 0.0);
+    EXPECT_LE(n.maxCoeff(), 1.0);
+    EXPECT_GE((step.reserve_rows * step.alpha() - step.bound_N).minCoeff(), -1e-6);  // reserves, N
+    EXPECT_GE(step.alpha().minCoeff(), 0.0);
+  }
+}
+
 TEST(RecedingHorizonStepBounds, BadBoundOptionsAreNamed) {
   PaperFirstStep s;
   auto rejects = [&](auto spoil, const std::string& field) {

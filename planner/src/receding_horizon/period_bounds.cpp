@@ -63,6 +63,17 @@ std::string domain_violation(const FlatOutputMap& flat, const RecedingHorizonSte
 
 }  // namespace
 
+namespace {
+// The bounds' sequential LP from alpha (moved to where it ends), in a trust box a tenth of its
+// size, restarted from the step's last LP basis.
+SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const NonlinearRows& rows, int max_iterations,
+                              RecedingHorizonStep& step, Eigen::VectorXd& alpha) {
+  double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
+  return solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis,
+                                {max_iterations, kBoundsLpRelativeDecrease});
+}
+}  // namespace
+
 std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHorizonStep& step, const TorqueJetGrid& grid,
                                     double h_s, int count) {
   const int m = flat.numMuscles(), p = flat.numFlatOutputs();
@@ -136,20 +147,32 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
   const SequentialLpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
   const NonlinearRows rows = bound_rows_of(flat, points, activation_minima(flat, 0.0), kSampleMargin);
+  auto violation = [&](const Eigen::VectorXd& x) { return rows(x, false).violation + reserve_violation_N(lp, x); };
+  const Eigen::VectorXd unbounded = step.slp.alpha;
   // Start from the previous bounded step's alpha when it violates less than the SLP's optimum:
   // consecutive periods' problems differ little, so a few Newton steps remain instead of the
   // whole way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3).
-  Eigen::VectorXd alpha = step.slp.alpha;
   const Eigen::VectorXd& previous = step.buffers.bounded_alpha;
-  if (previous.size() == alpha.size() && previous.allFinite()) {
-    auto violation = [&](const Eigen::VectorXd& x) {
-      return rows(x, false).violation + reserve_violation_N(lp, x);
-    };
-    if (violation(previous) < violation(alpha)) alpha = previous;
+  const bool from_previous = previous.size() == p && previous.allFinite() && violation(previous) < violation(unbounded);
+  Eigen::VectorXd alpha = from_previous ? previous : unbounded;
+  SequentialLpOutcome slp = bounds_lp(linear, rows, max_iterations, step, alpha);
+  if (!slp.converged || slp.rows_violated) {
+    // A stationary point of the violation is only local. The SLP's optimum sits on a vertex of
+    // the reserve rows (most flat outputs at their reserve), from where the iteration can walk
+    // into a co-contraction that no step leaves while feasible flat outputs exist elsewhere.
+    // Once more from the optimum raised by its mean: inside the reserves, every muscle loaded.
+    Eigen::VectorXd raised = unbounded.array() + std::max(unbounded.mean(), 1.0);
+    SequentialLpOutcome again = bounds_lp(linear, rows, max_iterations, step, raised);
+    again.iterations += slp.iterations;
+    again.lp_pivots += slp.lp_pivots;
+    if (again.converged && !again.rows_violated) {
+      slp = std::move(again);
+      alpha = raised;
+    } else {
+      slp.iterations = again.iterations;
+      slp.lp_pivots = again.lp_pivots;
+    }
   }
-  double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
-  const SequentialLpOutcome slp =
-      solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis, {max_iterations, kBoundsLpRelativeDecrease});
   step.bound_iterations = slp.iterations;
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;
