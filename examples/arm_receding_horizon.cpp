@@ -102,6 +102,11 @@ int run(int argc, char** argv) {
                  "model's muscles miss (model mismatch, pushes) follows the measurement, so that neither leaves an "
                  "offset (0: the paper's controller, --paper)")
       ->capture_default_str()->check(CLI::Range(0.0, 1000.0));
+  app.add_option("--quick-arrival", options.quick_arrival_fraction,
+                 "below 1: the fraction of the horizon a step first plans to come to rest at the set point in, "
+                 "over the whole horizon where that plan fails (errors near the target corrected faster, noise and "
+                 "model mismatch amplified as much; 1: always the whole horizon, the paper's)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   bool paper = false;
   app.add_flag("--paper", paper,
                "Richter & Warner's controller: no disturbance observer (unless --observer-gain-per-s is given)");
@@ -279,6 +284,7 @@ int run(int argc, char** argv) {
     summary["integrator_attempts"] = run.integrator_attempts;
     summary["slp_solver"] = solver;
     summary["observer_gain_per_s"] = options.disturbance_observer_gain_per_s;
+    summary["quick_arrival_fraction"] = options.quick_arrival_fraction;
     summary["plant"] = {{"model_file", plant_path.empty() ? model_path : plant_path},
                         {"strength", plant_strength},
                         {"disturbance_file", disturbance_path}};

@@ -81,3 +81,24 @@ def test_the_programs_set_points_file_is_pythons_setpoints(arm, build_dir, tmp_p
                               "--out", str(tmp_path / "refused")], capture_output=True, text=True)
     assert refused.returncode == 1 and "no column for joint 'elbow'" in refused.stderr
     assert not (tmp_path / "refused").exists()
+
+
+def test_quick_arrival_gives_the_programs_run_and_a_bad_fraction_is_named(arm, build_dir, tmp_path):
+    model, _ = arm
+    run = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 2.0, quick_arrival=0.5)
+    program = subprocess.run([str(build_dir / "bin" / "arm_receding_horizon"), "--quick-arrival", "0.5",
+                              "--out", str(tmp_path)], capture_output=True, text=True)
+    assert program.returncode == 0, program.stderr
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert run["success"] and run["settling_time"] == summary["settling_time_s"]
+    assert summary["quick_arrival_fraction"] == 0.5
+    assert np.degrees(np.abs(run["q"][-1] - np.radians(summary["final_q_deg"])).max()) < 1e-9
+    whole = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 2.0)
+    assert run["settling_time"] < whole["settling_time"] - 0.1  # the second half of the move is quicker
+    for fraction in (0.0, 1.5):
+        try:
+            flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 0.1, quick_arrival=fraction)
+        except ValueError as e:
+            assert "quick_arrival" in str(e)
+        else:
+            raise AssertionError(f"accepted quick_arrival={fraction}")

@@ -177,7 +177,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;
   step.slp.cost_N = lp.cost.dot(alpha);
-  if (slp.converged) step.buffers.bounded_alpha = alpha;
+  if (slp.converged && !slp.rows_violated) step.buffers.bounded_alpha = alpha;  // never start from a stuck point
   if (!slp.converged) {
     step.status = SolveStatus::Failed;
     step.message = "the excitation bounds on the first period were not met: " + slp.failure;

@@ -72,6 +72,8 @@ const RecedingHorizonControllerOptions& validated(const RecedingHorizonControlle
   if (!o.plan.reference)
     detail::require_within_joint_ranges(flat.model().description(), o.plan.target_q_rad, "target joint angles");
   if (!o.planner) throw std::invalid_argument("RH controller: no planner function");
+  if (!(o.quick_arrival_fraction > 0.0 && o.quick_arrival_fraction <= 1.0))
+    throw std::invalid_argument("RH controller: quick_arrival_fraction must be in (0, 1] (1: the whole horizon always)");
   check_setpoints(o, flat);
   const DeadlineOptions& d = o.deadline;
   if (!(d.deadline_s >= 0.0) || !std::isfinite(d.deadline_s))
@@ -224,6 +226,7 @@ void RecedingHorizonController::planStep(const SimTK::State& state, double t, Re
       plan_options_.start_qdd.resize(0);
     }
   }
+  if (!plan_options_.reference) return planSetpointStep();
   options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
   if (step_.status != SolveStatus::Solved && !plan_options_.flat_start.empty()) {
     // No plan carries the muscles on from where they are: a free start, as the paper's.
@@ -232,6 +235,27 @@ void RecedingHorizonController::planStep(const SimTK::State& state, double t, Re
     plan_options_.start_qdd.resize(0);
     options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
   }
+}
+
+void RecedingHorizonController::planSetpointStep() {
+  const double horizon_s = plan_options_.horizon_s;
+  const double quick_s = std::max(options_.quick_arrival_fraction * horizon_s, options_.control_period_s);
+  const Eigen::VectorXd& target = plan_options_.target_q_rad;
+  const double largest_error = (q_ - target).cwiseAbs().maxCoeff();
+  if (quick_target_.size() != target.size() || quick_target_ != target) {
+    // A new set point: its first half is too fast a transfer for the quick arrival (where a
+    // failed attempt costs several times a step), its second half may be.
+    quick_target_ = target;
+    quick_retry_below_rad_ = 0.5 * largest_error;
+  }
+  if (quick_s < horizon_s && largest_error < quick_retry_below_rad_) {
+    plan_options_.horizon_s = quick_s;
+    options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+    plan_options_.horizon_s = horizon_s;
+    if (step_.status == SolveStatus::Solved) return;
+    quick_retry_below_rad_ = 0.5 * largest_error;
+  }
+  options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
 }
 
 void RecedingHorizonController::countStep(const RecedingHorizonRecord& rec, bool have_excitations, bool plan_not_finite) {

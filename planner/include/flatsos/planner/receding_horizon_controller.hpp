@@ -96,6 +96,15 @@ struct RecedingHorizonControllerOptions {
   /// times the model's strength (docs/method/receding_horizon.md), and leaves a plant equal to
   /// the model as the paper's controller runs it.
   double disturbance_observer_gain_per_s = 40.0;
+  /// Below 1: a set point's step first plans to come to rest at the target in this fraction of
+  /// the horizon, and over the whole horizon only when that plan is not solved (too fast a
+  /// transfer for the muscles). The rest cubic over a time T acts on an error like a PD law of
+  /// stiffness 6/T^2 and damping 4/T, so a quick arrival corrects errors and pushes near the
+  /// target faster, and amplifies measurement noise and model mismatch as much (see
+  /// docs/reliability.md). Quick plans are tried once the error is half of what it was when the
+  /// set point changed, and after a failed one once it has halved again. In (0, 1]; never
+  /// shorter than the control period. 1: the paper's cubic over the whole horizon.
+  double quick_arrival_fraction = 1.0;
   /// Keep every period's record in history() (for analysis and prediction_table). Each record
   /// copies its plan: a few heap allocations per period; off, only last() is kept and the loop
   /// allocates nothing.
@@ -193,6 +202,9 @@ class RecedingHorizonController final : public plugin::Controller {
   // Plans this period's step into step_: a tracking step from the muscles' state, and when that
   // start is refused or its plan fails, again with a free start (said in rec).
   void planStep(const SimTK::State& state, double t, RecedingHorizonRecord& rec);
+  // A set point's step: over the quick arrival first where allowed (quick_arrival_fraction),
+  // else, or when that plan fails, over the whole horizon.
+  void planSetpointStep();
   // Takes the measurement into q_, qd_, qdd_ (holding the last valid one when it is not finite).
   void takeMeasurement(const plugin::JointMeasurement& measured, RecedingHorizonRecord& rec);
   // Updates the observer from the measured motion (q_, qd_, qdd_) at time t.
@@ -233,6 +245,8 @@ class RecedingHorizonController final : public plugin::Controller {
   RecedingHorizonStep step_;
   Eigen::VectorXd q_, qd_, qdd_, measured_torque_, muscle_torque_;
   Eigen::VectorXd previous_q_, previous_qd_, previous_qdd_;  ///< measured at the previous step
+  Eigen::VectorXd quick_target_;  ///< the set point the quick arrival's state below refers to
+  double quick_retry_below_rad_ = 0.0;  ///< a quick plan is tried while the largest joint error is below this
   PlanExcitationScratch excitation_scratch_;
   Eigen::MatrixXd excitations_;  ///< samples x muscles of the period being planned
   Jet start_joint_jet_, start_flat_jet_;  ///< the plan in use at the step's time: N x 4, p x 3
