@@ -22,8 +22,11 @@ namespace {
 
 class Pulse final : public fp::ExcitationSignal {
  public:
-  Pulse(double start_s, double width_s, double value) : start_s_(start_s), width_s_(width_s), value_(value) {}
-  double value(double t) const override { return t >= start_s_ && t < start_s_ + width_s_ ? value_ : 0.0; }
+  Pulse(double start_s, double width_s, double value)
+      : start_s_(start_s), width_s_(width_s), value_(value) {}
+  double value(double t) const override {
+    return t >= start_s_ && t < start_s_ + width_s_ ? value_ : 0.0;
+  }
 
  private:
   double start_s_, width_s_, value_;
@@ -31,12 +34,14 @@ class Pulse final : public fp::ExcitationSignal {
 
 // Seconds after `after_s` until every joint is within 1 deg of the target and stays (the
 // states' reports, every 10 ms); infinity when the run ends outside.
-double back_within_1_deg(const fp::StoTable& states, double after_s, const Eigen::VectorXd& target_rad) {
+double back_within_1_deg(const fp::StoTable& states, double after_s,
+                         const Eigen::VectorXd& target_rad) {
   double last_outside = after_s;
   for (const auto& row : states.rows) {
     if (row[0] < after_s) continue;
     for (Eigen::Index j = 0; j < target_rad.size(); ++j)
-      if (std::abs(row[static_cast<std::size_t>(1 + 2 * j)] - target_rad[j]) > deg(1)) last_outside = row[0];
+      if (std::abs(row[static_cast<std::size_t>(1 + 2 * j)] - target_rad[j]) > deg(1))
+        last_outside = row[0];
   }
   if (last_outside >= states.rows.back()[0]) return std::numeric_limits<double>::infinity();
   return last_outside - after_s;
@@ -84,8 +89,9 @@ TEST(QuickArrival, TheFirstHalfOfAMoveAndAfterAFailedQuickPlanUseTheWholeHorizon
   auto calls = std::make_shared<std::vector<Call>>();
   auto refused = std::make_shared<bool>(false);
   const Eigen::VectorXd target = rh.options.plan.target_q_rad;
-  rh.options.planner = [calls, refused, target](const fpl::FlatOutputMap& f, fp::ModelWorkspace& w, const Eigen::VectorXd& q,
-                                                const Eigen::VectorXd& qd, const fpl::RecedingHorizonOptions& o,
+  rh.options.planner = [calls, refused, target](const fpl::FlatOutputMap& f, fp::ModelWorkspace& w,
+                                                const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                                const fpl::RecedingHorizonOptions& o,
                                                 fpl::RecedingHorizonStep& out) {
     calls->push_back({o.horizon_s, (q - target).cwiseAbs().maxCoeff()});
     fpl::plan_receding_horizon_step(f, w, q, qd, o, out);
@@ -104,8 +110,10 @@ TEST(QuickArrival, TheFirstHalfOfAMoveAndAfterAFailedQuickPlanUseTheWholeHorizon
     if (c.horizon_s >= 0.5) continue;
     EXPECT_DOUBLE_EQ(c.horizon_s, 0.25);
     EXPECT_LT(c.error_rad, 0.5 * move_rad);
-    if (refused_at_rad < 0.0) refused_at_rad = c.error_rad;
-    else EXPECT_LT(c.error_rad, 0.5 * refused_at_rad);
+    if (refused_at_rad < 0.0)
+      refused_at_rad = c.error_rad;
+    else
+      EXPECT_LT(c.error_rad, 0.5 * refused_at_rad);
     ++quick_calls;
   }
   ASSERT_GE(quick_calls, 2) << "the quick plan was never tried again after its refusal";
@@ -119,7 +127,8 @@ TEST(QuickArrival, AFractionOutsideZeroToOneIsRefusedNamingIt) {
       fpl::RecedingHorizonController controller(rh.flat, rh.options);
       ADD_FAILURE() << "accepted " << fraction;
     } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("quick_arrival_fraction"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("quick_arrival_fraction"), std::string::npos)
+          << e.what();
     }
   }
 }
