@@ -26,6 +26,7 @@ namespace {
 
 const std::string kDense = "dense LDL^T (flatsos)";
 const std::string kMumps = "MUMPS";
+const std::string kSparse = "sparse LDL^T (flatsos)";
 
 // Runs f under each linear solver; the process-wide choice is restored even when f throws.
 template <class F>
@@ -223,18 +224,27 @@ TEST(IpoptLinearSolvers, CollocationAgrees) {
   const fpl::JointPath path = fpl::plan_open_loop(arm.flat, s0, o).path;
   fpl::CollocationOptions co;
   co.mesh_intervals = 12;
-  auto solve = [&] {
-    auto ws = arm.flat.makeWorkspace();
-    return fpl::solve_collocation_along_path(arm.flat, ws, path, s0, o.reserves_N, co);
-  };
-  const auto dense = under(IpoptLinearSolver::DenseLdlt, solve);
-  const auto mumps = under(IpoptLinearSolver::Mumps, solve);
-  EXPECT_EQ(mumps.status, fpl::SolveStatus::Solved) << mumps.message;
-  EXPECT_EQ(dense.solver_status, mumps.solver_status);
-  EXPECT_EQ(dense.iterations, mumps.iterations);
-  EXPECT_EQ(dense.linear_solver, kDense);
-  EXPECT_EQ(mumps.linear_solver, kMumps);
-  EXPECT_NEAR(dense.cost, mumps.cost, 1e-8 * mumps.cost);
+  for (bool free : {false, true}) {
+    SCOPED_TRACE(free ? "free path" : "prescribed path");
+    auto solve = [&] {
+      auto ws = arm.flat.makeWorkspace();
+      return free ? fpl::solve_collocation_free_path(arm.flat, ws, path, s0, o.reserves_N, co)
+                  : fpl::solve_collocation_along_path(arm.flat, ws, path, s0, o.reserves_N, co);
+    };
+    const auto mumps = under(IpoptLinearSolver::Mumps, solve);
+    const auto automatic = solve();  // the collocation's rows come in time order: the sparse LDL^T
+    EXPECT_EQ(mumps.status, fpl::SolveStatus::Solved) << mumps.message;
+    EXPECT_EQ(mumps.linear_solver, kMumps);
+    EXPECT_EQ(automatic.linear_solver, kSparse);
+    EXPECT_EQ(automatic.solver_status, mumps.solver_status);
+    EXPECT_NEAR(automatic.cost, mumps.cost, 1e-8 * mumps.cost);
+    if (free) continue;
+    const auto dense = under(IpoptLinearSolver::DenseLdlt, solve);
+    EXPECT_EQ(dense.solver_status, mumps.solver_status);
+    EXPECT_EQ(dense.iterations, mumps.iterations);
+    EXPECT_EQ(dense.linear_solver, kDense);
+    EXPECT_NEAR(dense.cost, mumps.cost, 1e-8 * mumps.cost);
+  }
 }
 
 TEST(IpoptLinearSolvers, TheJointPathNewtonMethodAgrees) {

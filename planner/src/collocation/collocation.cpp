@@ -137,7 +137,7 @@ double objective_scaling(const Effort& effort, double duration_s, int muscles) {
 IpoptOutcome run_ipopt(const detail::HermiteSimpsonProblem& problem, std::vector<double> start, const CollocationOptions& o,
                        double objective_scaling_factor) {
   Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(problem, std::move(start));
-  auto app = detail::make_ipopt(o.tolerance, o.max_iterations, *nlp);
+  auto app = detail::make_ipopt(o.tolerance, o.max_iterations, *nlp, /*rows_in_time_order=*/true);
   app->Options()->SetNumericValue("obj_scaling_factor", objective_scaling_factor);
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
   IpoptOutcome out;

@@ -16,13 +16,14 @@
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "numerics/condensed_kkt.hpp"
 #include "numerics/dense_ldlt.hpp"
+#include "numerics/sparse_kkt.hpp"
 
 namespace flatsos::planner::detail {
 namespace {
 
 static_assert(std::is_same_v<ipfint, int>, "Ipopt's Fortran integer is not int: the slot's signatures differ");
 
-// Two ways to factor, chosen by the analysis and kept in ikeep[0] (ikeep lives from the analysis
+// Three ways to factor, chosen by the analysis and kept in ikeep[0] (ikeep lives from the analysis
 // to every factorization) and iw[0] (from a factorization to its solves):
 //   dense:     the whole matrix by the dense LDL^T; iw: mode, the factor's offset in the real
 //              workspace, n, then n pivots;
@@ -30,7 +31,9 @@ static_assert(std::is_same_v<ipfint, int>, "Ipopt's Fortran integer is not int: 
 //              multiplier pairs, those eliminated first (numerics/condensed_kkt.hpp); ikeep:
 //              mode, core, pairs, couplings, then the n roles; iw: mode, the factor's offset,
 //              then the condensed factor's integers.
-enum Mode : int { kDense = 0, kCondensed = 1 };
+//   sparse:    on request (set_sparse_kkt_primal_rows), the sparse LDL^T in time order; ikeep:
+//              mode, the factor's serial number, the primal rows; iw: mode, serial number.
+enum Mode : int { kDense = 0, kCondensed = 1, kSparse = 2 };
 constexpr int kHeader = 3;
 constexpr int kCondensedHeader = 2;
 constexpr int kKeepHeader = 5;  // mode, core, pairs, couplings, the analysis' serial number
@@ -79,6 +82,51 @@ ScatterPlans& scatter_plans() {
   return plans;
 }
 
+// The sparse factors, found by the serial number their analysis leaves in ikeep and their
+// factorization in iw (the factor lives here, not in Ipopt's arrays). Solves are serialized by
+// the Ipopt session lock; the most recent few are kept, and a factorization whose entry was
+// dropped analyses its pattern again.
+class SparseFactors {
+ public:
+  int add(std::unique_ptr<SparseKkt> kkt) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const int serial = next_serial_++;
+    if (next_serial_ == INT_MAX) next_serial_ = 0;
+    keep(serial, std::move(kkt));
+    return serial;
+  }
+  SparseKkt* find(int serial) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    for (auto& [s, kkt] : kept_)
+      if (s == serial) return kkt.get();
+    return nullptr;
+  }
+  SparseKkt* replace(int serial, std::unique_ptr<SparseKkt> kkt) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    SparseKkt* raw = kkt.get();
+    keep(serial, std::move(kkt));
+    return raw;
+  }
+
+ private:
+  static constexpr std::size_t kKept = 4;
+  void keep(int serial, std::unique_ptr<SparseKkt> kkt) {
+    kept_.erase(std::remove_if(kept_.begin(), kept_.end(), [&](const auto& e) { return e.first == serial; }), kept_.end());
+    kept_.emplace_back(serial, std::move(kkt));
+    if (kept_.size() > kKept) kept_.erase(kept_.begin());
+  }
+  std::mutex mutex_;
+  int next_serial_ = 0;
+  std::vector<std::pair<int, std::unique_ptr<SparseKkt>>> kept_;
+};
+
+SparseFactors& sparse_factors() {
+  static SparseFactors factors;
+  return factors;
+}
+
+thread_local int sparse_primal_rows_on_thread = 0;
+
 // A pivot column is zero when its largest entry is below this fraction of the matrix's largest:
 // only cancellation to rounding level of exactly dependent rows, as MUMPS (and MA27 with its
 // default zero-pivot threshold 0) report singular only for exact zeros. Ipopt's KKT entries
@@ -112,6 +160,15 @@ void dense_kkt_analyse(int* n, int* nz, const int* irn, const int* icn, int* /*i
       return;
     }
   ikeep[0] = kDense;
+  if (*n > kDenseKktMaxDimension && sparse_primal_rows_on_thread > 0) {
+    ikeep[0] = kSparse;
+    ikeep[2] = std::min(sparse_primal_rows_on_thread, *n);
+    ikeep[1] = sparse_factors().add(analyse_sparse_kkt(*n, *nz, irn, icn, ikeep[2]));
+    info[4] = std::max(*nz, 1);  // Ipopt's values only: the factor is kept apart
+    info[5] = kHeader;
+    *ops = 0.0;
+    return;
+  }
   if (*n > kDenseKktMaxDimension) {
     CondensedPattern p = find_eliminable_pairs(*n, *nz, irn, icn);
     const std::int64_t reals = *nz + condensed_real_workspace(p), integers = kCondensedHeader + condensed_integer_workspace(p);
@@ -182,6 +239,26 @@ void factor_condensed_into(int n, int nz, const int* irn, const int* icn, double
   info[14] = inertia.negative;
 }
 
+void factor_sparse_into(int n, int nz, const int* irn, const int* icn, const double* a, int* iw, int liw,
+                        const int* ikeep, int* maxfrt, int* info) {
+  if (liw < kHeader) {
+    info[0] = -3;
+    info[1] = kHeader;
+    return;
+  }
+  SparseKkt* kkt = sparse_factors().find(ikeep[1]);
+  if (!kkt || kkt->n != n || !same_sparse_pattern(*kkt, nz, irn, icn))
+    kkt = sparse_factors().replace(ikeep[1], analyse_sparse_kkt(n, nz, irn, icn, ikeep[2]));
+  int negative = 0;
+  const bool regular = factor_sparse_kkt(*kkt, a, negative);
+  iw[0] = kSparse;
+  iw[1] = ikeep[1];
+  *maxfrt = 1;  // Ipopt allocates the solve's scratch vector of this length; the solve needs none
+  info[0] = regular ? 0 : 3;
+  info[1] = regular ? n : n - 1;
+  info[14] = negative;
+}
+
 }  // namespace
 
 void dense_kkt_factor(int* n, int* nz, const int* irn, const int* icn, double* a, int* la, int* iw,
@@ -190,6 +267,10 @@ void dense_kkt_factor(int* n, int* nz, const int* irn, const int* icn, double* a
   std::fill(info, info + 20, 0);
   if (ikeep[0] == kCondensed) {
     factor_condensed_into(*n, *nz, irn, icn, a, *la, iw, *liw, ikeep, maxfrt, info);
+    return;
+  }
+  if (ikeep[0] == kSparse) {
+    factor_sparse_into(*n, *nz, irn, icn, a, iw, *liw, ikeep, maxfrt, info);
     return;
   }
   const int dim = *n, entries = *nz;
@@ -236,6 +317,11 @@ void dense_kkt_solve(int* n, double* a, int* /*la*/, int* iw, int* /*liw*/, doub
     solve_condensed(iw + kCondensedHeader, a + iw[1], rhs, w);
     return;
   }
+  if (iw[0] == kSparse) {
+    if (SparseKkt* kkt = sparse_factors().find(iw[1])) solve_sparse_kkt(*kkt, rhs);
+    else std::fill(rhs, rhs + *n, std::numeric_limits<double>::quiet_NaN());  // dropped: Ipopt sees the failure
+    return;
+  }
   solve_ldlt_in_place(a + iw[1], *n, iw + kHeader, rhs);
 }
 
@@ -250,6 +336,12 @@ bool claim_dense_kkt_slot() {
   }
   ++slot_claims;
   return true;
+}
+
+int set_sparse_kkt_primal_rows(int primal_rows) {
+  const int previous = sparse_primal_rows_on_thread;
+  sparse_primal_rows_on_thread = primal_rows;
+  return previous;
 }
 
 void return_dense_kkt_slot() {

@@ -21,6 +21,12 @@ bool claim_dense_kkt_slot();
 /// Returns a successful claim.
 void return_dense_kkt_slot();
 
+/// While set above 0 on a thread, the systems analysed there (above kDenseKktMaxDimension) are
+/// factored by the sparse LDL^T in time order (numerics/sparse_kkt.hpp), their first
+/// `primal_rows` indices the primal ones (Ipopt's variables and slacks). Returns the previous
+/// setting, which the caller restores (FlatsosSolveScope does).
+int set_sparse_kkt_primal_rows(int primal_rows);
+
 /// The calls as Ipopt makes them (exposed for tests of the calling convention; Ipopt's Fortran
 /// integer is int, checked where they are defined). Indices
 /// are 1-based (Fortran); entries of either triangle, duplicates summed. info has 20 entries:

@@ -83,6 +83,7 @@ std::string ipopt_linear_solver_name(IpoptLinearSolver solver) {
   switch (solver) {
     case IpoptLinearSolver::DenseLdlt: return "dense LDL^T (flatsos)";
     case IpoptLinearSolver::Mumps: return "MUMPS";
+    case IpoptLinearSolver::SparseLdlt: return "sparse LDL^T (flatsos)";
     case IpoptLinearSolver::Automatic: return "automatic";
   }
   return "unknown";
@@ -101,18 +102,20 @@ void add_linear_solver_name(std::string& names, const std::string& name) {
 
 namespace detail {
 
-FlatsosSolveScope::FlatsosSolveScope(bool holds_dense_kkt_slot) : holds_slot_(holds_dense_kkt_slot) {
+FlatsosSolveScope::FlatsosSolveScope(bool holds_dense_kkt_slot, int sparse_primal_rows)
+    : holds_slot_(holds_dense_kkt_slot), previous_sparse_primal_rows_(set_sparse_kkt_primal_rows(sparse_primal_rows)) {
   ++flatsos_solves_on_thread;
 }
 
 FlatsosSolveScope::FlatsosSolveScope(FlatsosSolveScope&& other) noexcept
-    : live_(other.live_), holds_slot_(other.holds_slot_) {
+    : live_(other.live_), holds_slot_(other.holds_slot_), previous_sparse_primal_rows_(other.previous_sparse_primal_rows_) {
   other.live_ = other.holds_slot_ = false;
 }
 
 FlatsosSolveScope::~FlatsosSolveScope() {
   if (!live_) return;
   --flatsos_solves_on_thread;
+  set_sparse_kkt_primal_rows(previous_sparse_primal_rows_);
   if (holds_slot_) return_dense_kkt_slot();
 }
 
@@ -125,29 +128,33 @@ KktDimensions kkt_dimensions(Ipopt::TNLP& problem) {
   std::vector<double> x_lower(static_cast<std::size_t>(n)), x_upper(x_lower.size());
   std::vector<double> g_lower(static_cast<std::size_t>(m)), g_upper(g_lower.size());
   if (!problem.get_bounds_info(n, x_lower.data(), x_upper.data(), m, g_lower.data(), g_upper.data()))
-    return {n + 2 * m, n + 2 * m};
+    return {n + 2 * m, n + 2 * m, n + m};
   int equalities = 0;
   for (Ipopt::Index i = 0; i < m; ++i) equalities += g_lower[static_cast<std::size_t>(i)] == g_upper[static_cast<std::size_t>(i)];
-  return {n + equalities + 2 * (m - equalities), n + equalities};
+  // Ipopt takes fixed variables out of its KKT system (fixed_variable_treatment make_parameter).
+  int fixed = 0;
+  for (Ipopt::Index i = 0; i < n; ++i) fixed += x_lower[static_cast<std::size_t>(i)] == x_upper[static_cast<std::size_t>(i)];
+  return {n + equalities + 2 * (m - equalities), n + equalities, n - fixed + (m - equalities)};
 }
 
-IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem) {
+IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem, bool rows_in_time_order) {
   static std::recursive_mutex mumps;
   IpoptLinearSolver solver = ipopt_linear_solver();
-  if (solver == IpoptLinearSolver::Automatic) {
-    const KktDimensions kkt = kkt_dimensions(problem);
-    solver = ipopt_linear_solver_for(kkt.full, kkt.condensed);
-  }
+  const KktDimensions kkt = kkt_dimensions(problem);
+  if (solver == IpoptLinearSolver::Automatic)
+    solver = rows_in_time_order && kkt.full > kDenseKktMaxDimension ? IpoptLinearSolver::SparseLdlt
+                                                                     : ipopt_linear_solver_for(kkt.full, kkt.condensed);
   std::unique_lock<std::recursive_mutex> lock(mumps);
-  // flatsos's own dense LDL^T in the slot Ipopt names ma27 (numerics/ipopt_dense_kkt.hpp), for
-  // this session only; MUMPS where the slot holds another MA27.
-  const bool dense = solver == IpoptLinearSolver::DenseLdlt && claim_dense_kkt_slot();
-  if (!dense) solver = IpoptLinearSolver::Mumps;
-  IpoptSession session{std::move(lock), FlatsosSolveScope(dense), IpoptApplicationFactory(), solver};
+  // flatsos's own LDL^T in the slot Ipopt names ma27 (numerics/ipopt_dense_kkt.hpp), for this
+  // session only; MUMPS where the slot holds another MA27.
+  const bool own = solver != IpoptLinearSolver::Mumps && claim_dense_kkt_slot();
+  if (!own) solver = IpoptLinearSolver::Mumps;
+  const int sparse_primal_rows = solver == IpoptLinearSolver::SparseLdlt ? std::max(kkt.primal, 1) : 0;
+  IpoptSession session{std::move(lock), FlatsosSolveScope(own, sparse_primal_rows), IpoptApplicationFactory(), solver};
   Ipopt::IpoptApplication* app = Ipopt::GetRawPtr(session.app);
   app->Options()->SetIntegerValue("print_level", 0);
   app->Options()->SetStringValue("sb", "yes");  // no banner
-  if (dense) {
+  if (own) {
     app->Options()->SetStringValue("linear_solver", "ma27");
     // Ipopt would ask the HSL loader for MC19 to scale the system; none is loaded.
     app->Options()->SetStringValue("linear_system_scaling", "none");

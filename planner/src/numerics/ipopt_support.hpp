@@ -24,7 +24,9 @@ namespace flatsos::planner::detail {
 /// as Ipopt's own. Movable, not copyable.
 class FlatsosSolveScope {
  public:
-  explicit FlatsosSolveScope(bool holds_dense_kkt_slot);
+  /// sparse_primal_rows > 0: the KKT systems analysed meanwhile go to the sparse LDL^T in time
+  /// order with that many primal rows (ipopt_dense_kkt.hpp), the thread's setting restored after.
+  explicit FlatsosSolveScope(bool holds_dense_kkt_slot, int sparse_primal_rows = 0);
   FlatsosSolveScope(FlatsosSolveScope&& other) noexcept;
   FlatsosSolveScope& operator=(FlatsosSolveScope&&) = delete;
   FlatsosSolveScope(const FlatsosSolveScope&) = delete;
@@ -34,6 +36,7 @@ class FlatsosSolveScope {
 
  private:
   bool live_ = true, holds_slot_ = false;
+  int previous_sparse_primal_rows_ = 0;
 };
 
 struct IpoptSession {
@@ -48,13 +51,15 @@ struct IpoptSession {
 /// A quiet Ipopt application for `problem`. Its linear solver: the process-wide choice
 /// (flatsos/planner/numerics/ipopt_linear_solver.hpp), which by default depends on the
 /// problem's KKT dimension. Initialize("") so that no stray ipopt.opt in the working directory
-/// is read.
-IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem);
+/// is read. `rows_in_time_order`: the problem's unknowns and rows come in time order (a
+/// collocation's), so that Automatic may give it the sparse LDL^T in time order.
+IpoptSession make_ipopt(double tol, int max_iter, Ipopt::TNLP& problem, bool rows_in_time_order = false);
 
 /// Dimensions of the KKT system Ipopt factors for `problem` (read from its sizes and bounds).
 struct KktDimensions {
   int full = 0;       ///< variables, a multiplier per equality row, a slack and a multiplier per other row
   int condensed = 0;  ///< variables and a multiplier per equality row (the rest eliminated first)
+  int primal = 0;     ///< variables not fixed, a slack per other row (the primal unknowns, first in Ipopt's KKT)
 };
 KktDimensions kkt_dimensions(Ipopt::TNLP& problem);
 

@@ -19,6 +19,10 @@ enum class IpoptLinearSolver {
   /// factors the dense rest (the condensed system: variables and equality rows).
   DenseLdlt,
   Mumps,  ///< MUMPS (sparse multifrontal), whatever the size
+  /// flatsos's sparse LDL^T in time order (numerics/sparse_kkt.hpp): each multiplier after the
+  /// last variable its row touches. Automatic picks it above kDenseKktMaxDimension for the
+  /// problems whose unknowns and rows come in time order (the collocation reference's).
+  SparseLdlt,
 };
 
 /// Largest KKT dimension (variables + equality rows + 2 x inequality rows) that Automatic gives
@@ -40,7 +44,8 @@ IpoptLinearSolver ipopt_linear_solver();
 /// themselves).
 IpoptLinearSolver ipopt_linear_solver_for(int kkt_dimension, int condensed_dimension);
 
-/// Name for logs and summaries: "dense LDL^T (flatsos)" or "MUMPS" ("automatic" for Automatic).
+/// Name for logs and summaries: "dense LDL^T (flatsos)", "sparse LDL^T (flatsos)" or "MUMPS"
+/// ("automatic" for Automatic).
 std::string ipopt_linear_solver_name(IpoptLinearSolver solver);
 
 /// Ipopt 3.11 reads its CPU timers (getrusage, about 120 system calls per iteration) whether or
