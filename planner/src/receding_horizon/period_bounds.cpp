@@ -61,9 +61,6 @@ std::string domain_violation(const FlatOutputMap& flat, const RecedingHorizonSte
   return "an excitation is not finite";
 }
 
-}  // namespace
-
-namespace {
 // The bounds' sequential LP from alpha (moved to where it ends), in a trust box a tenth of its
 // size, restarted from the step's last LP basis.
 SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const NonlinearRows& rows, int max_iterations,
@@ -72,6 +69,7 @@ SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const Nonlin
   return solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis,
                                 {max_iterations, kBoundsLpRelativeDecrease});
 }
+
 }  // namespace
 
 std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHorizonStep& step, const TorqueJetGrid& grid,
@@ -148,7 +146,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   const SequentialLpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
   const NonlinearRows rows = bound_rows_of(flat, points, activation_minima(flat, 0.0), kSampleMargin);
   auto violation = [&](const Eigen::VectorXd& x) { return rows(x, false).violation + reserve_violation_N(lp, x); };
-  const Eigen::VectorXd unbounded = step.slp.alpha;
+  const Eigen::VectorXd& unbounded = step.slp.alpha;  // unchanged until the end
   // Start from the previous bounded step's alpha when it violates less than the SLP's optimum:
   // consecutive periods' problems differ little, so a few Newton steps remain instead of the
   // whole way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3).
