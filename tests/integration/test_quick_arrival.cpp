@@ -132,3 +132,25 @@ TEST(QuickArrival, AFractionOutsideZeroToOneIsRefusedNamingIt) {
     }
   }
 }
+
+TEST(QuickArrival, AQuickPlanThatThrowsLeavesTheWholeHorizonToTheNextSteps) {
+  flatsos::test::RecedingHorizonScenario rh;
+  rh.options.quick_arrival_fraction = 0.5;
+  auto horizons = std::make_shared<std::vector<double>>();
+  auto thrown = std::make_shared<bool>(false);
+  rh.options.planner = [horizons, thrown](const fpl::FlatOutputMap& f, fp::ModelWorkspace& w,
+                                          const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                          const fpl::RecedingHorizonOptions& o,
+                                          fpl::RecedingHorizonStep& out) {
+    horizons->push_back(o.horizon_s);
+    if (o.horizon_s < 0.5 && !*thrown) {
+      *thrown = true;
+      throw std::runtime_error("a planner fault");
+    }
+    fpl::plan_receding_horizon_step(f, w, q, qd, o, out);
+  };
+  const auto outcome = rh.run(rh.loop(1.5));
+  ASSERT_TRUE(*thrown);
+  EXPECT_EQ(outcome.controller->planFailures(), 1);  // the step that threw, and only it
+  for (double h : *horizons) EXPECT_TRUE(h == 0.5 || h == 0.25) << h;
+}

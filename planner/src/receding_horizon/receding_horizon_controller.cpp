@@ -250,7 +250,12 @@ void RecedingHorizonController::planSetpointStep() {
   }
   if (quick_s < horizon_s && largest_error < quick_retry_below_rad_) {
     plan_options_.horizon_s = quick_s;
-    options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+    try {
+      options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+    } catch (...) {  // the next steps plan over the whole horizon again
+      plan_options_.horizon_s = horizon_s;
+      throw;
+    }
     plan_options_.horizon_s = horizon_s;
     if (step_.status == SolveStatus::Solved) return;
     quick_retry_below_rad_ = 0.5 * largest_error;
