@@ -104,8 +104,8 @@ int run(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(0.0, 1000.0));
   app.add_option("--quick-arrival", options.quick_arrival_fraction,
                  "below 1: the fraction of the horizon a step first plans to come to rest at the set point in, "
-                 "over the whole horizon where that plan fails (errors near the target corrected faster, noise and "
-                 "model mismatch amplified as much; 1: always the whole horizon, the paper's)")
+                 "while the observer finds the model explaining the motion; over the whole horizon where that plan "
+                 "fails (errors near the target corrected faster; 1: always the whole horizon, the paper's)")
       ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   bool paper = false;
   app.add_flag("--paper", paper,

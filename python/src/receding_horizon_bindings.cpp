@@ -196,7 +196,7 @@ void register_receding_horizon(py::module_& m) {
         py::arg("duration"), py::kw_only(), py::arg("qd0") = py::none(), py::arg("a0") = py::none(),
         py::arg("reserves") = 1.0, py::arg("horizon") = 0.5, py::arg("grid_points") = 11, py::arg("period") = 0.05,
         py::arg("solver") = "exact", py::arg("bounds") = true, py::arg("observer_gain") = 40.0,
-        py::arg("quick_arrival") = 1.0, py::arg("integrator") = "rosenbrock", py::arg("accuracy") = py::none(), py::arg("plant") = py::none(),
+        py::arg("quick_arrival") = 0.5, py::arg("integrator") = "rosenbrock", py::arg("accuracy") = py::none(), py::arg("plant") = py::none(),
         py::arg("settle_tolerance") = M_PI / 180.0, py::arg("disturbance") = py::none(), py::arg("noise_deg") = 0.0,
         py::arg("noise_deg_per_s") = 0.0, py::arg("seed") = 1u, py::arg("measurement_delay") = 0.0,
         py::arg("actuation_delay") = 0.0, py::arg("deadline") = 0.0, py::arg("inject_deadline_misses") = 0.0, py::arg("setpoints") = py::none(),
@@ -207,10 +207,10 @@ void register_receding_horizon(py::module_& m) {
         "Start: qd0 (rad/s, default 0) with activations a0 and tendons in static equilibrium, or (a0=None) the "
         "minimum-effort rest state for `reserves` (minimum tendon force, N, one number or one per muscle). "
         "observer_gain: the disturbance observer, 1/s (default 40: removes the offset of a "
-        "model mismatch or a push; 0: the paper's controller). quick_arrival: below 1, the fraction of the "
-        "horizon a plan first tries to come to rest at the target in, the whole horizon where that fails "
-        "(errors near the target corrected faster, noise and model mismatch amplified as much; default 1: "
-        "always the whole horizon, the paper's). plant: another flatsos.Model with the same joints and muscles to simulate instead of "
+        "model mismatch or a push; 0: the paper's controller). quick_arrival: below 1 (default 0.5), the "
+        "fraction of the horizon a plan first tries to come to rest at the target in while the observer finds "
+        "the model explaining the motion, the whole horizon where that fails (errors near the target corrected "
+        "faster; 1: always the whole horizon, the paper's). plant: another flatsos.Model with the same joints and muscles to simulate instead of "
         "`model` (model mismatch). disturbance: rows (time_s, forces per joint: N m, N along a slider) pushing "
         "the plant's joints, each held until the next row's time. noise_deg, noise_deg_per_s: standard "
         "deviations of the measured pins' angles and speeds (seed: of the noise and of injected misses); "

@@ -82,6 +82,7 @@ TEST(QuickArrival, TheFirstHalfOfAMoveAndAfterAFailedQuickPlanUseTheWholeHorizon
   // A planner that records every call's horizon and refuses the first quick plan it is asked
   // for: no quick plan until the error is half the move's, the next one only once it halved again.
   flatsos::test::RecedingHorizonScenario rh;
+  rh.options.disturbance_observer_gain_per_s = 40.0;  // quick plans need the observer
   rh.options.quick_arrival_fraction = 0.5;
   struct Call {
     double horizon_s, error_rad;
@@ -135,6 +136,7 @@ TEST(QuickArrival, AFractionOutsideZeroToOneIsRefusedNamingIt) {
 
 TEST(QuickArrival, AQuickPlanThatThrowsLeavesTheWholeHorizonToTheNextSteps) {
   flatsos::test::RecedingHorizonScenario rh;
+  rh.options.disturbance_observer_gain_per_s = 40.0;
   rh.options.quick_arrival_fraction = 0.5;
   auto horizons = std::make_shared<std::vector<double>>();
   auto thrown = std::make_shared<bool>(false);
@@ -153,4 +155,50 @@ TEST(QuickArrival, AQuickPlanThatThrowsLeavesTheWholeHorizonToTheNextSteps) {
   ASSERT_TRUE(*thrown);
   EXPECT_EQ(outcome.controller->planFailures(), 1);  // the step that threw, and only it
   for (double h : *horizons) EXPECT_TRUE(h == 0.5 || h == 0.25) << h;
+}
+
+TEST(QuickArrival, OnlyWhileTheObserverFindsTheModelExplainingTheMotion) {
+  // A plant 30 % weaker than the model: the observer's offset settles near 1.8 % of the
+  // shoulder's muscle capacity, above kTrustedOffsetOfCapacity, so quick plans stop once it has
+  // grown; without the observer none is made at all.
+  for (double gain : {40.0, 0.0}) {
+    SCOPED_TRACE(gain);
+    flatsos::test::RecedingHorizonScenario rh;
+    rh.options.disturbance_observer_gain_per_s = gain;
+    rh.options.quick_arrival_fraction = 0.5;
+    Eigen::VectorXd capacity = Eigen::VectorXd::Zero(2);
+    const Eigen::MatrixXd R = rh.model->momentArmMatrix(rh.options.plan.target_q_rad);
+    for (int j = 0; j < rh.model->numMuscles(); ++j)
+      capacity += rh.model->muscle(j).getParameters().max_isometric_force_N * R.col(j).cwiseAbs();
+    struct Call {
+      double horizon_s, offset_over_capacity;
+    };
+    auto calls = std::make_shared<std::vector<Call>>();
+    rh.options.planner = [calls, capacity](const fpl::FlatOutputMap& f, fp::ModelWorkspace& w,
+                                           const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                           const fpl::RecedingHorizonOptions& o,
+                                           fpl::RecedingHorizonStep& out) {
+      const double ratio = o.torque_offset_N_m.size()
+                               ? o.torque_offset_N_m.cwiseAbs().cwiseQuotient(capacity).maxCoeff()
+                               : 0.0;
+      calls->push_back({o.horizon_s, ratio});
+      fpl::plan_receding_horizon_step(f, w, q, qd, o, out);
+    };
+    fp::ModelDescription weak = fp::load_model_file(flatsos::test::arm_model_path());
+    for (auto& muscle : weak.muscles) muscle.parameters.max_isometric_force_N *= 0.7;
+    const auto plant = std::make_shared<const fp::MusculoskeletalModel>(std::move(weak));
+    rh.run(rh.loop(2.0, fp::IntegratorKind::MuscleRosenbrock, 1e-5), plant);
+    int quick = 0;
+    double largest_ratio = 0.0;
+    for (const Call& c : *calls) {
+      largest_ratio = std::max(largest_ratio, c.offset_over_capacity);
+      if (c.horizon_s >= 0.5) continue;
+      ++quick;
+      EXPECT_LE(c.offset_over_capacity, fpl::kTrustedOffsetOfCapacity);
+    }
+    if (gain == 0.0)
+      EXPECT_EQ(quick, 0);
+    else
+      EXPECT_GT(largest_ratio, fpl::kTrustedOffsetOfCapacity);  // the weak plant shows
+  }
 }

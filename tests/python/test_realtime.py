@@ -93,7 +93,7 @@ def test_quick_arrival_gives_the_programs_run_and_a_bad_fraction_is_named(arm, b
     assert run["success"] and run["settling_time"] == summary["settling_time_s"]
     assert summary["quick_arrival_fraction"] == 0.5
     assert np.degrees(np.abs(run["q"][-1] - np.radians(summary["final_q_deg"])).max()) < 1e-9
-    whole = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 2.0)
+    whole = flatsos.run_receding_horizon(model, np.radians([20, 20]), np.radians([80, 80]), 2.0, quick_arrival=1.0)
     assert run["settling_time"] < whole["settling_time"] - 0.1  # the second half of the move is quicker
     for fraction in (0.0, 1.5):
         try:

@@ -12,6 +12,16 @@
 namespace flatsos::planner {
 
 namespace {
+// Per joint, the torque (or force) all the model's muscles at their maximum isometric force would
+// exert about it at posture q, each on its own side: the scale the observer's offset is read on.
+Eigen::VectorXd muscle_capacity(const plugin::MusculoskeletalModel& model, const Eigen::VectorXd& q) {
+  const Eigen::MatrixXd R = model.momentArmMatrix(q);
+  Eigen::VectorXd capacity = Eigen::VectorXd::Zero(R.rows());
+  for (int j = 0; j < model.numMuscles(); ++j)
+    capacity += model.muscle(j).getParameters().max_isometric_force_N * R.col(j).cwiseAbs();
+  return capacity;
+}
+
 // The plan's joint jet at tau into `out` (its column count: the orders); from its end on the plan
 // rests at its target (the cubic's acceleration at T is not zero, a rest's is).
 
@@ -247,8 +257,9 @@ void RecedingHorizonController::planSetpointStep() {
     // failed attempt costs several times a step), its second half may be.
     quick_target_ = target;
     quick_retry_below_rad_ = 0.5 * largest_error;
+    joint_capacity_N_m_ = muscle_capacity(flat_.model(), target);
   }
-  if (quick_s < horizon_s && largest_error < quick_retry_below_rad_) {
+  if (quick_s < horizon_s && largest_error < quick_retry_below_rad_ && modelExplainsTheMotion()) {
     plan_options_.horizon_s = quick_s;
     try {
       options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
@@ -261,6 +272,12 @@ void RecedingHorizonController::planSetpointStep() {
     quick_retry_below_rad_ = 0.5 * largest_error;
   }
   options_.planner(flat_, workspace_, q_, qd_, plan_options_, step_);
+}
+
+bool RecedingHorizonController::modelExplainsTheMotion() const {
+  if (!observer_.enabled()) return false;  // no evidence either way: the whole horizon
+  const Eigen::VectorXd& missed = plan_options_.torque_offset_N_m;
+  return (missed.cwiseAbs().array() <= kTrustedOffsetOfCapacity * joint_capacity_N_m_.array()).all();
 }
 
 void RecedingHorizonController::countStep(const RecedingHorizonRecord& rec, bool have_excitations, bool plan_not_finite) {
