@@ -3,8 +3,9 @@
 //
 // Ipopt spends most of a small problem's time in its linear solver's fixed costs: Debian's MUMPS
 // costs 0.3-0.6 ms per iteration whatever the size. flatsos therefore factors small KKT systems
-// with its own dense Bunch-Kaufman LDL^T (served through Ipopt's ma27 slot for the length of its
-// own solves; no HSL code is used) and leaves large ones to MUMPS.
+// with its own dense Bunch-Kaufman LDL^T, and a collocation's banded ones with its own sparse
+// LDL^T in time order (both served through Ipopt's ma27 slot for the length of its own solves;
+// no HSL code is used), and leaves the other large ones to MUMPS.
 
 #include <string>
 
@@ -12,7 +13,9 @@ namespace flatsos::planner {
 
 enum class IpoptLinearSolver {
   /// The dense LDL^T up to kDenseKktMaxDimension, or when the condensed system is at most
-  /// kCondensedKktMaxDimension and a quarter of the whole; MUMPS otherwise (the default).
+  /// kCondensedKktMaxDimension and a quarter of the whole; above that the sparse LDL^T in time
+  /// order for problems whose unknowns and rows come in time order (the collocation's); MUMPS
+  /// otherwise (the default).
   Automatic,
   /// flatsos's dense Bunch-Kaufman LDL^T, whatever the size. Above kDenseKktMaxDimension it
   /// first eliminates each inequality row's slack and multiplier by their own 2x2 block and
