@@ -38,15 +38,6 @@ fp::ModelDescription mismatched(const Mismatch& m) {
   return d;
 }
 
-class TorquePulse : public fp::ExcitationSignal {
- public:
-  TorquePulse(double start, double width, double torque) : start_(start), width_(width), torque_(torque) {}
-  double value(double t) const override { return t >= start_ && t < start_ + width_ ? torque_ : 0.0; }
-
- private:
-  double start_, width_, torque_;
-};
-
 constexpr double kGainPerSecond = 40.0;  // the default
 
 // 3 s of the RH scenario on `plant` with the given observer gain, settling within 2 deg.
@@ -117,8 +108,8 @@ TEST(ModelMismatch, ObserverRejectsATorquePulseFasterAndCloserThanThePapersContr
   // settled within 2 deg at 1.21 s with it; 1.4e-3 deg and 1.37 s without).
   const auto plant = std::make_shared<const fp::MusculoskeletalModel>(
       fp::load_model_file(flatsos::test::arm_model_path()),
-      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<TorquePulse>(0.5, 0.1, -5.0)},  // against the shoulder
-                                           {1, std::make_shared<TorquePulse>(0.5, 0.1, 3.0)}});
+      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<flatsos::test::TorquePulse>(0.5, 0.1, -5.0)},  // against the shoulder
+                                           {1, std::make_shared<flatsos::test::TorquePulse>(0.5, 0.1, 3.0)}});
   const auto with = run(plant, kGainPerSecond);
   const auto without = run(plant, 0.0);
   std::cout << "torque pulse: final error " << with.final_error_deg << " deg with the observer (settled " << with.run.settling_time_s

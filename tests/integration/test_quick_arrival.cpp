@@ -10,7 +10,6 @@
 #include <string>
 #include <vector>
 
-#include "flatsos/plugin/force/excitation_signal.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "rh_scenario.hpp"
 
@@ -19,18 +18,6 @@ namespace fpl = flatsos::planner;
 using flatsos::test::deg;
 
 namespace {
-
-class Pulse final : public fp::ExcitationSignal {
- public:
-  Pulse(double start_s, double width_s, double value)
-      : start_s_(start_s), width_s_(width_s), value_(value) {}
-  double value(double t) const override {
-    return t >= start_s_ && t < start_s_ + width_s_ ? value_ : 0.0;
-  }
-
- private:
-  double start_s_, width_s_, value_;
-};
 
 // Seconds after `after_s` until every joint is within 1 deg of the target and stays (the
 // states' reports, every 10 ms); infinity when the run ends outside.
@@ -55,8 +42,8 @@ flatsos::test::RecedingHorizonScenario::Outcome pushed_arm(double fraction) {
   rh.options.quick_arrival_fraction = fraction;
   const auto plant = std::make_shared<const fp::MusculoskeletalModel>(
       fp::load_model_file(flatsos::test::arm_model_path()),
-      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<Pulse>(1.75, 0.1, 2.0)},
-                                           {1, std::make_shared<Pulse>(1.75, 0.1, 2.0)}});
+      std::vector<fp::ExternalJointTorque>{{0, std::make_shared<flatsos::test::TorquePulse>(1.75, 0.1, 2.0)},
+                                           {1, std::make_shared<flatsos::test::TorquePulse>(1.75, 0.1, 2.0)}});
   auto out = rh.run(rh.loop(3.25, fp::IntegratorKind::MuscleRosenbrock, 1e-5), plant);
   EXPECT_TRUE(out.run.success()) << (out.run.failures.empty() ? "" : out.run.failures.front());
   return out;

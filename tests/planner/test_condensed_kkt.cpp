@@ -13,39 +13,25 @@
 
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
 #include "numerics/condensed_kkt.hpp"
+#include "kkt_triplets.hpp"
 #include "numerics/ipopt_dense_kkt.hpp"
 
 namespace fd = flatsos::planner::detail;
 
 namespace {
 
-struct Triplets {
-  int n = 0;
-  std::vector<int> irn, icn;  // 1-based
-  std::vector<double> values;
+struct Triplets : flatsos::test::KktTriplets {
   // Adds a(i, j) (0-based) in a random triangle, sometimes split into two duplicates.
   void add(std::mt19937& rng, int i, int j, double v) {
     std::uniform_int_distribution<int> coin(0, 3);
     const bool upper = coin(rng) % 2 == 0;
     const int r = upper ? std::min(i, j) : std::max(i, j), c = upper ? std::max(i, j) : std::min(i, j);
     if (coin(rng) == 0) {
-      irn.insert(irn.end(), {r + 1, c + 1});
-      icn.insert(icn.end(), {c + 1, r + 1});
-      values.insert(values.end(), {0.25 * v, 0.75 * v});
+      KktTriplets::add(r, c, 0.25 * v);
+      KktTriplets::add(c, r, 0.75 * v);
     } else {
-      irn.push_back(r + 1);
-      icn.push_back(c + 1);
-      values.push_back(v);
+      KktTriplets::add(r, c, v);
     }
-  }
-  Eigen::MatrixXd dense() const {
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-    for (std::size_t e = 0; e < values.size(); ++e) {
-      const int i = irn[e] - 1, j = icn[e] - 1;
-      a(i, j) += values[e];
-      if (i != j) a(j, i) += values[e];
-    }
-    return a;
   }
 };
 

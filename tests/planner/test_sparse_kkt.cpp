@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "flatsos/planner/numerics/ipopt_linear_solver.hpp"
+#include "kkt_triplets.hpp"
 #include "numerics/ipopt_dense_kkt.hpp"
 #include "numerics/sparse_kkt.hpp"
 
@@ -18,24 +19,8 @@ namespace fd = flatsos::planner::detail;
 
 namespace {
 
-struct Kkt {
-  int n = 0, primal = 0;
-  std::vector<int> irn, icn;  // 1-based
-  std::vector<double> values;
-  void add(int i, int j, double v) {  // a(i, j), 0-based, in either triangle
-    irn.push_back(i + 1);
-    icn.push_back(j + 1);
-    values.push_back(v);
-  }
-  Eigen::MatrixXd dense() const {
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-    for (std::size_t e = 0; e < values.size(); ++e) {
-      const int i = irn[e] - 1, j = icn[e] - 1;
-      a(i, j) += values[e];
-      if (i != j) a(j, i) += values[e];
-    }
-    return a;
-  }
+struct Kkt : flatsos::test::KktTriplets {
+  int primal = 0;
 };
 
 // Ipopt's augmented system [W + Sigma, J^T; J, -delta] in its order (primal first) for `points`

@@ -46,4 +46,14 @@ class ConstantSignal : public plugin::ExcitationSignal {
   double v_;
 };
 
+/// A signal that is `value` over [start_s, start_s + width_s) and 0 elsewhere (a torque pulse).
+class TorquePulse : public plugin::ExcitationSignal {
+ public:
+  TorquePulse(double start_s, double width_s, double value) : start_s_(start_s), width_s_(width_s), value_(value) {}
+  double value(double t) const override { return t >= start_s_ && t < start_s_ + width_s_ ? value_ : 0.0; }
+
+ private:
+  double start_s_, width_s_, value_;
+};
+
 }  // namespace flatsos::test
