@@ -261,7 +261,8 @@ nlohmann::json plan_summary(const planner::OpenLoopPlan& plan, const planner::Fl
                               {"equalities", s.nlp_equalities},
                               {"max_certificate_residual_N", s.max_certificate_residual_N}};
   j["lp_points"] = s.lp_points;
-  j["flat_output_basis"] = {{"degree", plan.flat_output_degree}, {"spans", plan.flat_output_spans}};
+  j["flat_output_basis"] = {
+      {"degree", plan.flat_output_degree}, {"spans", plan.flat_output_spans}, {"span_growth", plan.flat_output_span_growth}};
   std::vector<double> piece_starts_s;
   for (const auto& piece : plan.torque.pieces) piece_starts_s.push_back(piece.t0_s);
   j["torque_model"] = {{"pieces", plan.torque.pieces.size()},

@@ -8,6 +8,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <Eigen/Core>
@@ -20,7 +21,9 @@
 #include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "flatsos/planner/rest_state.hpp"
+#include "flatsos/planner/task_region.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
+#include "flatsos/plugin/io/opensim_import.hpp"
 #include "flatsos/plugin/model/model_workspace.hpp"
 #include "open_loop_replay.hpp"
 
@@ -225,3 +228,90 @@ TEST(OpenLoopEffort, SquaredExcitationsWithTheJointPathFreeMatchTheCollocationsF
   EXPECT_LT(replay.max_q_error_rad, flatsos::test::deg(1e-4));
 }
 
+
+namespace {
+
+// OpenSim's arm26 flexing the elbow from 0 to 90 deg in 1 s from rest with 10 N reserves: its flat
+// outputs for the task, the start state and the options (the default basis).
+struct Arm26Transfer {
+  std::shared_ptr<const fp::MusculoskeletalModel> model;
+  std::optional<fpl::FlatOutputMap> flat;
+  fpl::MuscleState s0;
+  fpl::OpenLoopOptions options;
+};
+
+Arm26Transfer arm26_transfer(const fp::OpenSimFileOptions& file) {
+  Arm26Transfer a;
+  a.model = std::make_shared<const fp::MusculoskeletalModel>(
+      fp::import_opensim_file(std::string(FLATSOS_SOURCE_DIR) + "/models/opensim/arm26/arm26.osim", file).model);
+  const Eigen::VectorXd q0 = Eigen::Vector2d::Zero();
+  const Eigen::Vector2d target(0.0, 90.0 * M_PI / 180.0);
+  a.flat.emplace(fpl::flat_outputs_for_task(a.model, {q0, target}));
+  a.options.duration_s = 1.0;
+  a.options.target_q_rad = target;
+  a.options.reserves_N = Eigen::VectorXd::Constant(6, 10.0);
+  a.s0 = fpl::muscle_state_of(*a.model,
+                              fpl::start_state(*a.flat, q0, Eigen::Vector2d::Zero(), std::nullopt, a.options.reserves_N));
+  return a;
+}
+
+// The squared-excitation plan of the transfer: solved on uniform spans after the default graded
+// ones found none, with a warning that says so, and executable.
+fpl::OpenLoopPlan plan_arm26_squared(const Arm26Transfer& a) {
+  fpl::OpenLoopOptions o = a.options;
+  o.effort = fpl::effort_named("excitation_squared");
+  fpl::OpenLoopPlan plan = fpl::plan_open_loop(*a.flat, a.s0, o);
+  EXPECT_EQ(plan.status, fpl::SolveStatus::Solved) << plan.message;
+  if (plan.status != fpl::SolveStatus::Solved) return plan;
+  EXPECT_EQ(plan.flat_output_span_growth, 1.0);
+  EXPECT_FALSE(plan.warnings.empty());
+  if (!plan.warnings.empty()) {
+    EXPECT_NE(plan.warnings.back().find("planned again on uniform spans"), std::string::npos) << plan.warnings.back();
+  }
+  flatsos::test::expect_executable(*a.flat, plan, o.reserves_N);
+  return plan;
+}
+
+}  // namespace
+
+// OpenSim's arm26 as downloaded (Thelen 2003 muscles, wrapping paths fitted). On the graded spans
+// a nonlinear effort gets by default, the effort's sequential QP finds no plan: Thelen's
+// force-velocity slope doubles at zero fibre velocity, so the excitation, and its bounds, jump
+// where a fibre's velocity changes sign. On uniform spans the plan costs less than the linear
+// effort's muscles under the same effort and is replayed by Simbody.
+TEST(OpenLoopEffort, Arm26sSquaredExcitationsArePlannedOnUniformSpansWhereTheGradedOnesFindNone) {
+  const Arm26Transfer a = arm26_transfer({});
+  const fpl::OpenLoopPlan linear = fpl::plan_open_loop(*a.flat, a.s0, a.options);
+  ASSERT_EQ(linear.status, fpl::SolveStatus::Solved) << linear.message;
+  const fpl::OpenLoopPlan plan = plan_arm26_squared(a);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved);
+  // Recomputed by Simpson's rule: 0.249402 / 0.249365 / 0.249410 / 0.249395 s with 1000 / 3000 /
+  // 9000 / 30000 intervals (the jumps keep it from converging faster). The plan's own Gauss points
+  // (4 per segment) see the jumps as if smooth: 0.248522 s, 0.35 % below. With DeGroote-Fregly's
+  // smooth muscles (below) the two agree to 1e-6.
+  const double recomputed = squared_excitations_of(*a.flat, plan, 3000);
+  const double linears = squared_excitations_of(*a.flat, linear, 3000);
+  EXPECT_NEAR(recomputed, plan.sos.effort_value, 5e-3 * plan.sos.effort_value);
+  EXPECT_LT(recomputed, 0.9 * linears);
+  const auto replay = flatsos::test::replay_open_loop(*a.flat, a.s0, plan, 1e-10, 0.01);
+  EXPECT_TRUE(replay.sim.finite) << replay.sim.message;
+  EXPECT_LT(replay.max_q_error_rad, 1e-4 * M_PI / 180.0);
+  std::cout << "arm26, squared excitations: " << plan.sos.effort_value << " s (recomputed " << recomputed
+            << "; the linear effort's muscles " << linears << ") in " << plan.setup_seconds + plan.solve_seconds
+            << " s; Simbody replay " << replay.max_q_error_rad * 180.0 / M_PI << " deg\n";
+}
+
+// The same transfer with arm26's muscles replaced as Moco replaces them (DeGroote-Fregly 2016): on
+// the graded spans the bounded exchange keeps adding reserve points; on uniform spans the plan's
+// effort is its muscles' to 1e-5.
+TEST(OpenLoopEffort, Arm26WithDeGrooteFreglyMusclesIsPlannedOnUniformSpansWhereTheGradedOnesFindNone) {
+  fp::OpenSimFileOptions file;
+  file.degroote_fregly2016_muscles = true;
+  const Arm26Transfer a = arm26_transfer(file);
+  const fpl::OpenLoopPlan plan = plan_arm26_squared(a);
+  ASSERT_EQ(plan.status, fpl::SolveStatus::Solved);
+  const double recomputed = squared_excitations_of(*a.flat, plan, 3000);
+  EXPECT_NEAR(recomputed, plan.sos.effort_value, 1e-5 * plan.sos.effort_value);
+  std::cout << "arm26 with DeGroote-Fregly muscles, squared excitations: " << plan.sos.effort_value << " s (recomputed "
+            << recomputed << ") in " << plan.setup_seconds + plan.solve_seconds << " s\n";
+}

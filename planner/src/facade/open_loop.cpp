@@ -103,6 +103,7 @@ class OpenLoopPlanning {
     OpenLoopPlan plan;
     plan.flat_output_degree = o_.sos.flat_output_degree;
     plan.flat_output_spans = o_.sos.flat_output_spans;
+    plan.flat_output_span_growth = o_.sos.flat_output_span_growth;
     const auto& description = flat_.model().description();
     plan.warnings = plugin::joint_angle_warnings(description, initial_.q_rad, "initial joint angles");
     for (auto& w : plugin::joint_angle_warnings(description, o_.target_q_rad, "target joint angles"))
@@ -172,6 +173,29 @@ class OpenLoopPlanning {
   FlatOutputBoundary bc_;
 };
 
+// The plan in the resolved basis. The graded spans a nonlinear effort gets by default resolve its
+// optimum's first tenths of a second, but on some models (arm26's muscles) their short first spans
+// leave the bounded exchange without a plan where uniform spans find one: there, uniform spans.
+OpenLoopPlan plan_in_automatic_basis(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
+                                     const MuscleState& initial, const OpenLoopOptions& options,
+                                     const OpenLoopStudyOptions& study) {
+  const OpenLoopOptions resolved = resolve_basis(flat, options);
+  OpenLoopPlan graded = OpenLoopPlanning(flat, workspace, initial, resolved, study).plan();
+  const bool automatic_grading = options.sos.flat_output_span_growth == 0.0 && resolved.sos.flat_output_span_growth != 1.0;
+  if (graded.status == SolveStatus::Solved || !automatic_grading) return graded;
+  OpenLoopOptions uniform = options;
+  uniform.sos.flat_output_span_growth = 1.0;
+  OpenLoopPlan plan = OpenLoopPlanning(flat, workspace, initial, resolve_basis(flat, uniform), study).plan();
+  if (plan.status != SolveStatus::Solved) return graded;
+  std::ostringstream why;
+  why << "no plan on the default spans growing by " << resolved.sos.flat_output_span_growth << " (" << graded.message
+      << "): planned again on uniform spans";
+  plan.warnings.push_back(why.str());
+  plan.setup_seconds += graded.setup_seconds;  // the graded attempt's time counts too
+  plan.solve_seconds += graded.solve_seconds + graded.certify_seconds + graded.check_seconds;
+  return plan;
+}
+
 }  // namespace
 
 OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, const MuscleState& initial, const OpenLoopOptions& o) {
@@ -201,9 +225,9 @@ OpenLoopPlan plan_open_loop(const FlatOutputMap& flat, plugin::ModelWorkspace& w
     if (options.effort->tendonForceWeights())
       return plan_open_loop(flat.withEffort(options.effort), workspace, initial, rest, study);
     rest.sos.effort = options.effort;
-    return OpenLoopPlanning(flat, workspace, initial, resolve_basis(flat, rest), study).plan();
+    return plan_in_automatic_basis(flat, workspace, initial, rest, study);
   }
-  return OpenLoopPlanning(flat, workspace, initial, resolve_basis(flat, options), study).plan();
+  return plan_in_automatic_basis(flat, workspace, initial, options, study);
 }
 
 }  // namespace flatsos::planner

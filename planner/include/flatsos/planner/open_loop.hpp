@@ -109,6 +109,7 @@ struct OpenLoopPlan {
   JointPath path;                     ///< degree-8 joint polynomials, or the optimized spline (free path)
   std::optional<SplineTrajectory> Y;  ///< flat outputs (N); none unless the SOS program was solved
   int flat_output_degree = 0, flat_output_spans = 0;  ///< the basis planned in (resolve_basis)
+  double flat_output_span_growth = 1.0;               ///< its spans' growth (1: uniform)
   SosProgramResult sos;
   TorqueModel torque;
   PlanCheck check;
@@ -124,6 +125,8 @@ struct OpenLoopPlan {
 };
 
 /// Open-loop plan from `initial` to rest at options.target_q_rad in options.duration_s.
+/// With the automatic graded basis of a nonlinear effort (span growth 0 resolved to 1.06), a plan
+/// that fails there is planned again on uniform spans, and a warning says so.
 /// The initial muscle state fixes q, qd, qdd, q''' and Y, dY at t = 0 (forward map); terminal
 /// rest fixes qd..q'''' = 0 and dY = ddY = 0. Throws std::invalid_argument for bad input (sizes,
 /// NaN, T <= 0, negative reserves, initial state outside the model's valid domain); solver
