@@ -181,7 +181,8 @@ OpenLoopPlan plan_in_automatic_basis(const FlatOutputMap& flat, plugin::ModelWor
                                      const OpenLoopStudyOptions& study) {
   const OpenLoopOptions resolved = resolve_basis(flat, options);
   OpenLoopPlan graded = OpenLoopPlanning(flat, workspace, initial, resolved, study).plan();
-  const bool automatic_grading = options.sos.flat_output_span_growth == 0.0 && resolved.sos.flat_output_span_growth != 1.0;
+  const bool automatic_grading = options.sos.flat_output_span_growth == 0.0 &&
+                                 resolved.sos.flat_output_span_growth != 1.0 && resolved.sos.flat_output_spans > 1;
   if (graded.status == SolveStatus::Solved || !automatic_grading) return graded;
   OpenLoopOptions uniform = options;
   uniform.sos.flat_output_span_growth = 1.0;
