@@ -67,10 +67,11 @@ int run(int argc, char** argv) {
       ->capture_default_str()->check(flatsos::examples::positive_number());
   long max_steps = ex::kDefaultMaxIntegratorSteps;
   ex::add_max_steps_option(app, max_steps);
-  std::string integrator = "rkm";
+  std::string integrator = "auto";
   ex::add_integrator_option(app, integrator,
-                            "rkm (Runge-Kutta-Merson), bdf (CPodes) or rosenbrock (implicit in the muscles); the "
-                            "last two for stiff runs at tiny activations");
+                            "rkm (Runge-Kutta-Merson), bdf (CPodes), rosenbrock (implicit in the muscles; these two "
+                            "for stiff runs at tiny activations) or auto (rkm, bdf where the muscles are stiff at the "
+                            "start)");
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
 
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
@@ -128,7 +129,7 @@ int run(int argc, char** argv) {
     auto table = result.states;
     table.metadata = {{"model", model_path},
                       {"accuracy", ex::format(accuracy)},
-                      {"integrator", integrator},
+                      {"integrator", fp::integrator_name(result.integrator)},
                       {"integrator_steps", std::to_string(result.integrator_steps)},
                       {"success", result.completed() ? "true" : "false"}};
     if (!result.completed()) table.metadata.emplace_back("status", result.message);

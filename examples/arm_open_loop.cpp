@@ -132,10 +132,11 @@ int run(int argc, char** argv) {
   app.add_option("--accuracy", accuracy, "integrator accuracy")->capture_default_str()->check(CLI::Range(1e-14, 1e-3));
   long max_steps = ex::kDefaultMaxIntegratorSteps;
   ex::add_max_steps_option(app, max_steps);
-  std::string integrator = "rkm";
+  std::string integrator = "auto";
   ex::add_integrator_option(app, integrator,
-                            "integrator of the open-loop simulation: rkm (Runge-Kutta-Merson), bdf (CPodes) or "
-                            "rosenbrock (implicit in the muscles)");
+                            "integrator of the open-loop simulation: rkm (Runge-Kutta-Merson), bdf (CPodes), "
+                            "rosenbrock (implicit in the muscles) or auto (rkm, bdf where the muscles are stiff at "
+                            "the start)");
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
   if (const int rc = ex::parse_arguments(app, argc, argv); rc >= 0) return rc;
 
@@ -216,7 +217,7 @@ int run(int argc, char** argv) {
     summary["simulation"] = {{"success", sim.completed()},
                              {"step_limit_reached", sim.step_limit_reached},
                              {"message", sim.message},
-                             {"integrator", integrator},
+                             {"integrator", fp::integrator_name(sim.integrator)},
                              {"accuracy", accuracy},
                              {"integrator_steps", sim.integrator_steps},
                              {"wall_seconds", sim_seconds}};
@@ -237,7 +238,7 @@ int run(int argc, char** argv) {
     ex::write_json(out_dir + "/summary.json", summary);
     const double simulated_s = sim.final_state.getTime() - s.getTime();
     std::cout << "  simulated open loop " << simulated_s << (sim.completed() ? "" : " of " + ex::format(duration_s)) << " s in "
-              << sim_seconds << " s: max |q error| "
+              << sim_seconds << " s (" << fp::integrator_name(sim.integrator) << "): max |q error| "
               << err.max_q_error_rad / ex::kRadPerDeg << " deg"
               << (err.max_slider_error_m > 0.0 ? ", " + ex::format(err.max_slider_error_m) + " m along sliders" : "")
               << ", max |a error| " << err.max_activation_error

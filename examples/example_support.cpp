@@ -68,7 +68,7 @@ int parse_arguments(CLI::App& app, int argc, char** argv) {
 CLI::Option* add_integrator_option(CLI::App& app, std::string& name, const std::string& help) {
   std::vector<std::string> names;
   for (auto kind : {plugin::IntegratorKind::RungeKuttaMerson, plugin::IntegratorKind::CPodesBdf,
-                    plugin::IntegratorKind::MuscleRosenbrock})
+                    plugin::IntegratorKind::MuscleRosenbrock, plugin::IntegratorKind::Automatic})
     names.emplace_back(plugin::integrator_name(kind));
   return app.add_option("--integrator", name, help)->capture_default_str()->check(CLI::IsMember(names));
 }

@@ -55,6 +55,7 @@ py::dict simulation_result(const plugin::MusculoskeletalModel& model,
   out["step_limit_reached"] = sim.step_limit_reached;
   out["message"] = sim.message;
   out["integrator_steps"] = sim.integrator_steps;
+  out["integrator"] = plugin::integrator_name(sim.integrator);
   return out;
 }
 
@@ -143,8 +144,8 @@ constexpr const char* kResultDoc =
     "stopped, 'message' "
     "says where), 'step_limit_reached' (True: it stopped after `max_steps` integrator steps; 0: no "
     "limit), "
-    "'completed' (the whole duration), 'integrator_steps'. integrator: 'rkm', 'bdf' or "
-    "'rosenbrock'; `reports` "
+    "'completed' (the whole duration), 'integrator_steps', 'integrator' (the one used). integrator: "
+    "'rkm', 'bdf', 'rosenbrock' or 'auto' (rkm, bdf where the muscles are stiff at the start); `reports` "
     "rows after the first. Releases the GIL while it integrates.";
 
 }  // namespace
@@ -168,7 +169,7 @@ void register_simulation(py::module_& m) {
           "last. ") +
       kResultDoc;
   m.def("simulate_plan", &simulate_plan, py::arg("plan"), py::kw_only(),
-        py::arg("accuracy") = 1e-10, py::arg("integrator") = "rkm", py::arg("reports") = 300,
+        py::arg("accuracy") = 1e-10, py::arg("integrator") = "auto", py::arg("reports") = 300,
         py::arg("max_steps") = 1000000, simulate_plan_doc.c_str());
   m.def("simulate", &simulate, py::arg("model"), py::arg("q0"), py::arg("qd0"), py::arg("a0"),
         py::arg("excitation"), py::arg("duration"), py::kw_only(), py::arg("accuracy") = 1e-8,

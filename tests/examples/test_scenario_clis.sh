@@ -20,6 +20,9 @@ grep -q '"status": "infeasible"' "$tmp/box/summary.json" || { echo "FAILED: box 
 expect 2 "--integrator" -- "$ol" --integrator euler --out "$tmp/o"
 expect 0 "simulated open loop" -- "$ol" --paper --integrator rosenbrock --accuracy 1e-6 --out "$tmp/olr"
 grep -q '"integrator": "rosenbrock"' "$tmp/olr/summary.json" || { echo "FAILED: open-loop summary does not name the integrator"; fail=1; }
+# By default the integrator is chosen (auto): the elbow's muscles are not stiff, Runge-Kutta-Merson.
+expect 0 "(rkm)" -- "$ol" --model "$models/elbow_1dof.json" --out "$tmp/ola"
+grep -q '"integrator": "rkm"' "$tmp/ola/summary.json" || { echo "FAILED: the automatic choice is not named"; fail=1; }
 # A replay past its step limit fails the task, says why, and keeps what it simulated (an unstable
 # plan's explicit replay can otherwise run for hours).
 expect 2 "--max-integrator-steps" -- "$ol" --max-integrator-steps -1 --out "$tmp/o"

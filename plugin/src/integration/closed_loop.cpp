@@ -51,7 +51,7 @@ ClosedLoopResult simulate_closed_loop(const MusculoskeletalModel& plant, Control
   out.controls = make_controls_table(plant, "simulation_controls");
 
   const Stopwatch wall;
-  const auto stepper = make_stepper(plant, o.integrator, o.accuracy);
+  const auto stepper = make_stepper(plant, resolve_integrator(plant, initial, o.duration_s, o.integrator), o.accuracy);
   stepper->initialize(initial);
   const auto append_row = [&](const SimTK::State& st) {
     if (o.keep_tables) {

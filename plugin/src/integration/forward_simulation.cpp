@@ -33,7 +33,8 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
   SimulationResult result;
   result.states = make_state_table(model);
   result.controls = make_controls_table(model);
-  const auto stepper = make_stepper(model, o.integrator, o.accuracy);
+  result.integrator = resolve_integrator(model, initial, o.duration_s, o.integrator);
+  const auto stepper = make_stepper(model, result.integrator, o.accuracy);
   stepper->initialize(initial);
   const double t0 = initial.getTime(), t_end = t0 + o.duration_s;
   const auto append_rows = [&](const SimTK::State& s) {
@@ -60,7 +61,7 @@ SimulationResult simulate(const MusculoskeletalModel& model, const SimTK::State&
     result.message = "integration stopped at t = " + std::to_string(stepper->state().getTime()) + " s of " +
                      std::to_string(t_end) + " s after " + std::to_string(stepper->stepsTaken()) +
                      " steps, the step limit";
-    if (o.integrator == IntegratorKind::RungeKuttaMerson)
+    if (result.integrator == IntegratorKind::RungeKuttaMerson)
       result.message += ": the explicit Runge-Kutta-Merson method takes tiny steps where the muscles' states are "
                         "stiff (a tendon loaded at tiny activation); the implicit rosenbrock or bdf integrators take "
                         "far fewer";

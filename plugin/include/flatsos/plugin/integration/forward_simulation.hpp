@@ -32,6 +32,7 @@ struct SimulationResult {
   StoTable controls;  ///< make_controls_table columns, the same times
   SimTK::State final_state;
   long integrator_steps = 0;
+  IntegratorKind integrator = IntegratorKind::RungeKuttaMerson;  ///< the one used (Automatic resolved)
   bool finite = true;    ///< false: a state became NaN/Inf, integration stopped there
   bool step_limit_reached = false;  ///< true: stopped at SimulationOptions::max_steps
   std::string message;   ///< why it stopped early, empty otherwise

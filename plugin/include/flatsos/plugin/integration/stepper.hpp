@@ -21,18 +21,29 @@ namespace flatsos::plugin {
 
 class MusculoskeletalModel;
 
-/// Explicit Runge-Kutta-Merson, CPodes' implicit BDF, or the muscle Rosenbrock-W method.
-enum class IntegratorKind { RungeKuttaMerson, CPodesBdf, MuscleRosenbrock };
+/// Explicit Runge-Kutta-Merson, CPodes' implicit BDF, the muscle Rosenbrock-W method, or the
+/// first two chosen by the muscles' stiffness at the start (resolve_integrator).
+enum class IntegratorKind { RungeKuttaMerson, CPodesBdf, MuscleRosenbrock, Automatic };
 
 /// The contract of Stepper::advanceTo, checked in one place for every stepper: `t_end` finite and
 /// not before `now`; report times finite, strictly ascending and each in (now, t_end]; a
 /// callback when there are report times. Throws std::invalid_argument naming the time and why.
 void check_times(double now, double t_end, const std::vector<double>& report_times, bool have_report);
 
-/// "rkm", "bdf", "rosenbrock" (the command-line names) and back; the inverse throws
+/// "rkm", "bdf", "rosenbrock", "auto" (the command-line names) and back; the inverse throws
 /// std::invalid_argument naming the unknown name.
 const char* integrator_name(IntegratorKind kind);
 IntegratorKind integrator_from_name(const std::string& name);
+
+/// `requested`, or for Automatic the integrator a run of `duration_s` from `initial` needs: the
+/// explicit Runge-Kutta-Merson method unless its stability alone would take more than
+/// kStiffExplicitSteps steps, estimated from the muscles' fastest time scale at `initial`
+/// (d(dL_S/dt)/dL_S, d(da/dt)/da); then CPodes' BDF. A tendon loaded at tiny activation (Moco's
+/// DeGroote-Fregly muscles on arm26 at rest: 7.9e5 1/s) would otherwise take some 250 000 explicit
+/// steps per second.
+constexpr double kStiffExplicitSteps = 20000;
+IntegratorKind resolve_integrator(const MusculoskeletalModel& model, const SimTK::State& initial, double duration_s,
+                                  IntegratorKind requested);
 
 class Stepper {
  public:
@@ -83,7 +94,8 @@ class Stepper {
 };
 
 /// A stepper for `system` whose muscles are `muscles` (used by the Rosenbrock method only).
-/// `accuracy` is relative (Simbody's meaning); throws std::invalid_argument outside (0, 1).
+/// `accuracy` is relative (Simbody's meaning); throws std::invalid_argument outside (0, 1) and
+/// for Automatic (resolve_integrator first).
 std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
                                                IntegratorKind kind, double accuracy);
 std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
