@@ -15,6 +15,7 @@ def test_the_simulation_is_the_cpp_programs_and_follows_the_plan(name, model_fil
     plan = scenario.plan(model)
     sim = flatsos.simulate_plan(plan)
     assert sim["finite"] and sim["message"] == ""
+    assert sim["integrator"] == "rkm"  # chosen ("auto"): these muscles are not stiff at rest, as the program's
     assert sim["q"].shape == (301, len(model.joints)) and sim["activation"].shape == (301, len(model.muscles))
     program = subprocess.run([str(build_dir / "bin" / "arm_open_loop"), "--model", str(models_dir / model_file),
                               "--paper", "--out", str(tmp_path)], capture_output=True, text=True)
@@ -34,7 +35,7 @@ def test_other_integrators_and_bad_options(arm):
     model, scenario = arm
     plan = scenario.plan(model)
     bdf = flatsos.simulate_plan(plan, integrator="bdf", accuracy=1e-8, reports=30)
-    assert bdf["q"].shape == (31, 2)
+    assert bdf["q"].shape == (31, 2) and bdf["integrator"] == "bdf"
     np.testing.assert_allclose(bdf["q"][-1], scenario.target, atol=np.radians(0.05))
     with pytest.raises(ValueError, match="unknown integrator 'euler'"):
         flatsos.simulate_plan(plan, integrator="euler")
