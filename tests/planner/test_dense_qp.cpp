@@ -4,7 +4,10 @@
 // unknowns, degenerate ones (repeated rows, more active rows than unknowns), infeasible ones.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -117,6 +120,20 @@ TEST(DenseQp, BadInputThrowsNamingTheProblem) {
   EXPECT_THROW(fd::solve_dense_qp(Eigen::MatrixXd::Identity(2, 2), Eigen::VectorXd::Zero(3), Eigen::MatrixXd::Zero(0, 2),
                                   Eigen::VectorXd::Zero(0), w, x),
                std::invalid_argument);
+  // A non-finite entry of A, also in a row a hint offers first (A is checked through A x).
+  Eigen::MatrixXd A = Eigen::MatrixXd::Identity(3, 2);
+  for (const double bad : {std::nan(""), HUGE_VAL}) {
+    A(2, 1) = bad;
+    for (const std::vector<int>& hint : {std::vector<int>{}, std::vector<int>{2}}) {
+      try {
+        fd::solve_dense_qp(Eigen::MatrixXd::Identity(2, 2), Eigen::VectorXd::Ones(2), A, Eigen::VectorXd::Zero(3), w, x,
+                           nullptr, 1e-10, &hint);
+        ADD_FAILURE() << "A with " << bad << " was accepted";
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("NaN or Inf"), std::string::npos) << e.what();
+      }
+    }
+  }
 }
 
 // A hint (rows to try first) changes the work, not the optimum: the last active set of a nearby

@@ -26,6 +26,7 @@ struct DenseQpWorkspace {
   Eigen::VectorXd d, z, r, u, slack;
   std::vector<int> active;      // row indices of the active set, in R's column order (after a solve: those at its optimum)
   std::vector<char> is_active;  // per row
+  std::vector<std::pair<double, int>> violated;  // the last pass's violated rows (distance, row), most first
 };
 
 struct DenseQpResult {
