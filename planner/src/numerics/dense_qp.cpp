@@ -1,5 +1,7 @@
 #include "numerics/dense_qp.hpp"
 
+#include <Eigen/Jacobi>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -24,11 +26,8 @@ Givens givens(double a, double b) {
 }
 
 void rotate_columns(Eigen::MatrixXd& J, int i, int k, const Givens& g) {
-  for (Eigen::Index row = 0; row < J.rows(); ++row) {
-    const double a = J(row, i), b = J(row, k);
-    J(row, i) = g.c * a + g.s * b;
-    J(row, k) = -g.s * a + g.c * b;
-  }
+  // J <- J [c -s; s c] on columns i, k (Eigen's rotation [c s; -s c] with s negated), vectorized.
+  J.applyOnTheRight(i, k, Eigen::JacobiRotation<double>(g.c, -g.s));
 }
 
 // Appends the row whose J^T a is in w.d to the active set: rotations zero d below position q,
@@ -131,6 +130,7 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
   // J = L^-T: J^T H J = I.
   w.J.setIdentity(n, n);
   w.cholesky.matrixL().transpose().solveInPlace(w.J);
+  const double j_squared_norm = w.J.squaredNorm();  // the rotations below keep it
   w.R.setZero(n, n);
   w.d.resize(n);
   w.z.resize(n);
@@ -154,13 +154,14 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
     }
     if (p < 0) p = next_violated(A, b, x, w, feasibility_tolerance);
     if (p < 0) break;
+    w.row = A.row(p).transpose();  // contiguous: A is column-major, its rows strided by m
     double u_new = 0.0;  // the multiplier of row p while it joins
     while (true) {
       if (++result.iterations > max_iterations) {
         result.failure = "no convergence in " + std::to_string(max_iterations) + " active-set changes";
         return result;
       }
-      w.d.noalias() = w.J.transpose() * A.row(p).transpose();
+      w.d.noalias() = w.J.transpose() * w.row;
       w.z.noalias() = w.J.rightCols(n - q) * w.d.tail(n - q);
       if (q > 0) w.r.head(q) = w.R.topLeftCorner(q, q).triangularView<Eigen::Upper>().solve(w.d.head(q));
       // Partial step: the first active multiplier to reach zero.
@@ -169,10 +170,10 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
       for (int k = 0; k < q; ++k)
         if (w.r[k] > 0.0 && w.u[k] / w.r[k] < t_partial) t_partial = w.u[k] / w.r[k], l = k;
       // Full step: onto row p's plane (z^T a_p = |J2^T a_p|^2 >= 0).
-      const double za = w.z.dot(A.row(p));
-      const double scale = A.row(p).squaredNorm();
-      const double s_p = A.row(p).dot(x) - b[p];
-      const double t_full = za > 1e-14 * scale * w.J.squaredNorm() / n ? -s_p / za : kInfinity;
+      const double za = w.z.dot(w.row);
+      const double scale = w.row.squaredNorm();
+      const double s_p = w.row.dot(x) - b[p];
+      const double t_full = za > 1e-14 * scale * j_squared_norm / n ? -s_p / za : kInfinity;
       const double t = std::min(t_partial, t_full);
       if (t == kInfinity) {
         result.failure = "infeasible: row " + std::to_string(p) + " cannot be met with the active rows";

@@ -23,7 +23,7 @@ namespace flatsos::planner::detail {
 struct DenseQpWorkspace {
   Eigen::LLT<Eigen::MatrixXd> cholesky;
   Eigen::MatrixXd J, R;
-  Eigen::VectorXd d, z, r, u, slack;
+  Eigen::VectorXd d, z, r, u, slack, row;  // row: the joining row of A, contiguous
   std::vector<int> active;      // row indices of the active set, in R's column order (after a solve: those at its optimum)
   std::vector<char> is_active;  // per row
   std::vector<std::pair<double, int>> violated;  // the last pass's violated rows (distance, row), most first
