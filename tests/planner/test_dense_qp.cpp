@@ -72,6 +72,30 @@ TEST(DenseQp, RandomProblemsMeetTheOptimalityConditions) {
   EXPECT_GT(with_drops, 20);
 }
 
+// Many rows of which few bind, as the effort's QPs have (13 000 rows, some hundred active): after
+// the first pass over every row, later passes compute only the rows that can have become
+// violated since (|A_i| |x - x_then| against their slack then), and the optimum is the same.
+TEST(DenseQp, ManyRowsFewBindingPassesComputeOnlyTheRowsThatCanBeViolated) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  fd::DenseQpWorkspace w;
+  int partial = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const int n = 10 + trial, m = 100 * n;
+    Qp qp = random_qp(rng, n, m, trial % 2 ? 1e4 : 10.0);
+    // Most rows far from binding: their slack at the feasible point grows tenfold.
+    for (int i = 0; i < m; ++i)
+      if (i % 20 != 0) qp.b[i] -= 10.0 * std::abs(normal(rng));
+    Eigen::VectorXd x, lambda;
+    const fd::DenseQpResult r = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x, &lambda);
+    ASSERT_TRUE(r.solved) << "trial " << trial << ": " << r.failure;
+    EXPECT_LT(kkt_residual(qp, x, lambda), 1e-8) << "trial " << trial;
+    EXPECT_GE(w.full_passes, 1);
+    partial += w.partial_passes;
+  }
+  EXPECT_GT(partial, 20);  // the partial passes are exercised, not only full ones
+}
+
 TEST(DenseQp, RepeatedRowsAndMoreActiveRowsThanUnknowns) {
   // minimize |x - (2, 2)|^2 with x1 <= 1 three times over, x2 <= 1, x1 + x2 <= 2: the optimum
   // (1, 1) has five active rows in two unknowns.

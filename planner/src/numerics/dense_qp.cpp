@@ -82,20 +82,51 @@ bool violated_at(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen
 }
 
 // Every row violated at x, most violated first (distance to its plane, A_i x - b_i over |A_i|),
-// into w.violated; false when every row holds to the tolerance. One pass over A serves the
-// rows' additions until its list is used up (each rechecked at the x of its turn): a pass per
-// addition made the pass (A x over some 13 000 rows) most of a QP's time.
+// into w.violated; false when every row holds to the tolerance. One pass serves the rows'
+// additions until its list is used up (each rechecked at the x of its turn): a pass per addition
+// made the pass (A x over some 13 000 rows) most of a QP's time. After the first pass a row whose
+// slack then exceeded |A_i| |x - x_then| cannot be violated now and is not looked at; the others
+// are computed alone, unless they are many (then A x again).
+constexpr double kMostRowsComputedAlone = 0.125;  // of the rows
 bool collect_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
                       double tolerance) {
-  w.slack.noalias() = A * x;
-  // x is finite: a non-finite entry of A leaves its row's product non-finite.
-  if (!w.slack.allFinite()) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
-  w.slack -= b;
+  const Eigen::Index m = A.rows();
+  const auto tolerance_of = [&](Eigen::Index i) { return -tolerance * (1.0 + std::abs(b[i])); };
+  const auto add = [&](Eigen::Index i, double slack) {
+    const double norm = w.row_norm[i];
+    w.violated.emplace_back(norm > 0.0 ? slack / norm : -kInfinity, static_cast<int>(i));
+  };
   w.violated.clear();
-  for (Eigen::Index i = 0; i < A.rows(); ++i) {
-    if (w.is_active[static_cast<std::size_t>(i)] || w.slack[i] >= -tolerance * (1.0 + std::abs(b[i]))) continue;
-    const double norm = A.row(i).norm();
-    w.violated.emplace_back(norm > 0.0 ? w.slack[i] / norm : -kInfinity, static_cast<int>(i));
+  bool partial = w.pass_x.size() == x.size();
+  if (partial) {
+    const double moved = (x - w.pass_x).norm();
+    w.candidates.clear();
+    for (Eigen::Index i = 0; i < m; ++i)
+      if (!w.is_active[static_cast<std::size_t>(i)] && w.slack[i] - w.row_norm[i] * moved < tolerance_of(i))
+        w.candidates.push_back(static_cast<int>(i));
+    partial = static_cast<double>(w.candidates.size()) <= kMostRowsComputedAlone * static_cast<double>(m);
+    w.partial_passes += partial;
+    if (partial)
+      for (const int i : w.candidates) {
+        const double slack = A.row(i).dot(x) - b[i];
+        if (!std::isfinite(slack)) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
+        if (slack < tolerance_of(i)) add(i, slack);
+      }
+  }
+  if (!partial) {
+    ++w.full_passes;
+    w.slack.noalias() = A * x;
+    // x is finite: a non-finite entry of A leaves its row's product non-finite.
+    if (!w.slack.allFinite()) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
+    w.slack -= b;
+    w.pass_x = x;
+    if (w.row_norm.size() != m) {  // once per solve: column by column (A is column-major)
+      w.row_norm.setZero(m);
+      for (Eigen::Index j = 0; j < A.cols(); ++j) w.row_norm.array() += A.col(j).array().square();
+      w.row_norm = w.row_norm.cwiseSqrt();
+    }
+    for (Eigen::Index i = 0; i < m; ++i)
+      if (!w.is_active[static_cast<std::size_t>(i)] && w.slack[i] < tolerance_of(i)) add(i, w.slack[i]);
   }
   std::sort(w.violated.begin(), w.violated.end());
   std::reverse(w.violated.begin(), w.violated.end());  // taken from the back: most violated first
@@ -139,6 +170,9 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
   w.active.assign(static_cast<std::size_t>(n), -1);
   w.is_active.assign(static_cast<std::size_t>(m), 0);
   w.violated.clear();
+  w.pass_x.resize(0);  // no pass over this A yet
+  w.full_passes = w.partial_passes = 0;
+  w.row_norm.resize(0);
   int q = 0;
   const int max_iterations = 10 * (n + m) + 10;
   std::size_t next_hint = 0;

@@ -27,6 +27,9 @@ struct DenseQpWorkspace {
   std::vector<int> active;      // row indices of the active set, in R's column order (after a solve: those at its optimum)
   std::vector<char> is_active;  // per row
   std::vector<std::pair<double, int>> violated;  // the last pass's violated rows (distance, row), most first
+  Eigen::VectorXd row_norm, pass_x;  // |A_i|; x at the last full pass (slack holds A x - b there)
+  std::vector<int> candidates;       // rows a partial pass computes
+  int full_passes = 0, partial_passes = 0;  // over the rows, in the last solve
 };
 
 struct DenseQpResult {
