@@ -81,53 +81,61 @@ bool violated_at(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen
   return product - b[row] < -tolerance * (1.0 + std::abs(b[row]));
 }
 
-// Every row violated at x, most violated first (distance to its plane, A_i x - b_i over |A_i|),
-// into w.violated; false when every row holds to the tolerance. One pass serves the rows'
-// additions until its list is used up (each rechecked at the x of its turn): a pass per addition
-// made the pass (A x over some 13 000 rows) most of a QP's time. After the first pass a row whose
-// slack then exceeded |A_i| |x - x_then| cannot be violated now and is not looked at; the others
-// are computed alone, unless they are many (then A x again).
-constexpr double kMostRowsComputedAlone = 0.125;  // of the rows
+// The rows a pass can find violated lie in w.violated as (distance to the row's plane,
+// A_i x - b_i over |A_i|, row), most violated taken first from the back.
+void list_violated(const Eigen::VectorXd& b, DenseQpWorkspace& w, double tolerance, Eigen::Index row, double slack) {
+  if (w.is_active[static_cast<std::size_t>(row)] || slack >= -tolerance * (1.0 + std::abs(b[row]))) return;
+  const double norm = w.row_norm[row];
+  w.violated.emplace_back(norm > 0.0 ? slack / norm : -kInfinity, static_cast<int>(row));
+}
+
+// A x over every row, the row norms once per solve (column by column: A is column-major).
+void full_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
+               double tolerance) {
+  ++w.full_passes;
+  w.slack.noalias() = A * x;
+  // x is finite: a non-finite entry of A leaves its row's product non-finite.
+  if (!w.slack.allFinite()) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
+  w.slack -= b;
+  w.pass_x = x;
+  if (w.row_norm.size() != A.rows()) {
+    w.row_norm.setZero(A.rows());
+    for (Eigen::Index j = 0; j < A.cols(); ++j) w.row_norm.array() += A.col(j).array().square();
+    w.row_norm = w.row_norm.cwiseSqrt();
+  }
+  for (Eigen::Index i = 0; i < A.rows(); ++i) list_violated(b, w, tolerance, i, w.slack[i]);
+}
+
+// After a full pass, a row whose slack then exceeded |A_i| |x - x_then| still holds
+// (Cauchy-Schwarz); the others are computed alone. False, with nothing listed, when they are more
+// than kMostRowsComputedAlone of the rows (a full pass is cheaper then) or there was no full pass.
+constexpr double kMostRowsComputedAlone = 0.125;
+bool partial_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
+                  double tolerance) {
+  if (w.pass_x.size() != x.size()) return false;
+  const double moved = (x - w.pass_x).norm();
+  w.candidates.clear();
+  for (Eigen::Index i = 0; i < A.rows(); ++i)
+    if (!w.is_active[static_cast<std::size_t>(i)] &&
+        w.slack[i] - w.row_norm[i] * moved < -tolerance * (1.0 + std::abs(b[i])))
+      w.candidates.push_back(static_cast<int>(i));
+  if (static_cast<double>(w.candidates.size()) > kMostRowsComputedAlone * static_cast<double>(A.rows())) return false;
+  ++w.partial_passes;
+  for (const int i : w.candidates) {
+    const double slack = A.row(i).dot(x) - b[i];
+    if (!std::isfinite(slack)) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
+    list_violated(b, w, tolerance, i, slack);
+  }
+  return true;
+}
+
+// Every row violated at x into w.violated, most violated last; false when every row holds to
+// the tolerance. One pass serves the additions until its list is used up (each rechecked at the x
+// of its turn): a pass per addition (A x over some 13 000 rows) was most of a QP's time.
 bool collect_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
                       double tolerance) {
-  const Eigen::Index m = A.rows();
-  const auto tolerance_of = [&](Eigen::Index i) { return -tolerance * (1.0 + std::abs(b[i])); };
-  const auto add = [&](Eigen::Index i, double slack) {
-    const double norm = w.row_norm[i];
-    w.violated.emplace_back(norm > 0.0 ? slack / norm : -kInfinity, static_cast<int>(i));
-  };
   w.violated.clear();
-  bool partial = w.pass_x.size() == x.size();
-  if (partial) {
-    const double moved = (x - w.pass_x).norm();
-    w.candidates.clear();
-    for (Eigen::Index i = 0; i < m; ++i)
-      if (!w.is_active[static_cast<std::size_t>(i)] && w.slack[i] - w.row_norm[i] * moved < tolerance_of(i))
-        w.candidates.push_back(static_cast<int>(i));
-    partial = static_cast<double>(w.candidates.size()) <= kMostRowsComputedAlone * static_cast<double>(m);
-    w.partial_passes += partial;
-    if (partial)
-      for (const int i : w.candidates) {
-        const double slack = A.row(i).dot(x) - b[i];
-        if (!std::isfinite(slack)) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
-        if (slack < tolerance_of(i)) add(i, slack);
-      }
-  }
-  if (!partial) {
-    ++w.full_passes;
-    w.slack.noalias() = A * x;
-    // x is finite: a non-finite entry of A leaves its row's product non-finite.
-    if (!w.slack.allFinite()) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
-    w.slack -= b;
-    w.pass_x = x;
-    if (w.row_norm.size() != m) {  // once per solve: column by column (A is column-major)
-      w.row_norm.setZero(m);
-      for (Eigen::Index j = 0; j < A.cols(); ++j) w.row_norm.array() += A.col(j).array().square();
-      w.row_norm = w.row_norm.cwiseSqrt();
-    }
-    for (Eigen::Index i = 0; i < m; ++i)
-      if (!w.is_active[static_cast<std::size_t>(i)] && w.slack[i] < tolerance_of(i)) add(i, w.slack[i]);
-  }
+  if (!partial_pass(A, b, x, w, tolerance)) full_pass(A, b, x, w, tolerance);
   std::sort(w.violated.begin(), w.violated.end());
   std::reverse(w.violated.begin(), w.violated.end());  // taken from the back: most violated first
   return !w.violated.empty();
