@@ -64,7 +64,7 @@ int run(int argc, char** argv) {
   app.add_option("--flat-output-span-growth", options.sos.flat_output_span_growth,
                  "each of the flat outputs' spans this many times as long as the one before (1: uniform; above 1: "
                  "short spans at the start, where a low-effort transfer spends its effort; 0: by the effort, 1 for "
-                 "a linear one, 1.06 for a nonlinear one)")
+                 "a linear one, 1.06 for a nonlinear one, then 1 where 1.06 finds no plan)")
       ->capture_default_str()->check(flatsos::examples::nonnegative_number());
   std::string effort_name = "paper";
   app.add_option("--effort", effort_name,
