@@ -7,45 +7,28 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
-#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "../plugin/arm_fixture.hpp"
-#include "flatsos/planner/rest_state.hpp"
-#include "flatsos/planner/task_region.hpp"
+#include "arm26_transfer.hpp"
 #include "flatsos/plugin/integration/forward_simulation.hpp"
-#include "flatsos/plugin/io/opensim_import.hpp"
 
 namespace fp = flatsos::plugin;
-namespace fpl = flatsos::planner;
 
 namespace {
 
-struct ModelAtRest {
-  std::shared_ptr<const fp::MusculoskeletalModel> model;
-  SimTK::State rest;
-};
+using flatsos::test::Arm26Transfer;
 
 // arm26 at rest at q = 0 with 10 N reserves (its muscles near their floor activation), its
 // muscles as downloaded (Thelen) or as Moco replaces them (DeGroote-Fregly 2016).
-ModelAtRest arm26_at_rest(bool degroote) {
+Arm26Transfer arm26_at_rest(bool degroote) {
   fp::OpenSimFileOptions file;
   file.degroote_fregly2016_muscles = degroote;
-  ModelAtRest a;
-  a.model = std::make_shared<const fp::MusculoskeletalModel>(
-      fp::import_opensim_file(std::string(FLATSOS_SOURCE_DIR) + "/models/opensim/arm26/arm26.osim",
-                              file)
-          .model);
-  const Eigen::VectorXd q0 = Eigen::Vector2d::Zero();
-  const fpl::FlatOutputMap flat =
-      fpl::flat_outputs_for_task(a.model, {q0, Eigen::Vector2d(0.0, 1.5)});
-  a.rest = fpl::start_state(flat, q0, Eigen::Vector2d::Zero(), std::nullopt,
-                            Eigen::VectorXd::Constant(6, 10.0));
-  return a;
+  return flatsos::test::arm26_transfer(file);
 }
 
-fp::SimulationResult simulate(const ModelAtRest& a, double duration_s, fp::IntegratorKind kind) {
+fp::SimulationResult simulate(const Arm26Transfer& a, double duration_s, fp::IntegratorKind kind) {
   fp::SimulationOptions o;
   o.duration_s = duration_s;
   o.integrator = kind;
@@ -71,7 +54,7 @@ TEST(AutomaticIntegrator, IsNamedAutoAndResolvedBeforeAStepperIsMade) {
 // method's own steps over 10 ms agree with the estimate's rate within a factor of 2, and the
 // automatic choice (BDF) ends where the explicit method does, in a hundredth of its steps.
 TEST(AutomaticIntegrator, ChoosesBdfWhereTheMusclesAreStiffAndTheEstimateMatchesTheExplicitSteps) {
-  const ModelAtRest a = arm26_at_rest(true);
+  const Arm26Transfer a = arm26_at_rest(true);
   EXPECT_EQ(fp::resolve_integrator(*a.model, a.rest, 1.0, fp::IntegratorKind::Automatic),
             fp::IntegratorKind::CPodesBdf);
   // 10 ms is below the threshold's duration: the explicit method is chosen there, and its steps
@@ -110,7 +93,7 @@ TEST(AutomaticIntegrator, ChoosesBdfWhereTheMusclesAreStiffAndTheEstimateMatches
 // Thelen's muscles at the same rest are not stiff: the explicit method stays, as do the paper's
 // arm's runs.
 TEST(AutomaticIntegrator, KeepsTheExplicitMethodWhereTheMusclesAreNotStiff) {
-  const ModelAtRest a = arm26_at_rest(false);
+  const Arm26Transfer a = arm26_at_rest(false);
   const fp::SimulationResult run = simulate(a, 1.0, fp::IntegratorKind::Automatic);
   ASSERT_TRUE(run.completed()) << run.message;
   EXPECT_EQ(run.integrator, fp::IntegratorKind::RungeKuttaMerson);

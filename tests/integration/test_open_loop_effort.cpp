@@ -8,7 +8,6 @@
 
 #include <iostream>
 #include <memory>
-#include <optional>
 #include <string>
 
 #include <Eigen/Core>
@@ -21,10 +20,10 @@
 #include "flatsos/planner/motion_planner.hpp"
 #include "flatsos/planner/planned_excitation.hpp"
 #include "flatsos/planner/rest_state.hpp"
-#include "flatsos/planner/task_region.hpp"
 #include "flatsos/plugin/io/model_file.hpp"
 #include "flatsos/plugin/io/opensim_import.hpp"
 #include "flatsos/plugin/model/model_workspace.hpp"
+#include "arm26_transfer.hpp"
 #include "open_loop_replay.hpp"
 
 namespace fp = flatsos::plugin;
@@ -231,29 +230,8 @@ TEST(OpenLoopEffort, SquaredExcitationsWithTheJointPathFreeMatchTheCollocationsF
 
 namespace {
 
-// OpenSim's arm26 flexing the elbow from 0 to 90 deg in 1 s from rest with 10 N reserves: its flat
-// outputs for the task, the start state and the options (the default basis).
-struct Arm26Transfer {
-  std::shared_ptr<const fp::MusculoskeletalModel> model;
-  std::optional<fpl::FlatOutputMap> flat;
-  fpl::MuscleState s0;
-  fpl::OpenLoopOptions options;
-};
-
-Arm26Transfer arm26_transfer(const fp::OpenSimFileOptions& file) {
-  Arm26Transfer a;
-  a.model = std::make_shared<const fp::MusculoskeletalModel>(
-      fp::import_opensim_file(std::string(FLATSOS_SOURCE_DIR) + "/models/opensim/arm26/arm26.osim", file).model);
-  const Eigen::VectorXd q0 = Eigen::Vector2d::Zero();
-  const Eigen::Vector2d target(0.0, 90.0 * M_PI / 180.0);
-  a.flat.emplace(fpl::flat_outputs_for_task(a.model, {q0, target}));
-  a.options.duration_s = 1.0;
-  a.options.target_q_rad = target;
-  a.options.reserves_N = Eigen::VectorXd::Constant(6, 10.0);
-  a.s0 = fpl::muscle_state_of(*a.model,
-                              fpl::start_state(*a.flat, q0, Eigen::Vector2d::Zero(), std::nullopt, a.options.reserves_N));
-  return a;
-}
+using flatsos::test::Arm26Transfer;
+using flatsos::test::arm26_transfer;
 
 // The squared-excitation plan of the transfer: solved on uniform spans after the default graded
 // ones found none, with a warning that says so, and executable.

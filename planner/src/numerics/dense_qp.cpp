@@ -65,26 +65,38 @@ void drop_row(DenseQpWorkspace& w, int q, int l) {
   }
 }
 
+[[noreturn]] void refuse_non_finite() { throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b"); }
+
 void check_sizes(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
   const Eigen::Index n = g.size();
   if (n == 0 || H.rows() != n || H.cols() != n) throw std::invalid_argument("dense QP: H must be n x n with n = size of g > 0");
   if (A.cols() != n || A.rows() != b.size()) throw std::invalid_argument("dense QP: A must be m x n with m = size of b");
   // A's entries are checked through A x in the first pass over its rows (collect_violated):
   // allFinite over A cost as much as that pass.
-  if (!H.allFinite() || !g.allFinite() || !b.allFinite()) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
+  if (!H.allFinite() || !g.allFinite() || !b.allFinite()) refuse_non_finite();
+}
+
+// Below this slack row i counts as violated.
+double violation_threshold(const Eigen::VectorXd& b, Eigen::Index row, double tolerance) {
+  return -tolerance * (1.0 + std::abs(b[row]));
+}
+
+// A_i x - b_i of one row; x is finite, so a non-finite entry of A_i shows here.
+double slack_of(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, Eigen::Index row) {
+  const double slack = A.row(row).dot(x) - b[row];
+  if (!std::isfinite(slack)) refuse_non_finite();
+  return slack;
 }
 
 bool violated_at(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, int row,
                  double tolerance) {
-  const double product = A.row(row).dot(x);
-  if (!std::isfinite(product)) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
-  return product - b[row] < -tolerance * (1.0 + std::abs(b[row]));
+  return slack_of(A, b, x, row) < violation_threshold(b, row, tolerance);
 }
 
 // The rows a pass can find violated lie in w.violated as (distance to the row's plane,
 // A_i x - b_i over |A_i|, row), most violated taken first from the back.
 void list_violated(const Eigen::VectorXd& b, DenseQpWorkspace& w, double tolerance, Eigen::Index row, double slack) {
-  if (w.is_active[static_cast<std::size_t>(row)] || slack >= -tolerance * (1.0 + std::abs(b[row]))) return;
+  if (w.is_active[static_cast<std::size_t>(row)] || slack >= violation_threshold(b, row, tolerance)) return;
   const double norm = w.row_norm[row];
   w.violated.emplace_back(norm > 0.0 ? slack / norm : -kInfinity, static_cast<int>(row));
 }
@@ -95,7 +107,7 @@ void full_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::
   ++w.full_passes;
   w.slack.noalias() = A * x;
   // x is finite: a non-finite entry of A leaves its row's product non-finite.
-  if (!w.slack.allFinite()) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
+  if (!w.slack.allFinite()) refuse_non_finite();
   w.slack -= b;
   w.pass_x = x;
   if (w.row_norm.size() != A.rows()) {
@@ -117,15 +129,11 @@ bool partial_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eige
   w.candidates.clear();
   for (Eigen::Index i = 0; i < A.rows(); ++i)
     if (!w.is_active[static_cast<std::size_t>(i)] &&
-        w.slack[i] - w.row_norm[i] * moved < -tolerance * (1.0 + std::abs(b[i])))
+        w.slack[i] - w.row_norm[i] * moved < violation_threshold(b, i, tolerance))
       w.candidates.push_back(static_cast<int>(i));
   if (static_cast<double>(w.candidates.size()) > kMostRowsComputedAlone * static_cast<double>(A.rows())) return false;
   ++w.partial_passes;
-  for (const int i : w.candidates) {
-    const double slack = A.row(i).dot(x) - b[i];
-    if (!std::isfinite(slack)) throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b");
-    list_violated(b, w, tolerance, i, slack);
-  }
+  for (const int i : w.candidates) list_violated(b, w, tolerance, i, slack_of(A, b, x, i));
   return true;
 }
 
