@@ -173,6 +173,11 @@ TEST_F(CollocationReference, BadInputIsNamedAndAnImpossibleTransferIsNotReported
   fpl::CollocationOptions co;
   co.mesh_intervals = 0;
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, reserves, co); }, "mesh_intervals");
+  co = {};
+  for (const double growth : {0.0, -1.0, std::nan(""), HUGE_VAL}) {
+    co.mesh_interval_growth = growth;
+    expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, reserves, co); }, "mesh_interval_growth");
+  }
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, Eigen::VectorXd::Constant(6, -1.0)); }, "reserves");
   expect_error([&] { fpl::solve_collocation_along_path(arm.flat, ws, p, s0, Eigen::VectorXd::Constant(5, 1.0)); }, "reserves");
   co = {};
@@ -264,6 +269,52 @@ TEST_F(CollocationReference, WithTheJointPathFreeItConvergesObeysTheLawsAndBeats
                           r.joint_acceleration_rad_per_s2.col(i - 1)).cwiseAbs().maxCoeff() / (dt * dt);
     EXPECT_LT((slope - r.joint_speed_rad_per_s.col(i)).cwiseAbs().maxCoeff(), dt * dt * (third + 1.0)) << "t = " << r.time_s[i];
   }
+}
+
+// Squared excitations with the path free: the arm's excitations change within milliseconds at
+// the start (activation time constant 10 ms), so a uniform mesh converges slowly from below (100,
+// 200, 400, 800 intervals: 0.09344, 0.09483, 0.09515, 0.09540 s) and intervals growing from t = 0
+// converge fast (100 growing by 1.04, 200 by 1.02, 400 by 1.01: 0.09520, 0.09559, 0.09562 s).
+// The reported cost is Simpson's rule on the graded mesh, recomputed here from the solution.
+TEST_F(CollocationReference, AGradedMeshConvergesWhereTheTransferStartsFast) {
+  fpl::OpenLoopOptions o;
+  o.duration_s = 3.0;
+  o.target_q_rad = open_loop_options(3.0).target_q_rad;
+  o.reserves_N = open_loop_options(3.0).reserves_N;
+  o.effort = fpl::effort_named("excitation_squared");
+  const fpl::JointPath start = fpl::plan_open_loop(arm.flat, s0, o).path;
+  auto ws = arm.flat.makeWorkspace();
+  const auto solve = [&](int intervals, double growth) {
+    fpl::CollocationOptions co;
+    co.effort = o.effort;
+    co.mesh_intervals = intervals;
+    co.mesh_interval_growth = growth;
+    return fpl::solve_collocation_free_path(arm.flat, ws, start, s0, o.reserves_N, co);
+  };
+  const auto uniform = solve(100, 1.0), graded = solve(100, 1.04), fine = solve(200, 1.02);
+  for (const auto* r : {&uniform, &graded, &fine}) ASSERT_EQ(r->status, fpl::SolveStatus::Solved) << r->message;
+  std::printf("squared excitations, free path: uniform 100 %.7f s, graded 100 %.7f s, graded 200 %.7f s\n", uniform.cost,
+              graded.cost, fine.cost);
+  EXPECT_LT(std::abs(graded.cost - fine.cost), 0.25 * std::abs(uniform.cost - fine.cost));
+
+  // The mesh: intervals in geometric progression from 0 to T, each midpoint halfway.
+  const Eigen::VectorXd& t = graded.time_s;
+  ASSERT_EQ(t.size(), 201);
+  EXPECT_EQ(t[0], 0.0);
+  EXPECT_NEAR(t[200], 3.0, 1e-12);
+  for (int k = 0; k < 100; ++k) {
+    EXPECT_NEAR(t[2 * k + 1], 0.5 * (t[2 * k] + t[2 * k + 2]), 1e-12);
+    if (k > 0) {
+      EXPECT_NEAR((t[2 * k + 2] - t[2 * k]) / (t[2 * k] - t[2 * k - 2]), 1.04, 1e-9);
+    }
+  }
+  // Its cost, recomputed by Simpson's rule per interval from the excitations it reports.
+  double simpson = 0.0;
+  for (int k = 0; k < 100; ++k) {
+    const auto squares = [&](int i) { return graded.excitation.col(i).squaredNorm(); };
+    simpson += (t[2 * k + 2] - t[2 * k]) / 6.0 * (squares(2 * k) + 4.0 * squares(2 * k + 1) + squares(2 * k + 2));
+  }
+  EXPECT_NEAR(simpson, graded.cost, 1e-9 * graded.cost);
 }
 
 TEST_F(CollocationReference, TheFlatnessFreePathComesWithinTwoPercentWithAnExecutablePlan) {

@@ -69,7 +69,9 @@ class CollocationDerivatives : public ::testing::TestWithParam<std::pair<std::st
                                                        : Eigen::VectorXd::LinSpaced(arm.model->numMuscles(), 0.5, 2.0);
     std::optional<fpd::FreeJoints> joints;
     if (free) joints = fpd::free_joints(arm.flat, plan.path);
-    fpd::PathSamples samples = fpd::sample_path(arm.flat, ws, plan.path, 2);
+    // Two intervals, the second 1.5 times as long as the first: an interval's length taken from
+    // the wrong interval shows in the derivatives.
+    fpd::PathSamples samples = fpd::sample_path(arm.flat, ws, plan.path, 2, 1.5);
     if (kind == 2)  // arms that differ at every point, as posture-dependent ones do
       for (int i = 0; i < samples.time_s.size(); ++i)
         samples.moment_arms_at.push_back(samples.moment_arms_m * (1.0 + 0.1 * std::sin(1.0 + i)));

@@ -10,6 +10,7 @@
 #include "collocation/hermite_simpson.hpp"
 #include "flatness/input_checks.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
+#include "flatsos/planner/numerics/bspline.hpp"
 #include "flatsos/plugin/stopwatch.hpp"
 #include "numerics/ipopt_support.hpp"
 
@@ -194,6 +195,8 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
     }
   }
   if (o.mesh_intervals < 1) throw std::invalid_argument("collocation: mesh_intervals must be >= 1");
+  if (!(o.mesh_interval_growth > 0.0) || !std::isfinite(o.mesh_interval_growth))
+    throw std::invalid_argument("collocation: mesh_interval_growth must be finite and > 0 (1: uniform intervals)");
   if (!(o.min_activation >= 0.0 && o.min_activation < 1.0))
     throw std::invalid_argument("collocation: min_activation must be in [0, 1)");
   if (!(o.tolerance > 0.0)) throw std::invalid_argument("collocation: tolerance must be > 0");
@@ -205,10 +208,16 @@ void validate(const FlatOutputMap& flat, const JointPath& path, const MuscleStat
 namespace detail {
 
 PathSamples sample_path(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const JointPath& path,
-                        int intervals) {
+                        int intervals, double growth) {
   const int P = 2 * intervals + 1, m = flat.numMuscles();
   PathSamples samples;
-  samples.time_s = Eigen::VectorXd::LinSpaced(P, 0.0, path.duration_s);
+  const std::vector<double> mesh = geometric_breakpoints(intervals, path.duration_s, growth);
+  samples.time_s.resize(P);
+  for (int k = 0; k < intervals; ++k) {
+    samples.time_s[2 * k] = mesh[static_cast<std::size_t>(k)];
+    samples.time_s[2 * k + 1] = 0.5 * (mesh[static_cast<std::size_t>(k)] + mesh[static_cast<std::size_t>(k) + 1]);
+  }
+  samples.time_s[P - 1] = path.duration_s;
   samples.musculotendon_length_m.resize(m, P);
   samples.lengthening_rate_m_per_s.resize(m, P);
   samples.torque_N_m.resize(flat.numJoints(), P);
@@ -283,7 +292,7 @@ CollocationResult solve_collocation(const FlatOutputMap& flat, plugin::ModelWork
   const std::shared_ptr<const Effort> effort = o.effort                       ? o.effort
                                                : o.effort_weights.size() > 0 ? std::make_shared<TendonForceEffort>(o.effort_weights)
                                                                              : flat.effort();
-  detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals);
+  detail::PathSamples samples = detail::sample_path(flat, workspace, path, o.mesh_intervals, o.mesh_interval_growth);
   MuscleState none;  // free muscle ends: no initial state to read
   none.tendon_length_m = Eigen::VectorXd::Zero(m), none.activation = Eigen::VectorXd::Zero(m);
   std::vector<detail::CollocationMuscle> muscles =

@@ -16,9 +16,11 @@ namespace flatsos::planner::detail {
 int HermiteSimpsonProblem::constraints() const { return restRow(0) + muscles(); }
 
 double HermiteSimpsonProblem::quadratureWeight(int i) const {
-  const double h = intervalLength();
-  if (i % 2 == 1) return 4.0 * h / 6.0;
-  return (i == 0 || i == points() - 1) ? h / 6.0 : 2.0 * h / 6.0;
+  if (i % 2 == 1) return 4.0 * intervalLength(i / 2) / 6.0;
+  double w = 0.0;
+  if (i > 0) w += intervalLength(i / 2 - 1) / 6.0;  // the end of the interval before
+  if (i < points() - 1) w += intervalLength(i / 2) / 6.0;
+  return w;
 }
 
 HermiteSimpsonProblem::MuscleAt HermiteSimpsonProblem::evaluate(const double* x, int i, int j) const {
@@ -234,7 +236,7 @@ void HermiteSimpsonProblem::constraintValues(const double* x, double* g) const {
     }
   }
   for (int k = 0; k < intervals(); ++k) {
-    const double h = intervalLength();
+    const double h = intervalLength(k);
     for (int j = 0; j < m; ++j) {
       const auto& p = muscles_[j].parameters;
       const double vmax = p.max_shortening_velocity_m_per_s();

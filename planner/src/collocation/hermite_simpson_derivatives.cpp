@@ -48,7 +48,7 @@ void HermiteSimpsonProblem::visitJacobian(const double* x, Sink&& sink) const {
     }
   }
   for (int k = 0; k < intervals(); ++k) {
-    const double h = intervalLength();
+    const double h = intervalLength(k);
     for (int j = 0; j < m; ++j) {
       const auto& p = muscles_[j].parameters;
       const double rate_s_v = p.max_shortening_velocity_m_per_s() / stretch_scale_m_[j];
@@ -122,16 +122,15 @@ void HermiteSimpsonProblem::visitHessian(const double* x, double sigma, const do
       const double va = le * (-e.f * e.g_v), vv = le * (-e.a * e.f * e.g_vv);
       // Activation defects: the weight of f_a(n, a) at this point in each defect row.
       double fa_weight = 0.0;
-      const double interval = intervalLength();
       if (i % 2 == 1) {
         const int k = i / 2;
-        fa_weight = interval * (lambda[defectRow(k, j, 2)] * kSimpsonRate[1] + lambda[defectRow(k, j, 3)] * kInterpolationRate[1]);
+        fa_weight = intervalLength(k) * (lambda[defectRow(k, j, 2)] * kSimpsonRate[1] + lambda[defectRow(k, j, 3)] * kInterpolationRate[1]);
       } else {
         if (i < P - 1)  // first point of interval i / 2
-          fa_weight += interval * (lambda[defectRow(i / 2, j, 2)] * kSimpsonRate[0] +
+          fa_weight += intervalLength(i / 2) * (lambda[defectRow(i / 2, j, 2)] * kSimpsonRate[0] +
                                    lambda[defectRow(i / 2, j, 3)] * kInterpolationRate[0]);
         if (i > 0)  // last point of interval i / 2 - 1
-          fa_weight += interval * (lambda[defectRow(i / 2 - 1, j, 2)] * kSimpsonRate[2] +
+          fa_weight += intervalLength(i / 2 - 1) * (lambda[defectRow(i / 2 - 1, j, 2)] * kSimpsonRate[2] +
                                    lambda[defectRow(i / 2 - 1, j, 3)] * kInterpolationRate[2]);
       }
       const muscles::ActivationRate fa = activation_rate(p, e.n, e.a);

@@ -39,7 +39,7 @@ void HermiteSimpsonProblem::visitJointDefect(int k, int r, int which, Term&& ter
   const JointUnknown y = which < 2 ? kAngle : kSpeed, dy = which < 2 ? kSpeed : kAcceleration;
   for (int c = 0; c < 3; ++c) {
     if (state[c] != 0.0) term(jointIndex(2 * k + c, r, y), state[c]);
-    if (rate[c] != 0.0) term(jointIndex(2 * k + c, r, dy), intervalLength() * rate[c]);
+    if (rate[c] != 0.0) term(jointIndex(2 * k + c, r, dy), intervalLength(k) * rate[c]);
   }
 }
 

@@ -28,7 +28,11 @@
 namespace flatsos::planner {
 
 struct CollocationOptions {
-  int mesh_intervals = 100;          ///< K uniform intervals: 2K + 1 collocation points
+  int mesh_intervals = 100;          ///< K intervals: 2K + 1 collocation points
+  /// Each interval this many times as long as the one before (1: uniform; above 1: short
+  /// intervals at t = 0, where a transfer from rest starts fast and the activations change
+  /// within milliseconds).
+  double mesh_interval_growth = 1.0;
   /// What to minimize: null means the flatness planner's own effort, w^T F with the model's
   /// effort_weights (FlatOutputMap::effortWeights).
   std::shared_ptr<const Effort> effort;
