@@ -1,7 +1,7 @@
 #pragma once
 // Squared excitations (OpenSim Moco's default effort) with the joint path free: the flatness plan
 // (reduced quasi-Newton path stage, then the plan along the path) beside the collocation
-// reference of the same effort with the path free (200 intervals), one sample each (the arm's
+// reference of the same effort with the path free (200 intervals growing by 1.02), one sample each (the arm's
 // path stage takes minutes).
 
 #include <nlohmann/json.hpp>
