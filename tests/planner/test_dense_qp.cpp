@@ -167,6 +167,7 @@ TEST(DenseQp, AHintOfRowsToTryFirstReachesTheSameOptimum) {
   std::mt19937 rng(11);
   std::normal_distribution<double> normal(0.0, 1.0);
   fd::DenseQpWorkspace w;
+  int started = 0;  // hot solves that factored the hinted rows at once
   for (int trial = 0; trial < 40; ++trial) {
     const int n = 4 + trial % 9, m = 6 * n;
     Qp qp = random_qp(rng, n, m, trial % 2 ? 1e4 : 10.0);
@@ -180,8 +181,45 @@ TEST(DenseQp, AHintOfRowsToTryFirstReachesTheSameOptimum) {
     const fd::DenseQpResult cold = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_cold, &lambda_cold);
     const fd::DenseQpResult hot = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_hot, &lambda_hot, 1e-10, &hint);
     ASSERT_TRUE(cold.solved && hot.solved) << hot.failure;
+    if (!hint.empty() && w.started_rows > 0) ++started;
     EXPECT_LT(kkt_residual(qp, x_hot, lambda_hot), 1e-8) << "trial " << trial;
     EXPECT_LT((x_hot - x_cold).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + x_cold.cwiseAbs().maxCoeff())) << "trial " << trial;
     EXPECT_NEAR(hot.objective, cold.objective, 1e-9 * (1.0 + std::abs(cold.objective)));
   }
+  EXPECT_GE(started, 30);  // of 40: the last optimum's rows, the same but for g
+}
+
+// Hints that are not an optimum's active set: rows whose multipliers would be negative (they
+// leave before the start is factored), rows that repeat another's constraint (dependent: tried one
+// by one instead) and more rows than unknowns. Each reaches the optimum of the cold solve.
+TEST(DenseQp, HintedRowsThatDoNotBindOrAreDependentStillReachTheOptimum) {
+  std::mt19937 rng(5);
+  fd::DenseQpWorkspace w;
+  int started = 0, one_by_one = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int n = 3 + trial % 8, m = 5 * n;
+    Qp qp = random_qp(rng, n, m, trial % 2 ? 1e3 : 10.0);
+    std::vector<int> hint;
+    if (trial % 3 == 0) {
+      for (int r = 0; r < n / 2; ++r) hint.push_back(r);  // arbitrary rows: some would pull
+    } else if (trial % 3 == 1) {
+      qp.A.row(1) = 2.0 * qp.A.row(0);  // row 1 is row 0's constraint, scaled
+      qp.b[1] = 2.0 * qp.b[0];
+      hint = {0, 1, 2};
+    } else {
+      for (int r = 0; r <= n; ++r) hint.push_back(r);  // more rows than unknowns: the first n taken
+    }
+    Eigen::VectorXd x_cold, lambda_cold, x_hot, lambda_hot;
+    const fd::DenseQpResult cold = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_cold, &lambda_cold);
+    const fd::DenseQpResult hot = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_hot, &lambda_hot, 1e-10, &hint);
+    ASSERT_TRUE(cold.solved && hot.solved) << hot.failure;
+    (w.started_rows > 0 ? started : one_by_one) += 1;
+    if (trial % 3 == 1) {
+      EXPECT_EQ(w.started_rows, 0) << "dependent rows factored, trial " << trial;
+    }
+    EXPECT_LT(kkt_residual(qp, x_hot, lambda_hot), 1e-8) << "trial " << trial;
+    EXPECT_LT((x_hot - x_cold).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + x_cold.cwiseAbs().maxCoeff())) << "trial " << trial;
+  }
+  EXPECT_GT(started, 0);
+  EXPECT_GT(one_by_one, 20);
 }

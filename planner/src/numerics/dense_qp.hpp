@@ -30,6 +30,7 @@ struct DenseQpWorkspace {
   Eigen::VectorXd row_norm, pass_x;  // |A_i|; x at the last full pass (slack holds A x - b there)
   std::vector<int> candidates;       // rows a partial pass computes
   int full_passes = 0, partial_passes = 0;  // over the rows, in the last solve
+  int started_rows = 0;  // hinted rows the last solve started with, factored at once (0: one by one)
 };
 
 struct DenseQpResult {
@@ -42,10 +43,11 @@ struct DenseQpResult {
 /// Solves into x; `multipliers` (one per row, >= 0, 0 off the active set) when not null.
 /// H must be symmetric positive definite (throws std::invalid_argument otherwise, or on sizes).
 /// `feasibility_tolerance`: a row counts as met when A_i x - b_i >= -tolerance (1 + |b_i|).
-/// `hint`: rows to try first, in order, each joining while violated: a sequence of similar QPs
-/// passes the last one's active rows (workspace.active after a solve), which spares most scans of
-/// every row for the most violated (the same optimum; on the open-loop effort's 3000 rows and
-/// 200 coefficients most of the time).
+/// `hint`: rows to start from: a sequence of similar QPs passes the last one's active rows
+/// (workspace.active after a solve). Those whose multipliers are >= 0 on them are factored at once
+/// as the start's active set; where none such are independent, they are tried one by one, each
+/// joining while violated. Either spares most scans of every row for the most violated (the same
+/// optimum; on the open-loop effort's 3000 rows and 200 coefficients most of the time).
 DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A,
                              const Eigen::VectorXd& b, DenseQpWorkspace& workspace, Eigen::VectorXd& x,
                              Eigen::VectorXd* multipliers = nullptr, double feasibility_tolerance = 1e-10,
