@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "path/free_path.hpp"
 #include "path/path_effort.hpp"
 #include "path/path_rows.hpp"
+#include "path/value_function.hpp"
 #include "scenario_fixture.hpp"
 #include "sos/bound_points.hpp"
 #include "sos/sos_bounds.hpp"
@@ -157,6 +159,44 @@ TEST_F(FreePath, TheSquaredEffortsValueHasTheGradientOfItsPathAndItsMultipliers)
     const double tolerance = 10.0 * (std::abs(d2 - d1) / 3.0 + 1e-10 * at.cost_N_s / h) + 1e-6 * at.gradient.norm();
     EXPECT_NEAR(at.gradient[i], d1, tolerance) << "coefficient " << i;
   }
+}
+
+// V's sequential QP starts from the active rows of the evaluation it starts from (a QP started
+// from none added thousands of rows one by one): V, its plan and its gradient are those of a
+// start without them.
+TEST_F(FreePath, TheSquaredEffortsValueFromTheLastEvaluationsRowsIsTheValueFromNone) {
+  o = open_loop_options(1.5, kDegree, 24);
+  const Problem p = problem();
+  ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
+  const auto effort = fpl::effort_named("excitation_squared");
+  fpd::FreePathSettings settings = free_path();
+  settings.effort = effort.get();
+  const fpd::PathParameterization P = fpd::parameterize(settings, 1.5, p.initial_q_jet, o.target_q_rad);
+  std::vector<fpd::PathPoint> points;
+  for (const double t : uniform_times(1.5, 48)) points.push_back(fpd::make_path_point(*p.setup, arm.flat, P, t));
+  const fpd::PathEffort path_effort(*p.setup, arm.flat, P, *effort);
+  fpd::ValueFunction V(*p.setup, arm.flat, points, P, o.reserves_N, p.a_min, 200, &path_effort);
+  fpd::Evaluation start;
+  start.theta = fpd::theta_of(*p.setup, *p.prescribed.Y);
+  start.radius = 0.1 * (1.0 + start.theta.cwiseAbs().maxCoeff());
+  const Eigen::VectorXd c = fpd::fit_to(P, p.prescribed.path);
+  const fpd::Evaluation first = V(c, start);
+  ASSERT_TRUE(first.ok) << first.failure;
+  EXPECT_FALSE(first.effort_rows.bound.empty() && first.effort_rows.linear.empty());
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> move(-0.005, 0.005);
+  Eigen::VectorXd moved = c;
+  for (Eigen::Index i = 0; i < moved.size(); ++i) moved[i] += move(rng);
+  fpd::Evaluation without_rows = first;
+  without_rows.effort_rows = {};
+  const fpd::Evaluation warm = V(moved, first), cold = V(moved, without_rows);
+  ASSERT_TRUE(warm.ok && cold.ok) << warm.failure << cold.failure;
+  EXPECT_NEAR(warm.cost_N_s, cold.cost_N_s, 1e-8 * cold.cost_N_s);
+  EXPECT_LT((warm.gradient - cold.gradient).norm(), 1e-5 * cold.gradient.norm());
+  EXPECT_LT((warm.theta - cold.theta).cwiseAbs().maxCoeff(), 1e-5 * (1.0 + cold.theta.cwiseAbs().maxCoeff()));
+  std::printf("QP row changes from the last rows %d, from none %d\n", warm.effort_qp_row_changes,
+              cold.effort_qp_row_changes);
+  EXPECT_LT(warm.effort_qp_row_changes, cold.effort_qp_row_changes / 2);
 }
 
 // The effort along the path as a function of z = (theta, c): its gradient, through the muscle

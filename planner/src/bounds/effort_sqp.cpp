@@ -67,16 +67,17 @@ bool EffortSqp::descend(Eigen::VectorXd& theta, int& steps, int max_steps) {
   double current = violation(theta);
   Eigen::MatrixXd J, H;
   Eigen::VectorXd lower, d, multipliers;
-  std::vector<int> hint;  // the last QP's active rows (the rows keep their indices in a call)
   while (steps < max_steps) {
     qpRows(theta, J, lower);
+    std::vector<int> hint = qpHint(theta.size());
     // Levenberg's shift keeps the model strictly convex where the effort is flat in a direction.
     H = model_.hessian;
     H.diagonal().array() += 1e-9 * std::max(H.diagonal().maxCoeff(), 1e-12);
     const DenseQpResult r =
         solve_dense_qp(H, model_.gradient, J, lower, qp_, d, &multipliers, 1e-10, &hint);
-    hint = qp_.active;
+    qp_row_changes_ += r.iterations;
     if (!r.solved) return fail("the effort's QP was not solved: " + r.failure);
+    keepActive(qp_.active, theta.size());
     ++steps;
     keepMultipliers(multipliers);
     if (current == 0.0 &&
@@ -145,11 +146,34 @@ bool EffortSqp::correctedStep(const Eigen::VectorXd& theta, const Eigen::MatrixX
       corrected[row] -= after[i] - before[i] - J.row(row).dot(d);
   }
   Eigen::VectorXd step;
-  if (!solve_dense_qp(H, model_.gradient, J, corrected, qp_, step, nullptr, 1e-10, &hint).solved)
-    return false;
-  hint = qp_.active;
+  const DenseQpResult r = solve_dense_qp(H, model_.gradient, J, corrected, qp_, step, nullptr, 1e-10, &hint);
+  qp_row_changes_ += r.iterations;
+  if (!r.solved) return false;
+  keepActive(qp_.active, theta.size());
   d = step;
   return true;
+}
+
+std::vector<int> EffortSqp::qpHint(Eigen::Index n) const {
+  const auto bound = static_cast<int>(rows_at_theta_.value.size()), linear = static_cast<int>(p_.linear.G.rows());
+  std::vector<int> hint;
+  for (const int r : active_.bound)
+    if (r < bound) hint.push_back(r);
+  for (const int r : active_.linear)
+    if (r < linear) hint.push_back(bound + r);
+  for (const int r : active_.box)
+    if (r < 2 * n) hint.push_back(bound + linear + r);
+  return hint;
+}
+
+void EffortSqp::keepActive(const std::vector<int>& rows, Eigen::Index n) {
+  const auto bound = static_cast<int>(rows_at_theta_.value.size()), linear = static_cast<int>(p_.linear.G.rows());
+  active_ = EffortSqpActiveRows{};
+  for (const int r : rows) {
+    if (r < bound) active_.bound.push_back(r);
+    else if (r < bound + linear) active_.linear.push_back(r - bound);
+    else if (r < bound + linear + 2 * static_cast<int>(n)) active_.box.push_back(r - bound - linear);
+  }
 }
 
 void EffortSqp::keepMultipliers(const Eigen::VectorXd& all) {

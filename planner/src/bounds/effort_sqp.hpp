@@ -31,6 +31,13 @@ struct EffortSqpProblem {
   const Eigen::VectorXd& a_min;
 };
 
+/// A QP's active rows by kind, each index within its block: the bound rows (per point, muscle
+/// and row: they keep their index as points are appended), the linear rows, theta's box (lower,
+/// then upper). What the next QP starts from, in a later descend or another EffortSqp.
+struct EffortSqpActiveRows {
+  std::vector<int> bound, linear, box;
+};
+
 class EffortSqp {
  public:
   explicit EffortSqp(const EffortSqpProblem& problem) : p_(problem) {}
@@ -41,6 +48,13 @@ class EffortSqp {
   /// is negligible inside them, counting them in `steps` (at most max_steps over all calls).
   /// False with failure() when the rows cannot be reached, a QP fails or the steps run out.
   bool descend(Eigen::VectorXd& theta, int& steps, int max_steps);
+  /// The rows the next QP starts from (another run's activeRows(): a QP started without any
+  /// added thousands of rows one by one where one started from its neighbour's added a few).
+  void startFrom(EffortSqpActiveRows rows) { active_ = std::move(rows); }
+  /// The last QP's active rows.
+  const EffortSqpActiveRows& activeRows() const { return active_; }
+  /// Rows the QPs added or dropped so far (their active-set changes): the QPs' work.
+  int qpRowChanges() const { return qp_row_changes_; }
 
   const EffortModel& model() const { return model_; }
   const std::string& failure() const { return failure_; }
@@ -58,12 +72,17 @@ class EffortSqp {
                      const Eigen::MatrixXd& J, const Eigen::VectorXd& lower, Eigen::VectorXd& d,
                      std::vector<int>& hint);
   void keepMultipliers(const Eigen::VectorXd& all);
+  // active_ as row indices of the QP qpRows built (entries beyond their block left out), and back.
+  std::vector<int> qpHint(Eigen::Index n) const;
+  void keepActive(const std::vector<int>& rows, Eigen::Index n);
   bool fail(std::string why);
 
   const EffortSqpProblem& p_;
   EffortModel model_;
   BoundRowsAt rows_at_theta_;  // the bound rows at theta, as the last QP linearized them
   DenseQpWorkspace qp_;
+  EffortSqpActiveRows active_;
+  int qp_row_changes_ = 0;
   std::vector<double> bound_multipliers_;
   Eigen::VectorXd linear_multipliers_;
   std::string failure_;

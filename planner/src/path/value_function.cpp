@@ -80,6 +80,7 @@ Evaluation ValueFunction::operator()(const Eigen::VectorXd& c, const Evaluation&
   e.c = c;
   e.theta = from.theta;
   e.basis = from.basis;
+  e.effort_rows = from.effort_rows;
   // A new path moves the rows by up to newtons: a radius as small as the last converged step
   // would take many doublings to grow back (as after the exchange's new points).
   e.radius = std::max(from.radius, kRoundStartRadius * (1.0 + e.theta.cwiseAbs().maxCoeff()));
@@ -122,7 +123,10 @@ Evaluation ValueFunction::minimizeEffort(const RowsAlongPath& rows, Evaluation e
                 "' is not defined at the start of its sequential QP";
     return e;
   }
+  sqp.startFrom(std::move(e.effort_rows));
   const bool solved = sqp.descend(e.theta, e.sequential_lp_iterations, max_slp_);
+  e.effort_rows = sqp.activeRows();
+  e.effort_qp_row_changes = sqp.qpRowChanges();
   sequential_lp_iterations += e.sequential_lp_iterations;
   Eigen::VectorXd z(v_.size()), effort_gradient;
   z << e.theta, e.c;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bounds/effort_sqp.hpp"
 #include "bounds/sequential_lp.hpp"
 #include "path/path_effort.hpp"
 #include "path/path_rows.hpp"
@@ -29,6 +30,8 @@ struct Evaluation {
   double radius = 0.0;
   int sequential_lp_iterations = 0;
   int active_reserve_rows = 0, active_bound_rows = 0;
+  EffortSqpActiveRows effort_rows;  // a nonlinear effort's last QP's active rows: the next V's start
+  int effort_qp_row_changes = 0;    // its QPs' active-set changes (EffortSqp::qpRowChanges)
 };
 
 class ValueFunction {
