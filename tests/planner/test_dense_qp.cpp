@@ -223,3 +223,33 @@ TEST(DenseQp, HintedRowsThatDoNotBindOrAreDependentStillReachTheOptimum) {
   EXPECT_GT(started, 0);
   EXPECT_GT(one_by_one, 20);
 }
+
+// A's rows stored sparse: the same optimum, multipliers and passes as stored dense, on rows with
+// a few nonzeros each (as the effort's bound rows), with and without a hint.
+TEST(DenseQp, SparseRowsGiveWhatDenseRowsGive) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  fd::DenseQpWorkspace w;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 5 + trial % 20, m = 12 * n;
+    Qp qp = random_qp(rng, n, m, trial % 2 ? 1e4 : 10.0);
+    for (int i = 0; i < m; ++i)  // about a fifth of each row, some rows all zero
+      for (int j = 0; j < n; ++j)
+        if (unit(rng) > 0.2) qp.A(i, j) = 0.0;
+    const fd::SparseRows sparse = qp.A.sparseView();
+    Eigen::VectorXd x_dense, lambda_dense, x_sparse, lambda_sparse;
+    const fd::DenseQpResult dense = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_dense, &lambda_dense);
+    const int dense_passes = w.full_passes + w.partial_passes;
+    std::vector<int> hint = w.active;
+    const fd::DenseQpResult r = fd::solve_dense_qp(qp.H, qp.g, sparse, qp.b, w, x_sparse, &lambda_sparse);
+    ASSERT_EQ(dense.solved, r.solved) << "trial " << trial;
+    if (!r.solved) continue;
+    EXPECT_EQ(w.full_passes + w.partial_passes, dense_passes) << "trial " << trial;
+    EXPECT_LT(kkt_residual(qp, x_sparse, lambda_sparse), 1e-8) << "trial " << trial;
+    EXPECT_LT((x_sparse - x_dense).cwiseAbs().maxCoeff(), 1e-9 * (1.0 + x_dense.cwiseAbs().maxCoeff())) << "trial " << trial;
+    EXPECT_LT((lambda_sparse - lambda_dense).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + lambda_dense.cwiseAbs().maxCoeff()));
+    const fd::DenseQpResult hot = fd::solve_dense_qp(qp.H, qp.g, sparse, qp.b, w, x_sparse, &lambda_sparse, 1e-10, &hint);
+    ASSERT_TRUE(hot.solved) << hot.failure;
+    EXPECT_LT(kkt_residual(qp, x_sparse, lambda_sparse), 1e-8) << "trial " << trial;
+  }
+}

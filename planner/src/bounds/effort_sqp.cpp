@@ -38,34 +38,50 @@ double EffortSqp::violation(const Eigen::VectorXd& theta) const {
   return v;
 }
 
-// The QP's rows J d >= lower: the bound rows linearized at theta (a violated one asked to clear,
-// one theta does not move only not to get worse), the linear rows, the box.
-void EffortSqp::qpRows(const Eigen::VectorXd& theta, Eigen::MatrixXd& J, Eigen::VectorXd& lower) {
+namespace {
+// The largest |entry| of a row: 0 for a row no coefficient moves.
+double row_reach(const SparseRows& J, Eigen::Index row) {
+  double largest = 0.0;
+  for (SparseRows::InnerIterator it(J, row); it; ++it) largest = std::max(largest, std::abs(it.value()));
+  return largest;
+}
+}  // namespace
+
+// The QP's rows J d >= lower, stored sparse (each touches a few dozen of theta's coefficients):
+// the bound rows linearized at theta (a violated one asked to clear, one theta does not move only
+// not to get worse), the linear rows, the box.
+void EffortSqp::qpRows(const Eigen::VectorXd& theta, SparseRows& J, Eigen::VectorXd& lower) {
   const LinearProgram& lp = p_.linear;
   const Eigen::Index n = theta.size(), linear = lp.G.rows();
   BoundRowsAt& at = rows_at_theta_;
   at = BoundRowsAt{};
   if (!p_.bound_points.empty()) at = evaluate_rows(p_.flat, p_.bound_points, p_.a_min, theta, true);
   const auto bound_rows = static_cast<Eigen::Index>(at.value.size());
-  J.setZero(bound_rows + linear + 2 * n, n);
-  lower.resize(J.rows());
-  place_linearized_bound_rows(at, J, lower);
-  J.middleRows(bound_rows, linear) = lp.G;
-  lower.segment(bound_rows, linear) = lp.row_lower - lp.G * theta;
-  // A row no coefficient moves (a reserve at t = 0, fixed by the muscles' state) only must not
-  // get worse: its margin may be out of reach.
+  triplets_.assign(at.jacobian.begin(), at.jacobian.end());
   for (Eigen::Index r = 0; r < linear; ++r)
-    if (lp.G.row(r).cwiseAbs().maxCoeff() <= 1e-12)
-      lower[bound_rows + r] = std::min(lower[bound_rows + r], 0.0);
-  J.block(bound_rows + linear, 0, n, n).setIdentity();
+    for (Eigen::Index c = 0; c < n; ++c)
+      if (lp.G(r, c) != 0.0) triplets_.emplace_back(static_cast<int>(bound_rows + r), static_cast<int>(c), lp.G(r, c));
+  for (Eigen::Index c = 0; c < n; ++c) {
+    triplets_.emplace_back(static_cast<int>(bound_rows + linear + c), static_cast<int>(c), 1.0);
+    triplets_.emplace_back(static_cast<int>(bound_rows + linear + n + c), static_cast<int>(c), -1.0);
+  }
+  J.resize(bound_rows + linear + 2 * n, n);
+  J.setFromTriplets(triplets_.begin(), triplets_.end());  // repeated entries add up
+  lower.resize(J.rows());
+  for (Eigen::Index r = 0; r < bound_rows; ++r) lower[r] = -at.value[static_cast<std::size_t>(r)];
+  lower.segment(bound_rows, linear) = lp.row_lower - lp.G * theta;
+  // A row no coefficient moves (a bound row at t = 0, a reserve there: fixed by the muscles'
+  // state) only must not get worse: its margin may be out of reach.
+  for (Eigen::Index r = 0; r < bound_rows + linear; ++r)
+    if (row_reach(J, r) <= 1e-12) lower[r] = std::min(lower[r], 0.0);
   lower.segment(bound_rows + linear, n) = lp.x_lower - theta;
-  J.bottomRows(n) = -Eigen::MatrixXd::Identity(n, n);
   lower.tail(n) = theta - lp.x_upper;
 }
 
 bool EffortSqp::descend(Eigen::VectorXd& theta, int& steps, int max_steps) {
   double current = violation(theta);
-  Eigen::MatrixXd J, H;
+  SparseRows J;
+  Eigen::MatrixXd H;
   Eigen::VectorXd lower, d, multipliers;
   while (steps < max_steps) {
     qpRows(theta, J, lower);
@@ -132,9 +148,8 @@ bool EffortSqp::lineSearch(const Eigen::VectorXd& d, Eigen::VectorXd& theta, dou
 
 // d solved again with each bound row's lower bound moved by how far the row at theta + d differs
 // from its linearization. False when there are no bound rows or the QP fails.
-bool EffortSqp::correctedStep(const Eigen::VectorXd& theta, const Eigen::MatrixXd& H,
-                              const Eigen::MatrixXd& J, const Eigen::VectorXd& lower,
-                              Eigen::VectorXd& d, std::vector<int>& hint) {
+bool EffortSqp::correctedStep(const Eigen::VectorXd& theta, const Eigen::MatrixXd& H, const SparseRows& J,
+                              const Eigen::VectorXd& lower, Eigen::VectorXd& d, std::vector<int>& hint) {
   const std::vector<double>& before = rows_at_theta_.value;
   if (before.empty()) return false;
   const std::vector<double> after =
@@ -142,8 +157,7 @@ bool EffortSqp::correctedStep(const Eigen::VectorXd& theta, const Eigen::MatrixX
   Eigen::VectorXd corrected = lower;
   for (std::size_t i = 0; i < before.size(); ++i) {
     const auto row = static_cast<Eigen::Index>(i);
-    if (J.row(row).cwiseAbs().maxCoeff() > 1e-12)
-      corrected[row] -= after[i] - before[i] - J.row(row).dot(d);
+    if (row_reach(J, row) > 1e-12) corrected[row] -= after[i] - before[i] - (J.row(row) * d).value();
   }
   Eigen::VectorXd step;
   const DenseQpResult r = solve_dense_qp(H, model_.gradient, J, corrected, qp_, step, nullptr, 1e-10, &hint);

@@ -65,12 +65,11 @@ class EffortSqp {
 
  private:
   double violation(const Eigen::VectorXd& theta) const;
-  void qpRows(const Eigen::VectorXd& theta, Eigen::MatrixXd& J, Eigen::VectorXd& lower);
+  void qpRows(const Eigen::VectorXd& theta, SparseRows& J, Eigen::VectorXd& lower);
   double predictedDecrease(const Eigen::VectorXd& d) const;
   bool lineSearch(const Eigen::VectorXd& d, Eigen::VectorXd& theta, double& current);
-  bool correctedStep(const Eigen::VectorXd& theta, const Eigen::MatrixXd& H,
-                     const Eigen::MatrixXd& J, const Eigen::VectorXd& lower, Eigen::VectorXd& d,
-                     std::vector<int>& hint);
+  bool correctedStep(const Eigen::VectorXd& theta, const Eigen::MatrixXd& H, const SparseRows& J,
+                     const Eigen::VectorXd& lower, Eigen::VectorXd& d, std::vector<int>& hint);
   void keepMultipliers(const Eigen::VectorXd& all);
   // active_ as row indices of the QP qpRows built (entries beyond their block left out), and back.
   std::vector<int> qpHint(Eigen::Index n) const;
@@ -82,6 +81,7 @@ class EffortSqp {
   BoundRowsAt rows_at_theta_;  // the bound rows at theta, as the last QP linearized them
   DenseQpWorkspace qp_;
   EffortSqpActiveRows active_;
+  std::vector<Eigen::Triplet<double>> triplets_;  // qpRows' scratch
   int qp_row_changes_ = 0;
   std::vector<double> bound_multipliers_;
   Eigen::VectorXd linear_multipliers_;

@@ -68,7 +68,31 @@ void drop_row(DenseQpWorkspace& w, int q, int l) {
 
 [[noreturn]] void refuse_non_finite() { throw std::invalid_argument("dense QP: NaN or Inf in H, g, A or b"); }
 
-void check_sizes(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A, const Eigen::VectorXd& b) {
+// A's rows, dense (column-major) or sparse (row-major): a row's product with x, a row copied out
+// dense, every row's norm.
+double row_dot(const Eigen::MatrixXd& A, Eigen::Index row, const Eigen::VectorXd& x) { return A.row(row).dot(x); }
+double row_dot(const SparseRows& A, Eigen::Index row, const Eigen::VectorXd& x) {
+  double sum = 0.0;
+  for (SparseRows::InnerIterator it(A, row); it; ++it) sum += it.value() * x[it.index()];
+  return sum;
+}
+void copy_row(const Eigen::MatrixXd& A, Eigen::Index row, Eigen::VectorXd& out) { out = A.row(row).transpose(); }
+void copy_row(const SparseRows& A, Eigen::Index row, Eigen::VectorXd& out) {
+  out.setZero(A.cols());
+  for (SparseRows::InnerIterator it(A, row); it; ++it) out[it.index()] = it.value();
+}
+void row_norms(const Eigen::MatrixXd& A, Eigen::VectorXd& out) {  // column by column: A is column-major
+  out.setZero(A.rows());
+  for (Eigen::Index j = 0; j < A.cols(); ++j) out.array() += A.col(j).array().square();
+  out = out.cwiseSqrt();
+}
+void row_norms(const SparseRows& A, Eigen::VectorXd& out) {
+  out.resize(A.rows());
+  for (Eigen::Index i = 0; i < A.rows(); ++i) out[i] = A.row(i).norm();
+}
+
+template <class Rows>
+void check_sizes(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Rows& A, const Eigen::VectorXd& b) {
   const Eigen::Index n = g.size();
   if (n == 0 || H.rows() != n || H.cols() != n) throw std::invalid_argument("dense QP: H must be n x n with n = size of g > 0");
   if (A.cols() != n || A.rows() != b.size()) throw std::invalid_argument("dense QP: A must be m x n with m = size of b");
@@ -83,13 +107,15 @@ double violation_threshold(const Eigen::VectorXd& b, Eigen::Index row, double to
 }
 
 // A_i x - b_i of one row; x is finite, so a non-finite entry of A_i shows here.
-double slack_of(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, Eigen::Index row) {
-  const double slack = A.row(row).dot(x) - b[row];
+template <class Rows>
+double slack_of(const Rows& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, Eigen::Index row) {
+  const double slack = row_dot(A, row, x) - b[row];
   if (!std::isfinite(slack)) refuse_non_finite();
   return slack;
 }
 
-bool violated_at(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, int row,
+template <class Rows>
+bool violated_at(const Rows& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, int row,
                  double tolerance) {
   return slack_of(A, b, x, row) < violation_threshold(b, row, tolerance);
 }
@@ -102,8 +128,9 @@ void list_violated(const Eigen::VectorXd& b, DenseQpWorkspace& w, double toleran
   w.violated.emplace_back(norm > 0.0 ? slack / norm : -kInfinity, static_cast<int>(row));
 }
 
-// A x over every row, the row norms once per solve (column by column: A is column-major).
-void full_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
+// A x over every row, the row norms once per solve.
+template <class Rows>
+void full_pass(const Rows& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
                double tolerance) {
   ++w.full_passes;
   w.slack.noalias() = A * x;
@@ -111,11 +138,7 @@ void full_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::
   if (!w.slack.allFinite()) refuse_non_finite();
   w.slack -= b;
   w.pass_x = x;
-  if (w.row_norm.size() != A.rows()) {
-    w.row_norm.setZero(A.rows());
-    for (Eigen::Index j = 0; j < A.cols(); ++j) w.row_norm.array() += A.col(j).array().square();
-    w.row_norm = w.row_norm.cwiseSqrt();
-  }
+  if (w.row_norm.size() != A.rows()) row_norms(A, w.row_norm);
   for (Eigen::Index i = 0; i < A.rows(); ++i) list_violated(b, w, tolerance, i, w.slack[i]);
 }
 
@@ -123,7 +146,8 @@ void full_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::
 // (Cauchy-Schwarz); the others are computed alone. False, with nothing listed, when they are more
 // than kMostRowsComputedAlone of the rows (a full pass is cheaper then) or there was no full pass.
 constexpr double kMostRowsComputedAlone = 0.125;
-bool partial_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
+template <class Rows>
+bool partial_pass(const Rows& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
                   double tolerance) {
   if (w.pass_x.size() != x.size()) return false;
   const double moved = (x - w.pass_x).norm();
@@ -141,7 +165,8 @@ bool partial_pass(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eige
 // Every row violated at x into w.violated, most violated last; false when every row holds to
 // the tolerance. One pass serves the additions until its list is used up (each rechecked at the x
 // of its turn): a pass per addition (A x over some 13 000 rows) was most of a QP's time.
-bool collect_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
+template <class Rows>
+bool collect_violated(const Rows& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
                       double tolerance) {
   w.violated.clear();
   if (!partial_pass(A, b, x, w, tolerance)) full_pass(A, b, x, w, tolerance);
@@ -152,7 +177,8 @@ bool collect_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const 
 
 // The next row to add: a hinted one, else one of the last pass's (in its order) still violated
 // at x, else the most violated of a new pass; -1 when every row holds.
-int next_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
+template <class Rows>
+int next_violated(const Rows& A, const Eigen::VectorXd& b, const Eigen::VectorXd& x, DenseQpWorkspace& w,
                   double tolerance) {
   while (true) {
     while (!w.violated.empty()) {
@@ -175,7 +201,8 @@ int next_violated(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, const Eige
 constexpr int kWarmStartRounds = 3;
 constexpr double kDependentRow = 1e-10;  // |R_kk| below this times the largest: dependent rows
 
-bool start_on_hinted_rows(const Eigen::LLT<Eigen::MatrixXd>& cholesky, const Eigen::VectorXd& g, const Eigen::MatrixXd& A,
+template <class Rows>
+bool start_on_hinted_rows(const Eigen::LLT<Eigen::MatrixXd>& cholesky, const Eigen::VectorXd& g, const Rows& A,
                           const Eigen::VectorXd& b, const std::vector<int>& hint, DenseQpWorkspace& w, Eigen::VectorXd& x,
                           int& q) {
   const Eigen::Index n = g.size(), m = A.rows();
@@ -187,7 +214,10 @@ bool start_on_hinted_rows(const Eigen::LLT<Eigen::MatrixXd>& cholesky, const Eig
   for (int round = 0; round < kWarmStartRounds && !rows.empty(); ++round) {
     const auto k = static_cast<Eigen::Index>(rows.size());
     Eigen::MatrixXd M(n, k);
-    for (Eigen::Index c = 0; c < k; ++c) M.col(c) = A.row(rows[static_cast<std::size_t>(c)]).transpose();
+    for (Eigen::Index c = 0; c < k; ++c) {
+      copy_row(A, rows[static_cast<std::size_t>(c)], w.row);
+      M.col(c) = w.row;
+    }
     cholesky.matrixL().solveInPlace(M);  // L^-1 A_S^T
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(M);
     Eigen::MatrixXd R = qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
@@ -223,11 +253,10 @@ bool start_on_hinted_rows(const Eigen::LLT<Eigen::MatrixXd>& cholesky, const Eig
   return false;
 }
 
-}  // namespace
-
-DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A,
-                             const Eigen::VectorXd& b, DenseQpWorkspace& w, Eigen::VectorXd& x,
-                             Eigen::VectorXd* multipliers, double feasibility_tolerance, const std::vector<int>* hint) {
+template <class Rows>
+DenseQpResult solve(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Rows& A, const Eigen::VectorXd& b,
+                    DenseQpWorkspace& w, Eigen::VectorXd& x, Eigen::VectorXd* multipliers, double feasibility_tolerance,
+                    const std::vector<int>* hint) {
   check_sizes(H, g, A, b);
   const int n = static_cast<int>(g.size()), m = static_cast<int>(A.rows());
   w.cholesky.compute(H);
@@ -268,7 +297,7 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
     }
     if (p < 0) p = next_violated(A, b, x, w, feasibility_tolerance);
     if (p < 0) break;
-    w.row = A.row(p).transpose();  // contiguous: A is column-major, its rows strided by m
+    copy_row(A, p, w.row);  // contiguous: a dense A is column-major, its rows strided by m
     double u_new = 0.0;  // the multiplier of row p while it joins
     while (true) {
       if (++result.iterations > max_iterations) {
@@ -314,6 +343,20 @@ DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g,
     for (int k = 0; k < q; ++k) (*multipliers)[w.active[static_cast<std::size_t>(k)]] = std::max(w.u[k], 0.0);
   }
   return result;
+}
+
+}  // namespace
+
+DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A,
+                             const Eigen::VectorXd& b, DenseQpWorkspace& w, Eigen::VectorXd& x,
+                             Eigen::VectorXd* multipliers, double feasibility_tolerance, const std::vector<int>* hint) {
+  return solve(H, g, A, b, w, x, multipliers, feasibility_tolerance, hint);
+}
+
+DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const SparseRows& A,
+                             const Eigen::VectorXd& b, DenseQpWorkspace& w, Eigen::VectorXd& x,
+                             Eigen::VectorXd* multipliers, double feasibility_tolerance, const std::vector<int>* hint) {
+  return solve(H, g, A, b, w, x, multipliers, feasibility_tolerance, hint);
 }
 
 }  // namespace flatsos::planner::detail

@@ -16,8 +16,13 @@
 #include <vector>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 
 namespace flatsos::planner::detail {
+
+/// A's rows stored sparse, row by row: the effort's bound and reserve rows touch a few dozen of a
+/// plan's hundreds of coefficients each.
+using SparseRows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
 /// Buffers reused between solves of the same size (no allocation once sized).
 struct DenseQpWorkspace {
@@ -49,6 +54,11 @@ struct DenseQpResult {
 /// joining while violated. Either spares most scans of every row for the most violated (the same
 /// optimum; on the open-loop effort's 3000 rows and 200 coefficients most of the time).
 DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const Eigen::MatrixXd& A,
+                             const Eigen::VectorXd& b, DenseQpWorkspace& workspace, Eigen::VectorXd& x,
+                             Eigen::VectorXd* multipliers = nullptr, double feasibility_tolerance = 1e-10,
+                             const std::vector<int>* hint = nullptr);
+/// The same with A's rows sparse: every pass over the rows costs their nonzeros, not m n.
+DenseQpResult solve_dense_qp(const Eigen::MatrixXd& H, const Eigen::VectorXd& g, const SparseRows& A,
                              const Eigen::VectorXd& b, DenseQpWorkspace& workspace, Eigen::VectorXd& x,
                              Eigen::VectorXd* multipliers = nullptr, double feasibility_tolerance = 1e-10,
                              const std::vector<int>* hint = nullptr);
