@@ -224,8 +224,9 @@ TEST(DenseQp, HintedRowsThatDoNotBindOrAreDependentStillReachTheOptimum) {
   EXPECT_GT(one_by_one, 20);
 }
 
-// A's rows stored sparse: the same optimum, multipliers and passes as stored dense, on rows with
-// a few nonzeros each (as the effort's bound rows), with and without a hint.
+// A's rows stored sparse: the same optimum and multipliers as stored dense (their sums rounded
+// otherwise, so not necessarily the same passes), on rows with a few nonzeros each (as the
+// effort's bound rows), with and without a hint.
 TEST(DenseQp, SparseRowsGiveWhatDenseRowsGive) {
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -239,12 +240,10 @@ TEST(DenseQp, SparseRowsGiveWhatDenseRowsGive) {
     const fd::SparseRows sparse = qp.A.sparseView();
     Eigen::VectorXd x_dense, lambda_dense, x_sparse, lambda_sparse;
     const fd::DenseQpResult dense = fd::solve_dense_qp(qp.H, qp.g, qp.A, qp.b, w, x_dense, &lambda_dense);
-    const int dense_passes = w.full_passes + w.partial_passes;
     std::vector<int> hint = w.active;
     const fd::DenseQpResult r = fd::solve_dense_qp(qp.H, qp.g, sparse, qp.b, w, x_sparse, &lambda_sparse);
     ASSERT_EQ(dense.solved, r.solved) << "trial " << trial;
     if (!r.solved) continue;
-    EXPECT_EQ(w.full_passes + w.partial_passes, dense_passes) << "trial " << trial;
     EXPECT_LT(kkt_residual(qp, x_sparse, lambda_sparse), 1e-8) << "trial " << trial;
     EXPECT_LT((x_sparse - x_dense).cwiseAbs().maxCoeff(), 1e-9 * (1.0 + x_dense.cwiseAbs().maxCoeff())) << "trial " << trial;
     EXPECT_LT((lambda_sparse - lambda_dense).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + lambda_dense.cwiseAbs().maxCoeff()));
