@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
@@ -186,6 +187,7 @@ TEST(DenseQp, AHintOfRowsToTryFirstReachesTheSameOptimum) {
     EXPECT_LT((x_hot - x_cold).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + x_cold.cwiseAbs().maxCoeff())) << "trial " << trial;
     EXPECT_NEAR(hot.objective, cold.objective, 1e-9 * (1.0 + std::abs(cold.objective)));
   }
+  std::printf("hinted solves started on the hinted rows: %d of 40\n", started);
   EXPECT_GE(started, 30);  // of 40: the last optimum's rows, the same but for g
 }
 
@@ -220,8 +222,9 @@ TEST(DenseQp, HintedRowsThatDoNotBindOrAreDependentStillReachTheOptimum) {
     EXPECT_LT(kkt_residual(qp, x_hot, lambda_hot), 1e-8) << "trial " << trial;
     EXPECT_LT((x_hot - x_cold).cwiseAbs().maxCoeff(), 1e-7 * (1.0 + x_cold.cwiseAbs().maxCoeff())) << "trial " << trial;
   }
+  std::printf("started on the hinted rows %d, one by one %d\n", started, one_by_one);
   EXPECT_GT(started, 0);
-  EXPECT_GT(one_by_one, 20);
+  EXPECT_GE(one_by_one, 20);  // at least the 20 with dependent rows
 }
 
 // A's rows stored sparse: the same optimum and multipliers as stored dense (their sums rounded
