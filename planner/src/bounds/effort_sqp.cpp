@@ -58,9 +58,8 @@ void EffortSqp::qpRows(const Eigen::VectorXd& theta, SparseRows& J, Eigen::Vecto
   if (!p_.bound_points.empty()) at = evaluate_rows(p_.flat, p_.bound_points, p_.a_min, theta, true);
   const auto bound_rows = static_cast<Eigen::Index>(at.value.size());
   triplets_.assign(at.jacobian.begin(), at.jacobian.end());
-  for (Eigen::Index r = 0; r < linear; ++r)
-    for (Eigen::Index c = 0; c < n; ++c)
-      if (lp.G(r, c) != 0.0) triplets_.emplace_back(static_cast<int>(bound_rows + r), static_cast<int>(c), lp.G(r, c));
+  for (const Eigen::Triplet<double>& e : linear_entries_)
+    triplets_.emplace_back(static_cast<int>(bound_rows) + e.row(), e.col(), e.value());
   for (Eigen::Index c = 0; c < n; ++c) {
     triplets_.emplace_back(static_cast<int>(bound_rows + linear + c), static_cast<int>(c), 1.0);
     triplets_.emplace_back(static_cast<int>(bound_rows + linear + n + c), static_cast<int>(c), -1.0);
@@ -83,6 +82,11 @@ bool EffortSqp::descend(Eigen::VectorXd& theta, int& steps, int max_steps) {
   SparseRows J;
   Eigen::MatrixXd H;
   Eigen::VectorXd lower, d, multipliers;
+  const Eigen::MatrixXd& G = p_.linear.G;
+  linear_entries_.clear();
+  for (Eigen::Index c = 0; c < G.cols(); ++c)  // column by column: G is column-major
+    for (Eigen::Index r = 0; r < G.rows(); ++r)
+      if (G(r, c) != 0.0) linear_entries_.emplace_back(static_cast<int>(r), static_cast<int>(c), G(r, c));
   while (steps < max_steps) {
     qpRows(theta, J, lower);
     std::vector<int> hint = qpHint(theta.size());
