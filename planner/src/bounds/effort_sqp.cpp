@@ -98,6 +98,7 @@ bool EffortSqp::descend(Eigen::VectorXd& theta, int& steps, int max_steps) {
     qp_row_changes_ += r.iterations;
     if (!r.solved) return fail("the effort's QP was not solved: " + r.failure);
     keepActive(qp_.active, theta.size());
+    hint = qp_.active;  // the second-order correction's QP starts from this one's rows
     ++steps;
     keepMultipliers(multipliers);
     if (current == 0.0 &&
