@@ -108,11 +108,13 @@ void expect_all_certified(const std::vector<Polynomial>& ps, const Certification
   }
 }
 
-// No closed-form shortcut: what is not split off goes to Ipopt.
+// No closed form (neither the Bernstein shortcut nor the roots): what is not split off goes to
+// Ipopt.
 CertificationStudyOptions ipopt_only(double tol = kTol) {
   CertificationStudyOptions o;
   o.tolerance = tol;
   o.closed_form_shortcut = false;
+  o.closed_form_from_roots = false;
   return o;
 }
 // Nothing but the L L^T program: no shortcut, no deflation of near-zero minima, no retry.
@@ -226,13 +228,19 @@ TEST(SosCertificate, StrictlyPositiveDegreesZeroToEight) {
   std::vector<Polynomial> ps;
   for (int n = 0; n <= 8; ++n) ps.push_back(shifted_chebyshev(n) + poly({1.5}));  // min 0.5
   ps[0] = poly({2.0});
-  const CertificationResult res = certify_nonnegative_on_unit_interval(ps, kTol);
-  expect_all_certified(ps, res, kTol);
-  EXPECT_EQ(res.ipopt_calls, 1);
-  for (int n = 0; n <= 8; ++n) {
-    EXPECT_EQ(res.certificates[static_cast<std::size_t>(n)].degree, n);
-    // T_n(2s-1) + 1.5 has negative Bernstein coefficients for n >= 2: those need Ipopt.
-    EXPECT_EQ(res.certificates[static_cast<std::size_t>(n)].from_ipopt, n >= 2) << "degree " << n;
+  // T_n(2s-1) + 1.5 has negative Bernstein coefficients for n >= 2: those need Ipopt when the
+  // roots are not used, and by default none does.
+  CertificationStudyOptions bernstein_then_ipopt;
+  bernstein_then_ipopt.closed_form_from_roots = false;
+  for (const CertificationStudyOptions& o : {bernstein_then_ipopt, CertificationStudyOptions{}}) {
+    const CertificationResult res = certify_nonnegative_on_unit_interval(ps, o);
+    expect_all_certified(ps, res, kTol);
+    EXPECT_EQ(res.ipopt_calls, o.closed_form_from_roots ? 0 : 1);
+    for (int n = 0; n <= 8; ++n) {
+      EXPECT_EQ(res.certificates[static_cast<std::size_t>(n)].degree, n);
+      EXPECT_EQ(res.certificates[static_cast<std::size_t>(n)].from_ipopt, !o.closed_form_from_roots && n >= 2)
+          << "degree " << n;
+    }
   }
   // Every basis gives a valid certificate (cross-check of the three coefficient maps).
   for (GramBasis basis : {GramBasis::Bernstein, GramBasis::Chebyshev, GramBasis::Monomial}) {
@@ -259,10 +267,78 @@ TEST(SosCertificate, RandomBatchOfFortyInOneCall) {
   std::cout << "[ measure  ] 40 random, degrees 2..8, margins {0,1e-6,1e-3,0.1}: "
             << res.ipopt_iterations << " Ipopt iterations, " << res.solve_seconds * 1e3 << " ms ("
             << res.ipopt_variables << " variables, " << res.ipopt_constraints << " constraints)\n";
-  // Default options: the closed form takes what it can, the rest still goes to one call.
+  // Default options: the closed forms (Bernstein, then the roots) take every one.
   const CertificationResult by_default = certify_nonnegative_on_unit_interval(ps, kTol);
   expect_all_certified(ps, by_default, kTol);
-  EXPECT_EQ(by_default.ipopt_calls, 1);
+  EXPECT_EQ(by_default.ipopt_calls, 0);
+}
+
+// p = c prod(factors), each factor >= 0 on [0, 1]: real roots below 0 and above 1, double roots
+// inside, roots at the ends, complex pairs near and far from [0, 1], and the same shifted by a
+// minimum of 1e-12 * scale (two real roots, a hair apart, become a complex pair).
+std::vector<Polynomial> products_of_root_factors(std::mt19937& rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Polynomial> ps;
+  for (int i = 0; i < 120; ++i) {
+    Polynomial p = poly({0.1 + 10.0 * unit(rng)});
+    const int factors = 1 + i % 5;
+    for (int k = 0; k < factors; ++k) {
+      switch ((i + k) % 6) {
+        case 0: p = p * poly({3.0 * unit(rng), 1.0}); break;                    // s + |r|
+        case 1: p = p * poly({1.0 + 3.0 * unit(rng), -1.0}); break;             // r - s, r >= 1
+        case 2: { const double m = unit(rng); p = p * s_minus(m) * s_minus(m); break; }  // (s - m)^2
+        case 3: p = p * (i % 2 == 0 ? poly({0.0, 1.0}) : poly({1.0, -1.0})); break;       // s or 1 - s
+        case 4: { const double a = unit(rng), b = 1e-3 + 0.5 * unit(rng);                // (s - a)^2 + b^2
+                  p = p * (s_minus(a) * s_minus(a) + poly({b * b})); break; }
+        default: { const double a = 4.0 * unit(rng) - 2.0, b = 2.0 * unit(rng);
+                   p = p * (s_minus(a) * s_minus(a) + poly({b * b})); break; }
+      }
+    }
+    if (i % 3 == 2) p = p + poly({1e-12 * max_abs(p)});
+    ps.push_back(p);
+  }
+  return ps;
+}
+
+// The certificate assembled from the roots (the constructive proof of Lukacs' theorem) certifies
+// every product of nonnegative factors without Ipopt, in each basis; without it Ipopt is needed.
+TEST(SosCertificate, ProductsOfRootFactorsAreCertifiedFromTheirRoots) {
+  std::mt19937 rng(1729);
+  const std::vector<Polynomial> ps = products_of_root_factors(rng);
+  for (GramBasis basis : {GramBasis::Bernstein, GramBasis::Chebyshev, GramBasis::Monomial}) {
+    SCOPED_TRACE(flatsos::planner::gram_basis_name(basis));
+    CertificationStudyOptions o;
+    o.basis = basis;
+    const CertificationResult res = certify_nonnegative_on_unit_interval(ps, o);
+    expect_all_certified(ps, res, kTol);
+    EXPECT_EQ(res.ipopt_calls, 0);
+    double worst = 0.0;
+    for (const LukacsCertificate& c : res.certificates) worst = std::max(worst, c.max_coefficient_residual / c.scale);
+    std::cout << "[ measure  ] 120 products of root factors, degrees 1..11, " << flatsos::planner::gram_basis_name(basis)
+              << ": largest relative residual " << worst << "\n";
+  }
+  CertificationStudyOptions without_roots;
+  without_roots.closed_form_from_roots = false;
+  EXPECT_EQ(certify_nonnegative_on_unit_interval(ps, without_roots).ipopt_calls, 1);
+}
+
+std::vector<Polynomial> negative_somewhere();
+
+// The roots never certify what is negative somewhere on [0, 1], even without the pre-check:
+// the signs of the factors or the residual give it away.
+TEST(SosCertificate, TheRootsDoNotCertifyNegativePolynomials) {
+  CertificationStudyOptions o;
+  o.precheck = false;
+  o.deflate_near_zeros = false;
+  o.max_iterations = 30;
+  const std::vector<Polynomial> ps = negative_somewhere();
+  const CertificationResult res = certify_nonnegative_on_unit_interval(ps, o);
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    EXPECT_FALSE(res.certified[i]) << i;
+    EXPECT_FALSE(res.certificates[i].L0.size() > 0 && !res.certificates[i].from_ipopt &&
+                 res.certificates[i].max_coefficient_residual <= kTol * res.certificates[i].scale)
+        << i;
+  }
 }
 
 // Reports (does not time-test) the batches the planner needs: 40 quartics, 40 sextics, by the

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -16,6 +17,7 @@
 #include "numerics/lukacs_algebra.hpp"
 #include "numerics/lukacs_basis.hpp"
 #include "numerics/lukacs_nlp.hpp"
+#include "numerics/lukacs_roots.hpp"
 
 // Why the defaults are what they are (basis, factor layout, start, objective, splits):
 // docs/method/sos_certificates.md.
@@ -83,6 +85,20 @@ LukacsCertificate finished(const LukacsCertificate& qc, const std::vector<Deflat
   return full;
 }
 
+// The certificate of p from a closed form of q (p with `steps` split off): the diagonal Bernstein
+// Gram when q's Bernstein coefficients are >= 0 (exact), else the one assembled from q's roots
+// when its residual passes (the roots of q are computed, not exact). None: Ipopt's turn.
+std::optional<LukacsCertificate> closed_form(const VectorXd& q, const std::vector<DeflationStep>& steps, double scale,
+                                             const VectorXd& p, const CertificationStudyOptions& options) {
+  if (closed_form_certifies(q, scale, options)) return finished(bernstein_diagonal_certificate(q), steps, scale, p);
+  if (!options.closed_form_from_roots) return std::nullopt;
+  const std::optional<LukacsCertificate> from_roots = certificate_from_roots(q, options.basis);
+  if (!from_roots) return std::nullopt;
+  LukacsCertificate cert = finished(*from_roots, steps, scale, p);
+  if (!(cert.max_coefficient_residual <= options.tolerance * scale)) return std::nullopt;
+  return cert;
+}
+
 // The Ipopt block for q (polynomial ip after deflation). A computed minimum slightly below zero
 // (within the tolerance, else refused before) would make the exact problem infeasible and Ipopt
 // would iterate to its limit: the block certifies q + delta instead, and delta counts in the
@@ -136,19 +152,21 @@ void prepare_polynomial(std::size_t ip, const Polynomial& poly, const Certificat
     cert.L1.resize(0, 0);
     return;
   }
-  if (closed_form_certifies(pc, scale, options)) {
-    cert = finished(bernstein_diagonal_certificate(pc), {}, scale, c);
+  if (auto closed = closed_form(pc, {}, scale, c, options)) {
+    cert = *closed;
     return;
   }
   // Near-zero minima are split off exactly (at the global minimum: s, 1 - s or (s - r)^2, the
-  // small remainder certified apart): the L L^T program is nearly singular there.
+  // small remainder certified apart): the L L^T program is nearly singular there, and the roots
+  // of a cluster are too inexact for the closed form.
   Deflation defl;
   defl.q = pc;
   if (options.deflate_near_zeros) defl = deflate(pc, options.deflation_threshold, 0.01 * tol * scale);
-  if (closed_form_certifies(defl.q, scale, options)) {
-    cert = finished(bernstein_diagonal_certificate(defl.q), defl.steps, scale, c);
-    return;
-  }
+  if (!defl.steps.empty())
+    if (auto closed = closed_form(defl.q, defl.steps, scale, c, options)) {
+      cert = *closed;
+      return;
+    }
   blocks.push_back(ipopt_block(ip, defl, res.interval_minimum[ip], tol, options));
 }
 

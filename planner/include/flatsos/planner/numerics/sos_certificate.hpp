@@ -70,8 +70,8 @@ struct LukacsCertificate {
   /// A bound on |p - r| over [0, 1], so p(s) >= -residual_bound there: the smaller of
   /// sum_k |r_k - p_k| and the largest Bernstein coefficient of |r - p|.
   double residual_bound = std::numeric_limits<double>::infinity();
-  /// Whether Ipopt found (part of) it; false: closed form throughout (degree <= 1, zero, or
-  /// Bernstein coefficients >= 0, possibly after the splits).
+  /// Whether Ipopt found (part of) it; false: closed form throughout (degree <= 1, zero,
+  /// Bernstein coefficients >= 0, possibly after the splits, or assembled from p's roots).
   bool from_ipopt = false;
   /// Factors s, 1 - s or (s - r)^2 split off at near-zero minima before solving (see
   /// CertificationOptions::deflate_near_zeros). The factors above are for p itself.

@@ -14,6 +14,9 @@ struct CertificationStudyOptions : CertificationOptions {
   GramBasis basis = GramBasis::Bernstein;
   /// Diagonal Bernstein certificate without Ipopt when all Bernstein coefficients are >= 0.
   bool closed_form_shortcut = true;
+  /// Otherwise, before Ipopt: the certificate assembled from p's roots (lukacs_roots.hpp), kept
+  /// when its residual passes. false: Ipopt certifies what the Bernstein shortcut does not.
+  bool closed_form_from_roots = true;
   /// Refuse, without Ipopt, polynomials whose minimum on [0,1] is < -tolerance * scale. Only
   /// tests switch it off (to see that Ipopt alone refuses negative polynomials).
   bool precheck = true;
