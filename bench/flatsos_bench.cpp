@@ -290,10 +290,11 @@ int main(int argc, char** argv) try {
                 {"total", stats(times, 1e3, "ms")}};
   };
   // The same problems by the direct-collocation reference (Hermite-Simpson, 100 intervals: its cost
-  // has converged to 0.01 %), beside the flatness plan whose basis comes within 1 % of it.
+  // has converged to 0.01 %), beside the flatness plan in the default basis (quintic B-splines on
+  // 48 spans), within 0.6 % of it at both durations (cubic ones are 0.92 % above in 1.5 s).
   {
     json versus = json::array();
-    for (const auto& [T, degree, spans] : {std::tuple{ol.duration_s, 5, 48}, std::tuple{0.5 * ol.duration_s, 3, 48}}) {
+    for (const auto& [T, degree, spans] : {std::tuple{ol.duration_s, 5, 48}, std::tuple{0.5 * ol.duration_s, 5, 48}}) {
       fpl::OpenLoopOptions o = ol;
       o.duration_s = T;
       o.sos.flat_output_degree = degree;
