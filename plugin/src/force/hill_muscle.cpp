@@ -1,7 +1,9 @@
 #include "flatsos/plugin/force/hill_muscle.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -36,6 +38,27 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
         new SimTK::Value<ExcitationPolynomial>(ExcitationPolynomial::constant(kDefaultActivation)));
     signal_ = s.allocateDiscreteVariable(forces_, SimTK::Stage::Dynamics,
                                          new SimTK::Value<SignalPtr>(SignalPtr()));
+  }
+
+  // The arguments' coordinates in their matter subsystem's q and u, known from Stage::Model on.
+  // MobilizedBody::getOneQ finds them through the subsystem's model cache on every call (a
+  // dynamic_cast each), which took 6 % of a closed loop of the arm. Every State of a system has
+  // the same layout here (the muscles' mobilizers have one coordinate each, and no State of the
+  // project switches a ball or free joint to Euler angles), so they are found once, by the first
+  // State asked, under a lock (a getter may be the first to ask, from any thread).
+  void requireSlots(const SimTK::State& s) const {
+    if (slots_ready_.load(std::memory_order_acquire)) return;
+    const std::lock_guard<std::mutex> lock(slots_mutex_);
+    if (slots_ready_.load(std::memory_order_relaxed)) return;
+    slots_.assign(path_.arguments.size(), ArgumentSlot());
+    for (std::size_t k = 0; k < path_.arguments.size(); ++k) {
+      const SimTK::MobilizedBody& mobilizer = path_.arguments[k].mobilizer;
+      if (mobilizer.isEmptyHandle()) continue;  // held at its value
+      slots_[k].matter = mobilizer.getMatterSubsystem().getMySubsystemIndex();
+      slots_[k].q = static_cast<int>(mobilizer.getFirstQIndex(s));
+      slots_[k].u = static_cast<int>(mobilizer.getFirstUIndex(s));
+    }
+    slots_ready_.store(true, std::memory_order_release);
   }
 
   // ---- state access ----
@@ -77,9 +100,10 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   // ---- kinematics of the path ----
   // The polynomial's arguments at the state (held ones at their values); allocation-free.
   void arguments(const SimTK::State& s, double* x) const {
+    requireSlots(s);
     for (std::size_t k = 0; k < path_.arguments.size(); ++k) {
-      const PathArgument& arg = path_.arguments[k];
-      x[k] = arg.mobilizer.isEmptyHandle() ? arg.held_value_rad : arg.mobilizer.getOneQ(s, 0);
+      const ArgumentSlot& slot = slots_[k];
+      x[k] = slot.matter.isValid() ? s.getQ(slot.matter)[slot.q] : path_.arguments[k].held_value_rad;
     }
   }
   double length(const SimTK::State& s) const {
@@ -107,10 +131,10 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
     double x[fm::LengthPolynomial::kMaxDimension], gradient[fm::LengthPolynomial::kMaxDimension];
     arguments(s, x);
     if (path_.geometry) path_.geometry->lengthGradient(x, gradient);
-    double ldot = 0.0;
+    double ldot = 0.0;  // arguments() has made the slots
     for (std::size_t k = 0; k < path_.arguments.size(); ++k)
       if (!path_.arguments[k].mobilizer.isEmptyHandle())
-        ldot += (path_.geometry ? gradient[k] : gradient_[k].value(x)) * path_.arguments[k].mobilizer.getOneU(s, 0);
+        ldot += (path_.geometry ? gradient[k] : gradient_[k].value(x)) * s.getU(slots_[k].matter)[slots_[k].u];
     return ldot;
   }
 
@@ -137,10 +161,11 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
                  SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector& mobility_forces) const override {
     const double f = fm::tendon_force(p_, tendonLength(s));
     double arms[fm::LengthPolynomial::kMaxDimension];
-    momentArms(s, arms);
+    momentArms(s, arms);  // makes the slots
+    // As MobilizedBody::applyOneMobilityForce does, from the slots (the force vector is the
+    // matter subsystem's mobilities).
     for (std::size_t k = 0; k < path_.arguments.size(); ++k)
-      if (!path_.arguments[k].mobilizer.isEmptyHandle())
-        path_.arguments[k].mobilizer.applyOneMobilityForce(s, 0, arms[k] * f, mobility_forces);
+      if (slots_[k].matter.isValid()) mobility_forces[slots_[k].u] += arms[k] * f;
   }
   // The tendon stores energy, but the muscle-tendon unit is dissipative and its states are
   // first-order: no potential energy is reported to the multibody system.
@@ -159,6 +184,13 @@ class HillMuscleImpl : public SimTK::Force::Custom::Implementation {
   fm::MuscleParameters p_;
   MusclePath path_;
   std::vector<fm::LengthPolynomial> gradient_;  // dL/dx_k per argument
+  struct ArgumentSlot {
+    SimTK::SubsystemIndex matter;  // invalid: a held argument
+    int q = 0, u = 0;
+  };
+  mutable std::vector<ArgumentSlot> slots_;  // requireSlots
+  mutable std::mutex slots_mutex_;
+  mutable std::atomic<bool> slots_ready_{false};
   mutable SimTK::ZIndex first_z_;
   mutable SimTK::DiscreteVariableIndex held_excitation_;
   mutable SimTK::DiscreteVariableIndex signal_;
