@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <limits>
+#include <thread>
+#include <vector>
 
 #include "arm_fixture.hpp"
 #include "flatsos/muscles/hill_laws.hpp"
@@ -143,6 +145,42 @@ TEST(HillMuscleRobustness, ZeroExcitationForSecondsStaysFiniteAndBounded) {
   EXPECT_LT(arm->activations(r.final_state).maxCoeff(), 1e-6);
   // With no muscle force the arm falls and hangs down: the shoulder angle goes below 0.
   EXPECT_LT(r.states.column("/jointset/shoulder/shoulder/value").back(), -0.5);
+}
+
+// Simbody realizes forces through one task object per System, so two threads simulating States
+// of one model at once raced (their runs differed from a single thread's, silently). They now
+// take turns (integration/system_dynamics_lock.hpp) and each gets exactly the single-threaded
+// run, with Simbody's integrator and with the muscle Rosenbrock method.
+TEST(Simulation, TwoThreadsSimulatingOneModelAtOnceGetTheSingleThreadedRun) {
+  for (const fp::IntegratorKind integrator : {fp::IntegratorKind::RungeKuttaMerson, fp::IntegratorKind::MuscleRosenbrock}) {
+    SCOPED_TRACE(fp::integrator_name(integrator));
+    const auto simulate_from_rest = [integrator](const fp::MusculoskeletalModel& arm) {
+      SimTK::State s = paper_state(arm);
+      arm.setExcitations(s, Eigen::VectorXd::Constant(6, 0.3));
+      fp::SimulationOptions o;
+      o.duration_s = 0.3;
+      o.report_interval_s = 0.1;
+      o.accuracy = 1e-8;
+      o.integrator = integrator;
+      return fp::simulate(arm, s, o);
+    };
+    const auto single = simulate_from_rest(*flatsos::test::load_arm());
+    ASSERT_TRUE(single.finite) << single.message;
+    const auto shared = flatsos::test::load_arm();
+    std::vector<fp::SimulationResult> runs(2);
+    std::vector<std::thread> threads;
+    for (std::size_t i = 0; i < runs.size(); ++i) threads.emplace_back([&, i] { runs[i] = simulate_from_rest(*shared); });
+    for (auto& t : threads) t.join();
+    for (const auto& r : runs) {
+      ASSERT_TRUE(r.finite) << r.message;
+      ASSERT_EQ(r.states.rows.size(), single.states.rows.size());
+      EXPECT_EQ(r.states.rows.back(), single.states.rows.back());
+    }
+    // The arm moved: the run is not the initial state copied through.
+    const auto shoulder = single.states.column("/jointset/shoulder/shoulder/value");
+    const auto elbow = single.states.column("/jointset/elbow/elbow/value");
+    EXPECT_GT(std::abs(shoulder.back() - shoulder.front()) + std::abs(elbow.back() - elbow.front()), 0.05);
+  }
 }
 
 namespace {

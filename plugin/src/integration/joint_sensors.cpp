@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "system_dynamics_lock.hpp"
+
 namespace flatsos::plugin {
 
 namespace {
@@ -27,6 +29,7 @@ void measure_joints(const MusculoskeletalModel& plant, const SimTK::State& state
                     JointMeasurement& out) {
   const int n = plant.numJoints();
   if (out.q_rad.size() != n) size_measurement(out, n);
+  const auto lock = detail::lock_system_dynamics(plant.system());
   plant.system().realize(state, SimTK::Stage::Acceleration);
   out.time_s = state.getTime();
   plant.jointAngles(state, out.q_rad);

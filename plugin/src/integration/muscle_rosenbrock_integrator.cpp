@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "system_dynamics_lock.hpp"
+
 namespace flatsos::plugin {
 
 namespace {
@@ -256,6 +258,7 @@ void MuscleRosenbrockIntegrator::reportDense(double t0, double h, const std::vec
 
 bool MuscleRosenbrockIntegrator::advanceUnchecked(double t_end, const std::vector<double>& report_times,
                                                   const Report& report) {
+  const auto lock = detail::lock_system_dynamics(system_);
   if (!initialized_) throw std::logic_error("muscle Rosenbrock integrator: advanceTo before initialize");
   std::size_t next_report = 0;  // the times are in (now, t_end], ascending (checked by Stepper::advanceTo)
   while (state_.getTime() < t_end) {

@@ -11,6 +11,7 @@
 #include "flatsos/plugin/integration/forward_simulation.hpp"
 #include "flatsos/plugin/integration/muscle_rosenbrock_integrator.hpp"
 #include "flatsos/plugin/model/musculoskeletal_model.hpp"
+#include "system_dynamics_lock.hpp"
 
 namespace flatsos::plugin {
 
@@ -18,15 +19,18 @@ namespace {
 // Simbody's own integrators behind the Stepper interface.
 class SimbodyStepper final : public Stepper {
  public:
-  explicit SimbodyStepper(std::unique_ptr<SimTK::Integrator> integrator) : integ_(std::move(integrator)) {}
+  SimbodyStepper(std::unique_ptr<SimTK::Integrator> integrator, const SimTK::System& system)
+      : integ_(std::move(integrator)), system_(system) {}
 
   void initialize(const SimTK::State& s) override {
+    const auto lock = detail::lock_system_dynamics(system_);
     pending_ = false;
     integ_->initialize(s);
     counted_ = integ_->getNumStepsTaken();
     counted_attempts_ = integ_->getNumStepsAttempted();
   }
   bool advanceUnchecked(double t) override {
+    const auto lock = detail::lock_system_dynamics(system_);
     if (pending_) inputsChanged();
     bool failed = false;
     try {
@@ -63,6 +67,7 @@ class SimbodyStepper final : public Stepper {
 
  private:
   std::unique_ptr<SimTK::Integrator> integ_;
+  const SimTK::System& system_;
   SimTK::State changed_;
   bool pending_ = false;  // changed_ holds edits not yet handed to the integrator
   long steps_ = 0, counted_ = 0, attempts_ = 0, counted_attempts_ = 0;
@@ -171,7 +176,7 @@ std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<H
       throw std::invalid_argument("make_stepper: resolve the automatic integrator first (resolve_integrator)");
   }
   integ->setAccuracy(accuracy);
-  return std::make_unique<SimbodyStepper>(std::move(integ));
+  return std::make_unique<SimbodyStepper>(std::move(integ), system);
 }
 
 std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,

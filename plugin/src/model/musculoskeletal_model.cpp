@@ -5,6 +5,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "../integration/system_dynamics_lock.hpp"
+
 namespace flatsos::plugin {
 
 namespace {
@@ -310,6 +312,7 @@ Eigen::VectorXd MusculoskeletalModel::inverseDynamics(const Eigen::VectorXd& q, 
 }
 
 double MusculoskeletalModel::mechanicalEnergy(const SimTK::State& s) const {
+  const auto lock = detail::lock_system_dynamics(system_);
   system_.realize(s, SimTK::Stage::Dynamics);
   return system_.calcEnergy(s);
 }

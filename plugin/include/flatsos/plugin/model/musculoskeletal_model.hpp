@@ -10,6 +10,10 @@
 // every const member is safe to call from several threads at once. Calculations that need
 // scratch (the mass matrix through a Simbody State, inverse dynamics) take a ModelWorkspace that
 // the caller owns (one per thread); the overloads without one make a temporary workspace per call.
+// Simulations of one model (the project's steppers, mechanicalEnergy, the joint sensors) take
+// turns across threads: Simbody realizes a System's forces through one shared task object. Code
+// that realizes this model's States to Stage::Dynamics itself, from several threads, must
+// serialize that too (or use one model per thread).
 
 #include "flatsos/plugin/ndebug_guard.hpp"  // first: see there
 #include "flatsos/plugin/simtk_namespace_guard.hpp"  // before Eigen: see there
