@@ -322,6 +322,24 @@ TEST(SosCertificate, ProductsOfRootFactorsAreCertifiedFromTheirRoots) {
   EXPECT_EQ(certify_nonnegative_on_unit_interval(ps, without_roots).ipopt_calls, 1);
 }
 
+// Coefficients of extreme range (roots near 1e-150 or 1e150): positive on [0, 1], certified,
+// and each certificate valid (the roots' construction gives up on non-finite roots).
+TEST(SosCertificate, ExtremeCoefficientsAreCertifiedCorrectly) {
+  const std::vector<Polynomial> ps = {
+      poly({1e-300, 0.0, 1e300}),        // 1e300 s^2 + 1e-300
+      poly({1e150, -1.0, 1e-150}),       // complex roots of size 1e150
+      poly({1e-200, 1e-200, 0.0, 1e200}),  // 1e200 s^3 + 1e-200 (s + 1)
+      poly({0.25 + 1e-300, -1.0, 1.0}),    // (s - 1/2)^2 + 1e-300: a negative Bernstein coefficient
+      poly({1e300, -1e300, 1e300, 1e300}),
+  };
+  const CertificationResult res = certify_nonnegative_on_unit_interval(ps, kTol);
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    SCOPED_TRACE("polynomial " + std::to_string(i));
+    EXPECT_TRUE(res.certified[i]);  // each is > 0 on [0, 1]
+    if (res.certified[i]) expect_valid_certificate(ps[i], res.certificates[i], kTol);
+  }
+}
+
 std::vector<Polynomial> negative_somewhere();
 
 // The roots never certify what is negative somewhere on [0, 1], even without the pre-check:

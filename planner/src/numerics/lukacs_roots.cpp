@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <optional>
 #include <vector>
 
 #include <unsupported/Eigen/Polynomials>
@@ -25,9 +26,11 @@ struct RootFactors {
   std::vector<std::complex<double>> complex_pairs;  // the root with positive imaginary part
 };
 
-RootFactors sort_roots(const VectorXd& p) {
+// None when a computed root is not finite (coefficients of extreme range).
+std::optional<RootFactors> sort_roots(const VectorXd& p) {
   Eigen::PolynomialSolver<double, Eigen::Dynamic> solver;
   solver.compute(p);
+  if (!solver.roots().allFinite()) return std::nullopt;
   RootFactors f;
   std::vector<double> interior;
   for (const std::complex<double>& z : solver.roots()) {
@@ -96,7 +99,9 @@ void multiply_by_complex_pair(LukacsCertificate& c, double a, double b) {
 std::optional<LukacsCertificate> certificate_from_roots(const VectorXd& p, GramBasis basis) {
   const Eigen::Index n = p.size() - 1;
   if (n < 1 || p[n] == 0.0 || !p.allFinite()) return std::nullopt;
-  const RootFactors f = sort_roots(p);
+  const std::optional<RootFactors> roots = sort_roots(p);
+  if (!roots) return std::nullopt;
+  const RootFactors& f = *roots;
   // p = lead prod (s - z): each root >= 1 is written as -(r - s).
   const double constant = (f.at_or_above_one.size() % 2 == 0 ? 1.0 : -1.0) * p[n];
   if (!(constant > 0.0)) return std::nullopt;
