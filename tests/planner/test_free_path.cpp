@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -76,6 +77,20 @@ class FreePath : public ::testing::Test {
                            theta);
   }
 
+  // The squared-excitation effort on 24 spans in 1.5 s: the problem, and free-path settings that
+  // minimize that effort (they point into `effort`, which the case owns).
+  struct SquaredEffortCase {
+    Problem p;
+    std::shared_ptr<const fpl::Effort> effort;
+    fpd::FreePathSettings settings;
+  };
+  SquaredEffortCase squaredEffortCase() {
+    o = open_loop_options(1.5, kDegree, 24);
+    SquaredEffortCase k{problem(), fpl::effort_named("excitation_squared"), free_path()};
+    k.settings.effort = k.effort.get();
+    return k;
+  }
+
   static std::vector<double> uniform_times(double T, int count) {
     std::vector<double> t;
     for (int i = 0; i <= count; ++i) t.push_back(T * i / count);
@@ -123,12 +138,10 @@ TEST_F(FreePath, TheValuesGradientIsTheMultipliersTimesTheRowsDerivatives) {
 // gradient adds the effort's own derivative in c (the forces and lengths at its quadrature points
 // move with the path) to the rows' multipliers times their derivatives.
 TEST_F(FreePath, TheSquaredEffortsValueHasTheGradientOfItsPathAndItsMultipliers) {
-  o = open_loop_options(1.5, kDegree, 24);
-  const Problem p = problem();
+  const SquaredEffortCase k = squaredEffortCase();
+  const Problem& p = k.p;
   ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
-  const auto effort = fpl::effort_named("excitation_squared");
-  fpd::FreePathSettings settings = free_path();
-  settings.effort = effort.get();
+  const fpd::FreePathSettings& settings = k.settings;
   Eigen::VectorXd c = fpd::path_coefficients(*p.setup, p.prescribed.path, p.initial_q_jet, o.target_q_rad, settings);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> move(-0.01, 0.01);
@@ -165,12 +178,11 @@ TEST_F(FreePath, TheSquaredEffortsValueHasTheGradientOfItsPathAndItsMultipliers)
 // from none added thousands of rows one by one): V, its plan and its gradient are those of a
 // start without them.
 TEST_F(FreePath, TheSquaredEffortsValueFromTheLastEvaluationsRowsIsTheValueFromNone) {
-  o = open_loop_options(1.5, kDegree, 24);
-  const Problem p = problem();
+  const SquaredEffortCase k = squaredEffortCase();
+  const Problem& p = k.p;
   ASSERT_EQ(p.prescribed.status, fpl::SolveStatus::Solved) << p.prescribed.message;
-  const auto effort = fpl::effort_named("excitation_squared");
-  fpd::FreePathSettings settings = free_path();
-  settings.effort = effort.get();
+  const fpd::FreePathSettings& settings = k.settings;
+  const auto& effort = k.effort;
   const fpd::PathParameterization P = fpd::parameterize(settings, 1.5, p.initial_q_jet, o.target_q_rad);
   std::vector<fpd::PathPoint> points;
   for (const double t : uniform_times(1.5, 48)) points.push_back(fpd::make_path_point(*p.setup, arm.flat, P, t));
