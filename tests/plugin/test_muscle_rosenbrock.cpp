@@ -171,6 +171,17 @@ TEST(MuscleRosenbrock, KeepsItsStepSizeAcrossInitialize) {
   EXPECT_EQ(integ->nextStepSize(), h);
 }
 
+TEST(MuscleRosenbrock, TakesItsDerivativesFromTheDynamicsStageWhereTheyAreSimbodysOwn) {
+  // The arm (muscles the only z, no constraints): the tree's accelerations under the Dynamics
+  // stage's forces, checked at initialize against realize(Acceleration); the stiff run above
+  // then tests them against Runge-Kutta-Merson.
+  const auto arm = flatsos::test::load_arm();
+  auto integ = rosenbrock(*arm, 1e-6);
+  integ->initialize(stiff_start(*arm));
+  EXPECT_TRUE(integ->usesDynamicsStageDerivatives());
+
+}
+
 TEST(MuscleRosenbrock, RejectsSystemsItCannotIntegrateAndBadArguments) {
   SimTK::MultibodySystem system;
   SimTK::SimbodyMatterSubsystem matter(system);
@@ -184,6 +195,21 @@ TEST(MuscleRosenbrock, RejectsSystemsItCannotIntegrateAndBadArguments) {
     FAIL() << "a quaternion ball joint was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("quaternions"), std::string::npos) << e.what();
+  }
+  // Prescribed motion: Simbody's steppers impose it, this one would leave the link still.
+  SimTK::MultibodySystem turning;
+  SimTK::SimbodyMatterSubsystem turning_matter(turning);
+  SimTK::MobilizedBody::Pin crank(turning_matter.Ground(), SimTK::Transform(),
+                                  SimTK::Body::Rigid(SimTK::MassProperties(1.0, SimTK::Vec3(0.1, 0, 0), SimTK::Inertia(1))),
+                                  SimTK::Transform());
+  SimTK::Motion::Steady(crank, 2.0);
+  turning.realizeTopology();
+  fp::MuscleRosenbrockIntegrator turning_integ(turning, {}, 1e-6);
+  try {
+    turning_integ.initialize(turning.getDefaultState());
+    FAIL() << "prescribed motion was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("prescribed motion"), std::string::npos) << e.what();
   }
   EXPECT_THROW(fp::MuscleRosenbrockIntegrator(system, {}, 0.0), std::invalid_argument);
   EXPECT_THROW(fp::MuscleRosenbrockIntegrator(system, {}, 1.5), std::invalid_argument);

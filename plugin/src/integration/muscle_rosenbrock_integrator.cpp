@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "system_dynamics_lock.hpp"
 
@@ -49,7 +50,9 @@ bool finite(const SimTK::Vector& v) {
 
 MuscleRosenbrockIntegrator::MuscleRosenbrockIntegrator(const SimTK::System& system, std::vector<HillMuscle> muscles,
                                                        double accuracy)
-    : system_(system), accuracy_(accuracy) {
+    : system_(system),
+      multibody_(SimTK::MultibodySystem::isInstanceOf(system) ? &SimTK::MultibodySystem::downcast(system) : nullptr),
+      accuracy_(accuracy) {
   if (!(accuracy > 0.0 && accuracy < 1.0)) throw std::invalid_argument("integrator accuracy must be in (0, 1)");
   for (auto& m : muscles) {
     MuscleSlot slot;
@@ -70,6 +73,15 @@ void MuscleRosenbrockIntegrator::initialize(const SimTK::State& s) {
   if (state_.getNQErr() > 0 || state_.getNUErr() > 0 || state_.getNUDotErr() > 0)
     throw std::invalid_argument(
         "muscle Rosenbrock integrator: the system has constraints or quaternions; use Runge-Kutta-Merson or CPodes BDF");
+  if (multibody_) {
+    // Prescribed motion is imposed by Simbody's own time steppers (System::prescribe): steps of
+    // this integrator would leave the prescribed q and u where they were.
+    const SimTK::SimbodyMatterSubsystem& matter = multibody_->getMatterSubsystem();
+    for (SimTK::MobilizedBodyIndex b(1); b < matter.getNumBodies(); ++b)
+      if (matter.getMobilizedBody(b).getUDotMotionMethod(state_) != SimTK::Motion::Free)
+        throw std::invalid_argument("muscle Rosenbrock integrator: mobilized body " + std::to_string(int(b)) +
+                                    " has prescribed motion; use Runge-Kutta-Merson or CPodes BDF");
+  }
   y_ = s.getY();
   if (!finite(y_)) throw std::invalid_argument("muscle Rosenbrock integrator: the initial state is not finite");
   const int ny = y_.size();
@@ -106,6 +118,7 @@ void MuscleRosenbrockIntegrator::initialize(const SimTK::State& s) {
       if (slots_[a].tendon_index == slots_[b].tendon_index)
         throw std::invalid_argument("muscle Rosenbrock integrator: muscle '" + slots_[a].muscle.getParameters().name +
                                     "' is listed twice");
+  direct_derivatives_ = dynamicsStageGivesTheDerivatives();
   // The step size of the previous interval is kept: inputs changing at a control period do not
   // force the cold start an implicit multistep method needs (unless the last run collapsed it).
   if (!(h_ >= kMinStep)) h_ = kFirstStep;
@@ -113,12 +126,44 @@ void MuscleRosenbrockIntegrator::initialize(const SimTK::State& s) {
   f0_valid_ = false;
 }
 
+void MuscleRosenbrockIntegrator::derivativesFromDynamicsStage(SimTK::State& s, SimTK::Vector& ydot) {
+  system_.realize(s, SimTK::Stage::Dynamics);
+  multibody_->getMatterSubsystem().calcAccelerationIgnoringConstraints(
+      s, multibody_->getMobilityForces(s, SimTK::Stage::Dynamics), multibody_->getRigidBodyForces(s, SimTK::Stage::Dynamics),
+      udot_, body_accelerations_);
+  const SimTK::Vector& qdot = s.getQDot();
+  const int nq = s.getNQ(), nu = s.getNU();
+  for (int i = 0; i < nq; ++i) ydot[i] = qdot[i];
+  for (int i = 0; i < nu; ++i) ydot[nq + i] = udot_[i];
+  for (const auto& slot : slots_) {
+    ydot[slot.tendon_index] = slot.muscle.getTendonLengthDerivative(s);
+    ydot[slot.tendon_index + 1] = slot.muscle.getActivationDerivative(s);
+  }
+}
+
+bool MuscleRosenbrockIntegrator::dynamicsStageGivesTheDerivatives() {
+  if (!multibody_ || state_.getNZ() != 2 * static_cast<int>(slots_.size())) return false;
+  SimTK::State probe = state_;
+  SimTK::Vector direct(y_.size()), staged(y_.size());
+  probe.updY() = y_;
+  derivativesFromDynamicsStage(probe, direct);
+  probe.updY() = y_;
+  system_.realize(probe, SimTK::Stage::Acceleration);
+  staged = probe.getYDot();
+  for (int i = 0; i < staged.size(); ++i)
+    if (!(std::abs(direct[i] - staged[i]) <= 1e-10 * (1.0 + std::abs(staged[i])))) return false;
+  return true;
+}
+
 bool MuscleRosenbrockIntegrator::evaluate(SimTK::State& s, double t, const SimTK::Vector& y, SimTK::Vector& ydot,
                                           bool with_jacobian) {
   s.updTime() = t;
   s.updY() = y;
-  system_.realize(s, SimTK::Stage::Acceleration);
-  ydot = s.getYDot();
+  if (direct_derivatives_) derivativesFromDynamicsStage(s, ydot);
+  else {
+    system_.realize(s, SimTK::Stage::Acceleration);
+    ydot = s.getYDot();
+  }
   if (with_jacobian)
     for (std::size_t j = 0; j < slots_.size(); ++j) {
       const auto d = slots_[j].muscle.getTendonLengthDerivativePartials(s);

@@ -10,8 +10,8 @@
 // states are zero (explicit). The path columns matter: without them the fast tendon mode cannot
 // follow the joint motion that drives it and the accuracy collapses in the stiff regime
 // (measured with ROS2: 5x the steps per 10x accuracy instead of ~3x). That matrix is block
-// triangular, so a step costs four realize(Acceleration) calls and a substitution per muscle,
-// no factorization.
+// triangular, so a step costs four evaluations of the derivatives (each a realize to Dynamics
+// and the tree's accelerations) and a substitution per muscle, no factorization.
 //
 // Step size: the difference to the embedded solution, filtered through (I - gamma h J)^-1 (so
 // a fast tendon transient after an input change is not counted as error), per state in its
@@ -39,6 +39,9 @@ class MuscleRosenbrockIntegrator final : public Stepper {
   void inputsChanged() override;
   long stepsTaken() const override { return accepted_; }
   long stepsAttempted() const override { return accepted_ + rejected_; }
+  /// Whether the derivatives come from the Dynamics stage (see derivativesFromDynamicsStage);
+  /// false: from realize(Acceleration).
+  bool usesDynamicsStageDerivatives() const { return direct_derivatives_; }
   /// The step size the next step will try, s.
   double nextStepSize() const { return h_; }
   /// Fixed steps of h seconds without error control (0, the default: adaptive). For
@@ -77,7 +80,19 @@ class MuscleRosenbrockIntegrator final : public Stepper {
   void reportDense(double t0, double h, const std::vector<double>& times, std::size_t& next, double t_reached,
                    const Report& report);
 
+  // ydot from realize(Dynamics): the tree's accelerations under the Dynamics stage's forces
+  // (SimbodyMatterSubsystem::calcAccelerationIgnoringConstraints) and the muscles' own state
+  // derivatives. realize(Acceleration) adds Simbody's loop forward dynamics and every
+  // subsystem's Acceleration stage, the same numbers where there are no constraints, no
+  // prescribed motion and no z but the muscles' (checked at initialize against it).
+  void derivativesFromDynamicsStage(SimTK::State& s, SimTK::Vector& ydot);
+  bool dynamicsStageGivesTheDerivatives();
+
   const SimTK::System& system_;
+  const SimTK::MultibodySystem* multibody_ = nullptr;  // null: not a multibody system
+  bool direct_derivatives_ = false;                    // derivativesFromDynamicsStage, else realize(Acceleration)
+  SimTK::Vector udot_;
+  SimTK::Vector_<SimTK::SpatialVec> body_accelerations_;
   std::vector<MuscleSlot> slots_;
   double accuracy_;
   double fixed_step_ = 0.0;
