@@ -48,15 +48,16 @@ bool finite(const SimTK::Vector& v) {
 }
 }  // namespace
 
-MuscleRosenbrockIntegrator::MuscleRosenbrockIntegrator(const SimTK::System& system, std::vector<HillMuscle> muscles,
+MuscleRosenbrockIntegrator::MuscleRosenbrockIntegrator(const SimTK::System& system, const std::vector<HillMuscle>& muscles,
                                                        double accuracy)
     : system_(system),
       multibody_(SimTK::MultibodySystem::isInstanceOf(system) ? &SimTK::MultibodySystem::downcast(system) : nullptr),
       accuracy_(accuracy) {
   if (!(accuracy > 0.0 && accuracy < 1.0)) throw std::invalid_argument("integrator accuracy must be in (0, 1)");
-  for (auto& m : muscles) {
+  const auto lock = detail::lock_system_dynamics(system_);
+  for (const auto& m : muscles) {
     MuscleSlot slot;
-    slot.muscle = std::move(m);
+    slot.muscle = m;
     const auto& p = slot.muscle.getParameters();
     slot.stretch_scale_m = p.tendon_strain_at_max_force * p.tendon_slack_length_m;
     slots_.push_back(std::move(slot));
@@ -65,6 +66,11 @@ MuscleRosenbrockIntegrator::MuscleRosenbrockIntegrator(const SimTK::System& syst
   j_la_.assign(slots_.size(), 0.0);
   j_aa_.assign(slots_.size(), 0.0);
   j_lpath_.assign(slots_.size(), 0.0);
+}
+
+MuscleRosenbrockIntegrator::~MuscleRosenbrockIntegrator() {
+  const auto lock = detail::lock_system_dynamics(system_);
+  slots_.clear();
 }
 
 void MuscleRosenbrockIntegrator::initialize(const SimTK::State& s) {
@@ -143,6 +149,7 @@ void MuscleRosenbrockIntegrator::derivativesFromDynamicsStage(SimTK::State& s, S
 
 bool MuscleRosenbrockIntegrator::dynamicsStageGivesTheDerivatives() {
   if (!multibody_ || state_.getNZ() != 2 * static_cast<int>(slots_.size())) return false;
+  const auto lock = detail::lock_system_dynamics(system_);  // realizes to Dynamics and beyond
   SimTK::State probe = state_;
   SimTK::Vector direct(y_.size()), staged(y_.size());
   probe.updY() = y_;

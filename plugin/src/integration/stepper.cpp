@@ -159,13 +159,13 @@ IntegratorKind resolve_integrator(const MusculoskeletalModel& model, const SimTK
   return explicit_steps > kStiffExplicitSteps ? IntegratorKind::CPodesBdf : IntegratorKind::RungeKuttaMerson;
 }
 
-std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
+std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, const std::vector<HillMuscle>& muscles,
                                                IntegratorKind kind, double accuracy) {
   if (!(accuracy > 0.0 && accuracy < 1.0)) throw std::invalid_argument("integrator accuracy must be in (0, 1)");
   std::unique_ptr<SimTK::Integrator> integ;
   switch (kind) {
     case IntegratorKind::MuscleRosenbrock:
-      return std::make_unique<MuscleRosenbrockIntegrator>(system, std::move(muscles), accuracy);
+      return std::make_unique<MuscleRosenbrockIntegrator>(system, muscles, accuracy);
     case IntegratorKind::CPodesBdf:
       integ = std::make_unique<SimTK::CPodesIntegrator>(system, SimTK::CPodes::BDF, SimTK::CPodes::Newton);
       break;
@@ -181,9 +181,13 @@ std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<H
 
 std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
                                                double accuracy) {
+  // Copies of the model's muscle handles change their shared count, which Simbody does not
+  // guard: taken and released under the model's lock (declared first, released last), as threads
+  // simulating one model make their steppers at once.
+  const auto lock = detail::lock_system_dynamics(model.system());
   std::vector<HillMuscle> muscles;
   for (int j = 0; j < model.numMuscles(); ++j) muscles.push_back(model.muscle(j));
-  return make_stepper(model.system(), std::move(muscles), kind, accuracy);
+  return make_stepper(model.system(), muscles, kind, accuracy);
 }
 
 }  // namespace flatsos::plugin

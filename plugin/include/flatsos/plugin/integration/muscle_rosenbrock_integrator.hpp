@@ -31,7 +31,10 @@ namespace flatsos::plugin {
 
 class MuscleRosenbrockIntegrator final : public Stepper {
  public:
-  MuscleRosenbrockIntegrator(const SimTK::System& system, std::vector<HillMuscle> muscles, double accuracy);
+  /// Keeps copies of the muscles' handles, taken and (on destruction) released under the
+  /// system's lock: Simbody's handle counts are not atomic, and threads may simulate one model.
+  MuscleRosenbrockIntegrator(const SimTK::System& system, const std::vector<HillMuscle>& muscles, double accuracy);
+  ~MuscleRosenbrockIntegrator() override;
 
   void initialize(const SimTK::State& s) override;
   const SimTK::State& state() const override { return state_; }

@@ -96,7 +96,7 @@ class Stepper {
 /// A stepper for `system` whose muscles are `muscles` (used by the Rosenbrock method only).
 /// `accuracy` is relative (Simbody's meaning); throws std::invalid_argument outside (0, 1) and
 /// for Automatic (resolve_integrator first).
-std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, std::vector<HillMuscle> muscles,
+std::unique_ptr<Stepper> make_stepper(const SimTK::System& system, const std::vector<HillMuscle>& muscles,
                                                IntegratorKind kind, double accuracy);
 std::unique_ptr<Stepper> make_stepper(const MusculoskeletalModel& model, IntegratorKind kind,
                                                double accuracy);
