@@ -206,8 +206,13 @@ class BoundedExchange {
     // Every local maximum of the excess joins, not only those above the tolerance: along an arc
     // where a bound is active the dips between imposed points come back one by one otherwise.
     for (double t : violated_times(excess_, h_, 0.0)) bounds_added |= addPoint(t);
-    const bool reserves_hold_or_warm = !reserves_added || (warm_ && warm_->whole_grid_every_round);
-    if (reserves_hold_or_warm && (excess_.worst <= bo_.tolerance || !bounds_added) && stride_ > 1) {
+    // Once the reserves' dips are no deeper than the lift takes (kLiftBelow_N), the plan moves
+    // little more: the violations only the whole grid sees stay where it finds them, and their
+    // points join beside the last dips' instead of a round after them (the arm at T = 1.5 s: 11
+    // -> 6 rounds, 111 -> 86 ms; at 3 s 6 -> 5 rounds, 68 -> 66 ms).
+    const bool plan_settling = min_reserve >= -kLiftBelow_N;
+    const bool whole_grid_due = !reserves_added || plan_settling || (warm_ && warm_->whole_grid_every_round);
+    if (whole_grid_due && (excess_.worst <= bo_.tolerance || !bounds_added) && stride_ > 1) {
       // Nothing left that the coarse grid sees: the whole grid decides (BoundsWarmStart).
       excess_ = grid_excess(setup_, mp_, jets_, a_min_, theta_, bo_.check_points);
       for (double t : violated_times(excess_, h_, 0.0)) bounds_added |= addPoint(t);

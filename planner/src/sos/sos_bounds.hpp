@@ -28,7 +28,7 @@ struct BoundsWarmStart {
   /// join beside the dips instead of after them: the arm's free path 14 -> 8 rounds, 0.17 ->
   /// 0.13 s, the same plan (docs/method/free_path.md, "Speed", (vi)). From the reserves' optimum
   /// the plan moves far in its first rounds, and whole-grid searches there cost more than the
-  /// rounds they save, so a cold start keeps them for the end.
+  /// rounds they save, so a cold start keeps them until the reserves' dips are small (or hold).
   bool whole_grid_every_round = true;
 };
 
