@@ -63,11 +63,12 @@ std::string domain_violation(const FlatOutputMap& flat, const RecedingHorizonSte
 
 // The bounds' sequential LP from alpha (moved to where it ends), in a trust box a tenth of its
 // size, restarted from the step's last LP basis.
+// `rows_at_alpha`: rows(alpha, true) when already evaluated.
 SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const NonlinearRows& rows, int max_iterations,
-                              RecedingHorizonStep& step, Eigen::VectorXd& alpha) {
+                              RecedingHorizonStep& step, Eigen::VectorXd& alpha, BoundRowsAt* rows_at_alpha = nullptr) {
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
   return solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis,
-                                {max_iterations, kBoundsLpRelativeDecrease});
+                                {max_iterations, kBoundsLpRelativeDecrease}, rows_at_alpha);
 }
 
 }  // namespace
@@ -145,15 +146,21 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
   const SequentialLpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
   const NonlinearRows rows = bound_rows_of(flat, points, activation_minima(flat, 0.0), kSampleMargin);
-  auto violation = [&](const Eigen::VectorXd& x) { return rows(x, false).violation + reserve_violation_N(lp, x); };
   const Eigen::VectorXd& unbounded = step.slp.alpha;  // unchanged until the end
   // Start from the previous bounded step's alpha when it violates less than the SLP's optimum:
   // consecutive periods' problems differ little, so a few Newton steps remain instead of the
   // whole way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3).
+  // Its rows are evaluated with their Jacobian, which the sequential LP then starts from.
   const Eigen::VectorXd& previous = step.buffers.bounded_alpha;
-  const bool from_previous = previous.size() == p && previous.allFinite() && violation(previous) < violation(unbounded);
+  BoundRowsAt at_previous;
+  bool from_previous = false;
+  if (previous.size() == p && previous.allFinite()) {
+    at_previous = rows(previous, true);
+    from_previous = at_previous.violation + reserve_violation_N(lp, previous) <
+                    rows(unbounded, false).violation + reserve_violation_N(lp, unbounded);
+  }
   Eigen::VectorXd alpha = from_previous ? previous : unbounded;
-  SequentialLpOutcome slp = bounds_lp(linear, rows, max_iterations, step, alpha);
+  SequentialLpOutcome slp = bounds_lp(linear, rows, max_iterations, step, alpha, from_previous ? &at_previous : nullptr);
   if (!slp.converged || slp.rows_violated) {
     // A stationary point of the violation is only local. The SLP's optimum sits on a vertex of
     // the reserve rows (most flat outputs at their reserve), from where the iteration can walk
