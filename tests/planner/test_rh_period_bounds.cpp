@@ -117,6 +117,7 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   ASSERT_TRUE(reused.bounds_imposed);
   ASSERT_EQ(reused.buffers.bounded_alpha, reused.alpha());
   ASSERT_FALSE(reused.buffers.bounds_basis.bound_row.empty());
+  reused.buffers.bounds_vertex.clear();  // the sequential LP, not Newton's method on the last vertex (below)
   fpl::RecedingHorizonStep without_basis = reused;
   without_basis.buffers.bounds_basis = fpl::SequentialLpBasis{};
   // One period later.
@@ -136,6 +137,46 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   EXPECT_NEAR(reused.slp.cost_N, fresh.slp.cost_N, 1e-6 * fresh.slp.cost_N);
   EXPECT_LT((reused.alpha() - fresh.alpha()).cwiseAbs().maxCoeff(), 1e-4 * (1 + fresh.alpha().cwiseAbs().maxCoeff()));
   EXPECT_LT(reused.bound_iterations, fresh.bound_iterations);
+}
+
+TEST(RecedingHorizonStepBounds, TheNextPeriodHoldsTheLastActiveRowsByNewtonsMethodWhereTheyStillBind) {
+  // The seated knee one period later, as above: the last period's active bound rows (its
+  // vertex) still make the optimum's. Newton's method on them ends there without an LP step, at
+  // the sequential LP's plan.
+  const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
+  const fpl::FlatOutputMap flat(model);
+  fp::ModelWorkspace ws = flat.makeWorkspace();
+  fpl::RecedingHorizonOptions o;
+  o.target_q_rad = Eigen::VectorXd::Constant(1, deg(20));
+  o.reserves_N = Eigen::VectorXd::Constant(13, 1.0);
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(1, deg(60)), qd = Eigen::VectorXd::Constant(1, -1.0);
+  fpl::RecedingHorizonStep newton;
+  fpl::plan_receding_horizon_step(flat, ws, q, qd, o, newton);
+  ASSERT_EQ(newton.status, fpl::SolveStatus::Solved) << newton.message;
+  ASSERT_EQ(newton.buffers.bounds_vertex.size(), static_cast<std::size_t>(flat.numFlatOutputs()));
+  fpl::RecedingHorizonStep by_lp = newton;
+  by_lp.buffers.bounds_vertex.clear();
+  q[0] -= 0.05;
+  qd[0] = -1.1;
+  fpl::plan_receding_horizon_step(flat, ws, q, qd, o, newton);
+  fpl::plan_receding_horizon_step(flat, ws, q, qd, o, by_lp);
+  ASSERT_EQ(newton.status, fpl::SolveStatus::Solved) << newton.message;
+  ASSERT_EQ(by_lp.status, fpl::SolveStatus::Solved) << by_lp.message;
+  EXPECT_TRUE(newton.first_period_sampled);
+  EXPECT_GE(newton.bound_newton_steps, 1);
+  EXPECT_EQ(newton.bound_iterations, 0);
+  EXPECT_EQ(newton.bound_lp_pivots, 0);
+  EXPECT_GE(by_lp.bound_iterations, 1);
+  // Here the sequential LP reaches the vertex itself (3e-12 N apart when written).
+  EXPECT_NEAR(newton.slp.cost_N, by_lp.slp.cost_N, 1e-9 * by_lp.slp.cost_N);
+  EXPECT_LT((newton.alpha() - by_lp.alpha()).cwiseAbs().maxCoeff(), 1e-8 * (1 + by_lp.alpha().cwiseAbs().maxCoeff()));
+  // Every sample of the applied plan inside its bounds (what first_period_sampled vouches for).
+  EXPECT_GE(newton.buffers.activations.minCoeff(), model->muscle(0).getParameters().activation_floor - 1e-12);
+  EXPECT_GE(newton.buffers.excitations.minCoeff(), 0.0);
+  EXPECT_LE(newton.buffers.excitations.maxCoeff(), 1.0);
+  std::cout << "[ measure  ] next period: " << newton.bound_newton_steps << " Newton steps; by the sequential LP "
+            << by_lp.bound_iterations << " LP steps; cost " << newton.slp.cost_N - by_lp.slp.cost_N << " N apart, alpha "
+            << (newton.alpha() - by_lp.alpha()).cwiseAbs().maxCoeff() << " N\n";
 }
 
 TEST(RecedingHorizonStepBounds, AStepThatNeedsNoBoundsIsTheSlpOptimum) {

@@ -113,6 +113,32 @@ void append_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& point
   }
 }
 
+JacobianByRow::JacobianByRow(const BoundRowsAt& rows) : start_(rows.value.size() + 1, 0) {
+  for (const auto& t : rows.jacobian) ++start_[static_cast<std::size_t>(t.row()) + 1];
+  for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+  column_.resize(rows.jacobian.size());
+  value_.resize(rows.jacobian.size());
+  std::vector<int> next(start_.begin(), start_.end() - 1);
+  for (const auto& t : rows.jacobian) {
+    const auto k = static_cast<std::size_t>(next[static_cast<std::size_t>(t.row())]++);
+    column_[k] = t.col();
+    value_[k] = t.value();
+  }
+  l1_.assign(rows.value.size(), 0.0);
+  for (std::size_t i = 0; i < l1_.size(); ++i)
+    for (int k = start_[i]; k < start_[i + 1]; ++k) l1_[i] += std::abs(value_[static_cast<std::size_t>(k)]);
+}
+
+void JacobianByRow::append_row(std::size_t row, int lp_row, std::vector<Eigen::Triplet<double>>& entries) const {
+  for (int k = start_[row]; k < start_[row + 1]; ++k)
+    entries.emplace_back(lp_row, column_[static_cast<std::size_t>(k)], value_[static_cast<std::size_t>(k)]);
+}
+
+void JacobianByRow::copy_row(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const {
+  out.setZero();
+  for (int k = start_[row]; k < start_[row + 1]; ++k) out[column_[static_cast<std::size_t>(k)]] += value_[static_cast<std::size_t>(k)];
+}
+
 double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta) {
   if (lp.G.rows() == 0) return 0.0;
   return (lp.row_lower - lp.G * theta).cwiseMax(0.0).sum();

@@ -84,6 +84,28 @@ void append_rows(const FlatOutputMap& flat, const std::vector<BoundPoint>& point
                  const Eigen::VectorXd& a_min, const Eigen::VectorXd& theta, bool jacobian, double margin,
                  BoundRowsAt& rows);
 
+/// The rows' Jacobian by rows, built from its triplets in O(nonzeros) whatever their order: the
+/// step LPs take a few of its rows, and every row's norm and step are needed.
+class JacobianByRow {
+ public:
+  JacobianByRow() = default;
+  explicit JacobianByRow(const BoundRowsAt& rows);
+  double l1(std::size_t row) const { return l1_[row]; }  ///< the row's l1 norm
+  double dot(std::size_t row, const Eigen::VectorXd& d) const {
+    double sum = 0.0;
+    for (int k = start_[row]; k < start_[row + 1]; ++k) sum += value_[static_cast<std::size_t>(k)] * d[column_[static_cast<std::size_t>(k)]];
+    return sum;
+  }
+  /// The row's entries as (lp_row, column, value) triplets.
+  void append_row(std::size_t row, int lp_row, std::vector<Eigen::Triplet<double>>& entries) const;
+  /// The row as a dense vector (into `out`, sized to the columns beforehand).
+  void copy_row(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const;
+
+ private:
+  std::vector<int> start_, column_;
+  std::vector<double> value_, l1_;  // l1_: each row's norm (every iteration's box test asks for it)
+};
+
 /// Sum of the reserve rows' violations (N) of the exchange LP in setup.lp.
 double reserve_violation_N(const LinearProgram& lp, const Eigen::VectorXd& theta);
 

@@ -11,42 +11,6 @@ namespace flatsos::planner::detail {
 namespace {
 constexpr double kInitialPenalty = 1e4, kMaxPenalty = 1e12;
 
-// The bound rows' Jacobian by rows, built from its triplets in O(nonzeros) whatever their order:
-// the step LPs take a few of its rows, and every row's norm and step are needed.
-class JacobianByRow {
- public:
-  JacobianByRow() = default;
-  explicit JacobianByRow(const BoundRowsAt& rows) : start_(rows.value.size() + 1, 0) {
-    for (const auto& t : rows.jacobian) ++start_[static_cast<std::size_t>(t.row()) + 1];
-    for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
-    column_.resize(rows.jacobian.size());
-    value_.resize(rows.jacobian.size());
-    std::vector<int> next(start_.begin(), start_.end() - 1);
-    for (const auto& t : rows.jacobian) {
-      const auto k = static_cast<std::size_t>(next[static_cast<std::size_t>(t.row())]++);
-      column_[k] = t.col();
-      value_[k] = t.value();
-    }
-    l1_.assign(rows.value.size(), 0.0);
-    for (std::size_t i = 0; i < l1_.size(); ++i)
-      for (int k = start_[i]; k < start_[i + 1]; ++k) l1_[i] += std::abs(value_[static_cast<std::size_t>(k)]);
-  }
-  double l1(std::size_t row) const { return l1_[row]; }
-  double dot(std::size_t row, const Eigen::VectorXd& d) const {
-    double sum = 0.0;
-    for (int k = start_[row]; k < start_[row + 1]; ++k) sum += value_[static_cast<std::size_t>(k)] * d[column_[static_cast<std::size_t>(k)]];
-    return sum;
-  }
-  void append_row(std::size_t row, int lp_row, std::vector<Eigen::Triplet<double>>& entries) const {
-    for (int k = start_[row]; k < start_[row + 1]; ++k)
-      entries.emplace_back(lp_row, column_[static_cast<std::size_t>(k)], value_[static_cast<std::size_t>(k)]);
-  }
-
- private:
-  std::vector<int> start_, column_;
-  std::vector<double> value_, l1_;  // l1_: each row's norm (every iteration's box test asks for it)
-};
-
 // The smallest box |d| <= r in which the linearization at theta clears every violated row:
 // row v + g.d >= 0 needs r >= -v / |g|_1. A start far from feasibility (a receding-horizon step's
 // SLP optimum, 100 N below the activation floors) then takes a Newton step at once instead of

@@ -8,6 +8,7 @@
 
 #include "bounds/bound_rows.hpp"
 #include "bounds/sequential_lp.hpp"
+#include "bounds/vertex_newton.hpp"
 
 namespace flatsos::planner::detail {
 
@@ -71,6 +72,31 @@ SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const Nonlin
                                 {max_iterations, kBoundsLpRelativeDecrease}, rows_at_alpha);
 }
 
+// After the bounds moved alpha (step.slp.alpha): samples the first period and says what holds
+// there; `rows_violated`: the sequential LP settled with rows it could not meet.
+void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
+                           bool rows_violated, RecedingHorizonStep& step) {
+  const bool finite = sample_period(flat, workspace, b, step);
+  const SampleExcess left = finite ? worst_excess(flat, step) : SampleExcess{};
+  if (finite && left.value <= 0.0) {
+    // Every sample inside, even where a row's margin was not quite reached: what is applied holds.
+    step.first_period_sampled = true;
+  } else if (rows_violated) {
+    step.status = SolveStatus::Infeasible;
+    step.message = "infeasible: no constant flat outputs keep every excitation in [0, 1] and activation in [floor, 1] "
+                   "over the first period with the reserves" +
+                   (finite ? "; closest: " + describe(flat, b, step, left) : std::string());
+  } else if (!finite) {
+    step.status = SolveStatus::Failed;
+    step.message = "the excitation bounds' sequential LP left the model's valid domain on the first period: " +
+                   domain_violation(flat, step);
+  } else {
+    step.status = SolveStatus::Failed;
+    step.message = "the excitation bounds' sequential LP converged, but the first period still leaves them: " +
+                   describe(flat, b, step, left);
+  }
+}
+
 }  // namespace
 
 std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHorizonStep& step, const TorqueJetGrid& grid,
@@ -118,6 +144,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
                           RecedingHorizonStep& step) {
   step.bounds_imposed = false;
   step.bound_iterations = 0;
+  step.bound_newton_steps = 0;
   step.bound_lp_pivots = 0;
   step.first_period_sampled = false;
   const PeriodExcitationBounds& b = o.excitation_bounds;
@@ -147,19 +174,33 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   const SequentialLpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
   const NonlinearRows rows = bound_rows_of(flat, points, activation_minima(flat, 0.0), kSampleMargin);
   const Eigen::VectorXd& unbounded = step.slp.alpha;  // unchanged until the end
-  // Start from the previous bounded step's alpha when it violates less than the SLP's optimum:
-  // consecutive periods' problems differ little, so a few Newton steps remain instead of the
-  // whole way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3).
-  // Its rows are evaluated with their Jacobian, which the sequential LP then starts from.
   const Eigen::VectorXd& previous = step.buffers.bounded_alpha;
   BoundRowsAt at_previous;
-  bool from_previous = false;
-  if (previous.size() == p && previous.allFinite()) {
-    at_previous = rows(previous, true);
-    from_previous = at_previous.violation + reserve_violation_N(lp, previous) <
-                    rows(unbounded, false).violation + reserve_violation_N(lp, unbounded);
+  const bool has_previous = previous.size() == p && previous.allFinite();
+  if (has_previous) at_previous = rows(previous, true);
+  // Newton's method on the last period's vertex first: where its active rows are still the
+  // optimum's, the step ends there; where another row now binds (the leg: 60 % of periods, by up
+  // to 3e-4), the sequential LP starts from the point it reached.
+  std::vector<int>& vertex = step.buffers.bounds_vertex;
+  Eigen::VectorXd alpha = previous;
+  const VertexNewtonOutcome newton = has_previous && !vertex.empty() ? solve_on_vertex(linear, rows, vertex, at_previous, alpha)
+                                                                      : VertexNewtonOutcome{};
+  step.bound_newton_steps = newton.iterations;
+  if (newton.solved) {
+    step.slp.alpha = alpha;
+    step.slp.cost_N = lp.cost.dot(alpha);
+    step.buffers.bounded_alpha = alpha;
+    check_bounded_samples(flat, workspace, b, false, step);
+    return;
   }
-  Eigen::VectorXd alpha = from_previous ? previous : unbounded;
+  // Else from the previous bounded step's alpha when it violates less than the SLP's optimum:
+  // consecutive periods' problems differ little, so a few Newton steps remain instead of the
+  // whole way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3).
+  // Its rows were evaluated with their Jacobian, which the sequential LP then starts from.
+  const bool from_previous = !newton.converged && has_previous &&
+                             at_previous.violation + reserve_violation_N(lp, previous) <
+                                 rows(unbounded, false).violation + reserve_violation_N(lp, unbounded);
+  if (!newton.converged) alpha = from_previous ? previous : unbounded;
   SequentialLpOutcome slp = bounds_lp(linear, rows, max_iterations, step, alpha, from_previous ? &at_previous : nullptr);
   if (!slp.converged || slp.rows_violated) {
     // A stationary point of the violation is only local. The SLP's optimum sits on a vertex of
@@ -182,31 +223,14 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;
   step.slp.cost_N = lp.cost.dot(alpha);
+  vertex = vertex_rows(slp, p);
   if (slp.converged && !slp.rows_violated) step.buffers.bounded_alpha = alpha;  // never start from a stuck point
   if (!slp.converged) {
     step.status = SolveStatus::Failed;
     step.message = "the excitation bounds on the first period were not met: " + slp.failure;
     return;
   }
-  const bool finite = sample_period(flat, workspace, b, step);
-  const SampleExcess left = finite ? worst_excess(flat, step) : SampleExcess{};
-  if (finite && left.value <= 0.0) {
-    // Every sample inside, even where a row's margin was not quite reached: what is applied holds.
-    step.first_period_sampled = true;
-  } else if (slp.rows_violated) {
-    step.status = SolveStatus::Infeasible;
-    step.message = "infeasible: no constant flat outputs keep every excitation in [0, 1] and activation in [floor, 1] "
-                   "over the first period with the reserves" +
-                   (finite ? "; closest: " + describe(flat, b, step, left) : std::string());
-  } else if (!finite) {
-    step.status = SolveStatus::Failed;
-    step.message = "the excitation bounds' sequential LP left the model's valid domain on the first period: " +
-                   domain_violation(flat, step);
-  } else {
-    step.status = SolveStatus::Failed;
-    step.message = "the excitation bounds' sequential LP converged, but the first period still leaves them: " +
-                   describe(flat, b, step, left);
-  }
+  check_bounded_samples(flat, workspace, b, slp.rows_violated, step);
 }
 
 }  // namespace flatsos::planner::detail

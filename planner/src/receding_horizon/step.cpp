@@ -155,7 +155,7 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
   step.first_period_sampled = false;
   step.grid_seconds = step.bounds_seconds = step.effort_seconds = 0.0;
   step.bounds_imposed = false;
-  step.bound_iterations = step.bound_lp_pivots = 0;
+  step.bound_iterations = step.bound_newton_steps = step.bound_lp_pivots = 0;
   if (o.reference) fit_tracking_path(o.horizon_s, std::min(o.tracking_correction_s, o.horizon_s), q, qd, o.start_qdd, o.start_qddd, o.reference, o.reference_time_s, step.path);
   else fit_rest_cubic(o.horizon_s, q, qd, o.target_q_rad, step.path);
   step.torque_offset_N_m = o.torque_offset_N_m;  // same size every period: no allocation

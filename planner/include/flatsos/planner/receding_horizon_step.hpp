@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -83,6 +84,9 @@ struct RecedingHorizonStep {
   /// LP moved alpha inside (cost raised); its LP steps.
   bool bounds_imposed = false;
   int bound_iterations = 0;
+  /// Newton steps on the last period's active bound rows, taken before any LP step: the step
+  /// ended there when bound_iterations is 0 (receding_horizon/period_bounds.hpp).
+  int bound_newton_steps = 0;
   int bound_lp_pivots = 0;  ///< the simplex pivots of those LP steps
   /// buffers.excitations hold this step's excitations (alpha, path, offset as returned) on the
   /// bounds' samples of the first period, so a controller need not compute them again. Set by
@@ -119,6 +123,9 @@ struct RecedingHorizonStep {
     /// ... and its sequential LP's last basis, where the next one restarts (the rows keep their
     /// identity from period to period: sample, muscle, bound).
     SequentialLpBasis bounds_basis;
+    /// ... and the bound rows active there when they alone make its vertex (else empty): the
+    /// next period first holds them at zero by Newton's method (bounds/vertex_newton.hpp).
+    std::vector<int> bounds_vertex;
     /// A nonlinear effort's grid over the horizon and the last step's optimum (its start).
     TorqueJetGrid effort_grid;
     Eigen::VectorXd effort_alpha;

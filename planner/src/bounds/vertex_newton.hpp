@@ -1,0 +1,52 @@
+#pragma once
+// Newton's method on a known vertex of the bounds' problem (sequential_lp.hpp). With a linear
+// cost a nondegenerate optimum is a vertex: as many bound rows active (zero) as theta has
+// entries. A receding horizon's consecutive periods keep most of their active rows: holding
+// them at zero by Newton's method (one dense p x p solve per iteration) reaches the new optimum
+// in two or three evaluations of the rows, where the sequential LP takes as many LP steps, each
+// with its rows, their Jacobian by rows and a simplex solve. A row the linearized step would
+// leave below zero joins the vertex by a dual simplex pivot on the same linearization (the row
+// whose release raises it at the least cost leaves), as the sequential LP's step LP would.
+//
+// The point is accepted only as a KKT point of the whole problem: every bound row and reserve
+// row holds (as the sequential LP requires of its own result) and the cost is a nonnegative
+// combination of the active rows' gradients. With p independent active gradients that makes it
+// a strict local minimum (a direction that keeps every active row >= 0 raises the cost), the
+// kind of point the sequential LP converges to. Otherwise the caller runs the sequential LP.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "bounds/sequential_lp.hpp"
+
+namespace flatsos::planner::detail {
+
+struct VertexNewtonSettings {
+  int max_iterations = 6;  ///< Newton steps
+  int max_pivots = 20;     ///< rows joining the vertex, over all steps
+  double row_tolerance = 1e-10;  ///< |active row| at the vertex, in the rows' units (activation)
+};
+
+struct VertexNewtonOutcome {
+  bool converged = false;  ///< the active rows are zero at theta (which has moved there)
+  bool solved = false;     ///< ... and it is the KKT point described above
+  int iterations = 0;  ///< Newton steps
+  int pivots = 0;      ///< rows that joined the vertex
+  std::string why_not;  ///< what failed, for studies and tests
+};
+
+/// The active set of a converged sequential LP: its bound rows with positive multipliers when
+/// they are exactly p and no reserve row has one; empty otherwise (no vertex of bound rows alone).
+std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, Eigen::Index p);
+
+/// From theta, whose rows (with their Jacobian) are `rows_at_theta`, moves theta to where the
+/// bound rows `active` (indices into the rows, theta.size() of them; rows join and leave it)
+/// are zero, then checks the KKT conditions above. theta is moved once Newton's method
+/// converges, whether or not the point passes: the sequential LP then starts there.
+VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, const NonlinearRows& rows,
+                                    std::vector<int>& active, const BoundRowsAt& rows_at_theta,
+                                    Eigen::VectorXd& theta, const VertexNewtonSettings& settings = {});
+
+}  // namespace flatsos::planner::detail

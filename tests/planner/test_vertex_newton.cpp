@@ -1,0 +1,152 @@
+// Newton's method on the last vertex (bounds/vertex_newton.hpp) against the sequential LP on a
+// problem of the bounds' shape: where the moved problem keeps its active rows it must end where
+// the sequential LP ends, and everywhere else it must say no rather than return another point.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "bounds/vertex_newton.hpp"
+#include "concave_rows_problem.hpp"
+
+namespace fpd = flatsos::planner::detail;
+using flatsos::testing::Problem;
+
+namespace {
+
+struct Solved {
+  Problem problem;
+  Problem::Solved at;
+  std::vector<int> vertex;
+};
+
+// The problem with rows a hundred times less curved (its optimum a vertex), reserve rows and
+// bounds on x that never bind: a vertex of bound rows alone.
+Problem loose() {
+  Problem p;
+  p.lp.row_lower.setConstant(-1e3);
+  p.lp.x_lower.setConstant(-1e3);
+  p.rows.kappa *= 0.01;
+  return p;
+}
+
+Solved solve(const Problem& problem) {
+  Solved s{problem, problem.solve(true), {}};
+  s.vertex = fpd::vertex_rows(s.at.outcome, Problem::kVariables);
+  return s;
+}
+
+// Newton's method on `last`'s vertex for `moved`, from last's optimum (into x; the vertex it ends on into `vertex`).
+fpd::VertexNewtonOutcome newton_from(const Solved& last, const Problem& moved, Eigen::VectorXd& x,
+                                     std::vector<int>* vertex = nullptr) {
+  const fpd::SequentialLpLinearPart linear{moved.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
+  x = last.at.x;
+  std::vector<int> active = last.vertex;
+  const fpd::NonlinearRows rows = moved.rows;
+  const fpd::VertexNewtonOutcome out = fpd::solve_on_vertex(linear, rows, active, moved.rows(x, true), x);
+  if (vertex) *vertex = active;
+  return out;
+}
+
+}  // namespace
+
+TEST(VertexNewton, TheSequentialLpsOptimumIsAVertexOfItsBoundRows) {
+  const Solved s = solve(loose());
+  ASSERT_TRUE(s.at.outcome.converged) << s.at.outcome.failure;
+  ASSERT_EQ(s.vertex.size(), static_cast<std::size_t>(Problem::kVariables));
+  const fpd::BoundRowsAt at = s.problem.rows(s.at.x, false);
+  for (const int row : s.vertex) EXPECT_LT(std::abs(at.value[static_cast<std::size_t>(row)]), 1e-9) << "row " << row;
+}
+
+TEST(VertexNewton, AMovedProblemThatKeepsItsActiveRowsEndsWhereTheSequentialLpEnds) {
+  const Solved last = solve(loose());
+  ASSERT_EQ(last.vertex.size(), static_cast<std::size_t>(Problem::kVariables));
+  Problem moved = loose();
+  moved.rows.b.array() += 0.01;  // every row a little tighter: the optimum moves, its rows stay
+  Eigen::VectorXd x;
+  const fpd::VertexNewtonOutcome newton = newton_from(last, moved, x);
+  ASSERT_TRUE(newton.solved) << newton.why_not;
+  EXPECT_TRUE(newton.converged);
+  EXPECT_GE(newton.iterations, 2);
+  EXPECT_LE(newton.iterations, 4);
+  const Problem::Solved slp = moved.solve(true);
+  ASSERT_TRUE(slp.outcome.converged) << slp.outcome.failure;
+  EXPECT_LT((x - slp.x).cwiseAbs().maxCoeff(), 1e-8) << x.transpose() << "\n" << slp.x.transpose();
+  EXPECT_GT((x - last.at.x).cwiseAbs().maxCoeff(), 1e-4) << "the problem did not move";
+  std::cout << "[ measure  ] " << newton.iterations << " Newton steps; the sequential LP from the start: "
+            << slp.outcome.iterations << " LP steps\n";
+}
+
+TEST(VertexNewton, ARowThatNowBindsJoinsTheVertexWhereTheSequentialLpFindsIt) {
+  const Solved last = solve(loose());
+  ASSERT_EQ(last.vertex.size(), static_cast<std::size_t>(Problem::kVariables));
+  // A row off the vertex raised until it cuts the vertex off: the optimum moves to a vertex
+  // with that row in it.
+  const fpd::BoundRowsAt at = last.problem.rows(last.at.x, false);
+  std::size_t off = 0;
+  while (std::find(last.vertex.begin(), last.vertex.end(), static_cast<int>(off)) != last.vertex.end()) ++off;
+  Problem moved = loose();
+  moved.rows.b[static_cast<Eigen::Index>(off)] += at.value[off] + 0.05;
+  Eigen::VectorXd x;
+  std::vector<int> vertex;
+  const fpd::VertexNewtonOutcome newton = newton_from(last, moved, x, &vertex);
+  ASSERT_TRUE(newton.solved) << newton.why_not;
+  EXPECT_GE(newton.pivots, 1);
+  EXPECT_NE(std::find(vertex.begin(), vertex.end(), static_cast<int>(off)), vertex.end()) << "the raised row is not in the vertex";
+  const Problem::Solved slp = moved.solve(true);
+  ASSERT_TRUE(slp.outcome.converged) << slp.outcome.failure;
+  EXPECT_LT((x - slp.x).cwiseAbs().maxCoeff(), 1e-8) << x.transpose() << "\n" << slp.x.transpose();
+  std::vector<int> slp_vertex = fpd::vertex_rows(slp.outcome, Problem::kVariables);
+  std::sort(slp_vertex.begin(), slp_vertex.end());
+  std::sort(vertex.begin(), vertex.end());
+  EXPECT_EQ(vertex, slp_vertex);
+  std::cout << "[ measure  ] " << newton.iterations << " Newton steps, " << newton.pivots
+            << " pivots; the sequential LP from the start: " << slp.outcome.iterations << " LP steps\n";
+}
+
+TEST(VertexNewton, AVertexThatBreaksAReserveRowIsNotTaken) {
+  const Solved last = solve(loose());
+  ASSERT_EQ(last.vertex.size(), static_cast<std::size_t>(Problem::kVariables));
+  Problem moved = loose();
+  moved.rows.b.array() += 0.01;  // the same move as above
+  moved.lp.row_lower[0] = moved.lp.G.row(0).dot(last.at.x) + 1.0;  // a reserve row the moved vertex cannot meet
+  Eigen::VectorXd x;
+  const fpd::VertexNewtonOutcome newton = newton_from(last, moved, x);
+  EXPECT_TRUE(newton.converged);
+  EXPECT_FALSE(newton.solved);
+  EXPECT_NE(newton.why_not.find("reserve row"), std::string::npos) << newton.why_not;
+}
+
+TEST(VertexNewton, AVertexWhereTheCostStillFallsIsNotTheOptimum) {
+  // The same rows and vertex with the cost reversed: every multiplier negative.
+  const Solved last = solve(loose());
+  ASSERT_EQ(last.vertex.size(), static_cast<std::size_t>(Problem::kVariables));
+  Problem reversed = loose();
+  reversed.lp.cost = -reversed.lp.cost;
+  Eigen::VectorXd x;
+  const fpd::VertexNewtonOutcome newton = newton_from(last, reversed, x);
+  EXPECT_TRUE(newton.converged);
+  EXPECT_FALSE(newton.solved);
+  EXPECT_EQ(newton.iterations, 0);  // it starts on the vertex
+  EXPECT_NE(newton.why_not.find("multiplier is negative"), std::string::npos) << newton.why_not;
+}
+
+TEST(VertexNewton, AnActiveSetOfTheWrongSizeOrRowsIsRefused) {
+  Solved last = solve(loose());
+  ASSERT_EQ(last.vertex.size(), static_cast<std::size_t>(Problem::kVariables));
+  Eigen::VectorXd x;
+  Solved short_set = last;
+  short_set.vertex.pop_back();
+  fpd::VertexNewtonOutcome newton = newton_from(short_set, last.problem, x);
+  EXPECT_FALSE(newton.converged);
+  EXPECT_EQ(x, last.at.x);
+  Solved repeated = last;
+  repeated.vertex.back() = repeated.vertex.front();
+  newton = newton_from(repeated, last.problem, x);
+  EXPECT_FALSE(newton.converged);
+  EXPECT_NE(newton.why_not.find("twice"), std::string::npos) << newton.why_not;
+  Solved beyond = last;
+  beyond.vertex.back() = Problem::kRows;
+  EXPECT_FALSE(newton_from(beyond, last.problem, x).converged);
+}
