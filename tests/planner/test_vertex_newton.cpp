@@ -1,13 +1,18 @@
 // Newton's method on the last vertex (bounds/vertex_newton.hpp) against the sequential LP on a
-// problem of the bounds' shape: where the moved problem keeps its active rows it must end where
-// the sequential LP ends, and everywhere else it must say no rather than return another point.
+// problem of the bounds' shape: where the moved problem keeps its active rows, or rows join the
+// vertex, it must end where the sequential LP ends, and everywhere else it must say no rather
+// than return another point. And the bound rows it takes from a receding-horizon step's period
+// (bounds/point_rows.hpp) against the rows with their whole Jacobian.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <string>
 #include <vector>
 
+#include "bounds/point_rows.hpp"
 #include "bounds/vertex_newton.hpp"
+#include "flatsos/planner/receding_horizon_step.hpp"
+#include "receding_horizon/period_bounds.hpp"
 #include "concave_rows_problem.hpp"
 
 namespace fpd = flatsos::planner::detail;
@@ -44,7 +49,8 @@ fpd::VertexNewtonOutcome newton_from(const Solved& last, const Problem& moved, E
   x = last.at.x;
   std::vector<int> active = last.vertex;
   const fpd::NonlinearRows rows = moved.rows;
-  const fpd::VertexNewtonOutcome out = fpd::solve_on_vertex(linear, rows, active, moved.rows(x, true), x);
+  fpd::VertexRowsOf vertex_rows(rows, moved.rows(x, true));
+  const fpd::VertexNewtonOutcome out = fpd::solve_on_vertex(linear, vertex_rows, active, x);
   if (vertex) *vertex = active;
   return out;
 }
@@ -149,4 +155,44 @@ TEST(VertexNewton, AnActiveSetOfTheWrongSizeOrRowsIsRefused) {
   Solved beyond = last;
   beyond.vertex.back() = Problem::kRows;
   EXPECT_FALSE(newton_from(beyond, last.problem, x).converged);
+}
+
+// The bound rows of a receding-horizon step's period kept with gradients in each point's force
+// jets (PointRows) are the rows of evaluate_rows: the same values, each row's gradient in theta
+// the Jacobian's row, and a step's change of every row the Jacobian times the step.
+TEST(PointRows, AreTheBoundRowsWithTheirJacobianInTheta) {
+  const auto model =
+      flatsos::plugin::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
+  const flatsos::planner::FlatOutputMap flat(model);
+  flatsos::plugin::ModelWorkspace ws = flat.makeWorkspace();
+  flatsos::planner::RecedingHorizonOptions o;
+  o.target_q_rad = Eigen::VectorXd::Constant(1, 0.35);
+  o.reserves_N = Eigen::VectorXd::Constant(13, 1.0);
+  const auto step = flatsos::planner::plan_receding_horizon_step(flat, ws, Eigen::VectorXd::Constant(1, 1.05),
+                                                                Eigen::VectorXd::Constant(1, -1.0), o);
+  ASSERT_EQ(step.status, flatsos::planner::SolveStatus::Solved) << step.message;
+  ASSERT_TRUE(step.bounds_imposed);
+  const std::vector<fpd::BoundPoint> points = fpd::period_points(flat, o.excitation_bounds, step);
+  const Eigen::VectorXd a_min = fpd::activation_minima(flat, 0.0);
+  fpd::PointRows point_rows(flat, points, a_min, fpd::kSampleMargin);
+  const Eigen::Index p = step.alpha().size();
+  Eigen::VectorXd d = Eigen::VectorXd::LinSpaced(p, -1.0, 2.0), g(p);
+  std::vector<double> change;
+  for (const double scale : {0.5, 1.0, 1.5}) {
+    const Eigen::VectorXd x = scale * step.alpha();
+    const fpd::BoundRowsAt at = fpd::evaluate_rows(flat, points, a_min, x, true, fpd::kSampleMargin);
+    const fpd::JacobianByRow jacobian(at);
+    point_rows.evaluate(x, true);
+    ASSERT_EQ(point_rows.values(), at.value);
+    EXPECT_DOUBLE_EQ(point_rows.violation(), at.violation);
+    point_rows.change(d, change);
+    ASSERT_EQ(change.size(), at.value.size());
+    Eigen::VectorXd expected(p);
+    for (std::size_t row = 0; row < at.value.size(); ++row) {
+      jacobian.copy_row(row, expected);
+      point_rows.gradient(row, g);
+      EXPECT_LE((g - expected).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + expected.cwiseAbs().maxCoeff())) << "row " << row;
+      EXPECT_NEAR(change[row], expected.dot(d), 1e-12 * (1.0 + expected.cwiseAbs().sum() * 2.0)) << "row " << row;
+    }
+  }
 }

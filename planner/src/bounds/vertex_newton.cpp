@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 
 #include <Eigen/LU>
 
@@ -24,41 +23,40 @@ VertexNewtonOutcome fail(VertexNewtonOutcome out, std::string why) {
   return out;
 }
 
-// One linearization at theta: its rows' values and gradients, the vertex's rows among them.
+// The vertex's step at the rows' last linearization.
 class Linearization {
  public:
-  Linearization(const BoundRowsAt& at, std::vector<int>& active, std::vector<int>& position)
-      : at_(at), gradients_(at), active_(active), position_(position) {}
+  Linearization(const VertexRows& rows, std::vector<int>& active, std::vector<int>& position)
+      : rows_(rows), active_(active), position_(position) {}
 
   // The step that zeroes the vertex's linearized rows, taking in (by the dual simplex) the rows
   // that step would leave below zero until none does. False when the vertex's gradients are
   // dependent, no vertex nearby meets a row, or `max_pivots` is reached.
   bool step(const Eigen::VectorXd& cost, int max_pivots, Eigen::VectorXd& d, int& pivots, std::string& why) {
     const auto p = static_cast<Eigen::Index>(active_.size());
+    const std::vector<double>& value = rows_.values();
     Eigen::MatrixXd J(p, p);
     Eigen::VectorXd v(p), g(p);
     for (;;) {
       for (Eigen::Index k = 0; k < p; ++k) {
         const auto row = static_cast<std::size_t>(active_[static_cast<std::size_t>(k)]);
-        gradients_.copy_row(row, g);
+        rows_.gradient(row, g);
         J.row(k) = g.transpose();
-        v[k] = at_.value[row];
+        v[k] = value[row];
       }
       lu_.compute(J);
       if (!(lu_.rcond() > kMinReciprocalCondition)) return refuse(why, "the active rows' gradients are (nearly) dependent");
       d = -lu_.solve(v);
+      rows_.change(d, change_);
       int joining = -1;
       double worst = -kJoiningRow;
-      for (std::size_t i = 0; i < at_.value.size(); ++i) {
-        if (position_[i] >= 0) continue;
-        const double predicted = at_.value[i] + gradients_.dot(i, d);
-        if (predicted < worst) worst = predicted, joining = static_cast<int>(i);
-      }
+      for (std::size_t i = 0; i < value.size(); ++i)
+        if (position_[i] < 0 && value[i] + change_[i] < worst) worst = value[i] + change_[i], joining = static_cast<int>(i);
       if (joining < 0) return true;
       if (pivots == max_pivots) return refuse(why, "too many rows join the vertex");
       // Dual simplex: the leaving row k is the one whose release raises the joining row at the
       // least cost per unit (min y_k / w_k over w_k > 0), which keeps every multiplier >= 0.
-      gradients_.copy_row(static_cast<std::size_t>(joining), g);
+      rows_.gradient(static_cast<std::size_t>(joining), g);
       const Eigen::VectorXd w = lu_.transpose().solve(g), y = lu_.transpose().solve(cost);
       const double tiny = 1e-12 * w.cwiseAbs().maxCoeff();
       Eigen::Index leaving = -1;
@@ -80,23 +78,23 @@ class Linearization {
     why = reason;
     return false;
   }
-  const BoundRowsAt& at_;
-  JacobianByRow gradients_;
+  const VertexRows& rows_;
   std::vector<int>& active_;
   std::vector<int>& position_;
+  std::vector<double> change_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_;
 };
 
-double worst_row_off(const BoundRowsAt& at, const std::vector<int>& position) {
+double worst_row_off(const std::vector<double>& value, const std::vector<int>& position) {
   double worst = 0.0;
-  for (std::size_t i = 0; i < at.value.size(); ++i)
-    if (position[i] < 0) worst = std::min(worst, at.value[i]);
+  for (std::size_t i = 0; i < value.size(); ++i)
+    if (position[i] < 0) worst = std::min(worst, value[i]);
   return worst;
 }
 
-double largest_active(const BoundRowsAt& at, const std::vector<int>& active) {
+double largest_active(const std::vector<double>& value, const std::vector<int>& active) {
   double largest = 0.0;
-  for (const int row : active) largest = std::max(largest, std::abs(at.value[static_cast<std::size_t>(row)]));
+  for (const int row : active) largest = std::max(largest, std::abs(value[static_cast<std::size_t>(row)]));
   return largest;
 }
 }  // namespace
@@ -111,15 +109,26 @@ std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, Eigen::Index p)
   return active;
 }
 
-VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, const NonlinearRows& rows, std::vector<int>& active,
-                                    const BoundRowsAt& rows_at_theta, Eigen::VectorXd& theta,
-                                    const VertexNewtonSettings& settings) {
+VertexRowsOf::VertexRowsOf(const NonlinearRows& rows, BoundRowsAt at_start)
+    : rows_(rows), at_(std::move(at_start)), by_row_(at_) {}
+
+void VertexRowsOf::evaluate(const Eigen::VectorXd& x, bool gradients) {
+  at_ = rows_(x, gradients);
+  if (gradients) by_row_ = JacobianByRow(at_);
+}
+
+void VertexRowsOf::change(const Eigen::VectorXd& d, std::vector<double>& out) const {
+  out.resize(at_.value.size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = by_row_.dot(i, d);
+}
+
+VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, VertexRows& rows, std::vector<int>& active,
+                                    Eigen::VectorXd& theta, const VertexNewtonSettings& settings) {
   VertexNewtonOutcome out;
   const LinearProgram& lp = linear.lp;
   const Eigen::Index p = theta.size();
   if (static_cast<Eigen::Index>(active.size()) != p) return fail(out, "the active set has other than theta.size() rows");
-  if (rows_at_theta.jacobian.empty()) return fail(out, "the rows at theta come without their Jacobian");
-  std::vector<int> position(rows_at_theta.value.size(), -1);
+  std::vector<int> position(rows.values().size(), -1);
   for (std::size_t k = 0; k < active.size(); ++k) {
     const int row = active[k];
     if (row < 0 || static_cast<std::size_t>(row) >= position.size() || position[static_cast<std::size_t>(row)] >= 0)
@@ -128,33 +137,29 @@ VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, const 
   }
 
   Eigen::VectorXd x = theta, d;
-  BoundRowsAt current;
-  const BoundRowsAt* at = &rows_at_theta;
-  auto linearization = std::make_unique<Linearization>(*at, active, position);
+  Linearization linearization(rows, active, position);
   // Converged: the vertex's rows zero and every other row held as the sequential LP holds it.
   auto converged = [&] {
-    return largest_active(*at, active) <= settings.row_tolerance && worst_row_off(*at, position) >= -kBoundMargin;
+    return largest_active(rows.values(), active) <= settings.row_tolerance &&
+           worst_row_off(rows.values(), position) >= -kBoundMargin;
   };
   bool done = converged();
   std::string why;
   int no_pivots = 0;  // on the vertex from the start: its factors for the multipliers, as it is
-  if (done && !linearization->step(lp.cost, 0, d, no_pivots, why)) return fail(out, why);
+  if (done && !linearization.step(lp.cost, 0, d, no_pivots, why)) return fail(out, why);
   while (!done) {
     if (out.iterations == settings.max_iterations) return fail(out, "Newton's method did not converge");
-    const bool last_likely = largest_active(*at, active) <= kLastStepResidual;
-    if (!linearization->step(lp.cost, settings.max_pivots, d, out.pivots, why)) return fail(out, why);
+    const bool last_likely = largest_active(rows.values(), active) <= kLastStepResidual;
+    if (!linearization.step(lp.cost, settings.max_pivots, d, out.pivots, why)) return fail(out, why);
     x += d;
     ++out.iterations;
     if (!x.allFinite()) return fail(out, "a Newton step is not finite");
-    BoundRowsAt next = rows(x, !last_likely);
-    done = std::all_of(next.value.begin(), next.value.end(), [](double v) { return std::isfinite(v); });
-    if (!done) return fail(out, "the rows are not finite after a Newton step");
-    current = std::move(next);
-    at = &current;
+    rows.evaluate(x, !last_likely);
+    const std::vector<double>& value = rows.values();
+    if (!std::all_of(value.begin(), value.end(), [](double v) { return std::isfinite(v); }))
+      return fail(out, "the rows are not finite after a Newton step");
     done = converged();
-    if (done) break;
-    if (last_likely) current = rows(x, true);  // not quadratic after all: its Jacobian
-    linearization = std::make_unique<Linearization>(current, active, position);
+    if (!done && last_likely) rows.evaluate(x, true);  // not quadratic after all: its gradients
   }
   theta = x;
   out.converged = true;
@@ -166,7 +171,7 @@ VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, const 
     return fail(out, "the vertex leaves theta's bounds");
   // cost = J^T y with y >= 0, J the vertex's gradients at the last linearization (within a
   // Newton step of the vertex).
-  const Eigen::VectorXd y = linearization->factors().transpose().solve(lp.cost);
+  const Eigen::VectorXd y = linearization.factors().transpose().solve(lp.cost);
   if (!y.allFinite() || (y.array() < 0.0).any()) return fail(out, "a multiplier is negative: not the optimum's vertex");
   out.solved = true;
   return out;

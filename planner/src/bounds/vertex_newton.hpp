@@ -23,6 +23,36 @@
 
 namespace flatsos::planner::detail {
 
+/// What Newton's method on a vertex asks of the rows at a point x: their values and, after an
+/// evaluation with gradients, a row's gradient in theta and every row's change along a step.
+class VertexRows {
+ public:
+  virtual ~VertexRows() = default;
+  /// The rows at x (and what gradient() and change() need when `gradients`).
+  virtual void evaluate(const Eigen::VectorXd& x, bool gradients) = 0;
+  virtual const std::vector<double>& values() const = 0;
+  /// Row `row`'s gradient into `out` (theta.size() entries, set beforehand).
+  virtual void gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const = 0;
+  /// out[i] = gradient of row i . d, for every row.
+  virtual void change(const Eigen::VectorXd& d, std::vector<double>& out) const = 0;
+};
+
+/// VertexRows of NonlinearRows through their Jacobian by rows, starting from rows already
+/// evaluated (with their Jacobian) at the start.
+class VertexRowsOf final : public VertexRows {
+ public:
+  VertexRowsOf(const NonlinearRows& rows, BoundRowsAt at_start);
+  void evaluate(const Eigen::VectorXd& x, bool gradients) override;
+  const std::vector<double>& values() const override { return at_.value; }
+  void gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const override { by_row_.copy_row(row, out); }
+  void change(const Eigen::VectorXd& d, std::vector<double>& out) const override;
+
+ private:
+  const NonlinearRows& rows_;
+  BoundRowsAt at_;
+  JacobianByRow by_row_;
+};
+
 struct VertexNewtonSettings {
   int max_iterations = 6;  ///< Newton steps
   int max_pivots = 20;     ///< rows joining the vertex, over all steps
@@ -41,12 +71,11 @@ struct VertexNewtonOutcome {
 /// they are exactly p and no reserve row has one; empty otherwise (no vertex of bound rows alone).
 std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, Eigen::Index p);
 
-/// From theta, whose rows (with their Jacobian) are `rows_at_theta`, moves theta to where the
-/// bound rows `active` (indices into the rows, theta.size() of them; rows join and leave it)
-/// are zero, then checks the KKT conditions above. theta is moved once Newton's method
-/// converges, whether or not the point passes: the sequential LP then starts there.
-VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, const NonlinearRows& rows,
-                                    std::vector<int>& active, const BoundRowsAt& rows_at_theta,
+/// From theta, where `rows` were last evaluated with gradients, moves theta to where the bound
+/// rows `active` (indices into the rows, theta.size() of them; rows join and leave it) are
+/// zero, then checks the KKT conditions above. theta is moved once Newton's method converges,
+/// whether or not the point passes: the sequential LP then starts there.
+VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, VertexRows& rows, std::vector<int>& active,
                                     Eigen::VectorXd& theta, const VertexNewtonSettings& settings = {});
 
 }  // namespace flatsos::planner::detail

@@ -8,6 +8,7 @@
 
 #include "bounds/bound_rows.hpp"
 #include "bounds/sequential_lp.hpp"
+#include "bounds/point_rows.hpp"
 #include "bounds/vertex_newton.hpp"
 
 namespace flatsos::planner::detail {
@@ -172,19 +173,22 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   lp.x_lower = Eigen::VectorXd::Zero(p);
   lp.x_upper = Eigen::VectorXd::Constant(p, 1e19);
   const SequentialLpLinearPart linear{lp, {static_cast<std::size_t>(step.bound_N.size())}, kReserveMargin_N};
-  const NonlinearRows rows = bound_rows_of(flat, points, activation_minima(flat, 0.0), kSampleMargin);
+  const Eigen::VectorXd a_min = activation_minima(flat, 0.0);
+  const NonlinearRows rows = bound_rows_of(flat, points, a_min, kSampleMargin);
   const Eigen::VectorXd& unbounded = step.slp.alpha;  // unchanged until the end
   const Eigen::VectorXd& previous = step.buffers.bounded_alpha;
-  BoundRowsAt at_previous;
   const bool has_previous = previous.size() == p && previous.allFinite();
-  if (has_previous) at_previous = rows(previous, true);
   // Newton's method on the last period's vertex first: where its active rows are still the
-  // optimum's, the step ends there; where another row now binds (the leg: 60 % of periods, by up
-  // to 3e-4), the sequential LP starts from the point it reached.
+  // optimum's, or rows join it by a few pivots, the step ends there; otherwise the sequential LP
+  // starts from the point it reached (when it converged).
   std::vector<int>& vertex = step.buffers.bounds_vertex;
   Eigen::VectorXd alpha = previous;
-  const VertexNewtonOutcome newton = has_previous && !vertex.empty() ? solve_on_vertex(linear, rows, vertex, at_previous, alpha)
-                                                                      : VertexNewtonOutcome{};
+  VertexNewtonOutcome newton;
+  if (has_previous && !vertex.empty()) {
+    PointRows point_rows(flat, points, a_min, kSampleMargin);
+    point_rows.evaluate(previous, true);
+    newton = solve_on_vertex(linear, point_rows, vertex, alpha);
+  }
   step.bound_newton_steps = newton.iterations;
   if (newton.solved) {
     step.slp.alpha = alpha;
@@ -193,10 +197,12 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     check_bounded_samples(flat, workspace, b, false, step);
     return;
   }
+  BoundRowsAt at_previous;
+  if (has_previous && !newton.converged) at_previous = rows(previous, true);
   // Else from the previous bounded step's alpha when it violates less than the SLP's optimum:
-  // consecutive periods' problems differ little, so a few Newton steps remain instead of the
-  // whole way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3).
-  // Its rows were evaluated with their Jacobian, which the sequential LP then starts from.
+  // consecutive periods' problems differ little, so a few LP steps remain instead of the whole
+  // way from the unbounded optimum (measured on the seated knee: 6-7 LP steps to 2-3). Its rows
+  // were evaluated with their Jacobian, which the sequential LP then starts from.
   const bool from_previous = !newton.converged && has_previous &&
                              at_previous.violation + reserve_violation_N(lp, previous) <
                                  rows(unbounded, false).violation + reserve_violation_N(lp, unbounded);
