@@ -38,7 +38,7 @@ Problem loose() {
 
 Solved solve(const Problem& problem) {
   Solved s{problem, problem.solve(true), {}};
-  s.vertex = fpd::vertex_rows(s.at.outcome, Problem::kVariables);
+  s.vertex = fpd::vertex_rows(s.at.outcome, s.at.x, problem.lp.x_lower);
   return s;
 }
 
@@ -103,7 +103,7 @@ TEST(VertexNewton, ARowThatNowBindsJoinsTheVertexWhereTheSequentialLpFindsIt) {
   const Problem::Solved slp = moved.solve(true);
   ASSERT_TRUE(slp.outcome.converged) << slp.outcome.failure;
   EXPECT_LT((x - slp.x).cwiseAbs().maxCoeff(), 1e-8) << x.transpose() << "\n" << slp.x.transpose();
-  std::vector<int> slp_vertex = fpd::vertex_rows(slp.outcome, Problem::kVariables);
+  std::vector<int> slp_vertex = fpd::vertex_rows(slp.outcome, slp.x, moved.lp.x_lower);
   std::sort(slp_vertex.begin(), slp_vertex.end());
   std::sort(vertex.begin(), vertex.end());
   EXPECT_EQ(vertex, slp_vertex);
@@ -122,6 +122,40 @@ TEST(VertexNewton, AVertexThatBreaksAReserveRowIsNotTaken) {
   EXPECT_TRUE(newton.converged);
   EXPECT_FALSE(newton.solved);
   EXPECT_NE(newton.why_not.find("reserve row"), std::string::npos) << newton.why_not;
+}
+
+TEST(VertexNewton, ReserveRowsAndBoundsOnThetaJoinTheVertexAsRowsDo) {
+  // The move above, a reserve row raised above the vertex and one entry's lower bound above its
+  // value there: with the linear rows beside the bound rows both join the vertex, which ends
+  // where the sequential LP ends.
+  const Solved last = solve(loose());
+  ASSERT_EQ(last.vertex.size(), static_cast<std::size_t>(Problem::kVariables));
+  Problem moved = loose();
+  moved.rows.b.array() += 0.01;
+  moved.lp.row_lower[0] = moved.lp.G.row(0).dot(last.at.x) + 0.05;
+  moved.lp.x_lower[2] = last.at.x[2] + 0.02;
+  Eigen::MatrixXd G;
+  Eigen::VectorXd lower;
+  fpd::linear_rows_with_lower_bounds(moved.lp, G, lower);
+  const fpd::SequentialLpLinearPart linear{moved.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
+  const fpd::NonlinearRows rows = moved.rows;
+  Eigen::VectorXd x = last.at.x;
+  fpd::VertexRowsOf bound_rows(rows, moved.rows(x, true));
+  fpd::WithLinearRows with_linear(bound_rows, G, lower);
+  with_linear.evaluate(x, true);
+  std::vector<int> vertex = last.vertex;
+  const fpd::VertexNewtonOutcome newton = fpd::solve_on_vertex(linear, with_linear, vertex, x);
+  ASSERT_TRUE(newton.solved) << newton.why_not;
+  const int reserve_row = Problem::kRows, theta_bound = Problem::kRows + Problem::kReserveRows + 2;
+  EXPECT_NE(std::find(vertex.begin(), vertex.end(), reserve_row), vertex.end());
+  EXPECT_NE(std::find(vertex.begin(), vertex.end(), theta_bound), vertex.end());
+  const Problem::Solved slp = moved.solve(true);
+  ASSERT_TRUE(slp.outcome.converged) << slp.outcome.failure;
+  EXPECT_LT((x - slp.x).cwiseAbs().maxCoeff(), 1e-8) << x.transpose() << "\n" << slp.x.transpose();
+  std::vector<int> slp_vertex = fpd::vertex_rows(slp.outcome, slp.x, moved.lp.x_lower);
+  std::sort(slp_vertex.begin(), slp_vertex.end());
+  std::sort(vertex.begin(), vertex.end());
+  EXPECT_EQ(vertex, slp_vertex);
 }
 
 TEST(VertexNewton, AVertexWhereTheCostStillFallsIsNotTheOptimum) {

@@ -99,14 +99,58 @@ double largest_active(const std::vector<double>& value, const std::vector<int>& 
 }
 }  // namespace
 
-std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, Eigen::Index p) {
+std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, const Eigen::VectorXd& theta,
+                             const Eigen::VectorXd& theta_lower) {
+  const Eigen::Index p = theta.size();
   std::vector<int> active;
   if (!outcome.converged || outcome.rows_violated) return active;
-  if ((outcome.linear_row_multipliers.array() > 0.0).any()) return active;
   for (std::size_t i = 0; i < outcome.row_multipliers.size(); ++i)
     if (outcome.row_multipliers[i] > 0.0) active.push_back(static_cast<int>(i));
+  const auto bound_rows = static_cast<int>(outcome.row_multipliers.size());
+  for (Eigen::Index r = 0; r < outcome.linear_row_multipliers.size(); ++r)
+    if (outcome.linear_row_multipliers[r] > 0.0) active.push_back(bound_rows + static_cast<int>(r));
+  // The step LPs end exactly on theta's bounds (up to rounding of theta + d): no multiplier is kept for them.
+  const int first_bound = bound_rows + static_cast<int>(outcome.linear_row_multipliers.size());
+  for (Eigen::Index i = 0; i < p; ++i)
+    if (theta[i] - theta_lower[i] <= 1e-12 * (1.0 + std::abs(theta[i]))) active.push_back(first_bound + static_cast<int>(i));
   if (static_cast<Eigen::Index>(active.size()) != p) active.clear();
   return active;
+}
+
+void linear_rows_with_lower_bounds(const LinearProgram& lp, Eigen::MatrixXd& G, Eigen::VectorXd& lower) {
+  const Eigen::Index p = lp.x_lower.size(), r = lp.G.rows();
+  G.resize(r + p, p);
+  G.topRows(r) = lp.G;
+  G.bottomRows(p).setIdentity();
+  lower.resize(r + p);
+  lower.head(r) = lp.row_lower;
+  lower.tail(p) = lp.x_lower;
+}
+
+WithLinearRows::WithLinearRows(VertexRows& bound, const Eigen::MatrixXd& G, const Eigen::VectorXd& lower)
+    : bound_(bound), G_(G), lower_(lower) {}
+
+void WithLinearRows::collect(const Eigen::VectorXd& x) {
+  value_ = bound_.values();
+  const Eigen::VectorXd linear = G_ * x - lower_;
+  value_.insert(value_.end(), linear.data(), linear.data() + linear.size());
+}
+
+void WithLinearRows::evaluate(const Eigen::VectorXd& x, bool gradients) {
+  bound_.evaluate(x, gradients);
+  collect(x);
+}
+
+void WithLinearRows::gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const {
+  const std::size_t n = bound_.values().size();
+  if (row < n) bound_.gradient(row, out);
+  else out = G_.row(static_cast<Eigen::Index>(row - n)).transpose();
+}
+
+void WithLinearRows::change(const Eigen::VectorXd& d, std::vector<double>& out) const {
+  bound_.change(d, out);
+  const Eigen::VectorXd linear = G_ * d;
+  out.insert(out.end(), linear.data(), linear.data() + linear.size());
 }
 
 VertexRowsOf::VertexRowsOf(const NonlinearRows& rows, BoundRowsAt at_start)

@@ -53,6 +53,25 @@ class VertexRowsOf final : public VertexRows {
   JacobianByRow by_row_;
 };
 
+/// Bound rows and, numbered after them, linear rows G x >= lower (value G x - lower, in their
+/// own units): the reserve rows, which share the vertex with the bound rows while the plan moves.
+class WithLinearRows final : public VertexRows {
+ public:
+  /// Keeps references to all three.
+  WithLinearRows(VertexRows& bound, const Eigen::MatrixXd& G, const Eigen::VectorXd& lower);
+  void evaluate(const Eigen::VectorXd& x, bool gradients) override;
+  const std::vector<double>& values() const override { return value_; }
+  void gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const override;
+  void change(const Eigen::VectorXd& d, std::vector<double>& out) const override;
+
+ private:
+  void collect(const Eigen::VectorXd& x);
+  VertexRows& bound_;
+  const Eigen::MatrixXd& G_;
+  const Eigen::VectorXd& lower_;
+  std::vector<double> value_;
+};
+
 struct VertexNewtonSettings {
   int max_iterations = 6;  ///< Newton steps
   int max_pivots = 20;     ///< rows joining the vertex, over all steps
@@ -67,9 +86,16 @@ struct VertexNewtonOutcome {
   std::string why_not;  ///< what failed, for studies and tests
 };
 
-/// The active set of a converged sequential LP: its bound rows with positive multipliers when
-/// they are exactly p and no reserve row has one; empty otherwise (no vertex of bound rows alone).
-std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, Eigen::Index p);
+/// The active set of a sequential LP converged at theta: its bound rows, then its reserve rows
+/// (numbered after the bound rows, as in WithLinearRows) with positive multipliers, then the
+/// entries of theta at their lower bound (numbered after the reserve rows), when they are
+/// exactly theta.size(); empty otherwise.
+std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, const Eigen::VectorXd& theta,
+                             const Eigen::VectorXd& theta_lower);
+
+/// The reserve rows of `lp` and theta >= lp.x_lower below them, as one block of linear rows
+/// (for WithLinearRows, numbered as vertex_rows numbers them).
+void linear_rows_with_lower_bounds(const LinearProgram& lp, Eigen::MatrixXd& G, Eigen::VectorXd& lower);
 
 /// From theta, where `rows` were last evaluated with gradients, moves theta to where the bound
 /// rows `active` (indices into the rows, theta.size() of them; rows join and leave it) are

@@ -98,6 +98,20 @@ void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& wo
   }
 }
 
+// Newton's method on `vertex` from alpha over the points' bound rows, the reserve rows and
+// alpha >= 0 (bounds/vertex_newton.hpp).
+VertexNewtonOutcome newton_on_vertex(const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
+                                     const Eigen::VectorXd& a_min, const SequentialLpLinearPart& linear,
+                                     std::vector<int>& vertex, Eigen::VectorXd& alpha) {
+  PointRows point_rows(flat, points, a_min, kSampleMargin);
+  Eigen::MatrixXd G;
+  Eigen::VectorXd lower;
+  linear_rows_with_lower_bounds(linear.lp, G, lower);
+  WithLinearRows with_reserves(point_rows, G, lower);
+  with_reserves.evaluate(alpha, true);
+  return solve_on_vertex(linear, with_reserves, vertex, alpha);
+}
+
 }  // namespace
 
 std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHorizonStep& step, const TorqueJetGrid& grid,
@@ -183,12 +197,9 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   // starts from the point it reached (when it converged).
   std::vector<int>& vertex = step.buffers.bounds_vertex;
   Eigen::VectorXd alpha = previous;
-  VertexNewtonOutcome newton;
-  if (has_previous && !vertex.empty()) {
-    PointRows point_rows(flat, points, a_min, kSampleMargin);
-    point_rows.evaluate(previous, true);
-    newton = solve_on_vertex(linear, point_rows, vertex, alpha);
-  }
+  const VertexNewtonOutcome newton = has_previous && !vertex.empty()
+                                         ? newton_on_vertex(flat, points, a_min, linear, vertex, alpha)
+                                         : VertexNewtonOutcome{};
   step.bound_newton_steps = newton.iterations;
   if (newton.solved) {
     step.slp.alpha = alpha;
@@ -229,7 +240,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;
   step.slp.cost_N = lp.cost.dot(alpha);
-  vertex = vertex_rows(slp, p);
+  vertex = vertex_rows(slp, alpha, lp.x_lower);
   if (slp.converged && !slp.rows_violated) step.buffers.bounded_alpha = alpha;  // never start from a stuck point
   if (!slp.converged) {
     step.status = SolveStatus::Failed;
