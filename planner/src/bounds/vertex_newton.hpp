@@ -1,7 +1,7 @@
 #pragma once
 // Newton's method on a known vertex of the bounds' problem (sequential_lp.hpp). With a linear
-// cost a nondegenerate optimum is a vertex: as many bound rows active (zero) as theta has
-// entries. A receding horizon's consecutive periods keep most of their active rows: holding
+// cost a nondegenerate optimum is a vertex: as many rows active (zero) as theta has entries
+// (bound rows, and the linear rows beside them: reserve rows, theta's lower bounds). A receding horizon's consecutive periods keep most of their active rows: holding
 // them at zero by Newton's method (one dense p x p solve per iteration) reaches the new optimum
 // in two or three evaluations of the rows, where the sequential LP takes as many LP steps, each
 // with its rows, their Jacobian by rows and a simplex solve. A row the linearized step would
@@ -97,9 +97,8 @@ std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, const Eigen::Ve
 /// (for WithLinearRows, numbered as vertex_rows numbers them).
 void linear_rows_with_lower_bounds(const LinearProgram& lp, Eigen::MatrixXd& G, Eigen::VectorXd& lower);
 
-/// From theta, where `rows` were last evaluated with gradients, moves theta to where the bound
-/// rows `active` (indices into the rows, theta.size() of them; rows join and leave it) are
-/// zero, then checks the KKT conditions above. theta is moved once Newton's method converges,
+/// From theta, where `rows` were last evaluated with gradients, moves theta to where the rows
+/// `active` (indices into the rows, theta.size() of them; rows join and leave it) are zero, then checks the KKT conditions above. theta is moved once Newton's method converges,
 /// whether or not the point passes: the sequential LP then starts there.
 VertexNewtonOutcome solve_on_vertex(const SequentialLpLinearPart& linear, VertexRows& rows, std::vector<int>& active,
                                     Eigen::VectorXd& theta, const VertexNewtonSettings& settings = {});
