@@ -73,8 +73,9 @@ SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const Nonlin
                                 {max_iterations, kBoundsLpRelativeDecrease}, rows_at_alpha);
 }
 
-// After the bounds moved alpha (step.slp.alpha): samples the first period and says what holds
-// there; `rows_violated`: the sequential LP settled with rows it could not meet.
+// After the bounds moved alpha (step.slp.alpha; by the sequential LP or Newton's method on the
+// vertex): samples the first period and says what holds there; `rows_violated`: the sequential
+// LP settled with rows it could not meet.
 void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
                            bool rows_violated, RecedingHorizonStep& step) {
   const bool finite = sample_period(flat, workspace, b, step);
@@ -89,11 +90,11 @@ void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& wo
                    (finite ? "; closest: " + describe(flat, b, step, left) : std::string());
   } else if (!finite) {
     step.status = SolveStatus::Failed;
-    step.message = "the excitation bounds' sequential LP left the model's valid domain on the first period: " +
+    step.message = "the alpha that meets the excitation bounds' rows leaves the model's valid domain on the first period: " +
                    domain_violation(flat, step);
   } else {
     step.status = SolveStatus::Failed;
-    step.message = "the excitation bounds' sequential LP converged, but the first period still leaves them: " +
+    step.message = "the alpha that meets the excitation bounds' rows still leaves them on the first period's samples: " +
                    describe(flat, b, step, left);
   }
 }
