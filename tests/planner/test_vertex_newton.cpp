@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -229,4 +230,8 @@ TEST(PointRows, AreTheBoundRowsWithTheirJacobianInTheta) {
       EXPECT_NEAR(change[row], expected.dot(d), 1e-12 * (1.0 + expected.cwiseAbs().sum() * 2.0)) << "row " << row;
     }
   }
+  // Evaluated without gradients, the rows have none to give: asking is a programming error.
+  point_rows.evaluate(step.alpha(), false);
+  EXPECT_THROW(point_rows.gradient(0, g), std::logic_error);
+  EXPECT_THROW(point_rows.change(d, change), std::logic_error);
 }

@@ -1,6 +1,7 @@
 #include "bounds/point_rows.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace flatsos::planner::detail {
 
@@ -23,7 +24,12 @@ void PointRows::evaluate(const Eigen::VectorXd& x, bool gradients) {
     }
 }
 
+void PointRows::requireGradients() const {
+  if (gradient_.size() != value_.size()) throw std::logic_error("bound rows: gradients asked of rows evaluated without them");
+}
+
 void PointRows::gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const {
+  requireGradients();
   const auto per_point = static_cast<std::size_t>(flat_.numMuscles() * kRowsPerMuscle);
   const BoundPoint& bp = points_[row / per_point];
   const int j = static_cast<int>((row % per_point) / static_cast<std::size_t>(kRowsPerMuscle));
@@ -32,6 +38,7 @@ void PointRows::gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const
 }
 
 void PointRows::change(const Eigen::VectorXd& d, std::vector<double>& out) const {
+  requireGradients();
   const int m = flat_.numMuscles();
   out.resize(value_.size());
   Eigen::VectorXd d_columns;

@@ -22,6 +22,7 @@ class PointRows final : public VertexRows {
   double violation() const { return violation_; }  ///< sum of max(0, -row)
 
  private:
+  void requireGradients() const;  // throws std::logic_error after an evaluation without them
   const FlatOutputMap& flat_;
   const std::vector<BoundPoint>& points_;
   Eigen::VectorXd a_min_;

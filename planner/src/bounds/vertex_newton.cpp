@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <Eigen/LU>
 
@@ -154,14 +155,25 @@ void WithLinearRows::change(const Eigen::VectorXd& d, std::vector<double>& out) 
 }
 
 VertexRowsOf::VertexRowsOf(const NonlinearRows& rows, BoundRowsAt at_start)
-    : rows_(rows), at_(std::move(at_start)), by_row_(at_) {}
+    : rows_(rows), at_(std::move(at_start)), by_row_(at_), gradients_(!at_.jacobian.empty() || at_.value.empty()) {}
 
 void VertexRowsOf::evaluate(const Eigen::VectorXd& x, bool gradients) {
   at_ = rows_(x, gradients);
+  gradients_ = gradients;
   if (gradients) by_row_ = JacobianByRow(at_);
 }
 
+void VertexRowsOf::requireGradients() const {
+  if (!gradients_) throw std::logic_error("vertex rows: gradients asked of rows evaluated without them");
+}
+
+void VertexRowsOf::gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const {
+  requireGradients();
+  by_row_.copy_row(row, out);
+}
+
 void VertexRowsOf::change(const Eigen::VectorXd& d, std::vector<double>& out) const {
+  requireGradients();
   out.resize(at_.value.size());
   for (std::size_t i = 0; i < out.size(); ++i) out[i] = by_row_.dot(i, d);
 }

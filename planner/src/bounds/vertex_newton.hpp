@@ -44,13 +44,15 @@ class VertexRowsOf final : public VertexRows {
   VertexRowsOf(const NonlinearRows& rows, BoundRowsAt at_start);
   void evaluate(const Eigen::VectorXd& x, bool gradients) override;
   const std::vector<double>& values() const override { return at_.value; }
-  void gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const override { by_row_.copy_row(row, out); }
+  void gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const override;
   void change(const Eigen::VectorXd& d, std::vector<double>& out) const override;
 
  private:
+  void requireGradients() const;  // throws std::logic_error after an evaluation without them
   const NonlinearRows& rows_;
   BoundRowsAt at_;
   JacobianByRow by_row_;
+  bool gradients_ = true;  // the last evaluation's
 };
 
 /// Bound rows and, numbered after them, linear rows G x >= lower (value G x - lower, in their
