@@ -46,6 +46,28 @@ Eigen::VectorXd constraints(PaperFirstStep& s, const fpl::RecedingHorizonStep& s
   return flatsos::test::first_period_constraints(s.arm.flat, s.ws, s.options.excitation_bounds, step, alpha);
 }
 
+// The seated knee (13 muscles, 1 N reserves) moving from 60 to 20 degrees, one period after
+// another: most muscles' SLP optimum sits 100 N below their activation floor, so every step is
+// bounded.
+struct KneePeriods {
+  std::shared_ptr<const fp::MusculoskeletalModel> model =
+      fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
+  fpl::FlatOutputMap flat{model};
+  fp::ModelWorkspace ws = flat.makeWorkspace();
+  fpl::RecedingHorizonOptions o = [] {
+    fpl::RecedingHorizonOptions options;
+    options.target_q_rad = Eigen::VectorXd::Constant(1, deg(20));
+    options.reserves_N = Eigen::VectorXd::Constant(13, 1.0);
+    return options;
+  }();
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(1, deg(60)), qd = Eigen::VectorXd::Constant(1, -1.0);
+
+  void nextPeriod() {
+    q[0] -= 0.05;
+    qd[0] = -1.1;
+  }
+};
+
 }  // namespace
 
 TEST(RecedingHorizonStepBounds, KeepTheFirstPeriodInsideAtAFirstOrderOptimum) {
@@ -104,13 +126,8 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   // muscles, 1 N reserves): most muscles' SLP optimum sits 100 N below their activation floor.
   // Same optimum as a step planned afresh, in fewer LP steps; and the LP basis it keeps from
   // the last period saves simplex pivots over the same start without it.
-  const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
-  const fpl::FlatOutputMap flat(model);
-  fp::ModelWorkspace ws = flat.makeWorkspace();
-  fpl::RecedingHorizonOptions o;
-  o.target_q_rad = Eigen::VectorXd::Constant(1, deg(20));
-  o.reserves_N = Eigen::VectorXd::Constant(13, 1.0);
-  Eigen::VectorXd q = Eigen::VectorXd::Constant(1, deg(60)), qd = Eigen::VectorXd::Constant(1, -1.0);
+  KneePeriods knee;
+  auto& [model, flat, ws, o, q, qd] = knee;
   fpl::RecedingHorizonStep reused;
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, reused);
   ASSERT_EQ(reused.status, fpl::SolveStatus::Solved) << reused.message;
@@ -120,9 +137,7 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   reused.buffers.bounds_vertex.clear();  // the sequential LP, not Newton's method on the last vertex (below)
   fpl::RecedingHorizonStep without_basis = reused;
   without_basis.buffers.bounds_basis = fpl::SequentialLpBasis{};
-  // One period later.
-  q[0] -= 0.05;
-  qd[0] = -1.1;
+  knee.nextPeriod();
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, reused);
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, without_basis);
   ASSERT_EQ(without_basis.status, fpl::SolveStatus::Solved) << without_basis.message;
@@ -143,21 +158,15 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodHoldsTheLastActiveRowsByNewtonsMeth
   // The seated knee one period later, as above: the last period's active bound rows (its
   // vertex) still make the optimum's. Newton's method on them ends there without an LP step, at
   // the sequential LP's plan.
-  const auto model = fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/seated_knee_r.json");
-  const fpl::FlatOutputMap flat(model);
-  fp::ModelWorkspace ws = flat.makeWorkspace();
-  fpl::RecedingHorizonOptions o;
-  o.target_q_rad = Eigen::VectorXd::Constant(1, deg(20));
-  o.reserves_N = Eigen::VectorXd::Constant(13, 1.0);
-  Eigen::VectorXd q = Eigen::VectorXd::Constant(1, deg(60)), qd = Eigen::VectorXd::Constant(1, -1.0);
+  KneePeriods knee;
+  auto& [model, flat, ws, o, q, qd] = knee;
   fpl::RecedingHorizonStep newton;
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, newton);
   ASSERT_EQ(newton.status, fpl::SolveStatus::Solved) << newton.message;
   ASSERT_EQ(newton.buffers.bounds_vertex.size(), static_cast<std::size_t>(flat.numFlatOutputs()));
   fpl::RecedingHorizonStep by_lp = newton;
   by_lp.buffers.bounds_vertex.clear();
-  q[0] -= 0.05;
-  qd[0] = -1.1;
+  knee.nextPeriod();
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, newton);
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, by_lp);
   ASSERT_EQ(newton.status, fpl::SolveStatus::Solved) << newton.message;

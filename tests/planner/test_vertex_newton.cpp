@@ -56,6 +56,19 @@ fpd::VertexNewtonOutcome newton_from(const Solved& last, const Problem& moved, E
   return out;
 }
 
+// Expects x and its vertex to be where the sequential LP ends on `moved` from the start (the
+// same point to 1e-8 and the same active rows); returns its LP steps.
+int expect_the_sequential_lps_end(const Problem& moved, const Eigen::VectorXd& x, std::vector<int> vertex) {
+  const Problem::Solved slp = moved.solve(true);
+  EXPECT_TRUE(slp.outcome.converged) << slp.outcome.failure;
+  EXPECT_LT((x - slp.x).cwiseAbs().maxCoeff(), 1e-8) << x.transpose() << "\n" << slp.x.transpose();
+  std::vector<int> slp_vertex = fpd::vertex_rows(slp.outcome, slp.x, moved.lp.x_lower);
+  std::sort(slp_vertex.begin(), slp_vertex.end());
+  std::sort(vertex.begin(), vertex.end());
+  EXPECT_EQ(vertex, slp_vertex);
+  return slp.outcome.iterations;
+}
+
 }  // namespace
 
 TEST(VertexNewton, TheSequentialLpsOptimumIsAVertexOfItsBoundRows) {
@@ -101,15 +114,9 @@ TEST(VertexNewton, ARowThatNowBindsJoinsTheVertexWhereTheSequentialLpFindsIt) {
   ASSERT_TRUE(newton.solved) << newton.why_not;
   EXPECT_GE(newton.pivots, 1);
   EXPECT_NE(std::find(vertex.begin(), vertex.end(), static_cast<int>(off)), vertex.end()) << "the raised row is not in the vertex";
-  const Problem::Solved slp = moved.solve(true);
-  ASSERT_TRUE(slp.outcome.converged) << slp.outcome.failure;
-  EXPECT_LT((x - slp.x).cwiseAbs().maxCoeff(), 1e-8) << x.transpose() << "\n" << slp.x.transpose();
-  std::vector<int> slp_vertex = fpd::vertex_rows(slp.outcome, slp.x, moved.lp.x_lower);
-  std::sort(slp_vertex.begin(), slp_vertex.end());
-  std::sort(vertex.begin(), vertex.end());
-  EXPECT_EQ(vertex, slp_vertex);
+  const int lp_steps = expect_the_sequential_lps_end(moved, x, vertex);
   std::cout << "[ measure  ] " << newton.iterations << " Newton steps, " << newton.pivots
-            << " pivots; the sequential LP from the start: " << slp.outcome.iterations << " LP steps\n";
+            << " pivots; the sequential LP from the start: " << lp_steps << " LP steps\n";
 }
 
 TEST(VertexNewton, AVertexThatBreaksAReserveRowIsNotTaken) {
@@ -135,14 +142,11 @@ TEST(VertexNewton, ReserveRowsAndBoundsOnThetaJoinTheVertexAsRowsDo) {
   moved.rows.b.array() += 0.01;
   moved.lp.row_lower[0] = moved.lp.G.row(0).dot(last.at.x) + 0.05;
   moved.lp.x_lower[2] = last.at.x[2] + 0.02;
-  Eigen::MatrixXd G;
-  Eigen::VectorXd lower;
-  fpd::linear_rows_with_lower_bounds(moved.lp, G, lower);
   const fpd::SequentialLpLinearPart linear{moved.lp, {static_cast<std::size_t>(Problem::kReserveRows)}, 1e-6};
   const fpd::NonlinearRows rows = moved.rows;
   Eigen::VectorXd x = last.at.x;
   fpd::VertexRowsOf bound_rows(rows, moved.rows(x, true));
-  fpd::WithLinearRows with_linear(bound_rows, G, lower);
+  fpd::WithLinearRows with_linear(bound_rows, moved.lp);
   with_linear.evaluate(x, true);
   std::vector<int> vertex = last.vertex;
   const fpd::VertexNewtonOutcome newton = fpd::solve_on_vertex(linear, with_linear, vertex, x);
@@ -150,13 +154,7 @@ TEST(VertexNewton, ReserveRowsAndBoundsOnThetaJoinTheVertexAsRowsDo) {
   const int reserve_row = Problem::kRows, theta_bound = Problem::kRows + Problem::kReserveRows + 2;
   EXPECT_NE(std::find(vertex.begin(), vertex.end(), reserve_row), vertex.end());
   EXPECT_NE(std::find(vertex.begin(), vertex.end(), theta_bound), vertex.end());
-  const Problem::Solved slp = moved.solve(true);
-  ASSERT_TRUE(slp.outcome.converged) << slp.outcome.failure;
-  EXPECT_LT((x - slp.x).cwiseAbs().maxCoeff(), 1e-8) << x.transpose() << "\n" << slp.x.transpose();
-  std::vector<int> slp_vertex = fpd::vertex_rows(slp.outcome, slp.x, moved.lp.x_lower);
-  std::sort(slp_vertex.begin(), slp_vertex.end());
-  std::sort(vertex.begin(), vertex.end());
-  EXPECT_EQ(vertex, slp_vertex);
+  expect_the_sequential_lps_end(moved, x, vertex);
 }
 
 TEST(VertexNewton, AVertexWhereTheCostStillFallsIsNotTheOptimum) {

@@ -118,40 +118,33 @@ std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, const Eigen::Ve
   return active;
 }
 
-void linear_rows_with_lower_bounds(const LinearProgram& lp, Eigen::MatrixXd& G, Eigen::VectorXd& lower) {
-  const Eigen::Index p = lp.x_lower.size(), r = lp.G.rows();
-  G.resize(r + p, p);
-  G.topRows(r) = lp.G;
-  G.bottomRows(p).setIdentity();
-  lower.resize(r + p);
-  lower.head(r) = lp.row_lower;
-  lower.tail(p) = lp.x_lower;
-}
-
-WithLinearRows::WithLinearRows(VertexRows& bound, const Eigen::MatrixXd& G, const Eigen::VectorXd& lower)
-    : bound_(bound), G_(G), lower_(lower) {}
-
-void WithLinearRows::collect(const Eigen::VectorXd& x) {
-  value_ = bound_.values();
-  const Eigen::VectorXd linear = G_ * x - lower_;
-  value_.insert(value_.end(), linear.data(), linear.data() + linear.size());
-}
+WithLinearRows::WithLinearRows(VertexRows& bound, const LinearProgram& lp) : bound_(bound), lp_(lp) {}
 
 void WithLinearRows::evaluate(const Eigen::VectorXd& x, bool gradients) {
   bound_.evaluate(x, gradients);
-  collect(x);
+  value_ = bound_.values();
+  const Eigen::VectorXd reserve = lp_.G * x - lp_.row_lower;
+  value_.insert(value_.end(), reserve.data(), reserve.data() + reserve.size());
+  for (Eigen::Index i = 0; i < x.size(); ++i) value_.push_back(x[i] - lp_.x_lower[i]);
 }
 
 void WithLinearRows::gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const {
-  const std::size_t n = bound_.values().size();
-  if (row < n) bound_.gradient(row, out);
-  else out = G_.row(static_cast<Eigen::Index>(row - n)).transpose();
+  const std::size_t n = bound_.values().size(), reserves = static_cast<std::size_t>(lp_.G.rows());
+  if (row < n) {
+    bound_.gradient(row, out);
+  } else if (row < n + reserves) {
+    out = lp_.G.row(static_cast<Eigen::Index>(row - n)).transpose();
+  } else {
+    out.setZero();
+    out[static_cast<Eigen::Index>(row - n - reserves)] = 1.0;
+  }
 }
 
 void WithLinearRows::change(const Eigen::VectorXd& d, std::vector<double>& out) const {
   bound_.change(d, out);
-  const Eigen::VectorXd linear = G_ * d;
-  out.insert(out.end(), linear.data(), linear.data() + linear.size());
+  const Eigen::VectorXd reserve = lp_.G * d;
+  out.insert(out.end(), reserve.data(), reserve.data() + reserve.size());
+  out.insert(out.end(), d.data(), d.data() + d.size());
 }
 
 VertexRowsOf::VertexRowsOf(const NonlinearRows& rows, BoundRowsAt at_start)

@@ -55,22 +55,21 @@ class VertexRowsOf final : public VertexRows {
   bool gradients_ = true;  // the last evaluation's
 };
 
-/// Bound rows and, numbered after them, linear rows G x >= lower (value G x - lower, in their
-/// own units): the reserve rows, which share the vertex with the bound rows while the plan moves.
+/// Bound rows and, numbered after them, the linear rows of an LP: its rows G x >= row_lower
+/// (value G x - row_lower, in their own units: the reserve rows) and then x >= x_lower, which
+/// share the vertex with the bound rows while the plan moves.
 class WithLinearRows final : public VertexRows {
  public:
-  /// Keeps references to all three.
-  WithLinearRows(VertexRows& bound, const Eigen::MatrixXd& G, const Eigen::VectorXd& lower);
+  /// Keeps references to both.
+  WithLinearRows(VertexRows& bound, const LinearProgram& lp);
   void evaluate(const Eigen::VectorXd& x, bool gradients) override;
   const std::vector<double>& values() const override { return value_; }
   void gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const override;
   void change(const Eigen::VectorXd& d, std::vector<double>& out) const override;
 
  private:
-  void collect(const Eigen::VectorXd& x);
   VertexRows& bound_;
-  const Eigen::MatrixXd& G_;
-  const Eigen::VectorXd& lower_;
+  const LinearProgram& lp_;
   std::vector<double> value_;
 };
 
@@ -94,10 +93,6 @@ struct VertexNewtonOutcome {
 /// exactly theta.size(); empty otherwise.
 std::vector<int> vertex_rows(const SequentialLpOutcome& outcome, const Eigen::VectorXd& theta,
                              const Eigen::VectorXd& theta_lower);
-
-/// The reserve rows of `lp` and theta >= lp.x_lower below them, as one block of linear rows
-/// (for WithLinearRows, numbered as vertex_rows numbers them).
-void linear_rows_with_lower_bounds(const LinearProgram& lp, Eigen::MatrixXd& G, Eigen::VectorXd& lower);
 
 /// From theta, where `rows` were last evaluated with gradients, moves theta to where the rows
 /// `active` (indices into the rows, theta.size() of them; rows join and leave it) are zero, then checks the KKT conditions above. theta is moved once Newton's method converges,

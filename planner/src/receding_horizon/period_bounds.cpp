@@ -105,10 +105,7 @@ VertexNewtonOutcome newton_on_vertex(const FlatOutputMap& flat, const std::vecto
                                      const Eigen::VectorXd& a_min, const SequentialLpLinearPart& linear,
                                      std::vector<int>& vertex, Eigen::VectorXd& alpha) {
   PointRows point_rows(flat, points, a_min, kSampleMargin);
-  Eigen::MatrixXd G;
-  Eigen::VectorXd lower;
-  linear_rows_with_lower_bounds(linear.lp, G, lower);
-  WithLinearRows with_reserves(point_rows, G, lower);
+  WithLinearRows with_reserves(point_rows, linear.lp);
   with_reserves.evaluate(alpha, true);
   return solve_on_vertex(linear, with_reserves, vertex, alpha);
 }
