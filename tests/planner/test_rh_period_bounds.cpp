@@ -134,7 +134,7 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodStartsFromTheLastBoundedOptimum) {
   ASSERT_TRUE(reused.bounds_imposed);
   ASSERT_EQ(reused.buffers.bounded_alpha, reused.alpha());
   ASSERT_FALSE(reused.buffers.bounds_basis.bound_row.empty());
-  reused.buffers.bounds_vertex.clear();  // the sequential LP, not Newton's method on the last vertex (below)
+  reused.buffers.bounds_active_set.clear();  // the sequential LP, not Newton's method on the last vertex (below)
   fpl::RecedingHorizonStep without_basis = reused;
   without_basis.buffers.bounds_basis = fpl::SequentialLpBasis{};
   knee.nextPeriod();
@@ -163,9 +163,9 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodHoldsTheLastActiveRowsByNewtonsMeth
   fpl::RecedingHorizonStep newton;
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, newton);
   ASSERT_EQ(newton.status, fpl::SolveStatus::Solved) << newton.message;
-  ASSERT_EQ(newton.buffers.bounds_vertex.size(), static_cast<std::size_t>(flat.numFlatOutputs()));
+  ASSERT_EQ(newton.buffers.bounds_active_set.size(), static_cast<std::size_t>(flat.numFlatOutputs()));
   fpl::RecedingHorizonStep by_lp = newton;
-  by_lp.buffers.bounds_vertex.clear();
+  by_lp.buffers.bounds_active_set.clear();
   knee.nextPeriod();
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, newton);
   fpl::plan_receding_horizon_step(flat, ws, q, qd, o, by_lp);

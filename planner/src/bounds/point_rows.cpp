@@ -10,6 +10,7 @@ PointRows::PointRows(const FlatOutputMap& flat, const std::vector<BoundPoint>& p
 
 void PointRows::evaluate(const Eigen::VectorXd& x, bool gradients) {
   const int m = flat_.numMuscles();
+  x_ = x;
   value_.clear();
   gradient_.clear();
   violation_ = 0.0;
@@ -53,6 +54,27 @@ void PointRows::change(const Eigen::VectorXd& d, std::vector<double>& out) const
         const muscles::TendonForceJetGradient& g = gradient_[row];
         out[row] = g[0] * jet_change(j, 0) + g[1] * jet_change(j, 1) + g[2] * jet_change(j, 2);
       }
+  }
+}
+
+void PointRows::curvature(const std::vector<int>& rows, const Eigen::VectorXd& weight, const Eigen::VectorXd& z,
+                          Eigen::VectorXd& out) const {
+  out = Eigen::VectorXd::Zero(x_.size());
+  const double h = curvature_step(x_, z);
+  if (h == 0.0) return;
+  const Eigen::VectorXd plus = x_ + h * z, minus = x_ - h * z;
+  const auto per_point = static_cast<std::size_t>(flat_.numMuscles() * kRowsPerMuscle);
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    // Only the row's own muscle at its own point moves with alpha: two inversions per row.
+    const auto row = static_cast<std::size_t>(rows[k]);
+    const BoundPoint& bp = points_[row / per_point];
+    const int j = static_cast<int>((row % per_point) / static_cast<std::size_t>(kRowsPerMuscle));
+    const auto kind = static_cast<std::size_t>(static_cast<int>(row % static_cast<std::size_t>(kRowsPerMuscle)));
+    const muscles::TendonForceJetGradient g_plus = bound_rows(flat_, bp, j, a_min_[j], plus, true, margin_).gradient[kind];
+    const muscles::TendonForceJetGradient g_minus = bound_rows(flat_, bp, j, a_min_[j], minus, true, margin_).gradient[kind];
+    muscles::TendonForceJetGradient dg{};
+    for (std::size_t o = 0; o < 3; ++o) dg[o] = weight[static_cast<Eigen::Index>(k)] * (g_plus[o] - g_minus[o]) / (2.0 * h);
+    for (std::size_t c = 0; c < bp.columns.size(); ++c) out[bp.columns[c]] += column_derivative(bp, dg, j, c);
   }
 }
 

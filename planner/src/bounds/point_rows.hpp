@@ -7,11 +7,11 @@
 
 #include <vector>
 
-#include "bounds/vertex_newton.hpp"
+#include "bounds/active_set_newton.hpp"
 
 namespace flatsos::planner::detail {
 
-class PointRows final : public VertexRows {
+class PointRows final : public ActiveSetRows {
  public:
   /// Keeps references to `flat` and `points`.
   PointRows(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, Eigen::VectorXd a_min, double margin);
@@ -19,6 +19,8 @@ class PointRows final : public VertexRows {
   const std::vector<double>& values() const override { return value_; }
   void gradient(std::size_t row, Eigen::Ref<Eigen::VectorXd> out) const override;
   void change(const Eigen::VectorXd& d, std::vector<double>& out) const override;
+  void curvature(const std::vector<int>& rows, const Eigen::VectorXd& weight, const Eigen::VectorXd& z,
+                 Eigen::VectorXd& out) const override;
   double violation() const { return violation_; }  ///< sum of max(0, -row)
 
  private:
@@ -27,6 +29,7 @@ class PointRows final : public VertexRows {
   const std::vector<BoundPoint>& points_;
   Eigen::VectorXd a_min_;
   double margin_;
+  Eigen::VectorXd x_;  // the last evaluation's
   std::vector<double> value_;
   std::vector<muscles::TendonForceJetGradient> gradient_;  // per row, in its point's (F, dF, ddF)
   double violation_ = 0.0;

@@ -9,7 +9,7 @@
 #include "bounds/bound_rows.hpp"
 #include "bounds/sequential_lp.hpp"
 #include "bounds/point_rows.hpp"
-#include "bounds/vertex_newton.hpp"
+#include "bounds/active_set_newton.hpp"
 
 namespace flatsos::planner::detail {
 
@@ -73,8 +73,8 @@ SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const Nonlin
                                 {max_iterations, kBoundsLpRelativeDecrease}, rows_at_alpha);
 }
 
-// After the bounds moved alpha (step.slp.alpha; by the sequential LP or Newton's method on the
-// vertex): samples the first period and says what holds there; `rows_violated`: the sequential
+// After the bounds moved alpha (step.slp.alpha; by the sequential LP or Newton's method on an
+// active set): samples the first period and says what holds there; `rows_violated`: the sequential
 // LP settled with rows it could not meet.
 void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
                            bool rows_violated, RecedingHorizonStep& step) {
@@ -99,15 +99,15 @@ void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& wo
   }
 }
 
-// Newton's method on `vertex` from alpha over the points' bound rows, the reserve rows and
-// alpha >= 0 (bounds/vertex_newton.hpp).
-VertexNewtonOutcome newton_on_vertex(const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
+// Newton's method on the active set `active` from alpha over the points' bound rows, the reserve rows and
+// alpha >= 0 (bounds/active_set_newton.hpp).
+ActiveSetNewtonOutcome newton_on_active_set(const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
                                      const Eigen::VectorXd& a_min, const SequentialLpLinearPart& linear,
-                                     std::vector<int>& vertex, Eigen::VectorXd& alpha) {
+                                     std::vector<int>& active, Eigen::VectorXd& alpha) {
   PointRows point_rows(flat, points, a_min, kSampleMargin);
   WithLinearRows with_reserves(point_rows, linear.lp);
   with_reserves.evaluate(alpha, true);
-  return solve_on_vertex(linear, with_reserves, vertex, alpha);
+  return solve_on_active_set(linear, with_reserves, active, alpha);
 }
 
 }  // namespace
@@ -190,14 +190,14 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   const Eigen::VectorXd& unbounded = step.slp.alpha;  // unchanged until the end
   const Eigen::VectorXd& previous = step.buffers.bounded_alpha;
   const bool has_previous = previous.size() == p && previous.allFinite();
-  // Newton's method on the last period's vertex first: where its active rows are still the
+  // Newton's method on the last period's active set first: where its active rows are still the
   // optimum's, or rows join it by a few pivots, the step ends there; otherwise the sequential LP
   // starts from the point it reached (when it converged).
-  std::vector<int>& vertex = step.buffers.bounds_vertex;
+  std::vector<int>& active = step.buffers.bounds_active_set;
   Eigen::VectorXd alpha = previous;
-  const VertexNewtonOutcome newton = has_previous && !vertex.empty()
-                                         ? newton_on_vertex(flat, points, a_min, linear, vertex, alpha)
-                                         : VertexNewtonOutcome{};
+  const ActiveSetNewtonOutcome newton = has_previous && !active.empty()
+                                         ? newton_on_active_set(flat, points, a_min, linear, active, alpha)
+                                         : ActiveSetNewtonOutcome{};
   step.bound_newton_steps = newton.iterations;
   if (newton.solved) {
     step.slp.alpha = alpha;
@@ -238,7 +238,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   step.bound_lp_pivots = slp.lp_pivots;
   step.slp.alpha = alpha;
   step.slp.cost_N = lp.cost.dot(alpha);
-  vertex = vertex_rows(slp, alpha, lp.x_lower);
+  active = active_rows(slp, alpha, lp.x_lower);
   if (slp.converged && !slp.rows_violated) step.buffers.bounded_alpha = alpha;  // never start from a stuck point
   if (!slp.converged) {
     step.status = SolveStatus::Failed;

@@ -123,9 +123,10 @@ struct RecedingHorizonStep {
     /// ... and its sequential LP's last basis, where the next one restarts (the rows keep their
     /// identity from period to period: sample, muscle, bound).
     SequentialLpBasis bounds_basis;
-    /// ... and the bound rows active there when they alone make its vertex (else empty): the
-    /// next period first holds them at zero by Newton's method (bounds/vertex_newton.hpp).
-    std::vector<int> bounds_vertex;
+    /// ... and the rows active there (bound rows, reserve rows, alpha >= 0; at most alpha's size,
+    /// else empty): the next period first holds them at zero by Newton's method
+    /// (bounds/active_set_newton.hpp).
+    std::vector<int> bounds_active_set;
     /// A nonlinear effort's grid over the horizon and the last step's optimum (its start).
     TorqueJetGrid effort_grid;
     Eigen::VectorXd effort_alpha;
