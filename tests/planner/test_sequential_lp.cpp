@@ -152,3 +152,47 @@ TEST(SequentialLp, RowsGivenAtTheStartAreNotEvaluatedAgainAndComeBackAtTheEnd) {
   ASSERT_EQ(rows.jacobian.size(), at_end.jacobian.size());
   for (std::size_t k = 0; k < rows.jacobian.size(); ++k) EXPECT_EQ(rows.jacobian[k].value(), at_end.jacobian[k].value());
 }
+
+TEST(SequentialLp, AStepThatACurvingRowBreaksBacksOffToWhereItReachesZero) {
+  // Minimize x2 - x1 over x2 >= 0 and 1 - x1 - x1^2 / 2 >= 0 from 0: the first LP step goes to
+  // x1 = 1, where the curved row is -0.5. Its quadratic through value, slope and that value is
+  // the row itself, so the step backs off to its root sqrt(3) - 1 exactly, where halving the
+  // box would approach it by halves.
+  const fpd::NonlinearRows rows = [](const Eigen::VectorXd& x, bool jacobian) {
+    fpd::BoundRowsAt out;
+    out.value = {x[1], 1.0 - x[0] - 0.5 * x[0] * x[0]};
+    for (const double v : out.value) out.violation += std::max(0.0, -v);
+    if (jacobian) {
+      out.jacobian.emplace_back(0, 1, 1.0);
+      out.jacobian.emplace_back(1, 0, -1.0 - x[0]);
+    }
+    return out;
+  };
+  flatsos::planner::LinearProgram lp;
+  lp.cost = Eigen::Vector2d(-1.0, 1.0);
+  lp.G.resize(0, 2);
+  lp.row_lower.resize(0);
+  lp.row_upper.resize(0);
+  lp.x_lower = Eigen::Vector2d::Constant(-10.0);
+  lp.x_upper = Eigen::Vector2d::Constant(10.0);
+  const fpd::SequentialLpLinearPart linear{lp, {}, 0.0};
+  Eigen::VectorXd x = Eigen::Vector2d::Zero();
+  double radius = 5.0;
+  flatsos::planner::SequentialLpBasis basis;
+  fpd::SequentialLpSettings settings;
+  settings.back_off = true;
+  const fpd::SequentialLpOutcome out = fpd::solve_by_sequential_lp(linear, rows, x, radius, basis, settings);
+  ASSERT_TRUE(out.converged) << out.failure;
+  EXPECT_NEAR(x[0], std::sqrt(3.0) - 1.0, 1e-10);
+  EXPECT_NEAR(x[1], 0.0, 1e-12);
+  EXPECT_LE(out.iterations, 3);
+  // Halving instead: the same point, by halves.
+  Eigen::VectorXd halved = Eigen::Vector2d::Zero();
+  radius = 5.0;
+  flatsos::planner::SequentialLpBasis halved_basis;
+  const fpd::SequentialLpOutcome by_halves = fpd::solve_by_sequential_lp(linear, rows, halved, radius, halved_basis);
+  ASSERT_TRUE(by_halves.converged) << by_halves.failure;
+  EXPECT_LT((halved - x).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_GT(by_halves.iterations, 10);
+  std::printf("[ measure  ] %d LP steps; halving the box %d\n", out.iterations, by_halves.iterations);
+}

@@ -345,14 +345,19 @@ class SequentialLp {
   // The trust region's test of theta + d by the ratio of actual to predicted merit decrease;
   // true when the iteration has converged.
   bool trustRegionStep(const Eigen::VectorXd& d, double predicted, bool lp_paid_violation) {
-    const double step_size = d.size() ? d.cwiseAbs().maxCoeff() : 0.0;
-    const Eigen::VectorXd trial = theta_ + d;
+    double step_size = d.size() ? d.cwiseAbs().maxCoeff() : 0.0;
+    Eigen::VectorXd trial = theta_ + d;
     BoundRowsAt trial_rows = rowsAt(trial);
-    const double trial_phi = merit(trial, trial_rows);
+    double trial_phi = merit(trial, trial_rows);
     const double ratio = (phi_ - trial_phi) / predicted;
     if (ratio < 0.25) radius_ = 0.5 * step_size;
     else if (ratio > 0.75 && step_size >= 0.99 * radius_) radius_ *= 2.0;
-    const bool accepted = ratio > 0.1;
+    bool accepted = ratio > 0.1;
+    if (!accepted && settings_.back_off && backOff(d, trial, trial_rows, trial_phi)) {
+      accepted = true;
+      step_size = (trial - theta_).cwiseAbs().maxCoeff();
+      radius_ = step_size;
+    }
     if (accepted) {
       theta_ = trial;
       rows_ = std::move(trial_rows);
@@ -368,6 +373,38 @@ class SequentialLp {
       radius_ = std::max(radius_, 1e-6 * scale);
     }
     return false;
+  }
+
+  // A step the rows rejected because rows that held at theta break along it (curving down
+  // where the LP saw them straight): the cost falls along d until the first of them reaches
+  // zero, at the fraction t of d where each one's quadratic through its value, slope and value
+  // at theta + d does. That shorter step into trial (with its rows and merit) when the merit
+  // accepts it. Halving the box instead approaches such a row by halves, an LP step rejected at
+  // each halving.
+  bool backOff(const Eigen::VectorXd& d, Eigen::VectorXd& trial, BoundRowsAt& trial_rows, double& trial_phi) {
+    double t = 1.0;
+    for (const StepRow& c : candidates_) {
+      if (c.reserve || c.value < 0.0) continue;
+      const auto i = static_cast<std::size_t>(c.index);
+      const double at_end = trial_rows.value[i];
+      if (at_end >= -kBoundMargin) continue;
+      const double slope = jacobian_.dot(i, d), curve = at_end - c.value - slope;  // v(s) = value + slope s + curve s^2
+      if (curve >= 0.0) continue;  // not what broke it
+      const double root = (-slope - std::sqrt(slope * slope - 4.0 * curve * c.value)) / (2.0 * curve);
+      t = std::min(t, root);
+    }
+    if (!(t > 1e-3 && t < 1.0)) return false;
+    const Eigen::VectorXd shorter = t * d;
+    const double predicted = penalty_ * (violation_now_ - linearViolation(shorter)) - lp_.cost.dot(shorter);
+    if (!(predicted > 0.0)) return false;
+    Eigen::VectorXd x = theta_ + shorter;
+    BoundRowsAt rows = rowsAt(x);
+    const double phi = merit(x, rows);
+    if ((phi_ - phi) / predicted <= 0.1) return false;
+    trial = std::move(x);
+    trial_rows = std::move(rows);
+    trial_phi = phi;
+    return true;
   }
 
   const SequentialLpLinearPart& linear_;

@@ -69,6 +69,12 @@ struct SequentialLpSettings {
   /// can be removed the violation is stationary (the rows cannot be met from here). false: the
   /// penalty rises only once the iteration has settled (for comparison).
   bool steering = true;
+  /// A step rejected because rows that held at theta break along it first backs off to where
+  /// the first of them reaches zero (each row's quadratic through its value, slope and value at
+  /// the step's end) instead of halving the box. On with the receding horizon's tolerance; the
+  /// open-loop plans (tolerance 1e-12) keep halving: there it led the knee's exchange into a
+  /// walk along a curved row that 200 LP steps did not finish.
+  bool back_off = false;
 };
 
 /// Improves x in place (and the trust radius and the LP basis, kept across exchange rounds).

@@ -69,8 +69,11 @@ std::string domain_violation(const FlatOutputMap& flat, const RecedingHorizonSte
 SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const NonlinearRows& rows, int max_iterations,
                               RecedingHorizonStep& step, Eigen::VectorXd& alpha, BoundRowsAt* rows_at_alpha = nullptr) {
   double radius = 0.1 * (1.0 + alpha.cwiseAbs().maxCoeff());
-  return solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis,
-                                {max_iterations, kBoundsLpRelativeDecrease}, rows_at_alpha);
+  SequentialLpSettings settings;
+  settings.max_iterations = max_iterations;
+  settings.relative_decrease = kBoundsLpRelativeDecrease;
+  settings.back_off = true;
+  return solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis, settings, rows_at_alpha);
 }
 
 // After the bounds moved alpha (step.slp.alpha; by the sequential LP or Newton's method on an
