@@ -8,10 +8,12 @@
 
 #include "flatsos/planner/receding_horizon_study.hpp"
 #include "first_period_constraints.hpp"
+#include "receding_horizon/period_bounds.hpp"
 #include "scenario_fixture.hpp"
 
 namespace fpl = flatsos::planner;
 namespace fp = flatsos::plugin;
+namespace fpd = flatsos::planner::detail;
 using flatsos::test::deg;
 
 namespace {
@@ -277,4 +279,24 @@ TEST(RecedingHorizonStepBounds, AFirstPeriodOutsideTheDomainIsAFailedStepNotASol
   EXPECT_EQ(bounded.status, fpl::SolveStatus::Failed);
   EXPECT_NE(bounded.message.find("leaves the model's valid domain on the first period: muscle '"), std::string::npos)
       << bounded.message;
+}
+
+TEST(RecedingHorizonStepBounds, TheBoundedStepsExcitationsAreThePlansOwnSamples) {
+  // A bounded step hands the controller the excitations of its bound points (their torque jets
+  // and force-jet maps are the samples'): the plan sampled again gives the same numbers.
+  KneePeriods knee;
+  fpl::RecedingHorizonStep step;
+  fpl::plan_receding_horizon_step(knee.flat, knee.ws, knee.q, knee.qd, knee.o, step);
+  ASSERT_EQ(step.status, fpl::SolveStatus::Solved) << step.message;
+  ASSERT_TRUE(step.bounds_imposed);
+  ASSERT_TRUE(step.first_period_sampled);
+  const std::vector<fpd::BoundPoint> points = fpd::period_points(knee.flat, knee.o.excitation_bounds, step);
+  step.buffers.excitations.setZero();
+  ASSERT_TRUE(fpd::sampled_at_points(knee.flat, points, step));
+  const Eigen::MatrixXd from_points = step.buffers.excitations, activations_from_points = step.buffers.activations;
+  ASSERT_TRUE(fpd::sample_period(knee.flat, knee.ws, knee.o.excitation_bounds, step));
+  ASSERT_EQ(from_points.rows(), step.buffers.excitations.rows());
+  EXPECT_LT((from_points - step.buffers.excitations).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((activations_from_points - step.buffers.activations).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_GT(from_points.maxCoeff(), 0.01) << "nothing excited: nothing compared";
 }

@@ -60,8 +60,7 @@ MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::Secon
   return rows;
 }
 
-MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
-                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin) {
+fm::SecondOrderJet point_force_jet(const BoundPoint& bp, int j, const Eigen::Ref<const Eigen::VectorXd>& theta) {
   double F[3];
   for (int k = 0; k < 3; ++k) {
     double v = bp.base(j, k);
@@ -69,8 +68,32 @@ MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int 
     for (std::size_t c = 0; c < bp.columns.size(); ++c) v += s(j, static_cast<Eigen::Index>(c)) * theta[bp.columns[c]];
     F[k] = v;
   }
-  return muscle_bound_rows(flat.model().muscle(j).getParameters(), {F[0], F[1], F[2]}, bp.path[static_cast<std::size_t>(j)],
-                           a_min, gradients, margin);
+  return {F[0], F[1], F[2]};
+}
+
+MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
+                           const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin) {
+  return muscle_bound_rows(flat.model().muscle(j).getParameters(), point_force_jet(bp, j, theta),
+                           bp.path[static_cast<std::size_t>(j)], a_min, gradients, margin);
+}
+
+bool point_excitations(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& theta,
+                       Eigen::MatrixXd& excitations, Eigen::MatrixXd& activations) {
+  const int m = flat.numMuscles();
+  const auto count = static_cast<Eigen::Index>(points.size());
+  excitations.resize(count, m);
+  activations.resize(count, m);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const BoundPoint& bp = points[static_cast<std::size_t>(i)];
+    for (int j = 0; j < m; ++j) {
+      const fm::MuscleInverse inv = fm::invert_muscle(flat.model().muscle(j).getParameters(), point_force_jet(bp, j, theta),
+                                                      bp.path[static_cast<std::size_t>(j)], false);
+      if (inv.stage != fm::MuscleInverse::Stage::Complete || !std::isfinite(inv.excitation)) return false;
+      excitations(i, j) = inv.excitation;
+      activations(i, j) = inv.activation;
+    }
+  }
+  return true;
 }
 
 double column_derivative(const BoundPoint& bp, const fm::TendonForceJetGradient& g, int j, std::size_t c) {

@@ -62,6 +62,15 @@ MuscleBoundRows muscle_bound_rows(const muscles::MuscleParameters& p, const musc
                                   const muscles::SecondOrderJet& path, double a_min, bool gradients,
                                   double margin = kBoundMargin);
 
+/// Muscle j's tendon-force jet (F, dF/dt, d2F/dt2) at the point for theta.
+muscles::SecondOrderJet point_force_jet(const BoundPoint& bp, int j, const Eigen::Ref<const Eigen::VectorXd>& theta);
+
+/// The excitations and activations at the points for theta (points x m each): the muscles'
+/// inverse from each point's force jets. False, leaving the outputs partly written, where a
+/// muscle leaves its domain (no activation or excitation there).
+bool point_excitations(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& theta,
+                       Eigen::MatrixXd& excitations, Eigen::MatrixXd& activations);
+
 /// `margin`: how far inside the bounds the rows put a and n (kBoundMargin: the open-loop plans').
 MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
                            const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin = kBoundMargin);

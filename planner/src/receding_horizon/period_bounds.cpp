@@ -76,11 +76,24 @@ SequentialLpOutcome bounds_lp(const SequentialLpLinearPart& linear, const Nonlin
   return solve_by_sequential_lp(linear, rows, alpha, radius, step.buffers.bounds_basis, settings, rows_at_alpha);
 }
 
+}  // namespace
+
+bool sampled_at_points(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, RecedingHorizonStep& step) {
+  auto& buf = step.buffers;
+  step.first_period_sampled =
+      point_excitations(flat, points, step.alpha(), buf.excitations, buf.activations) && worst_excess(flat, step).value <= 0.0;
+  return step.first_period_sampled;
+}
+
+namespace {
+
 // After the bounds moved alpha (step.slp.alpha; by the sequential LP or Newton's method on an
 // active set): samples the first period and says what holds there; `rows_violated`: the sequential
 // LP settled with rows it could not meet.
 void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
-                           bool rows_violated, RecedingHorizonStep& step) {
+                           const std::vector<BoundPoint>& points, bool rows_violated, RecedingHorizonStep& step) {
+  if (sampled_at_points(flat, points, step)) return;
+  // Otherwise the plan itself, sampled as before the bounds: what holds there, and the message.
   const bool finite = sample_period(flat, workspace, b, step);
   const SampleExcess left = finite ? worst_excess(flat, step) : SampleExcess{};
   if (finite && left.value <= 0.0) {
@@ -206,7 +219,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     step.slp.alpha = alpha;
     step.slp.cost_N = lp.cost.dot(alpha);
     step.buffers.bounded_alpha = alpha;
-    check_bounded_samples(flat, workspace, b, false, step);
+    check_bounded_samples(flat, workspace, b, points, false, step);
     return;
   }
   BoundRowsAt at_previous;
@@ -248,7 +261,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     step.message = "the excitation bounds on the first period were not met: " + slp.failure;
     return;
   }
-  check_bounded_samples(flat, workspace, b, slp.rows_violated, step);
+  check_bounded_samples(flat, workspace, b, points, slp.rows_violated, step);
 }
 
 }  // namespace flatsos::planner::detail

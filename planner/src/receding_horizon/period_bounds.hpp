@@ -42,6 +42,12 @@ std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHor
 std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExcitationBounds& bounds,
                                       const RecedingHorizonStep& step);
 
+/// The first period's excitations and activations for step.alpha() from its bound points
+/// (period_points: the samples' own torque jets and force-jet maps, so the same values as
+/// sample_period without sampling the plan again) into the step's buffers; sets and returns
+/// first_period_sampled: true when every sample is finite and inside its bounds.
+bool sampled_at_points(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, RecedingHorizonStep& step);
+
 /// Checks step.alpha() on the first period's samples (step.buffers.excitations / activations
 /// hold them afterwards when they are finite) and, when a bound is violated, moves alpha inside:
 /// step.slp.alpha, cost, status and message, bounds_imposed and bound_iterations updated.

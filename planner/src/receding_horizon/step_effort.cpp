@@ -153,6 +153,7 @@ bool minimize_step_effort(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   if (!b.enforce) return true;
   // The rows keep every sample inside by half their margin; a sample outside all the same is a
   // failed step, as the bounds' sequential LP would report it.
+  if (sampled_at_points(flat, period, step)) return true;
   const bool finite = sample_period(flat, workspace, b, step);
   const SampleExcess excess = finite ? worst_excess(flat, step) : SampleExcess{1.0, 0, 0};
   step.first_period_sampled = finite && excess.value <= 0.0;
