@@ -311,3 +311,40 @@ TEST(PostureDependentFlatness, TorqueJetsThroughAJointsStopAreExact) {
   // The limit's own second rate is a large part of the jet there: the comparison means something.
   EXPECT_GT(largest_limit_rate, 1e3);
 }
+
+TEST(PostureDependentFlatness, TheForceJetMapWhereFlatChecksAssumption1AsTheDirectCheckDoes) {
+  // The leg's flat outputs hold over its joint ranges; the elbow's too. At random postures (and
+  // beyond the ranges, where they may not) the one-pass check agrees with assumption1FailureAt,
+  // word for word, and where it holds gives forceJetMap's map; condition 3's margin read from
+  // C_Y's row sums is 1 - C_tau s_tau.
+  for (const char* file : {"elbow_posture_dependent.json", "sagittal_leg_r.json"}) {
+    SCOPED_TRACE(file);
+    const fpl::FlatOutputMap flat(fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/" + file));
+    const int n = flat.numJoints();
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> share(-0.5, 1.5);
+    const fp::ModelDescription& d = flat.model().description();
+    int failing = 0;
+    for (int trial = 0; trial < 40; ++trial) {
+      fpl::Jet q = fpl::Jet::Zero(n, 3);
+      for (int i = 0; i < n; ++i) {
+        const auto& range = d.joints[static_cast<std::size_t>(i)].range_rad;
+        q(i, 0) = range[0] + share(rng) * (range[1] - range[0]);
+      }
+      fpl::ForceJetMap map;
+      const std::string failure = flat.forceJetMapWhereFlat(q, map);
+      EXPECT_EQ(failure, flat.assumption1FailureAt(q.col(0))) << trial;
+      if (!failure.empty()) {
+        ++failing;
+        continue;
+      }
+      const fpl::ForceJetMap direct = flat.forceJetMap(q);
+      EXPECT_EQ(map.Ctau, direct.Ctau);
+      EXPECT_EQ(map.CY, direct.CY);
+      const Eigen::VectorXd s_tau = flat.model().momentArmMatrix(q.col(0)).rowwise().sum();
+      const Eigen::VectorXd margin = Eigen::VectorXd::Ones(flat.numMuscles()) - map.Ctau * s_tau;
+      EXPECT_LT((map.CY.rowwise().sum() - margin).cwiseAbs().maxCoeff(), 1e-9) << trial;
+    }
+    std::cout << "[ measure  ] " << file << ": " << failing << " of 40 postures outside Assumption 1\n";
+  }
+}

@@ -301,6 +301,18 @@ std::string FlatOutputMap::assumption1FailureAt(const Eigen::VectorXd& q) const 
   return "at " + plugin::describe_posture(model_->description(), q) + ": " + join_failures(failures);
 }
 
+std::string FlatOutputMap::forceJetMapWhereFlat(const Jet& q_jet, ForceJetMap& map) const {
+  try {
+    map = forceJetMap(q_jet);
+  } catch (const FlatnessError&) {  // C(q) singular: condition 1
+    const std::string failure = assumption1FailureAt(q_jet.col(0));
+    return failure.empty() ? "at " + plugin::describe_posture(model_->description(), q_jet.col(0)) + ": C(q) is singular"
+                           : failure;
+  }
+  if ((map.CY.rowwise().sum().array() > 1e-9).all()) return "";
+  return assumption1FailureAt(q_jet.col(0));
+}
+
 const Eigen::MatrixXd& FlatOutputMap::requireConstant(const Eigen::MatrixXd& matrix, const char* name) const {
   if (!constant_)
     throw std::logic_error(std::string("flat-output map: ") + name + " is constant only with constant moment arms; model '" +

@@ -200,13 +200,13 @@ void plan_receding_horizon_step(const FlatOutputMap& flat, plugin::ModelWorkspac
     step.tau_max = step.tau_max.cwiseMax(tau);
     if (!varying) return true;
     // C(q) along the path: Assumption 1 at each posture, then the rows exact there.
-    const std::string failure = flat.assumption1FailureAt(j.col(0));
+    ForceJetMap map;
+    const std::string failure = flat.forceJetMapWhereFlat(j.leftCols(1), map);
     if (!failure.empty()) {
       step.message = "the horizon's joint path leaves the postures where the flat outputs are valid, at t = " +
                      std::to_string(t) + " s " + failure;
       return false;
     }
-    const ForceJetMap map = flat.forceJetMap(j.leftCols(1));
     // Y(t) = (1 - phi0) alpha + phi0 Y0 + phi1 Y0' (constant alpha without a start).
     double phi0[3] = {0.0, 0.0, 0.0}, phi1[3] = {0.0, 0.0, 0.0};
     if (blended) step.flat_start.blend(t, 0, phi0), step.flat_start.blend(t, 1, phi1);

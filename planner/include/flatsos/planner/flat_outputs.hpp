@@ -217,6 +217,11 @@ class FlatOutputMap {
   /// The failures of Assumption 1 at one posture (empty when it holds), as checkAssumption1
   /// words them, prefixed with the posture: for checks along a planned path.
   std::string assumption1FailureAt(const Eigen::VectorXd& q_rad) const;
+  /// The force-jet map at q_jet into `map` where Assumption 1 holds there (returns ""), else
+  /// assumption1FailureAt's words: one coupling inverse for both, since condition 3 is C_Y's row
+  /// sums (C 1 = [s_tau; 1] as E's rows sum to 1, so 1 - C_tau s_tau = C_Y 1). Within 1e-9 of
+  /// failing, assumption1FailureAt decides.
+  std::string forceJetMapWhereFlat(const Jet& q_jet, ForceJetMap& map) const;
 
   /// tau(q, qd, qdd): the torques the muscles must supply (MusculoskeletalModel::inverseDynamics).
   Eigen::VectorXd torque(plugin::ModelWorkspace& workspace, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
