@@ -32,6 +32,14 @@ bool sample_period(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace,
                                  b.samples, buf.period, buf.excitations, &buf.activations, &step.flat_start);
 }
 
+void muscle_torques(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+                    const RecedingHorizonStep& step, double h_s, int count, TorqueJetGrid& grid) {
+  flat.torqueJetsOnGrid(
+      workspace, [&](double t, Jet& jet) { rest_held_jet(step.path, t, jet); }, 0.0, h_s, count, grid);
+  if (o.torque_offset_N_m.size())
+    for (TorqueJet& tj : grid.jets) tj.tau.col(0) -= o.torque_offset_N_m;
+}
+
 SampleExcess worst_excess(const FlatOutputMap& flat, const RecedingHorizonStep& step) {
   SampleExcess worst;
   const Eigen::MatrixXd &n = step.buffers.excitations, &a = step.buffers.activations;
@@ -168,6 +176,28 @@ std::vector<BoundPoint> period_points(const FlatOutputMap& flat, const PeriodExc
   return step_points(flat, step, step.buffers.period.torque_grid, sample_spacing_s(b), b.samples);
 }
 
+namespace {
+// The first period's samples for step.alpha() into the step's buffers; false where they leave
+// the valid domain. With posture-dependent moment arms after a bounded step (the next is likely
+// bounded too: every one of the leg's) from the bound points the bounds need anyway, into
+// `points`, instead of sampling the plan and then forming the points at the same samples
+// (sampling allocates there too; with constant moment arms it does not, and a step whose plan
+// meets its bounds stays allocation-free). The plan is sampled where a point fails, for the
+// domain's message.
+bool sample_first_period(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
+                         RecedingHorizonStep& step, std::vector<BoundPoint>& points) {
+  const PeriodExcitationBounds& b = o.excitation_bounds;
+  const Eigen::VectorXd& last_bounded = step.buffers.bounded_alpha;
+  if (!flat.hasConstantMomentArms() && last_bounded.size() == flat.numFlatOutputs() && last_bounded.allFinite()) {
+    muscle_torques(flat, workspace, o, step, sample_spacing_s(b), b.samples, step.buffers.period.torque_grid);
+    points = period_points(flat, b, step);
+    auto& buf = step.buffers;
+    if (point_excitations(flat, points, step.alpha(), buf.excitations, buf.activations)) return true;
+  }
+  return sample_period(flat, workspace, b, step);
+}
+}  // namespace
+
 void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
                           int max_iterations,
                           RecedingHorizonStep& step) {
@@ -178,7 +208,9 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   step.first_period_sampled = false;
   const PeriodExcitationBounds& b = o.excitation_bounds;
   if (!b.enforce || step.status != SolveStatus::Solved) return;
-  if (!sample_period(flat, workspace, b, step)) {
+  const int p = flat.numFlatOutputs();
+  std::vector<BoundPoint> points;
+  if (!sample_first_period(flat, workspace, o, step, points)) {
     // Outside the valid domain (a too fast fibre, an unattainable excitation): no bound rows to
     // move alpha by from there, and nothing the muscles could execute.
     step.status = SolveStatus::Failed;
@@ -191,8 +223,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   }
 
   step.bounds_imposed = true;
-  const int p = flat.numFlatOutputs();
-  const std::vector<BoundPoint> points = period_points(flat, b, step);
+  if (points.empty()) points = period_points(flat, b, step);
   LinearProgram lp;
   lp.cost = step.buffers.slp.costVector(p);
   lp.G = step.reserve_rows;

@@ -25,6 +25,11 @@ constexpr double kSampleMargin = 1e-5;
 bool sample_period(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& bounds,
                    RecedingHorizonStep& step);
 
+/// The torque jets the muscles supply along the step's path at times i h_s (i < count): the
+/// model's inverse dynamics less the step's torque offset.
+void muscle_torques(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
+                    const RecedingHorizonStep& step, double h_s, int count, TorqueJetGrid& grid);
+
 /// The largest excess of a sample's a or n over its bounds (0 inside), and where.
 struct SampleExcess {
   double value = 0.0;
@@ -51,7 +56,8 @@ bool sampled_at_points(const FlatOutputMap& flat, const std::vector<BoundPoint>&
 /// Checks step.alpha() on the first period's samples (step.buffers.excitations / activations
 /// hold them afterwards when they are finite) and, when a bound is violated, moves alpha inside:
 /// step.slp.alpha, cost, status and message, bounds_imposed and bound_iterations updated.
-/// Allocates nothing when the SLP's optimum already meets the bounds. `max_iterations`: the
+/// Allocates nothing when the SLP's optimum already meets the bounds and the moment arms are
+/// constant. `max_iterations`: the
 /// sequential LP's steps.
 void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
                           int max_iterations, RecedingHorizonStep& step);

@@ -29,14 +29,6 @@ constexpr double kRowTolerance = 0.5 * kSampleMargin;
 constexpr double kMaxStartViolation = 1e-1;
 
 // The torques the step's muscles produce (its path's, less the offset) at times i h, i < count.
-void muscle_torques(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& o,
-                    const RecedingHorizonStep& step, double h_s, int count, TorqueJetGrid& grid) {
-  flat.torqueJetsOnGrid(
-      workspace, [&](double t, Jet& jet) { rest_held_jet(step.path, t, jet); }, 0.0, h_s, count, grid);
-  if (o.torque_offset_N_m.size())
-    for (TorqueJet& tj : grid.jets) tj.tau.col(0) -= o.torque_offset_N_m;
-}
-
 // The horizon's grid for the effort: `grid_points` times i T / grid_points, each weighing T /
 // grid_points (the horizon's end, where the plan's torques jump to the rest that follows it, is
 // left out).
