@@ -52,8 +52,8 @@ class ActiveSetRows {
 /// machine epsilon relative to x's scale, which balances truncation and rounding.
 double curvature_step(const Eigen::VectorXd& x, const Eigen::VectorXd& z);
 
-/// ActiveSetRows of NonlinearRows through their Jacobian by rows, starting from rows already
-/// evaluated (with their Jacobian) at the start.
+/// ActiveSetRows of NonlinearRows through their Jacobian by rows; their curvature by central
+/// differences of two more evaluations.
 class ActiveSetRowsOf final : public ActiveSetRows {
  public:
   /// Evaluated at x with gradients.
@@ -76,7 +76,7 @@ class ActiveSetRowsOf final : public ActiveSetRows {
 
 /// Bound rows and, numbered after them, the linear rows of an LP: its rows G x >= row_lower
 /// (value G x - row_lower, in their own units: the reserve rows) and then x >= x_lower, which
-/// share the vertex with the bound rows while the plan moves.
+/// share the active set with the bound rows while the plan moves.
 class WithLinearRows final : public ActiveSetRows {
  public:
   /// Keeps references to both.
@@ -96,8 +96,8 @@ class WithLinearRows final : public ActiveSetRows {
 
 struct ActiveSetNewtonSettings {
   int max_iterations = 6;  ///< Newton steps
-  int max_pivots = 20;     ///< rows joining the vertex, over all steps
-  double row_tolerance = 1e-10;  ///< |active row| at the vertex, in the rows' units (activation)
+  int max_pivots = 20;     ///< rows joining the active set, over all steps
+  double row_tolerance = 1e-10;  ///< |active row| at the end, in the rows' units (activation)
 };
 
 struct ActiveSetNewtonOutcome {

@@ -1,7 +1,7 @@
 #pragma once
-// The bound rows of fixed points (bound_rows.hpp) for Newton's method on a vertex: each row's
+// The bound rows of fixed points (bound_rows.hpp) for Newton's method on an active set: each row's
 // gradient is kept in its point's tendon-force jet (three numbers) and turned into theta's only
-// where asked (the vertex's p rows, a joining row), and a step's change of every row comes from
+// where asked (the active rows, a joining row), and a step's change of every row comes from
 // each point's force jets along it. The receding horizon's evaluations then skip the Jacobian
 // in theta (on the leg 65 000 entries over 1760 rows, most of an evaluation's cost).
 
