@@ -69,7 +69,7 @@ void PointRows::curvature(const std::vector<int>& rows, const Eigen::VectorXd& w
     const auto row = static_cast<std::size_t>(rows[k]);
     const BoundPoint& bp = points_[row / per_point];
     const int j = static_cast<int>((row % per_point) / static_cast<std::size_t>(kRowsPerMuscle));
-    const auto kind = static_cast<std::size_t>(static_cast<int>(row % static_cast<std::size_t>(kRowsPerMuscle)));
+    const std::size_t kind = row % static_cast<std::size_t>(kRowsPerMuscle);
     const muscles::TendonForceJetGradient g_plus = bound_rows(flat_, bp, j, a_min_[j], plus, true, margin_).gradient[kind];
     const muscles::TendonForceJetGradient g_minus = bound_rows(flat_, bp, j, a_min_[j], minus, true, margin_).gradient[kind];
     muscles::TendonForceJetGradient dg{};
