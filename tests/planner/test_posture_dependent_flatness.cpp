@@ -125,12 +125,59 @@ TEST(PostureDependentFlatness, TheForceJetBySolvesEqualsTheOneThroughCInverse) {
   }
 }
 
+TEST(PostureDependentFlatness, CYsRatesAreItsTimeDerivativesAlongTheMotion) {
+  // flatOutputColumnRates (rank-N factors) against central differences in time of C_Y(q(t)) and
+  // of the first rate, and against the coupling rates' products W10 C_Y, W20 C_Y; along random
+  // quadratic motions of the elbow and of the sagittal leg (3 joints, 40 muscles).
+  for (const char* file : {"elbow_posture_dependent.json", "sagittal_leg_r.json"}) {
+    SCOPED_TRACE(file);
+    const fpl::FlatOutputMap flat(fp::MusculoskeletalModel::fromFile(std::string(FLATSOS_SOURCE_DIR) + "/models/" + file));
+    const int n = flat.numJoints();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), share(0.3, 0.7);
+    const fp::ModelDescription& d = flat.model().description();
+    for (int trial = 0; trial < 5; ++trial) {
+      Eigen::VectorXd q0(n), v(n), a(n);
+      for (int i = 0; i < n; ++i) {
+        const auto& range = d.joints[static_cast<std::size_t>(i)].range_rad;
+        q0[i] = range[0] + share(rng) * (range[1] - range[0]);
+        v[i] = u(rng);
+        a[i] = 5.0 * u(rng);
+      }
+      const auto map_at = [&](double t) {
+        fpl::Jet q(n, 3);
+        q << q0 + t * v + 0.5 * t * t * a, v + t * a, a;
+        return flat.forceJetMap(q);
+      };
+      const auto rates_at = [&](double t) {
+        Eigen::MatrixXd cy1, cy2;
+        map_at(t).flatOutputColumnRates(cy1, cy2);
+        return std::make_pair(cy1, cy2);
+      };
+      const double h = 1e-5;
+      const fpl::ForceJetMap map = map_at(0.0);
+      const auto [cy1, cy2] = rates_at(0.0);
+      ASSERT_GT(cy1.norm(), 1e-6);  // the posture moves C_Y here
+      const Eigen::MatrixXd fd1 = (map_at(h).CY - map_at(-h).CY) / (2.0 * h);
+      const Eigen::MatrixXd fd2 = (rates_at(h).first - rates_at(-h).first) / (2.0 * h);
+      EXPECT_LT((cy1 - fd1).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + cy1.cwiseAbs().maxCoeff())) << trial;
+      EXPECT_LT((cy2 - fd2).cwiseAbs().maxCoeff(), 1e-5 * (1.0 + cy2.cwiseAbs().maxCoeff())) << trial;
+      EXPECT_LT((cy1 - map.W10 * map.CY).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + cy1.cwiseAbs().maxCoeff())) << trial;
+      EXPECT_LT((cy2 - map.W20 * map.CY).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + cy2.cwiseAbs().maxCoeff())) << trial;
+    }
+  }
+}
+
 TEST(PostureDependentFlatness, ConstantMomentArmsHaveNoCouplingRates) {
   flatsos::test::ArmPlanning arm;
   const fpl::ForceJetMap map = arm.flat.forceJetMap(fpl::Jet::Constant(2, 3, 0.4));
   EXPECT_FALSE(map.varies());
   EXPECT_EQ(map.Ctau, arm.flat.Ctau());
   EXPECT_EQ(map.CY, arm.flat.CY());
+  Eigen::MatrixXd cy1, cy2;
+  map.flatOutputColumnRates(cy1, cy2);
+  EXPECT_EQ(cy1, Eigen::MatrixXd::Zero(map.CY.rows(), map.CY.cols()));
+  EXPECT_EQ(cy2, Eigen::MatrixXd::Zero(map.CY.rows(), map.CY.cols()));
 }
 
 TEST(PostureDependentFlatness, ForwardThenInverseClosesAlongASimbodySimulation) {

@@ -329,23 +329,6 @@ Eigen::MatrixXd FlatOutputMap::momentArms(const Eigen::VectorXd& q) const {
   return constant_ ? A_ : model_->momentArmMatrix(q);
 }
 
-void ForceJetMap::mix(Eigen::MatrixXd& v0, Eigen::MatrixXd& v1, Eigen::MatrixXd& v2) const {
-  if (!varies()) return;
-  v2 += W21 * v1 + W20 * v0;  // before v1 changes
-  v1 += W10 * v0;
-}
-
-Eigen::MatrixXd ForceJetMap::forceJet(const Eigen::MatrixXd& tau, const Eigen::MatrixXd& Y) const {
-  Eigen::MatrixXd v0 = Ctau * tau.col(0) + CY * Y.col(0);
-  Eigen::MatrixXd v1 = Ctau * tau.col(1) + CY * Y.col(1);
-  Eigen::MatrixXd v2 = Ctau * tau.col(2);
-  if (Y.cols() > 2) v2 += CY * Y.col(2);
-  mix(v0, v1, v2);
-  Eigen::MatrixXd F(Ctau.rows(), 3);
-  F << v0, v1, v2;
-  return F;
-}
-
 ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   const int n = numJoints(), m = numMuscles();
   if (q_jet.rows() != n || q_jet.cols() < 1)
@@ -368,6 +351,10 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   const Eigen::MatrixXd Cinv = lu.inverse();
   map.Ctau = Cinv.leftCols(n);
   map.CY = Cinv.rightCols(numFlatOutputs());
+  // A posture at rest (no joint rates: the receding horizon's grid asks so) has R1 = R2 = 0, so
+  // every W is 0: left empty, as with constant moment arms.
+  const Eigen::Index rates = std::min<Eigen::Index>(2, q_jet.cols() - 1);
+  if (rates == 0 || q_jet.middleCols(1, rates).isZero(0.0)) return map;
   const Eigen::MatrixXd K1 = map.Ctau * R[1], K2 = map.Ctau * R[2];
   map.W10 = -K1;
   map.W21 = -2.0 * K1;
@@ -375,6 +362,8 @@ ForceJetMap FlatOutputMap::forceJetMap(const Jet& q_jet) const {
   const Eigen::MatrixXd middle = R[1] * map.Ctau;
   map.W20.noalias() = 2.0 * map.Ctau * (middle * R[1]);
   map.W20 -= K2;
+  map.R1 = R[1];
+  map.R2 = R[2];
   return map;
 }
 

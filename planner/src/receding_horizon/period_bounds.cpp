@@ -141,6 +141,7 @@ std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHor
   const int m = flat.numMuscles(), p = flat.numFlatOutputs();
   std::vector<BoundPoint> points(static_cast<std::size_t>(count));
   Jet q_jet(flat.numJoints(), 3);
+  Eigen::MatrixXd cy1, cy2;  // C_Y's rates at a point
   for (int i = 0; i < count; ++i) {
     BoundPoint& bp = points[static_cast<std::size_t>(i)];
     bp.t_s = h_s * i;
@@ -149,22 +150,24 @@ std::vector<BoundPoint> step_points(const FlatOutputMap& flat, const RecedingHor
     const ForceJetMap map = flat.forceJetMap(q_jet);
     bp.base = map.Ctau * tau.tau;
     for (int c = 0; c < p; ++c) bp.columns.push_back(c);
-    bp.slope = {map.CY, Eigen::MatrixXd::Zero(m, p), Eigen::MatrixXd::Zero(m, p)};
+    // Y^(k) = c^(k) alpha + (phi0 Y0 + phi1 Y0')^(k) with c = 1 - phi0 (c = 1 without a start):
+    // the start's part joins the base, and alpha's columns are the jet of c C_Y.
+    double c[3] = {1.0, 0.0, 0.0};
     if (!step.flat_start.empty()) {
-      // Y^(k) = (1 - phi0)^(k) alpha + (phi0 Y0 + phi1 Y0')^(k): the start's part joins the base.
       double phi0[3], phi1[3];
       step.flat_start.blend(bp.t_s, 0, phi0);
       step.flat_start.blend(bp.t_s, 1, phi1);
       for (int k = 0; k < 3; ++k) {
-        bp.slope[static_cast<std::size_t>(k)] = ((k == 0 ? 1.0 : 0.0) - phi0[k]) * map.CY;
+        c[k] = (k == 0 ? 1.0 : 0.0) - phi0[k];
         bp.base.col(k) += map.CY * (phi0[k] * step.flat_start.value + phi1[k] * step.flat_start.rate);
       }
     }
+    map.flatOutputColumnRates(cy1, cy2);
+    bp.slope = {c[0] * map.CY, c[1] * map.CY + c[0] * cy1, c[2] * map.CY + 2.0 * c[1] * cy1 + c[0] * cy2};
     if (map.varies()) {
       Eigen::MatrixXd b0 = bp.base.col(0), b1 = bp.base.col(1), b2 = bp.base.col(2);
       map.mix(b0, b1, b2);
       bp.base << b0, b1, b2;
-      map.mix(bp.slope[0], bp.slope[1], bp.slope[2]);
     }
     for (int j = 0; j < m; ++j) bp.path.push_back(flat.pathLengthJet(j, q_jet));
   }

@@ -106,11 +106,17 @@ struct TorqueJetGrid {
 /// motion. Differentiating C(q) F = [tau; Y] twice in time gives, with C^-1 = [C_tau | C_Y] and
 /// K_i = C^-1 d^iC/dt^i = C_tau d^iR/dt^i,
 ///   F = v_0,  dF = v_1 + W10 v_0,  ddF = v_2 + W21 v_1 + W20 v_0,  v_i = C_tau tau^(i) + C_Y Y^(i),
-/// W10 = -K1, W21 = -2 K1, W20 = 2 K1^2 - K2. With constant moment arms every W is 0 (empty).
+/// W10 = -K1, W21 = -2 K1, W20 = 2 K1^2 - K2. With constant moment arms, or at a posture at rest
+/// (a joint jet without rates), every W is 0 (empty).
 struct ForceJetMap {
   Eigen::MatrixXd Ctau, CY;       ///< m x N, m x p at this posture
-  Eigen::MatrixXd W10, W20, W21;  ///< m x m; empty when the moment arms are constant
+  Eigen::MatrixXd W10, W20, W21;  ///< m x m; empty where they are 0 (above)
+  Eigen::MatrixXd R1, R2;         ///< N x m: dR/dt, d2R/dt2 along the motion (K_i = C_tau R_i); empty likewise
+  /// Whether the map changes along the motion here (the W are not 0).
   bool varies() const { return W10.size() > 0; }
+  /// dC_Y/dt = W10 C_Y and d2C_Y/dt2 = W20 C_Y along the motion (m x p each; zero with constant
+  /// moment arms), through the rank-N factors: O(m N p), where W C_Y is O(m^2 p).
+  void flatOutputColumnRates(Eigen::MatrixXd& CY1, Eigen::MatrixXd& CY2) const;
   /// Replaces v_0, v_1, v_2 (m x c each) by the F-jet orders they give: the formulas above.
   void mix(Eigen::MatrixXd& v0, Eigen::MatrixXd& v1, Eigen::MatrixXd& v2) const;
   /// The tendon-force jet (m x 3: F, dF, ddF) from the torque jet (N x 3) and the flat-output
