@@ -180,6 +180,28 @@ TEST(PostureDependentFlatness, ConstantMomentArmsHaveNoCouplingRates) {
   EXPECT_EQ(cy2, Eigen::MatrixXd::Zero(map.CY.rows(), map.CY.cols()));
 }
 
+TEST(PostureDependentFlatness, AtAPostureAtRestTheMapDoesNotVary) {
+  // No joint rates: R1 = R2 = 0, so every coupling rate is 0 and none is formed; C^-1 is the
+  // posture's alone. An acceleration alone moves R2.
+  const fpl::FlatOutputMap flat(posture_dependent_elbow());
+  fpl::Jet at_rest = fpl::Jet::Zero(1, 3), accelerating = fpl::Jet::Zero(1, 3), moving(1, 3);
+  at_rest(0, 0) = accelerating(0, 0) = moving(0, 0) = deg(60);
+  accelerating(0, 2) = 3.0;
+  moving << deg(60), 1.5, -2.0;
+  const fpl::ForceJetMap rest = flat.forceJetMap(at_rest), q_only = flat.forceJetMap(at_rest.leftCols(1)),
+                         accel = flat.forceJetMap(accelerating), move = flat.forceJetMap(moving);
+  EXPECT_FALSE(rest.varies());
+  EXPECT_FALSE(q_only.varies());
+  EXPECT_TRUE(accel.varies());
+  EXPECT_TRUE(move.varies());
+  EXPECT_EQ(rest.Ctau, move.Ctau);
+  EXPECT_EQ(rest.CY, move.CY);
+  // The force jet at rest as the direct solves give it.
+  const Eigen::MatrixXd tau = Eigen::RowVector3d(4.0, 3.0, -4.0), Y = y_jet(0.3);
+  const Eigen::MatrixXd by_map = rest.forceJet(tau, Y), by_solves = flat.forceJet(at_rest, tau, Y);
+  EXPECT_LT((by_map - by_solves).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + by_solves.cwiseAbs().maxCoeff()));
+}
+
 TEST(PostureDependentFlatness, ForwardThenInverseClosesAlongASimbodySimulation) {
   const auto model = posture_dependent_elbow();
   const fpl::FlatOutputMap flat(model);
