@@ -67,14 +67,14 @@ Dual<K> seed(double value, int index) {
   return r;
 }
 
+// K = 3 seeds only the force's jet (the path's gradients stay 0), K = 6 both.
 template <int K>
 void set_domain_distance(MuscleInverse& out, const Dual<K>& distance) {
   out.domain_distance = distance.v;
+  if constexpr (K >= 3)
+    for (int i = 0; i < 3; ++i) out.domain_distance_gradient[i] = distance.g[i];
   if constexpr (K == 6)
-    for (int i = 0; i < 3; ++i) {
-      out.domain_distance_gradient[i] = distance.g[i];
-      out.path_domain_distance_gradient[i] = distance.g[3 + i];
-    }
+    for (int i = 0; i < 3; ++i) out.path_domain_distance_gradient[i] = distance.g[3 + i];
 }
 
 // The activation of a model whose maximum velocity scales with activation: a from
@@ -166,19 +166,18 @@ FiberJets<K> fiber_jets(double h, const Dual<K>& x, const Dual<K>& dx, const Dua
   return out;
 }
 
-// The gradients of a, da/dt and n with respect to the force's and the path's jets.
-void store_gradients(MuscleInverse& out, const Dual<6>& a, const Dual<6>& da, const ExcitationFromActivation& n) {
-  for (int i = 0; i < 3; ++i) {
-    out.activation_gradient[i] = a.g[i];
-    out.activation_rate_gradient[i] = da.g[i];
-    out.path_activation_gradient[i] = a.g[3 + i];
-    out.path_activation_rate_gradient[i] = da.g[3 + i];
+// The gradients of a, da/dt and n with respect to the force's jet, and with K = 6 the path's.
+template <int K>
+void store_gradients(MuscleInverse& out, const Dual<K>& a, const Dual<K>& da, const ExcitationFromActivation& n) {
+  for (int i = 0; i < K; ++i) {
+    auto& activation = i < 3 ? out.activation_gradient : out.path_activation_gradient;
+    auto& rate = i < 3 ? out.activation_rate_gradient : out.path_activation_rate_gradient;
+    auto& excitation = i < 3 ? out.excitation_gradient : out.path_excitation_gradient;
+    const auto o = static_cast<std::size_t>(i % 3);
+    activation[o] = a.g[i];
+    rate[o] = da.g[i];
+    if (n.real_root) excitation[o] = n.d_activation * a.g[i] + n.d_activation_rate_s * da.g[i];
   }
-  if (n.real_root)
-    for (int i = 0; i < 3; ++i) {
-      out.excitation_gradient[i] = n.d_activation * a.g[i] + n.d_activation_rate_s * da.g[i];
-      out.path_excitation_gradient[i] = n.d_activation * a.g[3 + i] + n.d_activation_rate_s * da.g[3 + i];
-    }
 }
 
 template <int K>
@@ -275,7 +274,7 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
   const ExcitationFromActivation n = model.excitationFromActivation(p, a.v, da.v);
   out.excitation = n.excitation;
   out.excitation_real = n.real_root;
-  if constexpr (K == 6) store_gradients(out, a, da, n);
+  if constexpr (K > 0) store_gradients(out, a, da, n);
   return out;
 }
 
@@ -283,7 +282,17 @@ MuscleInverse invert(const MuscleParameters& p, const SecondOrderJet& force, con
 
 MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& force, const SecondOrderJet& path,
                             bool with_gradients) {
-  return with_gradients ? invert<6>(p, force, path) : invert<0>(p, force, path);
+  return invert_muscle(p, force, path, with_gradients ? InverseGradients::ForceAndPathJets : InverseGradients::None);
+}
+
+MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& force, const SecondOrderJet& path,
+                            InverseGradients gradients) {
+  switch (gradients) {
+    case InverseGradients::None: return invert<0>(p, force, path);
+    case InverseGradients::ForceJet: return invert<3>(p, force, path);
+    case InverseGradients::ForceAndPathJets: break;
+  }
+  return invert<6>(p, force, path);
 }
 
 }  // namespace flatsos::muscles

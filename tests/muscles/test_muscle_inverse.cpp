@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include "flatsos/muscles/hill_laws.hpp"
 #include "flatsos/muscles/muscle_inverse.hpp"
@@ -285,4 +286,49 @@ TEST(MuscleInverse, TheDistanceOutsideTheDomainHasExactGradients) {
   const fm::MuscleInverse inside = fm::invert_muscle(plain, {200.0, 0.0, 0.0}, {slack_path, 0.0, 0.0}, true);
   ASSERT_EQ(inside.stage, fm::MuscleInverse::Stage::Complete);
   EXPECT_EQ(inside.domain_distance, 0.0);
+}
+
+TEST(MuscleInverse, TheForceJetsGradientsAloneAreTheFullInversesBitForBit) {
+  // Forward-mode components do not mix: seeding only the force's jet gives the same values and
+  // force gradients as seeding all six, and leaves every path gradient 0. Inside the domain (every
+  // variant) and outside it (slack tendon, collapsed fibre, no force capacity).
+  auto expect_same = [](const fm::MuscleInverse& alone, const fm::MuscleInverse& full) {
+    EXPECT_EQ(alone.stage, full.stage);
+    EXPECT_EQ(alone.activation, full.activation);
+    EXPECT_EQ(alone.activation_rate_per_s, full.activation_rate_per_s);
+    EXPECT_EQ(alone.excitation, full.excitation);
+    EXPECT_EQ(alone.domain_distance, full.domain_distance);
+    EXPECT_EQ(alone.activation_gradient, full.activation_gradient);
+    EXPECT_EQ(alone.activation_rate_gradient, full.activation_rate_gradient);
+    EXPECT_EQ(alone.excitation_gradient, full.excitation_gradient);
+    EXPECT_EQ(alone.domain_distance_gradient, full.domain_distance_gradient);
+    const fm::PathLengthJetGradient zero{};
+    EXPECT_EQ(alone.path_activation_gradient, zero);
+    EXPECT_EQ(alone.path_activation_rate_gradient, zero);
+    EXPECT_EQ(alone.path_excitation_gradient, zero);
+    EXPECT_EQ(alone.path_domain_distance_gradient, zero);
+  };
+  int nonzero = 0;
+  for (const auto& p : variants()) {
+    SCOPED_TRACE(p.name);
+    for (const Sample& s : samples(p, 20)) {
+      const fm::MuscleInverse full = fm::invert_muscle(p, s.force, s.path, fm::InverseGradients::ForceAndPathJets);
+      expect_same(fm::invert_muscle(p, s.force, s.path, fm::InverseGradients::ForceJet), full);
+      nonzero += full.activation_rate_gradient[2] != 0.0;
+    }
+  }
+  EXPECT_GT(nonzero, 100);  // the gradients compared are not all 0
+  const auto plain = triceps();
+  const auto pennated = variants()[1];
+  const double slack_path = plain.tendon_slack_length_m + plain.optimal_fiber_length_m;
+  const double vmax = plain.max_shortening_velocity_m_per_s();
+  const std::tuple<fm::MuscleParameters, fm::SecondOrderJet, fm::SecondOrderJet> outside[] = {
+      {plain, {-30.0, 5.0, 1.0}, {slack_path, 0.1, 0.0}},
+      {pennated, {300.0, 40.0, -200.0}, {pennated.tendon_slack_length_m - 0.01, 0.05, 0.3}},
+      {plain, {150.0, 300.0, 2e3}, {slack_path, -1.3 * vmax, 0.7}}};
+  for (const auto& [p, force, path] : outside) {
+    const fm::MuscleInverse full = fm::invert_muscle(p, force, path, fm::InverseGradients::ForceAndPathJets);
+    ASSERT_NE(full.stage, fm::MuscleInverse::Stage::Complete);
+    expect_same(fm::invert_muscle(p, force, path, fm::InverseGradients::ForceJet), full);
+  }
 }

@@ -21,7 +21,15 @@ CompressedRow compress_row(double r) {
 
 MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::SecondOrderJet& force,
                                   const fm::SecondOrderJet& path, double a_min, bool gradients, double margin) {
-  const fm::MuscleInverse inv = fm::invert_muscle(p, force, path, gradients);
+  return muscle_bound_rows(p, force, path, a_min,
+                           gradients ? fm::InverseGradients::ForceAndPathJets : fm::InverseGradients::None, margin);
+}
+
+MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::SecondOrderJet& force,
+                                  const fm::SecondOrderJet& path, double a_min, fm::InverseGradients which,
+                                  double margin) {
+  const bool gradients = which != fm::InverseGradients::None;
+  const fm::MuscleInverse inv = fm::invert_muscle(p, force, path, which);
   MuscleBoundRows rows;
   if (inv.stage != fm::MuscleInverse::Stage::Complete) {
     rows.value.fill(-(kOutsideDomain + inv.domain_distance));
@@ -74,7 +82,8 @@ fm::SecondOrderJet point_force_jet(const BoundPoint& bp, int j, const Eigen::Ref
 MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
                            const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin) {
   return muscle_bound_rows(flat.model().muscle(j).getParameters(), point_force_jet(bp, j, theta),
-                           bp.path[static_cast<std::size_t>(j)], a_min, gradients, margin);
+                           bp.path[static_cast<std::size_t>(j)], a_min,
+                           gradients ? fm::InverseGradients::ForceJet : fm::InverseGradients::None, margin);
 }
 
 bool point_excitations(const FlatOutputMap& flat, const std::vector<BoundPoint>& points, const Eigen::VectorXd& theta,

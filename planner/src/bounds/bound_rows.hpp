@@ -57,7 +57,12 @@ struct MuscleBoundRows {
   std::array<muscles::PathLengthJetGradient, kRowsPerMuscle> path_gradient{};  // in (L, dL, ddL)
 };
 
-/// The rows of one muscle from its tendon-force and path-length jets.
+/// The rows of one muscle from its tendon-force and path-length jets, with the gradients asked
+/// for (path_gradient 0 unless the path's are).
+MuscleBoundRows muscle_bound_rows(const muscles::MuscleParameters& p, const muscles::SecondOrderJet& force,
+                                  const muscles::SecondOrderJet& path, double a_min, muscles::InverseGradients gradients,
+                                  double margin = kBoundMargin);
+/// The same with every gradient (true) or none.
 MuscleBoundRows muscle_bound_rows(const muscles::MuscleParameters& p, const muscles::SecondOrderJet& force,
                                   const muscles::SecondOrderJet& path, double a_min, bool gradients,
                                   double margin = kBoundMargin);
@@ -72,6 +77,7 @@ bool point_excitations(const FlatOutputMap& flat, const std::vector<BoundPoint>&
                        Eigen::MatrixXd& excitations, Eigen::MatrixXd& activations);
 
 /// `margin`: how far inside the bounds the rows put a and n (kBoundMargin: the open-loop plans').
+/// A point's path is fixed: the gradients are the force jet's alone (path_gradient stays 0).
 MuscleBoundRows bound_rows(const FlatOutputMap& flat, const BoundPoint& bp, int j, double a_min,
                            const Eigen::Ref<const Eigen::VectorXd>& theta, bool gradients, double margin = kBoundMargin);
 

@@ -62,7 +62,14 @@ struct MuscleInverse {
   PathLengthJetGradient path_domain_distance_gradient{};
 };
 
+/// Which gradients an inverse carries: none, the tendon-force jet's only (a fixed path: cheaper,
+/// the same numbers), or the path-length jet's as well.
+enum class InverseGradients { None, ForceJet, ForceAndPathJets };
+
 /// `path` is the musculotendon length L and its rates (m, m/s, m/s^2).
+MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& tendon_force_N,
+                            const SecondOrderJet& path_length_m, InverseGradients gradients);
+/// The same with every gradient (true) or none (false).
 MuscleInverse invert_muscle(const MuscleParameters& p, const SecondOrderJet& tendon_force_N,
                             const SecondOrderJet& path_length_m, bool with_gradients);
 
