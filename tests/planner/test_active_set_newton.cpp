@@ -384,6 +384,27 @@ TEST(PointRows, AreTheBoundRowsWithTheirJacobianInTheta) {
   EXPECT_THROW(point_rows.change(d, change), std::logic_error);
 }
 
+// The last evaluation's inverse is point_excitations' at the same alpha, bit for bit, with or
+// without gradients; at another alpha, or with a muscle outside its domain, there is none.
+TEST(PointRows, KeepTheExcitationsOfTheirLastEvaluation) {
+  KneePeriodRows knee;
+  ASSERT_EQ(knee.step.status, flatsos::planner::SolveStatus::Solved) << knee.step.message;
+  fpd::PointRows point_rows(knee.flat, knee.points, knee.a_min, fpd::kSampleMargin);
+  const Eigen::VectorXd& alpha = knee.step.alpha();
+  Eigen::MatrixXd n, a, n_direct, a_direct;
+  ASSERT_TRUE(fpd::point_excitations(knee.flat, knee.points, alpha, n_direct, a_direct));
+  for (const bool gradients : {true, false}) {
+    point_rows.evaluate(alpha, gradients);
+    ASSERT_TRUE(point_rows.inverseAt(alpha, n, a));
+    EXPECT_EQ(n, n_direct);
+    EXPECT_EQ(a, a_direct);
+  }
+  EXPECT_GT(n_direct.maxCoeff(), 0.01) << "nothing excited: nothing compared";
+  EXPECT_FALSE(point_rows.inverseAt(1.01 * alpha, n, a));
+  point_rows.evaluate(-1e6 * Eigen::VectorXd::Ones(alpha.size()), false);  // slack tendons
+  EXPECT_FALSE(point_rows.inverseAt(-1e6 * Eigen::VectorXd::Ones(alpha.size()), n, a));
+}
+
 // A bound row's curvature along z from its force jets (PointRows) against second differences of
 // the row's values along z, and against central differences of the whole Jacobian (ActiveSetRowsOf).
 TEST(PointRows, CurveAsTheirValuesDoAlongADirection) {

@@ -185,6 +185,11 @@ TEST(RecedingHorizonStepBounds, TheNextPeriodHoldsTheLastActiveRowsByNewtonsMeth
   EXPECT_GE(newton.buffers.activations.minCoeff(), model->muscle(0).getParameters().activation_floor - 1e-12);
   EXPECT_GE(newton.buffers.excitations.minCoeff(), 0.0);
   EXPECT_LE(newton.buffers.excitations.maxCoeff(), 1.0);
+  // Those are the bound points' inverse at the final alpha (kept from Newton's last evaluation).
+  const Eigen::MatrixXd kept_n = newton.buffers.excitations, kept_a = newton.buffers.activations;
+  ASSERT_TRUE(fpd::sampled_at_points(flat, fpd::period_points(flat, o.excitation_bounds, newton), newton));
+  EXPECT_EQ(kept_n, newton.buffers.excitations);
+  EXPECT_EQ(kept_a, newton.buffers.activations);
   std::cout << "[ measure  ] next period: " << newton.bound_newton_steps << " Newton steps; by the sequential LP "
             << by_lp.bound_iterations << " LP steps; cost " << newton.slp.cost_N - by_lp.slp.cost_N << " N apart, alpha "
             << (newton.alpha() - by_lp.alpha()).cwiseAbs().maxCoeff() << " N\n";

@@ -41,6 +41,8 @@ MuscleBoundRows muscle_bound_rows(const fm::MuscleParameters& p, const fm::Secon
     return rows;
   }
   rows.in_domain = true;
+  rows.activation = inv.activation;
+  rows.excitation = inv.excitation;
   const fm::ExcitationBoundMargins m = fm::excitation_bound_margins(p, inv.activation, inv.activation_rate_per_s);
   // Imposed with a margin (kBoundMargin at least) wider than the step LPs resolve rows (about
   // 4e-7 with Clp's scaling), so that a row met to that resolution still leaves the plan inside.

@@ -52,6 +52,7 @@ constexpr double kBoundMargin = 1e-6;
 constexpr double kOutsideDomain = 1000.0;
 struct MuscleBoundRows {
   bool in_domain = false;  // false: the rows are the extension above
+  double activation = 0.0, excitation = 0.0;  // the inverse's, when in_domain
   std::array<double, kRowsPerMuscle> value{};
   std::array<muscles::TendonForceJetGradient, kRowsPerMuscle> gradient{};     // in (F, dF, ddF)
   std::array<muscles::PathLengthJetGradient, kRowsPerMuscle> path_gradient{};  // in (L, dL, ddL)

@@ -1,6 +1,7 @@
 #include "bounds/point_rows.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace flatsos::planner::detail {
@@ -13,16 +14,37 @@ void PointRows::evaluate(const Eigen::VectorXd& x, bool gradients) {
   x_ = x;
   value_.clear();
   gradient_.clear();
+  activation_.clear();
+  excitation_.clear();
+  every_inverse_ = true;
   violation_ = 0.0;
   for (const BoundPoint& bp : points_)
     for (int j = 0; j < m; ++j) {
       const MuscleBoundRows rows = bound_rows(flat_, bp, j, a_min_[j], x, gradients, margin_);
+      every_inverse_ = every_inverse_ && rows.in_domain && std::isfinite(rows.excitation);
+      activation_.push_back(rows.activation);
+      excitation_.push_back(rows.excitation);
       for (std::size_t k = 0; k < static_cast<std::size_t>(kRowsPerMuscle); ++k) {
         value_.push_back(rows.value[k]);
         violation_ += std::max(0.0, -rows.value[k]);
         if (gradients) gradient_.push_back(rows.gradient[k]);
       }
     }
+}
+
+bool PointRows::inverseAt(const Eigen::VectorXd& x, Eigen::MatrixXd& excitations, Eigen::MatrixXd& activations) const {
+  if (!every_inverse_ || x.size() != x_.size() || x != x_) return false;
+  const int m = flat_.numMuscles();
+  const auto count = static_cast<Eigen::Index>(points_.size());
+  excitations.resize(count, m);
+  activations.resize(count, m);
+  for (Eigen::Index i = 0; i < count; ++i)
+    for (int j = 0; j < m; ++j) {
+      const auto k = static_cast<std::size_t>(i * m + j);
+      excitations(i, j) = excitation_[k];
+      activations(i, j) = activation_[k];
+    }
+  return true;
 }
 
 void PointRows::requireGradients() const {

@@ -22,6 +22,9 @@ class PointRows final : public ActiveSetRows {
   void curvature(const std::vector<int>& rows, const Eigen::VectorXd& weight, const Eigen::VectorXd& z,
                  Eigen::VectorXd& out) const override;
   double violation() const { return violation_; }  ///< sum of max(0, -row)
+  /// The last evaluation's excitations and activations (points x m each), as point_excitations
+  /// gives them, when it was at x and every muscle had an inverse at every point; else false.
+  bool inverseAt(const Eigen::VectorXd& x, Eigen::MatrixXd& excitations, Eigen::MatrixXd& activations) const;
 
  private:
   void requireGradients() const;  // throws std::logic_error after an evaluation without them
@@ -32,6 +35,8 @@ class PointRows final : public ActiveSetRows {
   Eigen::VectorXd x_;  // the last evaluation's
   std::vector<double> value_;
   std::vector<muscles::TendonForceJetGradient> gradient_;  // per row, in its point's (F, dF, ddF)
+  std::vector<double> activation_, excitation_;           // per point and muscle
+  bool every_inverse_ = false;                            // every muscle in its domain, n finite
   double violation_ = 0.0;
 };
 

@@ -97,10 +97,13 @@ namespace {
 
 // After the bounds moved alpha (step.slp.alpha; by the sequential LP or Newton's method on an
 // active set): samples the first period and says what holds there; `rows_violated`: the sequential
-// LP settled with rows it could not meet.
+// LP settled with rows it could not meet; `at_points`: the step's buffers already hold the points'
+// excitations and activations for alpha (Newton's last evaluation).
 void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
-                           const std::vector<BoundPoint>& points, bool rows_violated, RecedingHorizonStep& step) {
-  if (sampled_at_points(flat, points, step)) return;
+                           const std::vector<BoundPoint>& points, bool rows_violated, bool at_points,
+                           RecedingHorizonStep& step) {
+  if (at_points) step.first_period_sampled = worst_excess(flat, step).value <= 0.0;
+  if (at_points ? step.first_period_sampled : sampled_at_points(flat, points, step)) return;
   // Otherwise the plan itself, sampled as before the bounds: what holds there, and the message.
   const bool finite = sample_period(flat, workspace, b, step);
   const SampleExcess left = finite ? worst_excess(flat, step) : SampleExcess{};
@@ -124,14 +127,19 @@ void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& wo
 }
 
 // Newton's method on the active set `active` from alpha over the points' bound rows, the reserve rows and
-// alpha >= 0 (bounds/active_set_newton.hpp).
+// alpha >= 0 (bounds/active_set_newton.hpp). Solved, the step's buffers take the points'
+// excitations and activations at the final alpha from its last evaluation when it has them
+// (`at_points`): the same inverse point_excitations would compute again.
 ActiveSetNewtonOutcome newton_on_active_set(const FlatOutputMap& flat, const std::vector<BoundPoint>& points,
                                      const Eigen::VectorXd& a_min, const SequentialLpLinearPart& linear,
-                                     std::vector<int>& active, Eigen::VectorXd& alpha) {
+                                     std::vector<int>& active, Eigen::VectorXd& alpha, RecedingHorizonStep& step,
+                                     bool& at_points) {
   PointRows point_rows(flat, points, a_min, kSampleMargin);
   WithLinearRows with_reserves(point_rows, linear.lp);
   with_reserves.evaluate(alpha, true);
-  return solve_on_active_set(linear, with_reserves, active, alpha);
+  const ActiveSetNewtonOutcome out = solve_on_active_set(linear, with_reserves, active, alpha);
+  at_points = out.solved && point_rows.inverseAt(alpha, step.buffers.excitations, step.buffers.activations);
+  return out;
 }
 
 }  // namespace
@@ -245,15 +253,16 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
   // starts from the point it reached (when it converged).
   std::vector<int>& active = step.buffers.bounds_active_set;
   Eigen::VectorXd alpha = previous;
+  bool at_points = false;
   const ActiveSetNewtonOutcome newton = has_previous && !active.empty()
-                                         ? newton_on_active_set(flat, points, a_min, linear, active, alpha)
+                                         ? newton_on_active_set(flat, points, a_min, linear, active, alpha, step, at_points)
                                          : ActiveSetNewtonOutcome{};
   step.bound_newton_steps = newton.iterations;
   if (newton.solved) {
     step.slp.alpha = alpha;
     step.slp.cost_N = lp.cost.dot(alpha);
     step.buffers.bounded_alpha = alpha;
-    check_bounded_samples(flat, workspace, b, points, false, step);
+    check_bounded_samples(flat, workspace, b, points, false, at_points, step);
     return;
   }
   BoundRowsAt at_previous;
@@ -295,7 +304,7 @@ void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& wor
     step.message = "the excitation bounds on the first period were not met: " + slp.failure;
     return;
   }
-  check_bounded_samples(flat, workspace, b, points, slp.rows_violated, step);
+  check_bounded_samples(flat, workspace, b, points, slp.rows_violated, false, step);
 }
 
 }  // namespace flatsos::planner::detail
