@@ -102,8 +102,8 @@ namespace {
 void check_bounded_samples(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const PeriodExcitationBounds& b,
                            const std::vector<BoundPoint>& points, bool rows_violated, bool at_points,
                            RecedingHorizonStep& step) {
-  if (at_points) step.first_period_sampled = worst_excess(flat, step).value <= 0.0;
-  if (at_points ? step.first_period_sampled : sampled_at_points(flat, points, step)) return;
+  step.first_period_sampled = at_points ? worst_excess(flat, step).value <= 0.0 : sampled_at_points(flat, points, step);
+  if (step.first_period_sampled) return;
   // Otherwise the plan itself, sampled as before the bounds: what holds there, and the message.
   const bool finite = sample_period(flat, workspace, b, step);
   const SampleExcess left = finite ? worst_excess(flat, step) : SampleExcess{};

@@ -57,8 +57,7 @@ bool sampled_at_points(const FlatOutputMap& flat, const std::vector<BoundPoint>&
 /// hold them afterwards when they are finite) and, when a bound is violated, moves alpha inside:
 /// step.slp.alpha, cost, status and message, bounds_imposed and bound_iterations updated.
 /// Allocates nothing when the SLP's optimum already meets the bounds and the moment arms are
-/// constant. `max_iterations`: the
-/// sequential LP's steps.
+/// constant. `max_iterations`: the sequential LP's steps.
 void impose_period_bounds(const FlatOutputMap& flat, plugin::ModelWorkspace& workspace, const RecedingHorizonOptions& options,
                           int max_iterations, RecedingHorizonStep& step);
 

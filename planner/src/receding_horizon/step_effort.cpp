@@ -28,7 +28,6 @@ constexpr double kRowTolerance = 0.5 * kSampleMargin;
 // steps clear them. Farther out the bounds' sequential LP moves alpha in first.
 constexpr double kMaxStartViolation = 1e-1;
 
-// The torques the step's muscles produce (its path's, less the offset) at times i h, i < count.
 // The horizon's grid for the effort: `grid_points` times i T / grid_points, each weighing T /
 // grid_points (the horizon's end, where the plan's torques jump to the rest that follows it, is
 // left out).
